@@ -1,0 +1,8 @@
+//! Tactile Workbench: learning from robot touch.
+//!
+//! Data flows one way: `session` → `features` → models (`sparse`, `svm`, `gp`, `learners`,
+//! `cluster`) → `experiments` → `figures` and the `app`. Engine modules never import the
+//! app or egui; the `gui` feature (on by default) adds the window.
+
+pub mod linalg;
+pub mod rng;
