@@ -4,5 +4,7 @@
 //! `cluster`) → `experiments` → `figures` and the `app`. Engine modules never import the
 //! app or egui; the `gui` feature (on by default) adds the window.
 
+pub mod cli;
 pub mod linalg;
 pub mod rng;
+pub mod session;
