@@ -5,6 +5,8 @@
 //! app or egui; the `gui` feature (on by default) adds the window.
 
 pub mod cli;
+pub mod features;
+pub mod jobs;
 pub mod linalg;
 pub mod rng;
 pub mod session;

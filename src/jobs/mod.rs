@@ -1,0 +1,5 @@
+//! Background work: progress, cancellation, errors.
+
+mod progress;
+
+pub use progress::{Cancelled, Progress};
