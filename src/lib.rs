@@ -6,6 +6,7 @@
 
 pub mod cli;
 pub mod features;
+pub mod fsutil;
 pub mod jobs;
 pub mod linalg;
 pub mod rng;

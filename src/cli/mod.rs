@@ -1,6 +1,8 @@
 //! The headless command line: the same binary as the window, with subcommands.
 //! Each subcommand lives in its own file with its `clap::Args` struct and a `run`.
 
+pub mod session;
+
 use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
@@ -20,9 +22,20 @@ pub struct Cli {
 }
 
 #[derive(Subcommand, Debug)]
-pub enum Command {}
+pub enum Command {
+    /// Print a summary of a session file.
+    Info(session::InfoArgs),
+    /// Check session files: format, version and every count and value.
+    Validate(session::ValidateArgs),
+    /// Convert a real dataset to the native format.
+    Import(session::ImportArgs),
+}
 
-/// Run a subcommand. Returns the process exit code.
+/// Run a subcommand.
 pub fn run(command: Command) -> anyhow::Result<()> {
-    match command {}
+    match command {
+        Command::Info(a) => session::info(a),
+        Command::Validate(a) => session::validate(a),
+        Command::Import(a) => session::import(a),
+    }
 }

@@ -1,0 +1,163 @@
+//! `info`, `validate` and `import`: session files from the shell.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use clap::{Args, Subcommand};
+
+use crate::session::{self, Session, icub::IcubOptions};
+
+#[derive(Args, Debug)]
+pub struct InfoArgs {
+    /// A native session file (.json).
+    pub file: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub struct ValidateArgs {
+    /// Native session files to check.
+    #[arg(required = true)]
+    pub files: Vec<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+pub struct ImportArgs {
+    #[command(subcommand)]
+    pub source: ImportSource,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum ImportSource {
+    /// The iCub grasp dataset folder (10 objects × 20 trials).
+    Icub {
+        /// The dataset folder (holding iCubGraspDataset/ or the trial files).
+        dir: PathBuf,
+        /// Write the native session here.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Also import the `full_coke` class, which the dataset's README calls unreliable.
+        #[arg(long)]
+        include_full_coke: bool,
+    },
+    /// The BioTac SP palm-down grasp CSV.
+    Bts3 {
+        /// The CSV file.
+        csv: PathBuf,
+        /// Write the native session here.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+}
+
+/// A human-readable summary of a session.
+pub fn summary(s: &Session) -> String {
+    let mut out = String::new();
+    let push = |out: &mut String, line: String| {
+        out.push_str(&line);
+        out.push('\n');
+    };
+    push(&mut out, format!("session   {}", s.meta.name));
+    push(&mut out, format!("source    {}", s.meta.source));
+    if let Some(hz) = s.meta.frame_rate_hz {
+        push(&mut out, format!("rate      {hz} Hz"));
+    }
+    push(&mut out, format!("sensors   {}", s.sensors.len()));
+    for sensor in &s.sensors {
+        push(
+            &mut out,
+            format!(
+                "  {:<8} {:>2} taxels  {}; pressure = {}",
+                sensor.name,
+                sensor.layout.taxel_count(),
+                sensor.unit,
+                sensor.transform.describe()
+            ),
+        );
+    }
+    push(&mut out, format!("encoders  {}", s.encoders.len()));
+    let frames: Vec<usize> = s.grasps.iter().map(|g| g.frames.len()).collect();
+    push(
+        &mut out,
+        format!(
+            "grasps    {} on {} objects; frames per grasp {}–{}",
+            s.grasps.len(),
+            s.objects().len(),
+            frames.iter().min().unwrap_or(&0),
+            frames.iter().max().unwrap_or(&0)
+        ),
+    );
+    for (l, set) in s.label_sets.iter().enumerate() {
+        let mut counts = vec![0usize; set.classes.len()];
+        for g in &s.grasps {
+            counts[g.labels[l]] += 1;
+        }
+        let parts: Vec<String> = set
+            .classes
+            .iter()
+            .zip(&counts)
+            .map(|(c, n)| format!("{c} {n}"))
+            .collect();
+        push(
+            &mut out,
+            format!("labels    {}: {}", set.name, parts.join(", ")),
+        );
+    }
+    if !s.meta.licence.is_empty() {
+        push(
+            &mut out,
+            format!("licence   {}", s.meta.licence.lines().next().unwrap_or("")),
+        );
+    }
+    out
+}
+
+pub fn info(args: InfoArgs) -> anyhow::Result<()> {
+    let s = session::load(&args.file)?;
+    print!("{}", summary(&s));
+    Ok(())
+}
+
+pub fn validate(args: ValidateArgs) -> anyhow::Result<()> {
+    let mut failed = 0;
+    for f in &args.files {
+        match session::load(f) {
+            Ok(s) => println!("{}: ok ({} grasps)", f.display(), s.grasps.len()),
+            Err(e) => {
+                eprintln!("{e}");
+                failed += 1;
+            }
+        }
+    }
+    anyhow::ensure!(
+        failed == 0,
+        "{failed} of {} files failed validation",
+        args.files.len()
+    );
+    Ok(())
+}
+
+fn write(s: &Session, output: &Path) -> anyhow::Result<()> {
+    session::save(s, output)?;
+    print!("{}", summary(s));
+    println!("written   {}", output.display());
+    Ok(())
+}
+
+pub fn import(args: ImportArgs) -> anyhow::Result<()> {
+    match args.source {
+        ImportSource::Icub {
+            dir,
+            output,
+            include_full_coke,
+        } => {
+            let s = session::import_icub_with(&dir, &IcubOptions { include_full_coke })
+                .with_context(|| format!("importing the iCub dataset from {}", dir.display()))?;
+            write(&s, &output)
+        }
+        ImportSource::Bts3 { csv, output } => {
+            let s = session::import_bts3(&csv)
+                .with_context(|| format!("importing BTS3 grasps from {}", csv.display()))?;
+            write(&s, &output)
+        }
+    }
+}

@@ -1,0 +1,129 @@
+//! Errors from reading and checking session files: always the file, and where in it.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// Where in a file a problem is.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Location {
+    /// The file as a whole (missing, unreadable, empty).
+    File,
+    /// A line of a text file (1-based), optionally a named field on it.
+    Line { line: usize, field: Option<String> },
+    /// A JSON position (1-based line and column).
+    LineColumn { line: usize, column: usize },
+    /// A field path inside the session, e.g. `grasps[3].frames[2].taxels[1]`.
+    Field(String),
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SessionError {
+    pub path: PathBuf,
+    pub location: Location,
+    pub message: String,
+}
+
+impl SessionError {
+    pub fn file(path: &Path, message: impl Into<String>) -> Self {
+        SessionError {
+            path: path.to_path_buf(),
+            location: Location::File,
+            message: message.into(),
+        }
+    }
+
+    pub fn line(path: &Path, line: usize, message: impl Into<String>) -> Self {
+        SessionError {
+            path: path.to_path_buf(),
+            location: Location::Line { line, field: None },
+            message: message.into(),
+        }
+    }
+
+    pub fn line_field(
+        path: &Path,
+        line: usize,
+        field: impl Into<String>,
+        message: impl Into<String>,
+    ) -> Self {
+        SessionError {
+            path: path.to_path_buf(),
+            location: Location::Line {
+                line,
+                field: Some(field.into()),
+            },
+            message: message.into(),
+        }
+    }
+
+    pub fn field(path: &Path, field: impl Into<String>, message: impl Into<String>) -> Self {
+        SessionError {
+            path: path.to_path_buf(),
+            location: Location::Field(field.into()),
+            message: message.into(),
+        }
+    }
+
+    pub fn io(path: &Path, err: &std::io::Error) -> Self {
+        Self::file(path, err.to_string())
+    }
+}
+
+impl fmt::Display for SessionError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let p = self.path.display();
+        match &self.location {
+            Location::File => write!(f, "{p}: {}", self.message),
+            Location::Line { line, field: None } => write!(f, "{p}:{line}: {}", self.message),
+            Location::Line {
+                line,
+                field: Some(field),
+            } => write!(f, "{p}:{line}: field `{field}`: {}", self.message),
+            Location::LineColumn { line, column } => {
+                write!(f, "{p}:{line}:{column}: {}", self.message)
+            }
+            Location::Field(field) => write!(f, "{p}: `{field}`: {}", self.message),
+        }
+    }
+}
+
+impl std::error::Error for SessionError {}
+
+/// Parse one number of a text format: finite, or an error naming the field.
+pub(crate) fn parse_number(
+    path: &Path,
+    line: usize,
+    field: &str,
+    text: &str,
+) -> Result<f64, SessionError> {
+    let t = text.trim();
+    if t.is_empty() {
+        return Err(SessionError::line_field(path, line, field, "empty value"));
+    }
+    match t.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(v) => Err(SessionError::line_field(
+            path,
+            line,
+            field,
+            format!("`{t}` is not a finite number ({v})"),
+        )),
+        Err(_) => Err(SessionError::line_field(
+            path,
+            line,
+            field,
+            format!("`{}` is not a number", shorten(t)),
+        )),
+    }
+}
+
+/// Keep messages readable when a field holds a long run of garbage.
+pub(crate) fn shorten(s: &str) -> String {
+    const MAX: usize = 40;
+    if s.chars().count() <= MAX {
+        s.to_string()
+    } else {
+        let head: String = s.chars().take(MAX).collect();
+        format!("{head}…")
+    }
+}

@@ -1,0 +1,190 @@
+//! Structural checks of a session: every count agrees with the sensors, every value is
+//! finite, every index is in range. The native reader and every importer run these, so a
+//! session in memory is always consistent and the analyses never index out of bounds.
+
+use std::path::Path;
+
+use super::{Layout, Session, SessionError, ValueTransform};
+
+/// Check `session`; errors name `path` and the field.
+pub fn validate(session: &Session, path: &Path) -> Result<(), SessionError> {
+    let err = |field: String, msg: String| SessionError::field(path, field, msg);
+    if session.sensors.is_empty() {
+        return Err(err("sensors".into(), "the session has no sensors".into()));
+    }
+    for (s, sensor) in session.sensors.iter().enumerate() {
+        let n = sensor.layout.taxel_count();
+        if n == 0 {
+            return Err(err(
+                format!("sensors[{s}].layout"),
+                format!("sensor `{}` has no taxels", sensor.name),
+            ));
+        }
+        match &sensor.layout {
+            Layout::Grid { rows, cols } if rows * cols == 0 => {
+                return Err(err(
+                    format!("sensors[{s}].layout"),
+                    "a grid needs at least one row and one column".into(),
+                ));
+            }
+            Layout::SparseGrid { rows, cols, cells } => {
+                for (i, c) in cells.iter().enumerate() {
+                    if c[0] >= *rows || c[1] >= *cols {
+                        return Err(err(
+                            format!("sensors[{s}].layout.cells[{i}]"),
+                            format!(
+                                "cell ({}, {}) is outside the {rows} × {cols} grid",
+                                c[0], c[1]
+                            ),
+                        ));
+                    }
+                }
+            }
+            Layout::Points {
+                positions, radius, ..
+            } => {
+                if !(radius.is_finite() && *radius > 0.0) {
+                    return Err(err(
+                        format!("sensors[{s}].layout.radius"),
+                        format!("taxel radius must be positive, found {radius}"),
+                    ));
+                }
+                if positions
+                    .iter()
+                    .any(|p| !p.x.is_finite() || !p.y.is_finite())
+                {
+                    return Err(err(
+                        format!("sensors[{s}].layout.positions"),
+                        "taxel positions must be finite".into(),
+                    ));
+                }
+            }
+            _ => {}
+        }
+        match &sensor.transform {
+            ValueTransform::BaselineMinus { baseline } => {
+                if baseline.len() != n {
+                    return Err(err(
+                        format!("sensors[{s}].transform.baseline"),
+                        format!("{} baselines for {n} taxels", baseline.len()),
+                    ));
+                }
+                if baseline.iter().any(|b| !b.is_finite()) {
+                    return Err(err(
+                        format!("sensors[{s}].transform.baseline"),
+                        "baselines must be finite".into(),
+                    ));
+                }
+            }
+            ValueTransform::Reversed { offset } if !offset.is_finite() => {
+                return Err(err(
+                    format!("sensors[{s}].transform.offset"),
+                    "the offset must be finite".into(),
+                ));
+            }
+            _ => {}
+        }
+    }
+    for (l, set) in session.label_sets.iter().enumerate() {
+        if set.classes.is_empty() {
+            return Err(err(
+                format!("label_sets[{l}]"),
+                format!("label set `{}` has no classes", set.name),
+            ));
+        }
+    }
+    if session.grasps.is_empty() {
+        return Err(err("grasps".into(), "the session has no grasps".into()));
+    }
+    let n_enc = session.encoders.len();
+    for (g, grasp) in session.grasps.iter().enumerate() {
+        let at = |rest: &str| format!("grasps[{g}]{rest}");
+        if grasp.labels.len() != session.label_sets.len() {
+            return Err(err(
+                at(".labels"),
+                format!(
+                    "{} labels for {} label sets",
+                    grasp.labels.len(),
+                    session.label_sets.len()
+                ),
+            ));
+        }
+        for (l, &c) in grasp.labels.iter().enumerate() {
+            let k = session.label_sets[l].classes.len();
+            if c >= k {
+                return Err(err(
+                    at(&format!(".labels[{l}]")),
+                    format!(
+                        "class {c} is out of range (label set `{}` has {k})",
+                        session.label_sets[l].name
+                    ),
+                ));
+            }
+        }
+        if grasp.frames.is_empty() {
+            return Err(err(at(".frames"), "the grasp has no frames".into()));
+        }
+        if grasp.key_frame >= grasp.frames.len() {
+            return Err(err(
+                at(".key_frame"),
+                format!(
+                    "key frame {} but the grasp has {} frames",
+                    grasp.key_frame,
+                    grasp.frames.len()
+                ),
+            ));
+        }
+        let mut last_t = f64::NEG_INFINITY;
+        for (f, frame) in grasp.frames.iter().enumerate() {
+            let fat = |rest: &str| format!("grasps[{g}].frames[{f}]{rest}");
+            if !frame.t.is_finite() || frame.t < last_t {
+                return Err(err(
+                    fat(".t"),
+                    format!("time {} is not finite or goes backwards", frame.t),
+                ));
+            }
+            last_t = frame.t;
+            if frame.taxels.len() != session.sensors.len() {
+                return Err(err(
+                    fat(".taxels"),
+                    format!(
+                        "{} sensor readings for {} sensors",
+                        frame.taxels.len(),
+                        session.sensors.len()
+                    ),
+                ));
+            }
+            for (s, values) in frame.taxels.iter().enumerate() {
+                let n = session.sensors[s].layout.taxel_count();
+                if values.len() != n {
+                    return Err(err(
+                        fat(&format!(".taxels[{s}]")),
+                        format!("expected {n} values, found {}", values.len()),
+                    ));
+                }
+                if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+                    return Err(err(
+                        fat(&format!(".taxels[{s}][{i}]")),
+                        "value is not finite".into(),
+                    ));
+                }
+            }
+            if frame.encoders.len() != n_enc {
+                return Err(err(
+                    fat(".encoders"),
+                    format!(
+                        "expected {n_enc} encoder values, found {}",
+                        frame.encoders.len()
+                    ),
+                ));
+            }
+            if let Some(i) = frame.encoders.iter().position(|v| !v.is_finite()) {
+                return Err(err(
+                    fat(&format!(".encoders[{i}]")),
+                    "value is not finite".into(),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
