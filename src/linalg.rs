@@ -38,7 +38,7 @@ impl Cholesky {
                     sum -= l[[i, k]] * l[[j, k]];
                 }
                 if i == j {
-                    if !(sum > 0.0) || !sum.is_finite() {
+                    if sum.is_nan() || sum <= 0.0 || !sum.is_finite() {
                         return Err(LinalgError::NotPositiveDefinite { row: i, pivot: sum });
                     }
                     l[[i, i]] = sum.sqrt();

@@ -105,7 +105,7 @@ pub fn parse_trial(text: &str, path: &Path) -> Result<Vec<Frame>, SessionError> 
     if lines.is_empty() {
         return Err(SessionError::file(path, "the file has no time steps"));
     }
-    if lines.len() % LINES_PER_STEP != 0 {
+    if !lines.len().is_multiple_of(LINES_PER_STEP) {
         let (last_no, _) = lines[lines.len() - 1];
         return Err(SessionError::line(
             path,
