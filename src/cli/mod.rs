@@ -2,6 +2,7 @@
 //! Each subcommand lives in its own file with its `clap::Args` struct and a `run`.
 
 pub mod session;
+pub mod simulate;
 
 use std::path::PathBuf;
 
@@ -29,6 +30,8 @@ pub enum Command {
     Validate(session::ValidateArgs),
     /// Convert a real dataset to the native format.
     Import(session::ImportArgs),
+    /// Regenerate the sample sessions from a seed.
+    Simulate(simulate::SimulateArgs),
 }
 
 /// Run a subcommand.
@@ -37,5 +40,6 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Info(a) => session::info(a),
         Command::Validate(a) => session::validate(a),
         Command::Import(a) => session::import(a),
+        Command::Simulate(a) => simulate::run(a),
     }
 }

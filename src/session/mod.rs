@@ -6,6 +6,7 @@ mod error;
 pub mod icub;
 mod model;
 pub mod native;
+pub mod simulate;
 mod validate;
 
 pub use bts3::import_bts3;
