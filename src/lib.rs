@@ -11,3 +11,6 @@ pub mod jobs;
 pub mod linalg;
 pub mod rng;
 pub mod session;
+
+#[cfg(feature = "gui")]
+pub mod app;

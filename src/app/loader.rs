@@ -1,0 +1,142 @@
+//! Opening sessions off the UI thread: native files, the BTS3 CSV, the iCub folder, and
+//! the sample sessions bundled into the binary.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::mpsc::{Receiver, Sender, channel};
+
+use serde::{Deserialize, Serialize};
+
+use crate::session::{self, Session};
+
+/// The sample sessions, compiled in so a fresh clone opens them with no other step.
+pub const BUNDLED: [(&str, &str); 2] = [
+    (
+        "grasp-stability.json",
+        include_str!("../../sample-sessions/grasp-stability.json"),
+    ),
+    (
+        "object-recognition.json",
+        include_str!("../../sample-sessions/object-recognition.json"),
+    ),
+];
+
+/// Where a session came from (what is persisted to reopen it next time).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Source {
+    Bundled(String),
+    File(PathBuf),
+}
+
+impl Source {
+    pub fn label(&self) -> String {
+        match self {
+            Source::Bundled(name) => format!("sample: {name}"),
+            Source::File(p) => p.display().to_string(),
+        }
+    }
+}
+
+/// A session ready to show, with what every view needs precomputed once.
+pub struct LoadedSession {
+    pub source: Source,
+    pub session: Arc<Session>,
+    /// Pressure range over the whole session, so colours mean the same in every frame.
+    pub pressure_range: (f64, f64),
+}
+
+fn pressure_range(s: &Session) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for g in &s.grasps {
+        for f in &g.frames {
+            for (k, values) in f.taxels.iter().enumerate() {
+                for (i, &v) in values.iter().enumerate() {
+                    let p = s.pressure(k, i, v);
+                    lo = lo.min(p);
+                    hi = hi.max(p);
+                }
+            }
+        }
+    }
+    if !lo.is_finite() || !hi.is_finite() {
+        (0.0, 1.0)
+    } else if hi - lo < 1e-9 {
+        (lo, lo + 1.0)
+    } else {
+        (lo.min(0.0), hi)
+    }
+}
+
+/// Read a session from any supported source: a native `.json`, a BTS3 `.csv`, or an iCub
+/// dataset folder.
+pub fn open(source: &Source) -> Result<LoadedSession, String> {
+    let session = match source {
+        Source::Bundled(name) => {
+            let text = BUNDLED
+                .iter()
+                .find(|(n, _)| n == name)
+                .map(|(_, t)| *t)
+                .ok_or_else(|| format!("no bundled sample named {name}"))?;
+            session::native::from_str(text, Path::new(name)).map_err(|e| e.to_string())?
+        }
+        Source::File(path) if path.is_dir() => {
+            session::import_icub(path).map_err(|e| e.to_string())?
+        }
+        Source::File(path)
+            if path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("csv")) =>
+        {
+            session::import_bts3(path).map_err(|e| e.to_string())?
+        }
+        Source::File(path) => session::load(path).map_err(|e| e.to_string())?,
+    };
+    Ok(LoadedSession {
+        source: source.clone(),
+        pressure_range: pressure_range(&session),
+        session: Arc::new(session),
+    })
+}
+
+/// Loads on a worker thread; the UI polls `try_recv` each frame.
+pub struct Loader {
+    tx: Sender<(Source, Result<LoadedSession, String>)>,
+    rx: Receiver<(Source, Result<LoadedSession, String>)>,
+    pub pending: Vec<Source>,
+}
+
+impl Default for Loader {
+    fn default() -> Self {
+        let (tx, rx) = channel();
+        Loader {
+            tx,
+            rx,
+            pending: Vec::new(),
+        }
+    }
+}
+
+impl Loader {
+    pub fn request(&mut self, source: Source, ctx: &egui::Context) {
+        if self.pending.contains(&source) {
+            return;
+        }
+        self.pending.push(source.clone());
+        let tx = self.tx.clone();
+        let ctx = ctx.clone();
+        std::thread::spawn(move || {
+            // A panic in a parser must not take the window down: report it as an error.
+            let result = std::panic::catch_unwind(|| open(&source))
+                .unwrap_or_else(|_| Err(format!("{}: the reader crashed", source.label())));
+            let _ = tx.send((source, result));
+            ctx.request_repaint();
+        });
+    }
+
+    /// Finished loads since the last call.
+    pub fn poll(&mut self) -> Vec<(Source, Result<LoadedSession, String>)> {
+        let done: Vec<_> = self.rx.try_iter().collect();
+        self.pending.retain(|p| !done.iter().any(|(s, _)| s == p));
+        done
+    }
+}

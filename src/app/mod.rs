@@ -1,0 +1,390 @@
+//! The egui workbench. One file per view; the app owns the open sessions and the selection,
+//! views read them and draw. Nothing here blocks: files load on worker threads.
+
+pub mod browser;
+pub mod heatmap;
+pub mod loader;
+pub mod replay;
+
+use std::path::PathBuf;
+use std::sync::mpsc::{Receiver, channel};
+
+use serde::{Deserialize, Serialize};
+
+use browser::{Browser, BrowserAction};
+use loader::{LoadedSession, Loader, Source};
+use replay::Replay;
+
+const STORAGE_KEY: &str = "tactile-workbench";
+const MAX_RECENT: usize = 10;
+
+/// The views of the central area.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum View {
+    #[default]
+    Replay,
+}
+
+/// What persists between runs.
+#[derive(Clone, Debug, Serialize, Deserialize, Default)]
+pub struct Persisted {
+    pub sources: Vec<Source>,
+    pub view: View,
+    pub dark: bool,
+    pub recent: Vec<PathBuf>,
+    pub browser: Browser,
+    pub selected: Option<(usize, usize)>,
+    pub replay: Replay,
+}
+
+pub struct WorkbenchApp {
+    pub sessions: Vec<LoadedSession>,
+    /// (session, grasp) being replayed.
+    pub selected: Option<(usize, usize)>,
+    pub browser: Browser,
+    pub replay: Replay,
+    pub view: View,
+    pub dark: bool,
+    pub recent: Vec<PathBuf>,
+    pub errors: Vec<String>,
+    loader: Loader,
+    /// Sources in the order they were asked for, so sessions list in a stable order.
+    requested: Vec<Source>,
+    dialog: Option<Receiver<Vec<PathBuf>>>,
+    /// The selection to restore once the persisted sessions have loaded.
+    restore: Option<(usize, usize)>,
+}
+
+impl WorkbenchApp {
+    /// A workbench opening `files`, or else the sessions of the last run, or else the
+    /// bundled sample sessions.
+    pub fn new(ctx: &egui::Context, persisted: Option<Persisted>, files: Vec<PathBuf>) -> Self {
+        let p = persisted.unwrap_or_else(|| Persisted {
+            dark: true,
+            ..Default::default()
+        });
+        let mut app = WorkbenchApp {
+            sessions: Vec::new(),
+            selected: None,
+            browser: p.browser.clone(),
+            replay: p.replay.clone(),
+            view: p.view,
+            dark: p.dark,
+            recent: p.recent.clone(),
+            errors: Vec::new(),
+            loader: Loader::default(),
+            requested: Vec::new(),
+            dialog: None,
+            restore: None,
+        };
+        ctx.set_theme(if app.dark {
+            egui::Theme::Dark
+        } else {
+            egui::Theme::Light
+        });
+        if !files.is_empty() {
+            for f in files {
+                app.open(Source::File(f), ctx);
+            }
+        } else if !p.sources.is_empty() {
+            app.restore = p.selected;
+            for s in p.sources {
+                app.open(s, ctx);
+            }
+        } else {
+            app.open_samples(ctx);
+        }
+        app
+    }
+
+    pub fn open_samples(&mut self, ctx: &egui::Context) {
+        for (name, _) in loader::BUNDLED {
+            self.open(Source::Bundled(name.to_string()), ctx);
+        }
+    }
+
+    pub fn open(&mut self, source: Source, ctx: &egui::Context) {
+        if self.sessions.iter().any(|s| s.source == source) {
+            return;
+        }
+        if let Source::File(p) = &source {
+            self.recent.retain(|r| r != p);
+            self.recent.insert(0, p.clone());
+            self.recent.truncate(MAX_RECENT);
+        }
+        if !self.requested.contains(&source) {
+            self.requested.push(source.clone());
+        }
+        self.loader.request(source, ctx);
+    }
+
+    pub fn is_loading(&self) -> bool {
+        !self.loader.pending.is_empty()
+    }
+
+    pub fn persisted(&self) -> Persisted {
+        Persisted {
+            sources: self.sessions.iter().map(|s| s.source.clone()).collect(),
+            view: self.view,
+            dark: self.dark,
+            recent: self.recent.clone(),
+            browser: self.browser.clone(),
+            selected: self.selected,
+            replay: self.replay.clone(),
+        }
+    }
+
+    fn close(&mut self, i: usize) {
+        let source = self.sessions.remove(i).source;
+        self.requested.retain(|s| s != &source);
+        self.selected = match self.selected {
+            Some((s, _)) if s == i => None,
+            Some((s, g)) if s > i => Some((s - 1, g)),
+            other => other,
+        };
+        self.browser.active = self
+            .browser
+            .active
+            .min(self.sessions.len().saturating_sub(1));
+    }
+
+    pub fn select(&mut self, session: usize, grasp: usize) {
+        self.selected = Some((session, grasp));
+        self.replay.reset();
+    }
+
+    /// Frames of the grasp being replayed.
+    fn replay_frames(&self) -> Option<(usize, f64)> {
+        let (s, g) = self.selected?;
+        let ls = self.sessions.get(s)?;
+        let grasp = ls.session.grasps.get(g)?;
+        let rate = ls.session.meta.frame_rate_hz.unwrap_or(10.0);
+        Some((grasp.frames.len(), rate))
+    }
+
+    /// Per-frame work that draws nothing: finished loads, dialogs, dropped files, playback.
+    pub fn tick(&mut self, ctx: &egui::Context) {
+        for (source, result) in self.loader.poll() {
+            match result {
+                Ok(loaded) => {
+                    let rank = |s: &Source| {
+                        self.requested
+                            .iter()
+                            .position(|r| r == s)
+                            .unwrap_or(usize::MAX)
+                    };
+                    let at = self
+                        .sessions
+                        .partition_point(|x| rank(&x.source) < rank(&source));
+                    self.sessions.insert(at, loaded);
+                }
+                Err(e) => {
+                    self.requested.retain(|s| s != &source);
+                    if let Source::File(p) = &source {
+                        self.recent.retain(|r| r != p);
+                    }
+                    self.errors.push(e);
+                }
+            }
+        }
+        if !self.is_loading()
+            && let Some((s, g)) = self.restore.take()
+            && self
+                .sessions
+                .get(s)
+                .is_some_and(|x| g < x.session.grasps.len())
+        {
+            self.selected = Some((s, g));
+        }
+        if let Some(rx) = &self.dialog
+            && let Ok(paths) = rx.try_recv()
+        {
+            self.dialog = None;
+            for p in paths {
+                self.open(Source::File(p), ctx);
+            }
+        }
+        let dropped: Vec<PathBuf> = ctx.input(|i| {
+            i.raw
+                .dropped_files
+                .iter()
+                .map(|f| f.path().to_path_buf())
+                .collect()
+        });
+        for p in dropped {
+            self.open(Source::File(p), ctx);
+        }
+        if let Some((n, rate)) = self.replay_frames() {
+            let (space, left, right, dt) = ctx.input(|i| {
+                (
+                    i.key_pressed(egui::Key::Space),
+                    i.key_pressed(egui::Key::ArrowLeft),
+                    i.key_pressed(egui::Key::ArrowRight),
+                    i.stable_dt as f64,
+                )
+            });
+            let typing = ctx.text_edit_focused();
+            if !typing {
+                if space {
+                    self.replay.toggle(n);
+                }
+                if left {
+                    self.replay.step(-1, n);
+                }
+                if right {
+                    self.replay.step(1, n);
+                }
+            }
+            if self.replay.advance(dt.min(0.1), rate, n) {
+                ctx.request_repaint();
+            }
+        }
+    }
+
+    fn open_dialog(&mut self, folder: bool) {
+        let (tx, rx) = channel();
+        self.dialog = Some(rx);
+        // The portal dialog blocks its thread; keep it off the UI thread.
+        std::thread::spawn(move || {
+            let dialog = rfd::FileDialog::new();
+            let picked = if folder {
+                dialog.pick_folder().map(|p| vec![p])
+            } else {
+                dialog
+                    .add_filter("Sessions and datasets", &["json", "csv"])
+                    .pick_files()
+            };
+            let _ = tx.send(picked.unwrap_or_default());
+        });
+    }
+
+    fn menu(&mut self, ui: &mut egui::Ui) {
+        egui::MenuBar::new().ui(ui, |ui| {
+            ui.menu_button("File", |ui| {
+                if ui.button("Open sessions…").clicked() {
+                    self.open_dialog(false);
+                }
+                if ui.button("Open iCub dataset folder…").clicked() {
+                    self.open_dialog(true);
+                }
+                if ui.button("Open sample sessions").clicked() {
+                    self.open_samples(ui.ctx());
+                }
+                ui.menu_button("Recent", |ui| {
+                    if self.recent.is_empty() {
+                        ui.label("(none)");
+                    }
+                    for p in self.recent.clone() {
+                        if ui.button(p.display().to_string()).clicked() {
+                            self.open(Source::File(p), ui.ctx());
+                        }
+                    }
+                });
+            });
+            ui.menu_button("View", |ui| {
+                ui.selectable_value(&mut self.view, View::Replay, "Replay");
+                ui.separator();
+                if ui.checkbox(&mut self.dark, "Dark theme").changed() {
+                    ui.ctx().set_theme(if self.dark {
+                        egui::Theme::Dark
+                    } else {
+                        egui::Theme::Light
+                    });
+                }
+            });
+            if self.is_loading() {
+                ui.spinner();
+                ui.label("loading…");
+            }
+        });
+    }
+
+    /// Draw the whole workbench into `ui`.
+    pub fn show(&mut self, ui: &mut egui::Ui) {
+        egui::Panel::top("menu").show(ui, |ui| self.menu(ui));
+        if !self.errors.is_empty() {
+            egui::Panel::bottom("errors").show(ui, |ui| {
+                let mut dismiss = None;
+                for (i, e) in self.errors.iter().enumerate() {
+                    ui.horizontal(|ui| {
+                        ui.colored_label(ui.visuals().error_fg_color, e);
+                        if ui.small_button("Dismiss").clicked() {
+                            dismiss = Some(i);
+                        }
+                    });
+                }
+                if let Some(i) = dismiss {
+                    self.errors.remove(i);
+                }
+            });
+        }
+        egui::Panel::left("browser")
+            .resizable(true)
+            .default_size(320.0)
+            .show(ui, |ui| {
+                match self.browser.ui(ui, &self.sessions, self.selected) {
+                    BrowserAction::Select(g) => {
+                        let s = self.browser.active;
+                        self.select(s, g);
+                    }
+                    BrowserAction::Close(i) => self.close(i),
+                    BrowserAction::None => {}
+                }
+            });
+        egui::CentralPanel::default_margins().show(ui, |ui| match self.view {
+            View::Replay => match self.selected {
+                Some((s, g)) if s < self.sessions.len() => {
+                    egui::ScrollArea::vertical().show(ui, |ui| {
+                        self.replay.ui(ui, &self.sessions[s], g);
+                    });
+                }
+                _ => {
+                    ui.heading("Replay");
+                    ui.label("Select a grasp in the browser to replay it.");
+                }
+            },
+        });
+    }
+}
+
+struct EframeApp(WorkbenchApp);
+
+impl eframe::App for EframeApp {
+    fn logic(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
+        self.0.tick(ctx);
+    }
+
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        self.0.show(ui);
+    }
+
+    fn save(&mut self, storage: &mut dyn eframe::Storage) {
+        eframe::set_value(storage, STORAGE_KEY, &self.0.persisted());
+    }
+}
+
+/// Open the workbench window.
+pub fn run(files: Vec<PathBuf>) -> anyhow::Result<()> {
+    let options = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_title("Tactile Workbench")
+            .with_inner_size([1400.0, 900.0])
+            .with_drag_and_drop(true),
+        ..Default::default()
+    };
+    eframe::run_native(
+        "Tactile Workbench",
+        options,
+        Box::new(move |cc| {
+            let persisted = cc
+                .storage
+                .and_then(|s| eframe::get_value::<Persisted>(s, STORAGE_KEY));
+            Ok(Box::new(EframeApp(WorkbenchApp::new(
+                &cc.egui_ctx,
+                persisted,
+                files,
+            ))))
+        }),
+    )
+    .map_err(|e| anyhow::anyhow!("could not open the window: {e}"))
+}

@@ -1,0 +1,248 @@
+//! Grasp replay: a timeline (play / pause / step / speed), the frame's pressures as
+//! heatmaps in each sensor's layout, and encoder and per-finger feature traces with a
+//! cursor at the current frame.
+
+use egui::{ComboBox, Vec2};
+use egui_plot::{Legend, Line, Plot, PlotPoints, VLine};
+
+use super::heatmap::{colour_bar, sensor_heatmap};
+use super::loader::LoadedSession;
+use crate::features::FingerStats;
+
+pub const SPEEDS: [f32; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
+
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Replay {
+    pub frame: usize,
+    pub playing: bool,
+    pub speed: f32,
+    /// Which per-finger statistic the feature trace shows (index into FingerStats::NAMES).
+    pub stat: usize,
+    #[serde(skip)]
+    carry: f64,
+}
+
+impl Default for Replay {
+    fn default() -> Self {
+        Replay {
+            frame: 0,
+            playing: false,
+            speed: 1.0,
+            stat: 0,
+            carry: 0.0,
+        }
+    }
+}
+
+impl Replay {
+    pub fn reset(&mut self) {
+        self.frame = 0;
+        self.playing = false;
+        self.carry = 0.0;
+    }
+
+    pub fn step(&mut self, delta: isize, n_frames: usize) {
+        let last = n_frames.saturating_sub(1) as isize;
+        self.frame = (self.frame as isize + delta).clamp(0, last) as usize;
+        self.carry = 0.0;
+    }
+
+    pub fn toggle(&mut self, n_frames: usize) {
+        if !self.playing && self.frame + 1 >= n_frames {
+            // Playing from the last frame starts again at the beginning.
+            self.frame = 0;
+        }
+        self.playing = !self.playing;
+        self.carry = 0.0;
+    }
+
+    /// Advance by `dt` seconds of wall time at `rate` frames per second.
+    /// Returns true while still playing (the UI keeps repainting).
+    pub fn advance(&mut self, dt: f64, rate: f64, n_frames: usize) -> bool {
+        if !self.playing || n_frames == 0 {
+            return false;
+        }
+        self.carry += dt * rate * self.speed as f64;
+        while self.carry >= 1.0 {
+            self.carry -= 1.0;
+            if self.frame + 1 >= n_frames {
+                self.playing = false;
+                self.carry = 0.0;
+                return false;
+            }
+            self.frame += 1;
+        }
+        true
+    }
+
+    pub fn ui(&mut self, ui: &mut egui::Ui, s: &LoadedSession, grasp: usize) {
+        let session = &s.session;
+        let Some(g) = session.grasps.get(grasp) else {
+            ui.label("Select a grasp in the browser.");
+            return;
+        };
+        let n = g.frames.len();
+        self.frame = self.frame.min(n - 1);
+        let label = g
+            .labels
+            .first()
+            .and_then(|&l| {
+                session
+                    .label_sets
+                    .first()
+                    .and_then(|set| set.classes.get(l))
+            })
+            .cloned()
+            .unwrap_or_default();
+        ui.heading(format!(
+            "{}{} · {label}",
+            g.object,
+            g.trial.map(|t| format!(" #{t}")).unwrap_or_default()
+        ));
+
+        ui.horizontal(|ui| {
+            if ui
+                .button("Step back")
+                .on_hover_text("Left arrow key")
+                .clicked()
+            {
+                self.step(-1, n);
+            }
+            let play = if self.playing { "Pause" } else { "Play" };
+            if ui.button(play).on_hover_text("Space bar").clicked() {
+                self.toggle(n);
+            }
+            if ui
+                .button("Step forward")
+                .on_hover_text("Right arrow key")
+                .clicked()
+            {
+                self.step(1, n);
+            }
+            ComboBox::from_label("Speed")
+                .selected_text(format!("{}×", self.speed))
+                .show_ui(ui, |ui| {
+                    for sp in SPEEDS {
+                        ui.selectable_value(&mut self.speed, sp, format!("{sp}×"));
+                    }
+                });
+            let mut frame = self.frame;
+            if ui
+                .add(egui::Slider::new(&mut frame, 0..=n - 1).text("frame index"))
+                .changed()
+            {
+                self.frame = frame;
+                self.playing = false;
+            }
+        });
+        let f = &g.frames[self.frame];
+        let key = if self.frame == g.key_frame {
+            " · key frame (full contact)"
+        } else {
+            ""
+        };
+        ui.label(format!(
+            "Frame {} / {n} · t = {:.2} s{key}",
+            self.frame + 1,
+            f.t
+        ));
+
+        ui.separator();
+        let unit = session
+            .sensors
+            .first()
+            .map(|x| match x.transform {
+                crate::session::ValueTransform::Identity => x.unit.clone(),
+                _ => "pressure-like units".into(),
+            })
+            .unwrap_or_default();
+        let cell = Vec2::new(130.0, 170.0);
+        ui.horizontal_wrapped(|ui| {
+            for (k, sensor) in session.sensors.iter().enumerate() {
+                ui.vertical(|ui| {
+                    ui.label(format!(
+                        "{} ({} taxels)",
+                        sensor.name,
+                        sensor.layout.taxel_count()
+                    ));
+                    let p = session.frame_pressures(f, k);
+                    sensor_heatmap(ui, sensor, &p, s.pressure_range, cell);
+                });
+            }
+            colour_bar(
+                ui,
+                s.pressure_range,
+                &format!("pressure ({unit})"),
+                cell.y + 20.0,
+            );
+        });
+
+        ui.separator();
+        let t_now = f.t;
+        let height = ((ui.available_height() - 40.0) / 2.0).max(120.0);
+        if !session.encoders.is_empty() {
+            ui.label("Joint encoders");
+            Plot::new("encoder_trace")
+                .height(height)
+                .legend(Legend::default())
+                .x_axis_label("time (s)")
+                .y_axis_label("angle (degrees)")
+                .show(ui, |plot| {
+                    for (j, name) in session.encoders.iter().enumerate() {
+                        let pts: PlotPoints =
+                            g.frames.iter().map(|fr| [fr.t, fr.encoders[j]]).collect();
+                        plot.line(Line::new(name.clone(), pts));
+                    }
+                    plot.vline(VLine::new("current frame", t_now));
+                });
+        }
+        ComboBox::from_label("Per-finger feature")
+            .selected_text(FingerStats::NAMES[self.stat])
+            .show_ui(ui, |ui| {
+                for (i, name) in FingerStats::NAMES.iter().enumerate() {
+                    ui.selectable_value(&mut self.stat, i, *name);
+                }
+            });
+        Plot::new("finger_trace")
+            .height(height)
+            .legend(Legend::default())
+            .x_axis_label("time (s)")
+            .y_axis_label(format!("{} of pressure", FingerStats::NAMES[self.stat]))
+            .show(ui, |plot| {
+                for (k, sensor) in session.sensors.iter().enumerate() {
+                    let pts: PlotPoints = g
+                        .frames
+                        .iter()
+                        .map(|fr| {
+                            let stats = FingerStats::of(&session.frame_pressures(fr, k));
+                            [fr.t, stats.to_array()[self.stat]]
+                        })
+                        .collect();
+                    plot.line(Line::new(sensor.name.clone(), pts));
+                }
+                plot.vline(VLine::new("current frame", t_now));
+            });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn playback_advances_at_rate_and_stops_at_the_end() {
+        let mut r = Replay::default();
+        r.toggle(5);
+        assert!(r.playing);
+        assert!(r.advance(0.25, 10.0, 5)); // 2.5 frames
+        assert_eq!(r.frame, 2);
+        r.speed = 2.0;
+        assert!(!r.advance(1.0, 10.0, 5));
+        assert_eq!(r.frame, 4);
+        assert!(!r.playing);
+        r.step(-10, 5);
+        assert_eq!(r.frame, 0);
+        r.step(3, 5);
+        assert_eq!(r.frame, 3);
+    }
+}
