@@ -5,12 +5,15 @@
 //! app or egui; the `gui` feature (on by default) adds the window.
 
 pub mod cli;
+pub mod cluster;
 pub mod features;
 pub mod fsutil;
 pub mod jobs;
+pub mod learners;
 pub mod linalg;
 pub mod rng;
 pub mod session;
+pub mod special;
 
 #[cfg(feature = "gui")]
 pub mod app;

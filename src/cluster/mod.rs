@@ -1,0 +1,74 @@
+//! Clustering baselines and clustering scores (the second paper, Sec. VII-A, Table IV):
+//! sequential k-means and a self-organising map on per-grasp features, and the external
+//! scores purity / ARI / NMI against true labels.
+
+pub mod grasp_features;
+pub mod kmeans;
+pub mod scores;
+pub mod som;
+
+use ndarray::{ArrayView1, ArrayView2};
+
+pub use kmeans::{SequentialKMeans, SequentialKMeansParams};
+pub use scores::{
+    ClusterScores, adjusted_rand_index, mutual_info, normalized_mutual_info, purity, scores,
+};
+pub use som::{Schedule, SelfOrganisingMap, SomParams};
+
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ClusterError {
+    #[error("invalid parameter `{name}`: {reason}")]
+    InvalidParameter { name: &'static str, reason: String },
+    #[error("invalid data: {0}")]
+    InvalidData(String),
+}
+
+impl ClusterError {
+    fn invalid(name: &'static str, reason: impl Into<String>) -> Self {
+        ClusterError::InvalidParameter {
+            name,
+            reason: reason.into(),
+        }
+    }
+}
+
+/// Samples to cluster must exist and be finite.
+fn check_data(data: ArrayView2<f64>) -> Result<(), ClusterError> {
+    if data.nrows() == 0 || data.ncols() == 0 {
+        return Err(ClusterError::InvalidData(format!(
+            "needs samples and features, got {} × {}",
+            data.nrows(),
+            data.ncols()
+        )));
+    }
+    if let Some(((r, c), _)) = data.indexed_iter().find(|(_, v)| !v.is_finite()) {
+        return Err(ClusterError::InvalidData(format!(
+            "sample {r}, feature {c} is not finite"
+        )));
+    }
+    Ok(())
+}
+
+/// Samples to assign must be finite and have the model's width.
+fn check_width(data: ArrayView2<f64>, width: usize) -> Result<(), ClusterError> {
+    check_data(data)?;
+    if data.ncols() != width {
+        return Err(ClusterError::InvalidData(format!(
+            "the model has {width} features, the data {}",
+            data.ncols()
+        )));
+    }
+    Ok(())
+}
+
+/// Row of `rows` nearest to `x` in squared Euclidean distance (ties to the lower index).
+fn nearest_row(rows: ArrayView2<f64>, x: ArrayView1<f64>) -> usize {
+    let mut best = (0, f64::INFINITY);
+    for (j, r) in rows.rows().into_iter().enumerate() {
+        let d: f64 = r.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum();
+        if d < best.1 {
+            best = (j, d);
+        }
+    }
+    best.0
+}
