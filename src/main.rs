@@ -2,10 +2,11 @@ use clap::Parser;
 use tactile_workbench::cli::{self, Cli};
 
 fn main() -> std::process::ExitCode {
+    let started = std::time::Instant::now();
     let args = Cli::parse();
     let result = match args.command {
         Some(command) => cli::run(command),
-        None => open_window(args.files),
+        None => open_window(args.files, args.measure_startup, started),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
@@ -17,11 +18,19 @@ fn main() -> std::process::ExitCode {
 }
 
 #[cfg(feature = "gui")]
-fn open_window(files: Vec<std::path::PathBuf>) -> anyhow::Result<()> {
-    tactile_workbench::app::run(files)
+fn open_window(
+    files: Vec<std::path::PathBuf>,
+    measure_startup: bool,
+    started: std::time::Instant,
+) -> anyhow::Result<()> {
+    tactile_workbench::app::run(files, measure_startup.then_some(started))
 }
 
 #[cfg(not(feature = "gui"))]
-fn open_window(_files: Vec<std::path::PathBuf>) -> anyhow::Result<()> {
+fn open_window(
+    _files: Vec<std::path::PathBuf>,
+    _measure_startup: bool,
+    _started: std::time::Instant,
+) -> anyhow::Result<()> {
     anyhow::bail!("this build has no window (built without the `gui` feature); see --help")
 }

@@ -8,6 +8,7 @@ pub mod replay;
 
 use std::path::PathBuf;
 use std::sync::mpsc::{Receiver, channel};
+use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
@@ -347,24 +348,40 @@ impl WorkbenchApp {
     }
 }
 
-struct EframeApp(WorkbenchApp);
+struct EframeApp {
+    app: WorkbenchApp,
+    /// Process start, when measuring startup (`--measure-startup`).
+    measure_from: Option<Instant>,
+    first_frame: Option<f64>,
+}
 
 impl eframe::App for EframeApp {
     fn logic(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
-        self.0.tick(ctx);
+        self.app.tick(ctx);
     }
 
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
-        self.0.show(ui);
+        self.app.show(ui);
+        if let Some(t0) = self.measure_from {
+            let ms = t0.elapsed().as_secs_f64() * 1e3;
+            let first = *self.first_frame.get_or_insert(ms);
+            if !self.app.is_loading() && !self.app.sessions.is_empty() {
+                println!("first frame: {first:.0} ms; sessions shown: {ms:.0} ms");
+                ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+            }
+        }
     }
 
     fn save(&mut self, storage: &mut dyn eframe::Storage) {
-        eframe::set_value(storage, STORAGE_KEY, &self.0.persisted());
+        if self.measure_from.is_none() {
+            eframe::set_value(storage, STORAGE_KEY, &self.app.persisted());
+        }
     }
 }
 
-/// Open the workbench window.
-pub fn run(files: Vec<PathBuf>) -> anyhow::Result<()> {
+/// Open the workbench window. With `measure_from` (the process start), print the time to
+/// the first frame and to the sessions shown, then close.
+pub fn run(files: Vec<PathBuf>, measure_from: Option<Instant>) -> anyhow::Result<()> {
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_title("Tactile Workbench")
@@ -376,14 +393,16 @@ pub fn run(files: Vec<PathBuf>) -> anyhow::Result<()> {
         "Tactile Workbench",
         options,
         Box::new(move |cc| {
+            // A startup measurement always starts from the bundled samples.
             let persisted = cc
                 .storage
+                .filter(|_| measure_from.is_none())
                 .and_then(|s| eframe::get_value::<Persisted>(s, STORAGE_KEY));
-            Ok(Box::new(EframeApp(WorkbenchApp::new(
-                &cc.egui_ctx,
-                persisted,
-                files,
-            ))))
+            Ok(Box::new(EframeApp {
+                app: WorkbenchApp::new(&cc.egui_ctx, persisted, files),
+                measure_from,
+                first_frame: None,
+            }))
         }),
     )
     .map_err(|e| anyhow::anyhow!("could not open the window: {e}"))

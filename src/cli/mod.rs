@@ -20,6 +20,10 @@ pub struct Cli {
     pub command: Option<Command>,
     /// Session files to open in the workbench (with no subcommand).
     pub files: Vec<PathBuf>,
+    /// Open the window, print the time to the first frame and to the sessions shown, and
+    /// quit (a startup benchmark).
+    #[arg(long)]
+    pub measure_startup: bool,
 }
 
 #[derive(Subcommand, Debug)]
