@@ -6,6 +6,7 @@
 
 pub mod cli;
 pub mod features;
+pub mod figures;
 pub mod fsutil;
 pub mod jobs;
 pub mod linalg;
