@@ -2,6 +2,7 @@
 //! laid out by hand in pixels (so that margins, ticks and colour bars look the same across
 //! kinds and backends), and sizes given in CSS pixels at 96 DPI are scaled by `dpi / 96`.
 
+use ab_glyph::{Font, FontRef, PxScale, ScaleFont, point};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::FontTransform;
@@ -37,13 +38,26 @@ pub(super) fn color(c: Rgb) -> RGBColor {
     RGBColor(c.0, c.1, c.2)
 }
 
+/// How text reaches the output.
+pub(super) enum TextMode {
+    /// As `<text>` elements (selectable, searchable), sized with the embedded font.
+    Svg,
+    /// Rasterised here from the embedded font's outlines.
+    Raster,
+}
+
 pub(super) struct Canvas<'a, DB: DrawingBackend> {
     area: &'a DrawingArea<DB, Shift>,
     /// DPI / 96: multiplies every length given in CSS pixels.
     pub scale: f64,
-    /// Vertical shift of text, in em, so that both backends place a centred line alike
-    /// (plotters' glyph rasteriser sits text higher than an SVG viewer does).
-    text_shift: f64,
+    font: &'a FontRef<'static>,
+    mode: TextMode,
+}
+
+/// A line of text laid out from its baseline origin, in device pixels.
+struct Layout {
+    glyphs: Vec<ab_glyph::Glyph>,
+    width: f64,
 }
 
 fn render_err<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> FigureError {
@@ -51,11 +65,17 @@ fn render_err<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) ->
 }
 
 impl<'a, DB: DrawingBackend> Canvas<'a, DB> {
-    pub fn new(area: &'a DrawingArea<DB, Shift>, scale: f64, text_shift: f64) -> Self {
+    pub fn new(
+        area: &'a DrawingArea<DB, Shift>,
+        scale: f64,
+        font: &'a FontRef<'static>,
+        mode: TextMode,
+    ) -> Self {
         Canvas {
             area,
             scale,
-            text_shift,
+            font,
+            mode,
         }
     }
 
@@ -73,15 +93,77 @@ impl<'a, DB: DrawingBackend> Canvas<'a, DB> {
         (css_width * self.scale).round().max(1.0) as u32
     }
 
-    fn style(&self, em_css: f64, c: Rgb, anchor: Anchor, rotated: bool) -> TextStyle<'static> {
-        let mut style = (FONT, em_css * self.scale * EM_TO_PLOTTERS)
-            .into_font()
-            .color(&color(c))
-            .pos(Pos::new(anchor.0, anchor.1));
-        if rotated {
-            style = style.transform(FontTransform::Rotate270);
+    fn layout(&self, text: &str, em_css: f64) -> Layout {
+        let em_px = (em_css * self.scale) as f32;
+        // ab_glyph scales by the ascent-to-descent height, not by the em.
+        let per_em = self.font.height_unscaled() / self.font.units_per_em().unwrap_or(1000.0);
+        let scale = PxScale::from(em_px * per_em);
+        let sf = self.font.as_scaled(scale);
+        let mut caret = 0.0f32;
+        let mut prev = None;
+        let mut glyphs = Vec::with_capacity(text.len());
+        for ch in text.chars() {
+            let id = sf.glyph_id(ch);
+            if let Some(p) = prev {
+                caret += sf.kern(p, id);
+            }
+            glyphs.push(id.with_scale_and_position(scale, point(caret, 0.0)));
+            caret += sf.h_advance(id);
+            prev = Some(id);
         }
-        style
+        Layout {
+            glyphs,
+            width: caret as f64,
+        }
+    }
+
+    /// Draw laid-out glyphs with coverage blending, the line centred vertically on `y` by
+    /// its cap height (about 0.7 em), optionally rotated to read bottom to top.
+    fn raster_text(
+        &self,
+        layout: &Layout,
+        (x, y): (f64, f64),
+        em_css: f64,
+        c: Rgb,
+        h: HPos,
+        rotated: bool,
+    ) -> Result<(), FigureError> {
+        let dx = match h {
+            HPos::Left => 0.0,
+            HPos::Center => -layout.width / 2.0,
+            HPos::Right => -layout.width,
+        };
+        let baseline = 0.35 * em_css * self.scale;
+        let ink = color(c);
+        for g in &layout.glyphs {
+            let Some(outline) = self.font.outline_glyph(g.clone()) else {
+                continue;
+            };
+            let b = outline.px_bounds();
+            let mut result = Ok(());
+            outline.draw(|gx, gy, coverage| {
+                if coverage <= 0.0 || result.is_err() {
+                    return;
+                }
+                let lx = dx + f64::from(b.min.x + gx as f32);
+                let ly = baseline + f64::from(b.min.y + gy as f32);
+                // Rotated by 270°: the text's x axis points up.
+                let (px, py) = if rotated {
+                    (x + ly, y - lx)
+                } else {
+                    (x + lx, y + ly)
+                };
+                result = self
+                    .area
+                    .draw_pixel(
+                        (px.round() as i32, py.round() as i32),
+                        &ink.mix(f64::from(coverage.min(1.0))),
+                    )
+                    .map_err(render_err);
+            });
+            result?;
+        }
+        Ok(())
     }
 
     /// Width and height of `text` in device pixels at font size `em_css`.
@@ -89,12 +171,7 @@ impl<'a, DB: DrawingBackend> Canvas<'a, DB> {
         if text.is_empty() {
             return Ok((0.0, 0.0));
         }
-        let style = self.style(em_css, TEXT, Anchor::LEFT, false);
-        let (w, _) = self
-            .area
-            .estimate_text_size(text, &style)
-            .map_err(render_err)?;
-        Ok((w as f64, em_css * self.scale * 1.2))
+        Ok((self.layout(text, em_css).width, em_css * self.scale * 1.2))
     }
 
     /// Draw `text`; `rotated` reads bottom to top (y-axis titles).
@@ -110,20 +187,25 @@ impl<'a, DB: DrawingBackend> Canvas<'a, DB> {
         if text.is_empty() {
             return Ok(());
         }
-        let shift = self.text_shift * em_css * self.scale;
-        let (x, y) = if rotated {
-            (x + shift, y)
-        } else {
-            (x, y + shift)
-        };
-        let style = self.style(em_css, c, anchor, rotated);
-        self.area
-            .draw(&Text::new(
-                text.to_string(),
-                (x.round() as i32, y.round() as i32),
-                style,
-            ))
-            .map_err(render_err)
+        match self.mode {
+            TextMode::Raster => {
+                let layout = self.layout(text, em_css);
+                self.raster_text(&layout, (x, y), em_css, c, anchor.0, rotated)
+            }
+            TextMode::Svg => {
+                let mut style = (FONT, em_css * self.scale * EM_TO_PLOTTERS)
+                    .into_font()
+                    .color(&color(c))
+                    .pos(Pos::new(anchor.0, anchor.1));
+                if rotated {
+                    style = style.transform(FontTransform::Rotate270);
+                }
+                let at = (x.round() as i32, y.round() as i32);
+                self.area
+                    .draw(&Text::new(text.to_string(), at, style))
+                    .map_err(render_err)
+            }
+        }
     }
 
     pub fn fill_rect(

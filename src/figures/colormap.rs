@@ -11,6 +11,7 @@ use super::model::Rgb;
 
 /// Which colour map a heatmap or image grid uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum ColorMap {
     /// Perceptually uniform, for magnitudes (counts, scores, pressures).
     Viridis,

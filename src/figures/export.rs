@@ -7,12 +7,13 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
+use ab_glyph::FontRef;
 use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
 use serde::{Deserialize, Serialize};
 
 use super::FigureError;
-use super::canvas::{Canvas, FONT};
+use super::canvas::{Canvas, FONT, TextMode};
 use super::csv::to_csv;
 use super::model::{Figure, FigureSet};
 use super::render;
@@ -103,25 +104,19 @@ impl Format {
     }
 }
 
-/// Register the embedded font with plotters once per process.
-fn ensure_font() -> Result<(), FigureError> {
-    static REGISTERED: OnceLock<bool> = OnceLock::new();
-    let ok = *REGISTERED.get_or_init(|| {
-        register_font(FONT, FontStyle::Normal, epaint_default_fonts::UBUNTU_LIGHT).is_ok()
-    });
-    if ok {
-        Ok(())
-    } else {
-        Err(FigureError::Render(
-            "the embedded font could not be loaded".into(),
-        ))
-    }
+/// The embedded font, parsed once; also registered with plotters, whose SVG text style
+/// needs the family to exist.
+fn font() -> Result<&'static FontRef<'static>, FigureError> {
+    static FONT_REF: OnceLock<Option<FontRef<'static>>> = OnceLock::new();
+    FONT_REF
+        .get_or_init(|| {
+            let bytes = epaint_default_fonts::UBUNTU_LIGHT;
+            register_font(FONT, FontStyle::Normal, bytes).ok()?;
+            FontRef::try_from_slice(bytes).ok()
+        })
+        .as_ref()
+        .ok_or_else(|| FigureError::Render("the embedded font could not be loaded".into()))
 }
-
-// Vertical text correction per backend, in em: plotters' rasteriser draws a "centred"
-// line about a fifth of an em too high, an SVG viewer (dy = 0.5ex) slightly low.
-const SVG_TEXT_SHIFT: f64 = -0.05;
-const PNG_TEXT_SHIFT: f64 = 0.2;
 
 fn draw_err(e: impl std::fmt::Display) -> FigureError {
     FigureError::Render(e.to_string())
@@ -130,12 +125,12 @@ fn draw_err(e: impl std::fmt::Display) -> FigureError {
 /// The figure as an SVG document.
 pub fn render_svg(fig: &Figure, opts: &RenderOptions) -> Result<String, FigureError> {
     opts.validate()?;
-    ensure_font()?;
+    let font = font()?;
     let mut out = String::new();
     {
         let root = SVGBackend::with_string(&mut out, (opts.width, opts.height)).into_drawing_area();
         root.fill(&WHITE).map_err(draw_err)?;
-        render::draw(&Canvas::new(&root, opts.scale(), SVG_TEXT_SHIFT), fig)?;
+        render::draw(&Canvas::new(&root, opts.scale(), font, TextMode::Svg), fig)?;
         root.present().map_err(draw_err)?;
     }
     Ok(out)
@@ -144,14 +139,17 @@ pub fn render_svg(fig: &Figure, opts: &RenderOptions) -> Result<String, FigureEr
 /// The figure as PNG bytes (RGB, 8 bits), with its DPI recorded in the pHYs chunk.
 pub fn render_png(fig: &Figure, opts: &RenderOptions) -> Result<Vec<u8>, FigureError> {
     opts.validate()?;
-    ensure_font()?;
+    let font = font()?;
     // Sides ≤ MAX_SIDE: the product fits a usize.
     let mut pixels = vec![0u8; opts.width as usize * opts.height as usize * 3];
     {
         let root =
             BitMapBackend::with_buffer(&mut pixels, (opts.width, opts.height)).into_drawing_area();
         root.fill(&WHITE).map_err(draw_err)?;
-        render::draw(&Canvas::new(&root, opts.scale(), PNG_TEXT_SHIFT), fig)?;
+        render::draw(
+            &Canvas::new(&root, opts.scale(), font, TextMode::Raster),
+            fig,
+        )?;
         root.present().map_err(draw_err)?;
     }
     let mut png_bytes = Vec::new();
@@ -180,8 +178,10 @@ fn render(fig: &Figure, format: Format, opts: &RenderOptions) -> Result<Vec<u8>,
 
 /// Write `bytes` to `path` atomically (see [`crate::fsutil`]); the error names `path`.
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FigureError> {
-    fsutil::write_atomic(path, bytes)
-        .map_err(|source| FigureError::Io { path: path.to_path_buf(), source })
+    fsutil::write_atomic(path, bytes).map_err(|source| FigureError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// Render `fig` to `path`, the format given by the extension (.svg, .png or .csv).

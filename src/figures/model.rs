@@ -560,8 +560,8 @@ impl Figure {
                 if c.ref_lines.iter().any(|r| !r.value.is_finite()) {
                     return invalid("a reference line needs a finite value".into());
                 }
-                check_include(&c.x).or_else(|e| invalid(e))?;
-                check_include(&c.y).or_else(|e| invalid(e))?;
+                check_include(&c.x).or_else(invalid)?;
+                check_include(&c.y).or_else(invalid)?;
             }
             FigureKind::Bars(b) => {
                 if b.categories.is_empty() || b.groups.is_empty() {
@@ -589,7 +589,7 @@ impl Figure {
                         return invalid(format!("group {:?}: one error per category", g.name));
                     }
                 }
-                check_include(&b.y).or_else(|e| invalid(e))?;
+                check_include(&b.y).or_else(invalid)?;
             }
             FigureKind::Heatmap(h) => {
                 if h.rows.is_empty() || h.columns.is_empty() {
@@ -610,7 +610,7 @@ impl Figure {
                 {
                     return invalid("a marked cell lies outside the matrix".into());
                 }
-                check_limits(&h.colors).or_else(|e| invalid(e))?;
+                check_limits(&h.colors).or_else(invalid)?;
             }
             FigureKind::ImageGrid(g) => {
                 let Some(first) = g.images.first() else {
@@ -628,7 +628,7 @@ impl Figure {
                         ));
                     }
                 }
-                check_limits(&g.colors).or_else(|e| invalid(e))?;
+                check_limits(&g.colors).or_else(invalid)?;
             }
         }
         Ok(())

@@ -168,7 +168,8 @@ fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
 }
 
 fn format_tick(v: f64, decimals: usize) -> String {
-    let big = v != 0.0 && (v.abs() >= 1e5 || v.abs() < 1e-4);
+    // Scientific notation for large values and for steps finer than 1e-4.
+    let big = v != 0.0 && (v.abs() >= 1e5 || decimals > 4);
     let s = if big {
         format!("{v:e}")
     } else {
@@ -937,7 +938,7 @@ fn colorbar_width<DB: DrawingBackend>(
         limits.0,
         limits.1,
         false,
-        (bar_h / c.px(40.0)).floor().clamp(2.0, 8.0) as usize,
+        (bar_h / c.px(50.0)).floor().clamp(2.0, 6.0) as usize,
     );
     let mut widest: f64 = 0.0;
     for l in &ticks.labels {
@@ -1092,13 +1093,13 @@ fn draw_heatmap<DB: DrawingBackend>(
                 } else {
                     "n/a".to_string()
                 };
-                let (tw, th) = c.text_size(&text, NOTE_EM)?;
+                let (tw, th) = c.text_size(&text, TICK_EM)?;
                 if tw + c.px(4.0) <= cw && th <= ch {
                     let ink = if light(color) { TEXT } else { WHITE };
                     c.text(
                         &text,
                         ((xe(k) + xe(k + 1)) / 2.0, (ye(r) + ye(r + 1)) / 2.0),
-                        NOTE_EM,
+                        TICK_EM,
                         ink,
                         Anchor::CENTER,
                         false,
@@ -1155,9 +1156,12 @@ fn draw_heatmap<DB: DrawingBackend>(
     )?;
     let y_title = h.y.text();
     let em = fitting_em(c, &y_title, AXIS_TITLE_EM, grid.h().max(c.px(100.0)))?;
+    // Beside the row labels, not at the far left when square cells leave room.
+    let title_x = (grid.l - c.px(14.0) - row_w.min(area.w() * 0.3) - axis_title_h / 2.0)
+        .max(area.l + axis_title_h / 2.0);
     c.text(
         &y_title,
-        (area.l + axis_title_h / 2.0, (grid.t + grid.b) / 2.0),
+        (title_x, (grid.t + grid.b) / 2.0),
         em,
         TEXT,
         Anchor::CENTER,
@@ -1201,11 +1205,11 @@ fn draw_image_grid<DB: DrawingBackend>(
     };
     let has_caption = g.images.iter().any(|im| !im.caption.is_empty());
     let cap_h = if has_caption {
-        c.px(NOTE_EM * 1.5)
+        c.px(NOTE_EM * 1.8)
     } else {
         0.0
     };
-    let gap = c.px(10.0);
+    let gap = c.px(16.0);
     let cell_for = |cols: usize| {
         let rows = n.div_ceil(cols);
         let by_w = (avail.w() - gap * (cols - 1) as f64) / (cols * iw) as f64;
@@ -1252,6 +1256,15 @@ fn draw_image_grid<DB: DrawingBackend>(
                 }
             }
         }
+        // The sensor's outline, so that sparse images stay apart.
+        let pad = c.px(2.0);
+        let frame = Rgb(0xcc, 0xcc, 0xcc);
+        c.stroke_rect(
+            (left - pad, top - pad),
+            (left + img_w + pad, top + img_h + pad),
+            frame,
+            1.0,
+        )?;
         if !im.caption.is_empty() {
             let em = fitting_em(c, &im.caption, NOTE_EM, img_w + gap * 0.8)?;
             c.text(
@@ -1291,7 +1304,8 @@ mod tests {
             (t.first().copied(), t.last().copied(), d),
             (Some(-2.5), Some(5.0), 1)
         );
-        assert_eq!(format_tick(-0.0001, 2), "-1e-4");
+        assert_eq!(format_tick(-0.00002, 5), "-2e-5");
+        assert_eq!(format_tick(250000.0, 0), "2.5e5");
         assert_eq!(format_tick(-0.001, 2), "0.00");
     }
 
