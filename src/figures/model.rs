@@ -481,7 +481,9 @@ impl Figure {
             front_name,
             front.iter().map(|&i| points.x[i]).collect(),
             front.iter().map(|&i| points.y[i]).collect(),
-        );
+        )
+        // A neutral line, so that the coloured points stand out.
+        .color(Rgb(0x55, 0x55, 0x55));
         Figure::chart(title, x, y, vec![front, points.style(SeriesStyle::Markers)])
     }
 
@@ -526,6 +528,16 @@ impl Figure {
     /// every row and column. Missing (NaN) values are allowed.
     pub fn validate(&self) -> Result<(), FigureError> {
         let invalid = |msg: String| Err(FigureError::Invalid(format!("{}: {msg}", self.title)));
+        // Every axis and colour bar says what it shows.
+        let titles: Vec<&str> = match &self.kind {
+            FigureKind::Chart(c) => vec![&c.x.title, &c.y.title],
+            FigureKind::Bars(b) => vec![&b.x.title, &b.y.title],
+            FigureKind::Heatmap(h) => vec![&h.x.title, &h.y.title, &h.colors.title],
+            FigureKind::ImageGrid(g) => vec![&g.colors.title],
+        };
+        if titles.iter().any(|t| t.trim().is_empty()) {
+            return invalid("every axis and colour bar needs a title".into());
+        }
         match &self.kind {
             FigureKind::Chart(c) => {
                 if c.series.is_empty() {
@@ -761,6 +773,13 @@ mod tests {
         assert!(matches!(bad.validate(), Err(FigureError::Invalid(m)) if m.contains("\"s\"")));
         let empty = Figure::chart("t", Axis::new("x", ""), Axis::new("y", ""), vec![]);
         assert!(empty.validate().is_err());
+        let untitled = Figure::chart(
+            "t",
+            Axis::new(" ", "s"),
+            Axis::new("y", ""),
+            vec![Series::new("s", vec![1.0], vec![1.0])],
+        );
+        assert!(matches!(untitled.validate(), Err(FigureError::Invalid(m)) if m.contains("title")));
         let heat = Figure::new(
             "h",
             FigureKind::Heatmap(Heatmap {

@@ -8,7 +8,7 @@ use super::canvas::{AXIS, Anchor, Canvas, GRID, MUTED, Marker, TEXT, WHITE};
 use super::colormap::ColorMap;
 use super::model::{
     Axis, BarChart, Chart, ColorScale, ErrorDisplay, Figure, FigureKind, Heatmap, ImageGrid,
-    Orientation, Rgb, Scale, SeriesStyle,
+    Orientation, Rgb, Scale, Series, SeriesStyle,
 };
 
 // Font sizes (em, CSS pixels at 96 DPI).
@@ -288,6 +288,39 @@ struct LegendEntry {
     bar: bool,
 }
 
+/// `text`, cut with an ellipsis to fit `max_w` at size `em`.
+fn truncated<DB: DrawingBackend>(
+    c: &Canvas<'_, DB>,
+    text: &str,
+    em: f64,
+    max_w: f64,
+) -> Result<String, FigureError> {
+    if c.text_size(text, em)?.0 <= max_w {
+        return Ok(text.to_string());
+    }
+    let chars: Vec<char> = text.chars().collect();
+    for n in (1..chars.len()).rev() {
+        let cut: String = chars[..n].iter().collect::<String>() + "…";
+        if c.text_size(&cut, em)?.0 <= max_w {
+            return Ok(cut);
+        }
+    }
+    Ok("…".to_string())
+}
+
+/// Shorten legend names so that the legend takes at most `max_w`; returns its width.
+fn fit_legend<DB: DrawingBackend>(
+    c: &Canvas<'_, DB>,
+    entries: &mut [LegendEntry],
+    max_w: f64,
+) -> Result<f64, FigureError> {
+    let swatch = c.px(30.0);
+    for e in entries.iter_mut() {
+        e.name = truncated(c, &e.name, LEGEND_EM, max_w - swatch)?;
+    }
+    legend_width(c, entries)
+}
+
 fn legend_width<DB: DrawingBackend>(
     c: &Canvas<'_, DB>,
     entries: &[LegendEntry],
@@ -392,7 +425,7 @@ fn frame<DB: DrawingBackend>(
     let (x, xt) = match x_numeric {
         Some((axis, lo, hi)) => {
             let log = axis.scale == Scale::Log;
-            let mut max = ((plot.w()) / c.px(80.0)).floor().clamp(2.0, 10.0) as usize;
+            let mut max = (plot.w() / c.px(55.0)).floor().clamp(3.0, 10.0) as usize;
             // Fewer ticks until their labels do not touch.
             let xt = loop {
                 let t = ticks_for(lo, hi, log, max);
@@ -535,7 +568,7 @@ fn draw_chart<DB: DrawingBackend>(
     let (xlo, xhi) = limits(&all_x, &chart.x, 0.04);
     let (ylo, yhi) = limits(&all_y, &chart.y, 0.06);
 
-    let entries: Vec<LegendEntry> = chart
+    let mut entries: Vec<LegendEntry> = chart
         .series
         .iter()
         .enumerate()
@@ -558,7 +591,7 @@ fn draw_chart<DB: DrawingBackend>(
         chart.series.len() > 1 || entries.iter().any(|e| e.name != chart.series[0].name);
     let mut body = area;
     if show_legend {
-        let lw = legend_width(c, &entries)?.min(area.w() * 0.4);
+        let lw = fit_legend(c, &mut entries, area.w() * 0.4)?;
         body.r -= lw + c.px(12.0);
     }
     let tick_label_h = c.px(TICK_EM * 1.2);
@@ -669,55 +702,102 @@ fn draw_chart<DB: DrawingBackend>(
     Ok(())
 }
 
-/// Point labels beside their points, at the first of four positions that neither leaves
-/// the plot nor overlaps a label already placed.
+/// Does the segment `a`–`b` cross the rectangle? (Liang–Barsky clipping.)
+fn segment_hits(r: &Rect, a: (f64, f64), b: (f64, f64)) -> bool {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for (p, q) in [
+        (-dx, a.0 - r.l),
+        (dx, r.r - a.0),
+        (-dy, a.1 - r.t),
+        (dy, r.b - a.1),
+    ] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return false;
+            }
+        } else {
+            let t = q / p;
+            if p < 0.0 {
+                t0 = t0.max(t);
+            } else {
+                t1 = t1.min(t);
+            }
+            if t0 > t1 {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// Point labels beside their points: of eight positions around the point, the one that
+/// crosses the fewest lines, markers and earlier labels, and stays inside the plot.
 fn draw_point_labels<DB: DrawingBackend>(
     c: &Canvas<'_, DB>,
     chart: &Chart,
     f: &Frame,
 ) -> Result<(), FigureError> {
+    let ok =
+        |s: &Series, k: usize| drawable(s.x[k], chart.x.scale) && drawable(s.y[k], chart.y.scale);
+    let mut segments = Vec::new();
+    let mut markers = Vec::new();
+    for s in &chart.series {
+        let pixel = |k: usize| (f.x.map(s.x[k]), f.y.map(s.y[k]));
+        for k in (0..s.x.len()).filter(|&k| ok(s, k)) {
+            let (x, y) = pixel(k);
+            let m = c.px(4.0);
+            markers.push(Rect {
+                l: x - m,
+                r: x + m,
+                t: y - m,
+                b: y + m,
+            });
+            if s.style != SeriesStyle::Markers && k + 1 < s.x.len() && ok(s, k + 1) {
+                segments.push((pixel(k), pixel(k + 1)));
+            }
+        }
+    }
     let mut placed: Vec<Rect> = Vec::new();
-    let off = c.px(5.0);
+    let (gap, lift) = (c.px(7.0), c.px(2.0));
     for s in &chart.series {
         for (k, label) in s.point_labels.iter().enumerate() {
-            if label.is_empty()
-                || !(drawable(s.x[k], chart.x.scale) && drawable(s.y[k], chart.y.scale))
-            {
+            if label.is_empty() || !ok(s, k) {
                 continue;
             }
             let (px, py) = (f.x.map(s.x[k]), f.y.map(s.y[k]));
             let (w, h) = c.text_size(label, NOTE_EM)?;
+            let at = |l: f64, t: f64| Rect {
+                l,
+                r: l + w,
+                t,
+                b: t + h,
+            };
             let candidates = [
-                Rect {
-                    l: px + off,
-                    r: px + off + w,
-                    t: py - off - h,
-                    b: py - off,
-                },
-                Rect {
-                    l: px + off,
-                    r: px + off + w,
-                    t: py + off,
-                    b: py + off + h,
-                },
-                Rect {
-                    l: px - off - w,
-                    r: px - off,
-                    t: py - off - h,
-                    b: py - off,
-                },
-                Rect {
-                    l: px - off - w,
-                    r: px - off,
-                    t: py + off,
-                    b: py + off + h,
-                },
+                at(px + gap, py - h / 2.0),
+                at(px + gap, py - lift - h),
+                at(px + gap, py + lift),
+                at(px - gap - w, py - h / 2.0),
+                at(px - gap - w, py - lift - h),
+                at(px - gap - w, py + lift),
+                at(px - w / 2.0, py - gap - h),
+                at(px - w / 2.0, py + gap),
             ];
+            let cost = |r: &Rect| {
+                let outside = if f.plot.contains(r) { 0 } else { 100 };
+                let labels = placed.iter().filter(|p| p.overlaps(r)).count() * 3;
+                let marks = markers.iter().filter(|m| m.overlaps(r)).count() * 2;
+                let lines = segments
+                    .iter()
+                    .filter(|(a, b)| segment_hits(r, *a, *b))
+                    .count();
+                outside + labels + marks + lines
+            };
             let chosen = candidates
                 .iter()
-                .find(|r| f.plot.contains(r) && !placed.iter().any(|p| p.overlaps(r)))
-                .or_else(|| candidates.iter().find(|r| f.plot.contains(r)))
-                .unwrap_or(&candidates[0]);
+                .enumerate()
+                .min_by_key(|(i, r)| (cost(r), *i))
+                .map_or(candidates[0], |(_, r)| *r);
             c.text(
                 label,
                 (chosen.l, (chosen.t + chosen.b) / 2.0),
@@ -726,7 +806,7 @@ fn draw_point_labels<DB: DrawingBackend>(
                 Anchor::LEFT,
                 false,
             )?;
-            placed.push(*chosen);
+            placed.push(chosen);
         }
     }
     Ok(())
@@ -827,7 +907,7 @@ fn draw_bars<DB: DrawingBackend>(
     let (ylo, yhi) = limits(&values, &bars.y, 0.05);
     let sign_pos = ColorMap::Diverging.at(0.85);
     let sign_neg = ColorMap::Diverging.at(0.15);
-    let entries: Vec<LegendEntry> = if bars.sign_colors {
+    let mut entries: Vec<LegendEntry> = if bars.sign_colors {
         let missing = bars.groups[0]
             .values
             .iter()
@@ -868,7 +948,7 @@ fn draw_bars<DB: DrawingBackend>(
     let show_legend = ng > 1 || bars.sign_colors || entries[0].name != bars.groups[0].name;
     let mut body = area;
     if show_legend {
-        let lw = legend_width(c, &entries)?.min(area.w() * 0.4);
+        let lw = fit_legend(c, &mut entries, area.w() * 0.4)?;
         body.r -= lw + c.px(12.0);
     }
     // The label layout needs the slot width, which needs the y-label width: estimate the
@@ -1315,6 +1395,20 @@ mod tests {
         assert_eq!(log_ticks(1.5, 30.0), vec![2.0, 5.0, 10.0, 20.0]);
         assert_eq!(format_log_tick(1e-6), "1e-6");
         assert_eq!(format_log_tick(0.01), "0.01");
+    }
+
+    #[test]
+    fn segments_hit_rectangles() {
+        let r = Rect {
+            l: 0.0,
+            t: 0.0,
+            r: 10.0,
+            b: 10.0,
+        };
+        assert!(segment_hits(&r, (-5.0, 5.0), (15.0, 5.0)));
+        assert!(segment_hits(&r, (5.0, 5.0), (50.0, 50.0)));
+        assert!(!segment_hits(&r, (-5.0, -1.0), (15.0, -1.0)));
+        assert!(!segment_hits(&r, (11.0, 0.0), (20.0, 10.0)));
     }
 
     #[test]
