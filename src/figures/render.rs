@@ -813,10 +813,22 @@ fn draw_point_labels<DB: DrawingBackend>(
 }
 
 /// Which category labels to draw: every `step`-th, rotated or not, and the height taken.
+#[derive(Clone, Copy)]
 struct CategoryLabels {
     step: usize,
     rotated: bool,
     height: f64,
+    /// Room one label needs along the axis.
+    needed: f64,
+}
+
+impl CategoryLabels {
+    /// The same layout for the final slot width: only how many labels are skipped changes,
+    /// so that the height already reserved stays right.
+    fn for_slot(self, slot: f64) -> Self {
+        let step = (self.needed / slot.max(1e-9)).ceil().max(1.0) as usize;
+        CategoryLabels { step, ..self }
+    }
 }
 
 fn category_labels<DB: DrawingBackend>(
@@ -831,27 +843,24 @@ fn category_labels<DB: DrawingBackend>(
     }
     let line_h = c.px(em * 1.2);
     let gap = c.px(6.0);
-    if widest + gap <= slot {
-        return Ok(CategoryLabels {
+    // Long names that do not fit read better rotated; short ones (indices) are thinned out.
+    let rotated = widest + gap > slot && widest > c.px(em * 3.0);
+    let layout = if rotated {
+        CategoryLabels {
             step: 1,
-            rotated: false,
-            height: line_h,
-        });
-    }
-    // Long names read better rotated; short ones (indices) thinned out.
-    let rotate = widest > c.px(em * 3.0);
-    let needed = if rotate { line_h } else { widest + gap };
-    let step = (needed / slot.max(1e-9)).ceil().max(1.0) as usize;
-    let height = if rotate {
-        widest.min(c.px(160.0))
+            rotated,
+            height: widest.min(c.px(160.0)),
+            needed: line_h,
+        }
     } else {
-        line_h
+        CategoryLabels {
+            step: 1,
+            rotated,
+            height: line_h,
+            needed: widest + gap,
+        }
     };
-    Ok(CategoryLabels {
-        step,
-        rotated: rotate,
-        height,
-    })
+    Ok(layout.for_slot(slot))
 }
 
 fn draw_category_label<DB: DrawingBackend>(
@@ -863,17 +872,8 @@ fn draw_category_label<DB: DrawingBackend>(
     layout: &CategoryLabels,
 ) -> Result<(), FigureError> {
     if layout.rotated {
-        c.text(
-            label,
-            (x, top),
-            em,
-            TEXT,
-            Anchor(
-                plotters::style::text_anchor::HPos::Right,
-                plotters::style::text_anchor::VPos::Center,
-            ),
-            true,
-        )
+        let label = truncated(c, label, em, layout.height)?;
+        c.text(&label, (x, top), em, TEXT, Anchor::RIGHT, true)
     } else {
         c.text(
             label,
@@ -954,13 +954,10 @@ fn draw_bars<DB: DrawingBackend>(
     // The label layout needs the slot width, which needs the y-label width: estimate the
     // slot from the body, then lay out the frame with the labels' height.
     let slot_estimate = (body.w() - c.px(60.0)) / n as f64;
-    let mut labels = category_labels(c, &bars.categories, slot_estimate, TICK_EM)?;
+    let labels = category_labels(c, &bars.categories, slot_estimate, TICK_EM)?;
     let f = frame(c, body, &bars.y, (ylo, yhi), None, labels.height)?;
     let slot = f.plot.w() / n as f64;
-    labels = CategoryLabels {
-        height: labels.height,
-        ..category_labels(c, &bars.categories, slot, TICK_EM)?
-    };
+    let labels = labels.for_slot(slot);
     let bar_w = slot * 0.8 / ng as f64;
     let inset = if bar_w > c.px(4.0) { c.px(0.5) } else { 0.0 };
     let y0 = f.y.map(0.0);
@@ -1152,10 +1149,7 @@ fn draw_heatmap<DB: DrawingBackend>(
         r: left + (avail_w - cw * nc as f64) / 2.0 + cw * nc as f64,
         b: area.t + ch * nr as f64,
     };
-    let col_layout = CategoryLabels {
-        height: col_layout.height,
-        ..category_labels(c, &h.columns, cw, TICK_EM)?
-    };
+    let col_layout = col_layout.for_slot(cw);
     let xe = |k: usize| grid.l + cw * k as f64;
     let ye = |k: usize| grid.t + ch * k as f64;
     let decimals = value_decimals(finite);
@@ -1202,8 +1196,9 @@ fn draw_heatmap<DB: DrawingBackend>(
     // Row labels, thinned out when rows are shorter than a line of text.
     let row_step = (c.px(TICK_EM * 1.2) / ch).ceil().max(1.0) as usize;
     for (r, label) in h.rows.iter().enumerate().step_by(row_step) {
+        let label = truncated(c, label, TICK_EM, area.w() * 0.3)?;
         c.text(
-            label,
+            &label,
             (grid.l - c.px(6.0), (ye(r) + ye(r + 1)) / 2.0),
             TICK_EM,
             TEXT,
