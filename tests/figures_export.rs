@@ -8,9 +8,9 @@ use std::path::{Path, PathBuf};
 use quick_xml::Reader;
 use quick_xml::events::Event;
 use tactile_workbench::figures::{
-    Axis, AxisTitle, BarGroup, ColorScale, Figure, FigureEntry, FigureError, FigureKind, FigureSet,
-    Format, GridImage, Heatmap, ImageGrid, Orientation, RenderOptions, Series, SeriesStyle,
-    export_all, render_png, render_svg, to_csv, write_figure,
+    Axis, AxisTitle, BarGroup, ColorMap, ColorScale, Figure, FigureEntry, FigureError, FigureSet,
+    Format, GridImage, Orientation, RenderOptions, Rgb, Series, SeriesStyle, export_all,
+    render_png, render_svg, to_csv, write_figure,
 };
 
 fn temp_dir(name: &str) -> PathBuf {
@@ -54,18 +54,14 @@ fn usage_bars() -> Figure {
 
 fn differential_heatmap(values: Vec<Vec<f64>>) -> Figure {
     let cols = values[0].len();
-    Figure::new(
+    Figure::heatmap(
         "Coefficient differential",
-        FigureKind::Heatmap(Heatmap {
-            x: AxisTitle::new("gamma", ""),
-            y: AxisTitle::new("beta", ""),
-            columns: (0..cols).map(|c| format!("g{c}")).collect(),
-            rows: (0..values.len()).map(|r| format!("b{r}")).collect(),
-            values,
-            colors: ColorScale::diverging("Differential", "a.u."),
-            annotate: false,
-            marked: vec![],
-        }),
+        AxisTitle::new("gamma", ""),
+        AxisTitle::new("beta", ""),
+        (0..cols).map(|c| format!("g{c}")).collect(),
+        (0..values.len()).map(|r| format!("b{r}")).collect(),
+        values,
+        ColorScale::diverging("Differential", "a.u."),
     )
 }
 
@@ -78,13 +74,10 @@ fn basis_grid() -> Figure {
                 .collect(),
         })
         .collect();
-    Figure::new(
+    Figure::image_grid(
         "Dictionary bases",
-        FigureKind::ImageGrid(ImageGrid {
-            images,
-            columns: 0,
-            colors: ColorScale::viridis("Basis weight", ""),
-        }),
+        images,
+        ColorScale::viridis("Basis weight", ""),
     )
 }
 
@@ -94,11 +87,33 @@ fn parse_svg(svg: &str) -> (Vec<String>, Vec<String>) {
     let mut texts = Vec::new();
     let mut fills = Vec::new();
     let mut depth = 0i32;
+    // Text arrives in pieces split at entity references (`&gt;`).
+    let mut text = String::new();
+    let mut flush = |text: &mut String| {
+        if !text.trim().is_empty() {
+            texts.push(text.trim().to_string());
+        }
+        text.clear();
+    };
     loop {
         match reader.read_event() {
             Ok(Event::Eof) => break,
-            Ok(Event::Start(_)) => depth += 1,
-            Ok(Event::End(_)) => depth -= 1,
+            Ok(Event::Start(_)) => {
+                flush(&mut text);
+                depth += 1;
+            }
+            Ok(Event::End(_)) => {
+                flush(&mut text);
+                depth -= 1;
+            }
+            Ok(Event::GeneralRef(r)) => text.push(match r.decode().unwrap().as_ref() {
+                "lt" => '<',
+                "gt" => '>',
+                "amp" => '&',
+                "quot" => '"',
+                "apos" => '\'',
+                other => panic!("unexpected entity &{other};"),
+            }),
             Ok(Event::Empty(e)) if e.name().as_ref() == b"rect" => {
                 let fill = e
                     .try_get_attribute("fill")
@@ -107,12 +122,7 @@ fn parse_svg(svg: &str) -> (Vec<String>, Vec<String>) {
                     .unwrap_or_default();
                 fills.push(fill);
             }
-            Ok(Event::Text(t)) => {
-                let text = t.decode().unwrap().trim().to_string();
-                if !text.is_empty() {
-                    texts.push(text);
-                }
-            }
+            Ok(Event::Text(t)) => text.push_str(&t.decode().unwrap()),
             Ok(_) => {}
             Err(e) => panic!(
                 "SVG is not well-formed XML at {}: {e}",
@@ -177,6 +187,64 @@ fn diverging_heatmap_puts_zero_at_the_neutral_colour() {
         fills[3], "#67001F",
         "1 is half-way to the red end, not at it"
     );
+}
+
+#[test]
+fn grid_search_map_marks_the_recommended_model() {
+    let fig = Figure::heatmap(
+        "Grid search",
+        AxisTitle::new("gamma", ""),
+        AxisTitle::new("beta", ""),
+        vec!["0.1".into(), "0.4".into()],
+        vec!["0.2".into(), "0.8".into()],
+        vec![vec![0.71, 0.8], vec![0.65, 0.775]],
+        ColorScale::viridis("Weighted success rate", ""),
+    )
+    .annotated()
+    .mark(0, 1);
+    let svg = render_svg(&fig, &RenderOptions::default()).unwrap();
+    let (texts, _) = parse_svg(&svg);
+    for value in ["0.710", "0.800", "0.650", "0.775"] {
+        assert!(
+            texts.iter().any(|t| t == value),
+            "cell value {value}: {texts:?}"
+        );
+    }
+    assert_eq!(
+        svg.matches("stroke=\"#000000\"").count(),
+        1,
+        "one outlined cell"
+    );
+    let out_of_range = fig.clone().mark(2, 0);
+    assert!(matches!(
+        render_svg(&out_of_range, &RenderOptions::default()),
+        Err(FigureError::Invalid(_))
+    ));
+}
+
+#[test]
+fn differential_bars_are_coloured_by_sign() {
+    let fig = Figure::bars(
+        "Usage differential",
+        AxisTitle::new("Basis", ""),
+        Axis::new("Success − failure", "patches"),
+        vec!["1".into(), "2".into(), "3".into()],
+        vec![BarGroup::new("differential", vec![4.0, -3.0, f64::NAN])],
+    )
+    .sign_colored();
+    let svg = render_svg(&fig, &RenderOptions::default()).unwrap();
+    let (texts, fills) = parse_svg(&svg);
+    assert!(
+        texts.iter().any(|t| t == "differential > 0 (1 missing)"),
+        "{texts:?}"
+    );
+    assert!(texts.iter().any(|t| t == "differential < 0"));
+    // fills: background, then the two bars (the missing one is not drawn).
+    let hex = |c: Rgb| format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2);
+    let (red, blue) = (ColorMap::Diverging.at(0.85), ColorMap::Diverging.at(0.15));
+    assert!(red.0 > red.2 && blue.2 > blue.0);
+    assert_eq!(fills[1], hex(red), "positive bar in the red half");
+    assert_eq!(fills[2], hex(blue), "negative bar in the blue half");
 }
 
 fn png_size(bytes: &[u8]) -> (u32, u32) {

@@ -4,6 +4,36 @@
 //! module writes it to files, so that a figure on paper shows the same numbers as the view.
 //! Export draws with plotters and a font embedded in the binary (Ubuntu Light, from
 //! `epaint_default_fonts`), so it works on machines without system fonts.
+//!
+//! ```
+//! use tactile_workbench::figures::*;
+//!
+//! let fig = Figure::chart(
+//!     "Accuracy as trials progress",
+//!     Axis::new("Trials", ""),
+//!     Axis::new("Accuracy", "%").including(0.0, 100.0),
+//!     vec![
+//!         Series::new("DS", vec![1.0, 2.0, 3.0], vec![60.0, 75.0, 90.0])
+//!             .band(vec![55.0, 70.0, 86.0], vec![65.0, 80.0, 94.0]),
+//!         Series::new("GS", vec![1.0, 2.0, 3.0], vec![50.0, 70.0, 85.0]),
+//!     ],
+//! )
+//! .ref_line(Orientation::Vertical, 2.0, "threshold");
+//! let svg = render_svg(&fig, &RenderOptions::default()).unwrap();
+//! assert!(svg.contains("Accuracy (%)"));
+//!
+//! let confusion = Figure::heatmap(
+//!     "Confusion matrix",
+//!     AxisTitle::new("Predicted", ""),
+//!     AxisTitle::new("True", ""),
+//!     vec!["success".into(), "failure".into()],
+//!     vec!["success".into(), "failure".into()],
+//!     vec![vec![40.0, 2.0], vec![5.0, 30.0]],
+//!     ColorScale::viridis("Grasps", "count"),
+//! )
+//! .annotated();
+//! assert!(to_csv(&confusion).unwrap().contains("success,40,2"));
+//! ```
 
 mod canvas;
 pub mod colormap;

@@ -507,6 +507,71 @@ impl Figure {
         )
     }
 
+    /// A heatmap, `values[row][column]`; see [`Heatmap::from_array`] for an ndarray.
+    pub fn heatmap(
+        title: impl Into<String>,
+        x: AxisTitle,
+        y: AxisTitle,
+        columns: Vec<String>,
+        rows: Vec<String>,
+        values: Vec<Vec<f64>>,
+        colors: ColorScale,
+    ) -> Self {
+        Figure::new(
+            title,
+            FigureKind::Heatmap(Heatmap {
+                x,
+                y,
+                columns,
+                rows,
+                values,
+                colors,
+                annotate: false,
+                marked: Vec::new(),
+            }),
+        )
+    }
+
+    /// Small multiples on one colour scale, arranged near-square.
+    pub fn image_grid(
+        title: impl Into<String>,
+        images: Vec<GridImage>,
+        colors: ColorScale,
+    ) -> Self {
+        Figure::new(
+            title,
+            FigureKind::ImageGrid(ImageGrid {
+                images,
+                columns: 0,
+                colors,
+            }),
+        )
+    }
+
+    /// Write each heatmap value in its cell (heatmaps only; other kinds are unchanged).
+    pub fn annotated(mut self) -> Self {
+        if let FigureKind::Heatmap(h) = &mut self.kind {
+            h.annotate = true;
+        }
+        self
+    }
+
+    /// Outline a heatmap cell, e.g. the recommended model (heatmaps only).
+    pub fn mark(mut self, row: usize, column: usize) -> Self {
+        if let FigureKind::Heatmap(h) = &mut self.kind {
+            h.marked.push([row, column]);
+        }
+        self
+    }
+
+    /// Colour bars by sign, for a differential (bar charts with one group only).
+    pub fn sign_colored(mut self) -> Self {
+        if let FigureKind::Bars(b) = &mut self.kind {
+            b.sign_colors = true;
+        }
+        self
+    }
+
     /// Add a reference line (charts only; other kinds are unchanged).
     pub fn ref_line(
         mut self,
