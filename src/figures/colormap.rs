@@ -74,6 +74,21 @@ impl ColorMap {
     }
 }
 
+/// The default colour of the `i`-th series or bar group (Okabe–Ito: distinguishable with
+/// the common colour-vision deficiencies), shared by the export and the views.
+pub fn series_color(i: usize) -> Rgb {
+    const PALETTE: [Rgb; 7] = [
+        Rgb(0x00, 0x72, 0xb2),
+        Rgb(0xd5, 0x5e, 0x00),
+        Rgb(0x00, 0x9e, 0x73),
+        Rgb(0xcc, 0x79, 0xa7),
+        Rgb(0xe6, 0x9f, 0x00),
+        Rgb(0x56, 0xb4, 0xe9),
+        Rgb(0x00, 0x00, 0x00),
+    ];
+    PALETTE[i % PALETTE.len()]
+}
+
 fn interpolate(table: &[[f64; 3]], t: f64) -> Rgb {
     let last = table.len() - 1;
     let pos = t * last as f64;

@@ -44,7 +44,7 @@ mod render;
 
 use std::path::PathBuf;
 
-pub use colormap::ColorMap;
+pub use colormap::{ColorMap, series_color};
 pub use csv::to_csv;
 pub use export::{
     Format, Index, IndexEntry, RenderOptions, export_all, render_png, render_svg, write_figure,

@@ -76,6 +76,14 @@ pub enum Scale {
     Log,
 }
 
+impl Scale {
+    /// Can `v` be drawn on an axis of this scale? (Finite, and positive on a log axis.)
+    /// Values that cannot are skipped and counted as missing.
+    pub fn can_draw(self, v: f64) -> bool {
+        v.is_finite() && (self == Scale::Linear || v > 0.0)
+    }
+}
+
 /// A numeric axis.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Axis {

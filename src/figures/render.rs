@@ -5,7 +5,7 @@ use plotters::prelude::DrawingBackend;
 
 use super::FigureError;
 use super::canvas::{AXIS, Anchor, Canvas, GRID, MUTED, Marker, TEXT, WHITE};
-use super::colormap::ColorMap;
+use super::colormap::{ColorMap, series_color};
 use super::model::{
     Axis, BarChart, Chart, ColorScale, ErrorDisplay, Figure, FigureKind, Heatmap, ImageGrid,
     Orientation, Rgb, Scale, Series, SeriesStyle,
@@ -19,28 +19,8 @@ const TICK_EM: f64 = 10.5;
 const LEGEND_EM: f64 = 11.0;
 const NOTE_EM: f64 = 9.5;
 
-/// Okabe–Ito colours: distinguishable with the common colour-vision deficiencies.
-const PALETTE: [Rgb; 7] = [
-    Rgb(0x00, 0x72, 0xb2),
-    Rgb(0xd5, 0x5e, 0x00),
-    Rgb(0x00, 0x9e, 0x73),
-    Rgb(0xcc, 0x79, 0xa7),
-    Rgb(0xe6, 0x9f, 0x00),
-    Rgb(0x56, 0xb4, 0xe9),
-    Rgb(0x00, 0x00, 0x00),
-];
-
 /// Colour of missing heatmap cells.
 const MISSING: Rgb = Rgb(0xd9, 0xd9, 0xd9);
-
-pub(super) fn palette(i: usize) -> Rgb {
-    PALETTE[i % PALETTE.len()]
-}
-
-/// Is `(x, y)` drawable on these axes (finite, and positive on a log axis)?
-pub(super) fn drawable(v: f64, scale: Scale) -> bool {
-    v.is_finite() && (scale == Scale::Linear || v > 0.0)
-}
 
 /// Pixel rectangle: left, top, right, bottom.
 #[derive(Clone, Copy, Debug)]
@@ -92,7 +72,7 @@ impl Span {
 fn limits(values: &[f64], axis: &Axis, pad: f64) -> (f64, f64) {
     let mut lo = f64::INFINITY;
     let mut hi = f64::NEG_INFINITY;
-    for &v in values.iter().filter(|&&v| drawable(v, axis.scale)) {
+    for &v in values.iter().filter(|&&v| axis.scale.can_draw(v)) {
         lo = lo.min(v);
         hi = hi.max(v);
     }
@@ -540,7 +520,7 @@ fn draw_chart<DB: DrawingBackend>(
     area: Rect,
 ) -> Result<(), FigureError> {
     let (xs, ys) = (chart.x.scale, chart.y.scale);
-    let ok = |x: f64, y: f64| drawable(x, xs) && drawable(y, ys);
+    let ok = |x: f64, y: f64| xs.can_draw(x) && ys.can_draw(y);
     let mut all_x = Vec::new();
     let mut all_y = Vec::new();
     for s in &chart.series {
@@ -576,7 +556,7 @@ fn draw_chart<DB: DrawingBackend>(
             let missing = (0..s.x.len()).filter(|&k| !ok(s.x[k], s.y[k])).count();
             LegendEntry {
                 name: missing_note(&s.name, missing),
-                color: s.color.unwrap_or(palette(i)),
+                color: s.color.unwrap_or(series_color(i)),
                 line: s.style != SeriesStyle::Markers,
                 marker: (s.style != SeriesStyle::Line).then(|| Marker::nth(i)),
                 band: s
@@ -614,8 +594,8 @@ fn draw_chart<DB: DrawingBackend>(
         for k in 0..=s.x.len() {
             let good = k < s.x.len()
                 && ok(s.x[k], s.y[k])
-                && drawable(e.lower[k], ys)
-                && drawable(e.upper[k], ys);
+                && ys.can_draw(e.lower[k])
+                && ys.can_draw(e.upper[k]);
             if good {
                 run.push(k);
             } else if !run.is_empty() {
@@ -678,7 +658,7 @@ fn draw_chart<DB: DrawingBackend>(
         }
         if let Some(e) = s.error.as_ref().filter(|e| e.display == ErrorDisplay::Bars) {
             for k in (0..s.x.len()).filter(|&k| ok(s.x[k], s.y[k])) {
-                if drawable(e.lower[k], ys) && drawable(e.upper[k], ys) {
+                if ys.can_draw(e.lower[k]) && ys.can_draw(e.upper[k]) {
                     let x = f.x.map(s.x[k]);
                     let (y0, y1) = (f.y.map(e.lower[k]), f.y.map(e.upper[k]));
                     let cap = c.px(3.0);
@@ -739,7 +719,7 @@ fn draw_point_labels<DB: DrawingBackend>(
     f: &Frame,
 ) -> Result<(), FigureError> {
     let ok =
-        |s: &Series, k: usize| drawable(s.x[k], chart.x.scale) && drawable(s.y[k], chart.y.scale);
+        |s: &Series, k: usize| chart.x.scale.can_draw(s.x[k]) && chart.y.scale.can_draw(s.y[k]);
     let mut segments = Vec::new();
     let mut markers = Vec::new();
     for s in &chart.series {
@@ -937,7 +917,7 @@ fn draw_bars<DB: DrawingBackend>(
             .enumerate()
             .map(|(i, g)| LegendEntry {
                 name: missing_note(&g.name, g.values.iter().filter(|v| !v.is_finite()).count()),
-                color: g.color.unwrap_or(palette(i)),
+                color: g.color.unwrap_or(series_color(i)),
                 line: false,
                 marker: None,
                 band: false,
