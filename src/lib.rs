@@ -7,6 +7,7 @@
 pub mod cli;
 pub mod cluster;
 pub mod features;
+pub mod figures;
 pub mod fsutil;
 pub mod jobs;
 pub mod learners;

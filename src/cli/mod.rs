@@ -1,6 +1,7 @@
 //! The headless command line: the same binary as the window, with subcommands.
 //! Each subcommand lives in its own file with its `clap::Args` struct and a `run`.
 
+mod figures;
 pub mod session;
 pub mod simulate;
 
@@ -36,6 +37,8 @@ pub enum Command {
     Import(session::ImportArgs),
     /// Regenerate the sample sessions from a seed.
     Simulate(simulate::SimulateArgs),
+    /// Render a figure saved as JSON to SVG, PNG or CSV.
+    RenderFigure(figures::RenderFigureArgs),
 }
 
 /// Run a subcommand.
@@ -45,5 +48,6 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Validate(a) => session::validate(a),
         Command::Import(a) => session::import(a),
         Command::Simulate(a) => simulate::run(a),
+        Command::RenderFigure(a) => figures::run(a),
     }
 }
