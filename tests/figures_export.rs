@@ -355,6 +355,17 @@ fn bad_figures_and_options_are_errors_not_panics() {
         render_svg(&accuracy_chart(), &nan_dpi),
         Err(FigureError::Options(_))
     ));
+    let small = RenderOptions {
+        width: 64,
+        height: 64,
+        dpi: 96.0,
+    };
+    let heat = differential_heatmap(vec![vec![1.0, 2.0]]);
+    let err = render_png(&heat, &small).unwrap_err();
+    assert!(
+        matches!(&err, FigureError::Options(m) if m.contains("too small")),
+        "{err}"
+    );
     // A log axis skips non-positive values like missing ones.
     let log = Figure::chart(
         "Speed",

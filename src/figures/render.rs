@@ -196,12 +196,21 @@ pub(super) fn draw<DB: DrawingBackend>(
 ) -> Result<(), FigureError> {
     fig.validate()?;
     let area = draw_title(c, fig)?;
+    if area.w() < c.px(120.0) || area.h() < c.px(80.0) {
+        return Err(too_small());
+    }
     match &fig.kind {
         FigureKind::Chart(chart) => draw_chart(c, chart, area),
         FigureKind::Bars(bars) => draw_bars(c, bars, area),
         FigureKind::Heatmap(h) => draw_heatmap(c, h, area),
         FigureKind::ImageGrid(g) => draw_image_grid(c, g, area),
     }
+}
+
+fn too_small() -> FigureError {
+    FigureError::Options(
+        "the image is too small for this figure at this DPI: enlarge it or lower the DPI".into(),
+    )
 }
 
 /// Text scaled down (to at most 60%) so that it fits `max_w`.
@@ -1109,9 +1118,7 @@ fn draw_heatmap<DB: DrawingBackend>(
     let bottom = area.b - axis_title_h - c.px(6.0) - col_layout.height - c.px(8.0);
     let avail_h = bottom - area.t;
     if avail_w <= 0.0 || avail_h <= 0.0 {
-        return Err(FigureError::Invalid(
-            "the image is too small for this heatmap".into(),
-        ));
+        return Err(too_small());
     }
     // Square cells unless that wastes most of the space.
     let (mut cw, mut ch) = (avail_w / nc as f64, avail_h / nr as f64);
@@ -1280,9 +1287,7 @@ fn draw_image_grid<DB: DrawingBackend>(
     };
     let cs = cell_for(cols);
     if cs <= 0.0 {
-        return Err(FigureError::Invalid(
-            "the image is too small for this many images".into(),
-        ));
+        return Err(too_small());
     }
     let rows = n.div_ceil(cols);
     let (img_w, img_h) = (cs * iw as f64, cs * ih as f64);
