@@ -23,17 +23,6 @@ pub(super) const GRID: Rgb = Rgb(0xe6, 0xe6, 0xe6);
 pub(super) const AXIS: Rgb = Rgb(0x44, 0x44, 0x44);
 pub(super) const WHITE: Rgb = Rgb(0xff, 0xff, 0xff);
 
-/// Horizontal and vertical anchor of a text position (the layout code uses vertically
-/// centred text throughout, the one case both backends are calibrated for).
-#[derive(Clone, Copy)]
-pub(super) struct Anchor(pub HPos, pub VPos);
-
-impl Anchor {
-    pub const CENTER: Anchor = Anchor(HPos::Center, VPos::Center);
-    pub const LEFT: Anchor = Anchor(HPos::Left, VPos::Center);
-    pub const RIGHT: Anchor = Anchor(HPos::Right, VPos::Center);
-}
-
 pub(super) fn color(c: Rgb) -> RGBColor {
     RGBColor(c.0, c.1, c.2)
 }
@@ -174,14 +163,15 @@ impl<'a, DB: DrawingBackend> Canvas<'a, DB> {
         Ok((self.layout(text, em_css).width, em_css * self.scale * 1.2))
     }
 
-    /// Draw `text`; `rotated` reads bottom to top (y-axis titles).
+    /// Draw `text` aligned at `x` by `anchor` and centred vertically on `y`; `rotated`
+    /// reads bottom to top (y-axis titles).
     pub fn text(
         &self,
         text: &str,
         (x, y): (f64, f64),
         em_css: f64,
         c: Rgb,
-        anchor: Anchor,
+        anchor: HPos,
         rotated: bool,
     ) -> Result<(), FigureError> {
         if text.is_empty() {
@@ -190,13 +180,13 @@ impl<'a, DB: DrawingBackend> Canvas<'a, DB> {
         match self.mode {
             TextMode::Raster => {
                 let layout = self.layout(text, em_css);
-                self.raster_text(&layout, (x, y), em_css, c, anchor.0, rotated)
+                self.raster_text(&layout, (x, y), em_css, c, anchor, rotated)
             }
             TextMode::Svg => {
                 let mut style = (FONT, em_css * self.scale * EM_TO_PLOTTERS)
                     .into_font()
                     .color(&color(c))
-                    .pos(Pos::new(anchor.0, anchor.1));
+                    .pos(Pos::new(anchor, VPos::Center));
                 if rotated {
                     style = style.transform(FontTransform::Rotate270);
                 }

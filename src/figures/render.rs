@@ -2,9 +2,10 @@
 //! gridlines, data, legends outside the data area, colour bars.
 
 use plotters::prelude::DrawingBackend;
+use plotters::style::text_anchor::HPos;
 
 use super::FigureError;
-use super::canvas::{AXIS, Anchor, Canvas, GRID, MUTED, Marker, TEXT, WHITE};
+use super::canvas::{AXIS, Canvas, GRID, MUTED, Marker, TEXT, WHITE};
 use super::colormap::{ColorMap, series_color};
 use super::model::{
     Axis, BarChart, Chart, ColorScale, ErrorDisplay, Figure, FigureKind, Heatmap, ImageGrid,
@@ -241,7 +242,7 @@ fn draw_title<DB: DrawingBackend>(c: &Canvas<'_, DB>, fig: &Figure) -> Result<Re
             (w / 2.0, top + lh / 2.0),
             em,
             TEXT,
-            Anchor::CENTER,
+            HPos::Center,
             false,
         )?;
         top += lh;
@@ -254,7 +255,7 @@ fn draw_title<DB: DrawingBackend>(c: &Canvas<'_, DB>, fig: &Figure) -> Result<Re
             (w / 2.0, top + lh / 2.0),
             em,
             MUTED,
-            Anchor::CENTER,
+            HPos::Center,
             false,
         )?;
         top += lh;
@@ -362,7 +363,7 @@ fn draw_legend<DB: DrawingBackend>(
             (x1 + c.px(8.0), y),
             LEGEND_EM,
             TEXT,
-            Anchor::LEFT,
+            HPos::Left,
             false,
         )?;
     }
@@ -483,7 +484,7 @@ fn axes<DB: DrawingBackend>(
             (p.l - tick - c.px(4.0), y),
             TICK_EM,
             TEXT,
-            Anchor::RIGHT,
+            HPos::Right,
             false,
         )?;
     }
@@ -491,7 +492,7 @@ fn axes<DB: DrawingBackend>(
     for (v, l) in f.xt.values.iter().zip(&f.xt.labels) {
         let x = f.x.map(*v);
         c.line((x, p.b), (x, p.b + tick), AXIS, 1.0)?;
-        c.text(l, (x, label_y), TICK_EM, TEXT, Anchor::CENTER, false)?;
+        c.text(l, (x, label_y), TICK_EM, TEXT, HPos::Center, false)?;
     }
     let title_h = c.px(AXIS_TITLE_EM * 1.3);
     let em = fitting_em(c, x_title, AXIS_TITLE_EM, p.w())?;
@@ -500,7 +501,7 @@ fn axes<DB: DrawingBackend>(
         ((p.l + p.r) / 2.0, area.b - title_h / 2.0),
         em,
         TEXT,
-        Anchor::CENTER,
+        HPos::Center,
         false,
     )?;
     let em = fitting_em(c, y_title, AXIS_TITLE_EM, p.h())?;
@@ -509,7 +510,7 @@ fn axes<DB: DrawingBackend>(
         (area.l + title_h / 2.0, (p.t + p.b) / 2.0),
         em,
         TEXT,
-        Anchor::CENTER,
+        HPos::Center,
         true,
     )?;
     Ok(())
@@ -633,7 +634,7 @@ fn draw_chart<DB: DrawingBackend>(
                     (x + c.px(4.0), p.t + c.px(8.0)),
                     NOTE_EM,
                     MUTED,
-                    Anchor::LEFT,
+                    HPos::Left,
                     false,
                 )?;
             }
@@ -645,7 +646,7 @@ fn draw_chart<DB: DrawingBackend>(
                     (p.r - c.px(4.0), y - c.px(8.0)),
                     NOTE_EM,
                     MUTED,
-                    Anchor::RIGHT,
+                    HPos::Right,
                     false,
                 )?;
             }
@@ -792,7 +793,7 @@ fn draw_point_labels<DB: DrawingBackend>(
                 (chosen.l, (chosen.t + chosen.b) / 2.0),
                 NOTE_EM,
                 TEXT,
-                Anchor::LEFT,
+                HPos::Left,
                 false,
             )?;
             placed.push(chosen);
@@ -862,14 +863,14 @@ fn draw_category_label<DB: DrawingBackend>(
 ) -> Result<(), FigureError> {
     if layout.rotated {
         let label = truncated(c, label, em, layout.height)?;
-        c.text(&label, (x, top), em, TEXT, Anchor::RIGHT, true)
+        c.text(&label, (x, top), em, TEXT, HPos::Right, true)
     } else {
         c.text(
             label,
             (x, top + c.px(em * 0.6)),
             em,
             TEXT,
-            Anchor::CENTER,
+            HPos::Center,
             false,
         )
     }
@@ -1059,7 +1060,7 @@ fn draw_colorbar<DB: DrawingBackend>(
             (r + tick + c.px(4.0), y),
             TICK_EM,
             TEXT,
-            Anchor::LEFT,
+            HPos::Left,
             false,
         )?;
     }
@@ -1072,7 +1073,7 @@ fn draw_colorbar<DB: DrawingBackend>(
             (left + width - title_h / 2.0, (top + bottom) / 2.0),
             em,
             TEXT,
-            Anchor::CENTER,
+            HPos::Center,
             true,
         )?;
     }
@@ -1162,7 +1163,7 @@ fn draw_heatmap<DB: DrawingBackend>(
                         ((xe(k) + xe(k + 1)) / 2.0, (ye(r) + ye(r + 1)) / 2.0),
                         TICK_EM,
                         ink,
-                        Anchor::CENTER,
+                        HPos::Center,
                         false,
                     )?;
                 }
@@ -1189,7 +1190,7 @@ fn draw_heatmap<DB: DrawingBackend>(
             (grid.l - c.px(6.0), (ye(r) + ye(r + 1)) / 2.0),
             TICK_EM,
             TEXT,
-            Anchor::RIGHT,
+            HPos::Right,
             false,
         )?;
     }
@@ -1213,7 +1214,7 @@ fn draw_heatmap<DB: DrawingBackend>(
         ),
         em,
         TEXT,
-        Anchor::CENTER,
+        HPos::Center,
         false,
     )?;
     let y_title = h.y.text();
@@ -1226,7 +1227,7 @@ fn draw_heatmap<DB: DrawingBackend>(
         (title_x, (grid.t + grid.b) / 2.0),
         em,
         TEXT,
-        Anchor::CENTER,
+        HPos::Center,
         true,
     )?;
     let (cb_top, cb_bottom) = colorbar_span(c, grid, area);
@@ -1332,7 +1333,7 @@ fn draw_image_grid<DB: DrawingBackend>(
                 (left + img_w / 2.0, top + img_h + cap_h / 2.0),
                 em,
                 TEXT,
-                Anchor::CENTER,
+                HPos::Center,
                 false,
             )?;
         }
