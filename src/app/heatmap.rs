@@ -3,32 +3,16 @@
 
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Stroke, StrokeKind, Vec2};
 
+use crate::figures::{ColorMap, Rgb};
 use crate::session::{Layout, Sensor};
 
-/// Viridis, sampled at 9 points from matplotlib's table and interpolated linearly.
-const VIRIDIS: [[u8; 3]; 9] = [
-    [68, 1, 84],
-    [71, 44, 122],
-    [59, 81, 139],
-    [44, 113, 142],
-    [33, 144, 141],
-    [39, 173, 129],
-    [92, 200, 99],
-    [170, 220, 50],
-    [253, 231, 37],
-];
-
+/// The figures' viridis, so the screen and exported figures agree.
 pub fn viridis(t: f64) -> Color32 {
-    let t = if t.is_finite() {
-        t.clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let x = t * (VIRIDIS.len() - 1) as f64;
-    let i = (x.floor() as usize).min(VIRIDIS.len() - 2);
-    let f = x - i as f64;
-    let c = |k: usize| (VIRIDIS[i][k] as f64 * (1.0 - f) + VIRIDIS[i + 1][k] as f64 * f) as u8;
-    Color32::from_rgb(c(0), c(1), c(2))
+    rgb(ColorMap::Viridis.at(t))
+}
+
+pub fn rgb(c: Rgb) -> Color32 {
+    Color32::from_rgb(c.0, c.1, c.2)
 }
 
 const BACKGROUND: Color32 = Color32::from_gray(45);
