@@ -203,3 +203,51 @@ pub fn run(a: BaselinesArgs) -> anyhow::Result<()> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use crate::cli::{Cli, Command};
+
+    /// The command line end to end on the iCub dataset folder, with few orders.
+    #[test]
+    fn baselines_command_writes_json() {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/datasets/icub-grasp");
+        if !std::path::Path::new(dir).exists() {
+            eprintln!("skipping: {dir} is absent");
+            return;
+        }
+        let out = std::env::temp_dir().join(format!("baselines-{}.json", std::process::id()));
+        let out_arg = out.to_string_lossy().into_owned();
+        let args = [
+            "tactile-workbench",
+            "baselines",
+            dir,
+            "--json",
+            &out_arg,
+            "--orders",
+            "2",
+            "--k-sweep",
+            "5,10",
+            "--cv-repeats",
+            "0",
+        ];
+        let Some(Command::Baselines(a)) = Cli::try_parse_from(args).unwrap().command else {
+            panic!("not parsed as `baselines`");
+        };
+        super::run(a).unwrap();
+        let text = std::fs::read_to_string(&out).unwrap();
+        let _ = std::fs::remove_file(&out);
+        let r: crate::cluster::baselines::BaselinesResult = serde_json::from_str(&text).unwrap();
+        assert_eq!((r.samples, r.features), (200, 165));
+        assert_eq!(r.sweep.len(), 2);
+        assert!(r.svm.is_none());
+        // a grid that does not hold k units is refused
+        let bad = ["tactile-workbench", "baselines", dir, "--som-rows", "3"];
+        let Some(Command::Baselines(a)) = Cli::try_parse_from(bad).unwrap().command else {
+            panic!("not parsed as `baselines`");
+        };
+        assert!(super::run(a).is_err());
+    }
+}
