@@ -15,6 +15,7 @@ pub mod linalg;
 pub mod rng;
 pub mod session;
 pub mod special;
+pub mod svm;
 
 #[cfg(feature = "gui")]
 pub mod app;

@@ -1,6 +1,7 @@
 //! The headless command line: the same binary as the window, with subcommands.
 //! Each subcommand lives in its own file with its `clap::Args` struct and a `run`.
 
+pub mod baselines;
 mod figures;
 pub mod session;
 pub mod simulate;
@@ -39,6 +40,8 @@ pub enum Command {
     Simulate(simulate::SimulateArgs),
     /// Render a figure saved as JSON to SVG, PNG or CSV.
     RenderFigure(figures::RenderFigureArgs),
+    /// Sequential k-means, SOM and RBF SVM baselines on the per-grasp Table I features.
+    Baselines(baselines::BaselinesArgs),
 }
 
 /// Run a subcommand.
@@ -49,5 +52,6 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Import(a) => session::import(a),
         Command::Simulate(a) => simulate::run(a),
         Command::RenderFigure(a) => figures::run(a),
+        Command::Baselines(a) => baselines::run(a),
     }
 }

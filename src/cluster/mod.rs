@@ -2,6 +2,7 @@
 //! sequential k-means and a self-organising map on per-grasp features, and the external
 //! scores purity / ARI / NMI against true labels.
 
+pub mod baselines;
 pub mod grasp_features;
 pub mod kmeans;
 pub mod scores;

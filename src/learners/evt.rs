@@ -18,7 +18,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::special::{ln_erfc, ln_gamma};
+use crate::special::{erfc, erfcx, ln_erfc, ln_gamma};
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum EvtError {
@@ -50,7 +50,8 @@ fn ln_add(ln_a: f64, ln_b: f64) -> f64 {
 /// - n = 2p + 1: G = erfc(√x) + exp(−x) Σ_{k<p} x^(k+½) / Γ(k + 3/2)   (n = 1: erfc(√x))
 ///
 /// (the regularised upper incomplete gamma Q(n/2, x), i.e. the χ²_n tail at t). All terms
-/// are positive, so the sum is accurate even in the far tail.
+/// are positive, so the sum is accurate even in the far tail; exp(−x) is kept out of it (as
+/// erfcx for the odd case) so that nothing underflows.
 fn ln_tail(n: usize, t: f64) -> f64 {
     if t <= 0.0 {
         return 0.0;
@@ -61,8 +62,30 @@ fn ln_tail(n: usize, t: f64) -> f64 {
     let x = 0.5 * t;
     let ln_x = x.ln();
     let p = n / 2;
-    if n.is_multiple_of(2) {
-        // ln of x^k / k!, built up term by term
+    let even = n.is_multiple_of(2);
+    // the largest term is below x^p, which must not overflow in linear space
+    if (p as f64) * ln_x < 600.0 {
+        let mut term = if even {
+            1.0
+        } else {
+            x.sqrt() * std::f64::consts::FRAC_2_SQRT_PI
+        };
+        let mut sum = 0.0;
+        for k in 0..p {
+            if k > 0 {
+                term *= x / if even { k as f64 } else { k as f64 + 0.5 };
+            }
+            sum += term;
+        }
+        if even {
+            sum.ln() - x
+        } else if x.sqrt() <= 0.468_75 {
+            (erfc(x.sqrt()) + (-x).exp() * sum).ln()
+        } else {
+            (erfcx(x.sqrt()) + sum).ln() - x
+        }
+    } else if even {
+        // the same sums in log space, for very large x or n
         let mut term = 0.0;
         let mut acc = f64::NEG_INFINITY;
         for k in 0..p {
@@ -74,8 +97,7 @@ fn ln_tail(n: usize, t: f64) -> f64 {
         acc - x
     } else {
         let mut acc = ln_erfc(x.sqrt());
-        // ln of x^(k+½) / Γ(k + 3/2), starting from Γ(3/2) = √π / 2
-        let mut term = 0.5 * ln_x - ln_gamma(1.5);
+        let mut term = 0.5 * ln_x + std::f64::consts::FRAC_2_SQRT_PI.ln();
         for k in 0..p {
             if k > 0 {
                 term += ln_x - (k as f64 + 0.5).ln();
@@ -88,8 +110,13 @@ fn ln_tail(n: usize, t: f64) -> f64 {
 
 /// ln of the χ²_n density at t > 0: ln p(t) = (n/2 − 1) ln t − t/2 − (n/2) ln 2 − ln Γ(n/2).
 fn ln_chi2_pdf(n: usize, t: f64) -> f64 {
+    ln_chi2_pdf_with(n, t, ln_gamma(0.5 * n as f64))
+}
+
+/// [`ln_chi2_pdf`] with ln Γ(n/2) given.
+fn ln_chi2_pdf_with(n: usize, t: f64, ln_gamma_half_n: f64) -> f64 {
     let h = 0.5 * n as f64;
-    (h - 1.0) * t.ln() - 0.5 * t - h * std::f64::consts::LN_2 - ln_gamma(h)
+    (h - 1.0) * t.ln() - 0.5 * t - h * std::f64::consts::LN_2 - ln_gamma_half_n
 }
 
 /// G_n(y) = P[N(X | μ, Σ) ≤ y] for X ~ N(μ, Σ) in n ≥ 1 dimensions, from ln y and
@@ -124,6 +151,7 @@ pub fn ln_density_pdf(n: usize, ln_det_sigma: f64, ln_y: f64) -> f64 {
 fn radius_quantile(n: usize, m: usize) -> f64 {
     let target = -(m as f64).ln();
     let f = |t: f64| ln_tail(n, t) - target;
+    let ln_gamma_half_n = ln_gamma(0.5 * n as f64);
     let (mut lo, mut hi) = (0.0_f64, (n as f64).max(1.0));
     while f(hi) > 0.0 {
         lo = hi;
@@ -141,7 +169,7 @@ fn radius_quantile(n: usize, m: usize) -> f64 {
             hi = t;
         }
         // d/dt ln G = −p(t) / G(t)
-        let slope = -(ln_chi2_pdf(n, t) - ln_tail(n, t)).exp();
+        let slope = -(ln_chi2_pdf_with(n, t, ln_gamma_half_n) - (ft + target)).exp();
         let newton = t - ft / slope;
         let next = if newton.is_finite() && newton > lo && newton < hi {
             newton
@@ -283,7 +311,6 @@ pub fn evt_novelty(residual: &[f64], variance: &[f64], m: usize) -> f64 {
 mod tests {
     use super::*;
     use crate::rng::Rng;
-    use crate::special::erfc;
 
     /// G_n against the fraction of Gaussian draws whose density is at most y, for random
     /// diagonal covariances spanning several orders of magnitude.
@@ -322,22 +349,29 @@ mod tests {
     /// a change of variable s = t + u², which removes the n = 1 singularity at 0).
     #[test]
     fn density_cdf_matches_quadrature() {
-        for n in [1usize, 2, 3, 4, 5, 10, 33, 34] {
-            for t in [0.01, 0.5, 2.0, 7.0, 30.0, 80.0] {
-                let f = |u: f64| 2.0 * u * ln_chi2_pdf(n, t + u * u).exp();
-                let (a, b, steps) = (0.0, 40.0, 40_000);
-                let h = (b - a) / steps as f64;
-                let mut s = f(a) + f(b);
-                for k in 1..steps {
-                    s += f(a + k as f64 * h) * if k % 2 == 1 { 4.0 } else { 2.0 };
-                }
-                let want = s * h / 3.0;
-                let got = ln_tail(n, t).exp();
-                assert!(
-                    (got - want).abs() <= 1e-9 * want.max(1e-300) + 1e-300,
-                    "n {n}, t {t}: {got} vs {want}"
-                );
+        // n = 400, 401 at t ≥ 40 take the log-space branch
+        let cases = [1usize, 2, 3, 4, 5, 10, 33, 34]
+            .iter()
+            .flat_map(|&n| [0.01, 0.5, 2.0, 7.0, 30.0, 80.0].map(|t| (n, t)))
+            .chain(
+                [400usize, 401]
+                    .iter()
+                    .flat_map(|&n| [10.0, 300.0, 400.0, 450.0].map(|t| (n, t))),
+            );
+        for (n, t) in cases {
+            let f = |u: f64| 2.0 * u * ln_chi2_pdf(n, t + u * u).exp();
+            let (a, b, steps) = (0.0, 40.0, 40_000);
+            let h = (b - a) / steps as f64;
+            let mut s = f(a) + f(b);
+            for k in 1..steps {
+                s += f(a + k as f64 * h) * if k % 2 == 1 { 4.0 } else { 2.0 };
             }
+            let want = s * h / 3.0;
+            let got = ln_tail(n, t).exp();
+            assert!(
+                (got - want).abs() <= 1e-9 * want.max(1e-300) + 1e-300,
+                "n {n}, t {t}: {got} vs {want}"
+            );
         }
     }
 
