@@ -2,6 +2,7 @@
 //! views read them and draw. Nothing here blocks: files load on worker threads.
 
 pub mod browser;
+pub mod figure_view;
 pub mod heatmap;
 pub mod loader;
 pub mod replay;

@@ -1,0 +1,3 @@
+//! Experiments: the papers' protocols run end to end, and what they leave behind.
+
+pub mod report;

@@ -1,0 +1,256 @@
+//! What an analysis leaves behind, independent of the method: its parameters, its scores,
+//! its timings and its figures. The workbench keeps these per session and saves them in
+//! a project file, so re-opening a project shows the same figures without re-training;
+//! the speed-against-accuracy chart and "export all" read them too.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::figures::{Figure, FigureEntry, FigureSet};
+use crate::fsutil;
+
+/// Which analysis produced a result.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AnalysisKind {
+    /// Sparse coding + linear SVM grasp-stability pipeline (first paper).
+    Stability,
+    /// Supervised OIESGP recognition, DS or GS (second paper).
+    Recognition,
+    /// Unsupervised OIESGP clustering, DU or GU, with k-means and SOM (second paper).
+    Clustering,
+    /// Offline baselines (k-means, SOM, RBF SVM on the Table I features).
+    Baselines,
+}
+
+impl AnalysisKind {
+    pub fn title(self) -> &'static str {
+        match self {
+            AnalysisKind::Stability => "Grasp stability",
+            AnalysisKind::Recognition => "Object recognition",
+            AnalysisKind::Clustering => "Clustering",
+            AnalysisKind::Baselines => "Baselines",
+        }
+    }
+}
+
+/// One trained model or experiment, as data.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AnalysisResult {
+    pub kind: AnalysisKind,
+    /// The method and its key parameters in a few words, e.g. "DS, all features".
+    pub label: String,
+    /// Name of the session it was computed on.
+    pub session: String,
+    pub parameters: BTreeMap<String, String>,
+    /// Named scores (as in the papers: "weighted success rate", "accuracy (all)", ...).
+    pub scores: Vec<(String, f64)>,
+    /// The score the speed-against-accuracy chart uses, with its name.
+    pub headline: Option<(String, f64)>,
+    /// Training time in seconds (whole fit), and prediction time per sample.
+    pub train_seconds: f64,
+    pub predict_seconds_per_sample: Option<f64>,
+    /// Seconds since the Unix epoch when it was computed.
+    pub created: u64,
+    pub figures: Vec<(String, Figure)>,
+}
+
+impl AnalysisResult {
+    pub fn score(&self, name: &str) -> Option<f64> {
+        self.scores.iter().find(|(n, _)| n == name).map(|(_, v)| *v)
+    }
+}
+
+pub fn now_unix() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs())
+        .unwrap_or(0)
+}
+
+/// A UTC date "YYYY-MM-DD hh:mm" from Unix seconds (civil-from-days, no time-zone data).
+pub fn date_text(unix: u64) -> String {
+    let days = (unix / 86_400) as i64;
+    let secs = unix % 86_400;
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!(
+        "{y:04}-{m:02}-{d:02} {:02}:{:02}",
+        secs / 3600,
+        secs / 60 % 60
+    )
+}
+
+/// Every figure of `results`, named for export (`<analysis>-<label>-<figure>`).
+pub fn figure_set(results: &[AnalysisResult]) -> FigureSet {
+    let slug = |s: &str| {
+        let mut out = String::new();
+        for c in s.chars() {
+            if c.is_ascii_alphanumeric() {
+                out.push(c.to_ascii_lowercase());
+            } else if !out.ends_with('-') {
+                out.push('-');
+            }
+        }
+        out.trim_matches('-').to_string()
+    };
+    let mut entries: Vec<FigureEntry> = Vec::new();
+    for (i, r) in results.iter().enumerate() {
+        for (name, figure) in &r.figures {
+            let mut parameters = r.parameters.clone();
+            parameters.insert("method".into(), r.label.clone());
+            entries.push(FigureEntry {
+                name: format!("{:02}-{}-{}", i + 1, slug(&r.label), slug(name)),
+                figure: figure.clone(),
+                parameters,
+                session: r.session.clone(),
+                date: date_text(r.created),
+            });
+        }
+    }
+    FigureSet { entries }
+}
+
+pub const PROJECT_TAG: &str = "tactile-workbench-project";
+pub const PROJECT_VERSION: u32 = 1;
+
+/// A saved project: the sessions it used (as paths or bundled names) and its results.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Project {
+    pub format: String,
+    pub version: u32,
+    /// Where each session came from, as the workbench names it.
+    pub sessions: Vec<String>,
+    pub results: Vec<AnalysisResult>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ProjectError {
+    #[error("{path}: {message}")]
+    Read { path: String, message: String },
+    #[error(
+        "{path}: unsupported project version {found}; this build reads version {PROJECT_VERSION}"
+    )]
+    Version { path: String, found: u64 },
+    #[error("{path}: could not write: {message}")]
+    Write { path: String, message: String },
+}
+
+impl Project {
+    pub fn new(sessions: Vec<String>, results: Vec<AnalysisResult>) -> Self {
+        Project {
+            format: PROJECT_TAG.into(),
+            version: PROJECT_VERSION,
+            sessions,
+            results,
+        }
+    }
+
+    pub fn save(&self, path: &Path) -> Result<(), ProjectError> {
+        let text = serde_json::to_string(self).map_err(|e| ProjectError::Write {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        fsutil::write_atomic(path, text.as_bytes()).map_err(|e| ProjectError::Write {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })
+    }
+
+    pub fn load(path: &Path) -> Result<Project, ProjectError> {
+        let p = path.display().to_string();
+        let read = |message: String| ProjectError::Read {
+            path: p.clone(),
+            message,
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| read(e.to_string()))?;
+        #[derive(Deserialize)]
+        struct Header {
+            format: Option<String>,
+            version: Option<u64>,
+        }
+        let h: Header = serde_json::from_str(&text).map_err(|e| read(e.to_string()))?;
+        if h.format.as_deref() != Some(PROJECT_TAG) {
+            return Err(read("not a tactile-workbench project file".into()));
+        }
+        match h.version {
+            Some(v) if v == PROJECT_VERSION as u64 => {}
+            Some(found) => return Err(ProjectError::Version { path: p, found }),
+            None => return Err(read("`version`: missing".into())),
+        }
+        serde_json::from_str(&text).map_err(|e| read(e.to_string()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::figures::{Axis, Series};
+
+    fn result() -> AnalysisResult {
+        AnalysisResult {
+            kind: AnalysisKind::Recognition,
+            label: "DS, all features".into(),
+            session: "iCub".into(),
+            parameters: BTreeMap::from([("reps".to_string(), "5".to_string())]),
+            scores: vec![("accuracy (all)".into(), 0.99)],
+            headline: Some(("accuracy (all)".into(), 0.99)),
+            train_seconds: 1.5,
+            predict_seconds_per_sample: Some(1e-4),
+            created: 1_795_000_000,
+            figures: vec![(
+                "accuracy".into(),
+                Figure::chart(
+                    "Accuracy as trials progress",
+                    Axis::new("trial", ""),
+                    Axis::new("accuracy", ""),
+                    vec![Series::new("DS", vec![1.0, 2.0], vec![0.5, f64::NAN])],
+                ),
+            )],
+        }
+    }
+
+    #[test]
+    fn dates_are_civil_utc() {
+        assert_eq!(date_text(0), "1970-01-01 00:00");
+        assert_eq!(date_text(951_782_400), "2000-02-29 00:00");
+        assert_eq!(
+            date_text(1_795_000_000 - 1_795_000_000 % 60),
+            "2026-11-18 11:06"
+        );
+    }
+
+    #[test]
+    fn projects_round_trip_and_reject_other_versions() {
+        let dir = std::env::temp_dir().join(format!("tw-project-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("p.json");
+        let project = Project::new(vec!["sample: a.json".into()], vec![result()]);
+        project.save(&p).unwrap();
+        let back = Project::load(&p).unwrap();
+        assert_eq!(back.results.len(), 1);
+        assert_eq!(back.results[0].label, "DS, all features");
+        assert_eq!(
+            back.results[0].figures[0].1.title,
+            "Accuracy as trials progress"
+        );
+        let text = std::fs::read_to_string(&p)
+            .unwrap()
+            .replace("\"version\":1", "\"version\":9");
+        std::fs::write(&p, text).unwrap();
+        let e = Project::load(&p).unwrap_err().to_string();
+        assert!(e.contains("unsupported project version 9"), "{e}");
+        let set = figure_set(&back.results);
+        assert_eq!(set.entries[0].name, "01-ds-all-features-accuracy");
+        let _ = std::fs::remove_dir_all(dir);
+    }
+}
