@@ -1,6 +1,7 @@
 //! The egui workbench. One file per view; the app owns the open sessions and the selection,
 //! views read them and draw. Nothing here blocks: files load on worker threads.
 
+pub mod analysis;
 pub mod browser;
 pub mod figure_view;
 pub mod heatmap;
@@ -13,6 +14,8 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
+use crate::experiments::report::AnalysisKind;
+use analysis::Analyses;
 use browser::{Browser, BrowserAction};
 use loader::{LoadedSession, Loader, Source};
 use replay::Replay;
@@ -25,6 +28,36 @@ const MAX_RECENT: usize = 10;
 pub enum View {
     #[default]
     Replay,
+    Baselines,
+    SpeedAccuracy,
+}
+
+impl View {
+    pub const ALL: [View; 3] = [View::Replay, View::Baselines, View::SpeedAccuracy];
+
+    pub fn title(self) -> &'static str {
+        match self {
+            View::Replay => "Replay",
+            View::Baselines => "Baselines",
+            View::SpeedAccuracy => "Speed vs accuracy",
+        }
+    }
+
+    fn of(kind: AnalysisKind) -> View {
+        match kind {
+            AnalysisKind::Baselines => View::Baselines,
+            _ => View::SpeedAccuracy,
+        }
+    }
+}
+
+/// Which file dialog is open.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Dialog {
+    Sessions,
+    Folder,
+    OpenProject,
+    SaveProject,
 }
 
 /// What persists between runs.
@@ -49,10 +82,11 @@ pub struct WorkbenchApp {
     pub dark: bool,
     pub recent: Vec<PathBuf>,
     pub errors: Vec<String>,
+    pub analyses: Analyses,
     loader: Loader,
     /// Sources in the order they were asked for, so sessions list in a stable order.
     requested: Vec<Source>,
-    dialog: Option<Receiver<Vec<PathBuf>>>,
+    dialog: Option<(Dialog, Receiver<Vec<PathBuf>>)>,
     /// The selection to restore once the persisted sessions have loaded.
     restore: Option<(usize, usize)>,
 }
@@ -74,6 +108,7 @@ impl WorkbenchApp {
             dark: p.dark,
             recent: p.recent.clone(),
             errors: Vec::new(),
+            analyses: Analyses::default(),
             loader: Loader::default(),
             requested: Vec::new(),
             dialog: None,
@@ -198,13 +233,27 @@ impl WorkbenchApp {
         {
             self.selected = Some((s, g));
         }
-        if let Some(rx) = &self.dialog
+        if let Some((kind, rx)) = &self.dialog
             && let Ok(paths) = rx.try_recv()
         {
+            let kind = *kind;
             self.dialog = None;
             for p in paths {
-                self.open(Source::File(p), ctx);
+                match kind {
+                    Dialog::Sessions | Dialog::Folder => self.open(Source::File(p), ctx),
+                    Dialog::OpenProject => self.analyses.open_project(ctx, p),
+                    Dialog::SaveProject => {
+                        let sessions = self.sessions.iter().map(|s| s.source.label()).collect();
+                        self.analyses.save_project(ctx, p, sessions);
+                    }
+                }
             }
+        }
+        if self.analyses.poll() {
+            ctx.request_repaint();
+        }
+        if let Some(kind) = self.analyses.open_request.take() {
+            self.view = View::of(kind);
         }
         let dropped: Vec<PathBuf> = ctx.input(|i| {
             i.raw
@@ -243,18 +292,26 @@ impl WorkbenchApp {
         }
     }
 
-    fn open_dialog(&mut self, folder: bool) {
+    fn open_dialog(&mut self, kind: Dialog) {
         let (tx, rx) = channel();
-        self.dialog = Some(rx);
+        self.dialog = Some((kind, rx));
         // The portal dialog blocks its thread; keep it off the UI thread.
         std::thread::spawn(move || {
             let dialog = rfd::FileDialog::new();
-            let picked = if folder {
-                dialog.pick_folder().map(|p| vec![p])
-            } else {
-                dialog
+            let picked = match kind {
+                Dialog::Folder => dialog.pick_folder().map(|p| vec![p]),
+                Dialog::Sessions => dialog
                     .add_filter("Sessions and datasets", &["json", "csv"])
-                    .pick_files()
+                    .pick_files(),
+                Dialog::OpenProject => dialog
+                    .add_filter("Projects", &["json"])
+                    .pick_file()
+                    .map(|p| vec![p]),
+                Dialog::SaveProject => dialog
+                    .add_filter("Projects", &["json"])
+                    .set_file_name("project.json")
+                    .save_file()
+                    .map(|p| vec![p]),
             };
             let _ = tx.send(picked.unwrap_or_default());
         });
@@ -264,11 +321,22 @@ impl WorkbenchApp {
         egui::MenuBar::new().ui(ui, |ui| {
             ui.menu_button("File", |ui| {
                 if ui.button("Open sessions…").clicked() {
-                    self.open_dialog(false);
+                    self.open_dialog(Dialog::Sessions);
                 }
                 if ui.button("Open iCub dataset folder…").clicked() {
-                    self.open_dialog(true);
+                    self.open_dialog(Dialog::Folder);
                 }
+                ui.separator();
+                if ui.button("Open project…").clicked() {
+                    self.open_dialog(Dialog::OpenProject);
+                }
+                if ui.button("Save project…").clicked() {
+                    self.open_dialog(Dialog::SaveProject);
+                }
+                if ui.button("Export all figures").clicked() {
+                    self.analyses.export_all(ui.ctx());
+                }
+                ui.separator();
                 if ui.button("Open sample sessions").clicked() {
                     self.open_samples(ui.ctx());
                 }
@@ -284,7 +352,9 @@ impl WorkbenchApp {
                 });
             });
             ui.menu_button("View", |ui| {
-                ui.selectable_value(&mut self.view, View::Replay, "Replay");
+                for v in View::ALL {
+                    ui.selectable_value(&mut self.view, v, v.title());
+                }
                 ui.separator();
                 if ui.checkbox(&mut self.dark, "Dark theme").changed() {
                     ui.ctx().set_theme(if self.dark {
@@ -294,6 +364,10 @@ impl WorkbenchApp {
                     });
                 }
             });
+            ui.separator();
+            for v in View::ALL {
+                ui.selectable_value(&mut self.view, v, v.title());
+            }
             if self.is_loading() {
                 ui.spinner();
                 ui.label("loading…");
@@ -304,6 +378,9 @@ impl WorkbenchApp {
     /// Draw the whole workbench into `ui`.
     pub fn show(&mut self, ui: &mut egui::Ui) {
         egui::Panel::top("menu").show(ui, |ui| self.menu(ui));
+        if self.analyses.busy() || !self.analyses.messages.is_empty() {
+            egui::Panel::bottom("jobs").show(ui, |ui| self.analyses.jobs_ui(ui));
+        }
         if !self.errors.is_empty() {
             egui::Panel::bottom("errors").show(ui, |ui| {
                 let mut dismiss = None;
@@ -333,7 +410,21 @@ impl WorkbenchApp {
                     BrowserAction::None => {}
                 }
             });
+        let active = self.browser.active;
+        let ctx = ui.ctx().clone();
         egui::CentralPanel::default_margins().show(ui, |ui| match self.view {
+            View::Baselines => match self.sessions.get(active) {
+                Some(s) => {
+                    egui::ScrollArea::vertical()
+                        .show(ui, |ui| self.analyses.baselines_ui(ui, s, &ctx));
+                }
+                None => {
+                    ui.label("Open a session first.");
+                }
+            },
+            View::SpeedAccuracy => {
+                egui::ScrollArea::vertical().show(ui, |ui| self.analyses.speed_accuracy_ui(ui));
+            }
             View::Replay => match self.selected {
                 Some((s, g)) if s < self.sessions.len() => {
                     egui::ScrollArea::vertical().show(ui, |ui| {

@@ -191,6 +191,39 @@ impl Project {
     }
 }
 
+/// Speed against accuracy: every result with a headline score, training time on a log axis,
+/// the Pareto front drawn, each point labelled with its method and session.
+pub fn speed_accuracy(results: &[AnalysisResult]) -> Option<Figure> {
+    use crate::figures::{Axis, Series};
+    let rows: Vec<(f64, f64, String)> = results
+        .iter()
+        .filter_map(|r| {
+            let (name, score) = r.headline.as_ref()?;
+            (r.train_seconds > 0.0 && score.is_finite())
+                .then(|| (r.train_seconds, *score, format!("{} ({name})", r.label)))
+        })
+        .collect();
+    if rows.is_empty() {
+        return None;
+    }
+    let points = Series::new(
+        "trained models",
+        rows.iter().map(|r| r.0).collect(),
+        rows.iter().map(|r| r.1).collect(),
+    )
+    .labels(rows.iter().map(|r| r.2.clone()).collect());
+    Some(
+        Figure::pareto(
+            "Speed against accuracy",
+            Axis::new("training time", "s").log(),
+            Axis::new("score", ""),
+            points,
+            "Pareto front",
+        )
+        .subtitle("each model's headline score (accuracy, weighted success rate or NMI)"),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

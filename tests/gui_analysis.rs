@@ -1,0 +1,110 @@
+//! The analysis views: a job starts from a view, shows progress, can be cancelled, and its
+//! result's figures and numbers appear (found by accessible label). Results survive a
+//! project save and re-open.
+#![cfg(feature = "gui")]
+
+use std::time::{Duration, Instant};
+
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+use tactile_workbench::app::{View, WorkbenchApp};
+
+fn harness() -> Harness<'static, WorkbenchApp> {
+    let app = WorkbenchApp::new(&egui::Context::default(), None, Vec::new());
+    let mut h = Harness::builder()
+        .with_size(egui::Vec2::new(1400.0, 1000.0))
+        .with_step_dt(1.0 / 60.0)
+        .build_ui_state(
+            |ui, app: &mut WorkbenchApp| {
+                app.tick(ui.ctx());
+                app.show(ui);
+            },
+            app,
+        );
+    let t = Instant::now();
+    while (h.state().is_loading() || h.state().sessions.len() < 2)
+        && t.elapsed() < Duration::from_secs(30)
+    {
+        h.step();
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    h.get_by_label("Simulated object recognition").click();
+    h.run_ok();
+    h
+}
+
+/// Step until no job runs (bounded), sleeping so the worker gets the CPU.
+fn wait_for_jobs(h: &mut Harness<'static, WorkbenchApp>, limit: Duration) {
+    let t = Instant::now();
+    while h.state().analyses.busy() && t.elapsed() < limit {
+        h.step();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    h.run_ok();
+}
+
+#[test]
+fn baselines_run_in_the_background_and_show_their_figures() {
+    let mut h = harness();
+    h.get_by_label("Baselines").click();
+    h.run_ok();
+    h.get_by_label_contains("No results yet");
+    h.state_mut().analyses.baselines.orders = 2;
+    h.state_mut().analyses.baselines.with_svm = false;
+    h.get_by_label("Run").click();
+    h.step();
+    h.step();
+    assert!(h.state().analyses.busy(), "the job runs in the background");
+    h.get_by_label("Cancel");
+    wait_for_jobs(&mut h, Duration::from_secs(120));
+    assert!(!h.state().analyses.busy());
+    assert_eq!(
+        h.state().analyses.results.len(),
+        1,
+        "messages: {:?}",
+        h.state().analyses.messages
+    );
+    h.get_by_label("Clustering scores at k = 10");
+    h.get_by_label("NMI against effective clusters");
+    h.get_by_label("k-means NMI");
+    let nmi = h.state().analyses.results[0].score("k-means NMI").unwrap();
+    h.get_by_label(&format!("{nmi:.4}"));
+    assert!((0.0..=1.0).contains(&nmi));
+
+    // The result appears on the speed-against-accuracy chart.
+    h.state_mut().view = View::SpeedAccuracy;
+    h.run_ok();
+    assert!(
+        h.get_all_by_label("Speed against accuracy").count() >= 2,
+        "heading and figure title"
+    );
+    h.get_by_label_contains("baselines, k = 10 ·");
+}
+
+#[test]
+fn a_cancelled_job_leaves_the_app_usable() {
+    let mut h = harness();
+    h.state_mut().view = View::Baselines;
+    h.run_ok();
+    h.state_mut().analyses.baselines.orders = 200;
+    h.get_by_label("Run").click();
+    h.step();
+    std::thread::sleep(Duration::from_millis(100));
+    h.step();
+    h.get_by_label("Cancel").click();
+    let t = Instant::now();
+    wait_for_jobs(&mut h, Duration::from_secs(10));
+    assert!(
+        t.elapsed() < Duration::from_secs(5),
+        "cancel took {:?}",
+        t.elapsed()
+    );
+    assert!(h.state().analyses.results.is_empty());
+    h.get_by_label_contains("cancelled");
+    // The replay still works.
+    h.state_mut().view = View::Replay;
+    h.run_ok();
+    h.get_by_label_contains("sponge #1 ·").click();
+    h.run_ok();
+    h.get_by_label_contains("Frame 1 /");
+}
