@@ -9,6 +9,7 @@ pub mod cluster;
 pub mod features;
 pub mod figures;
 pub mod fsutil;
+pub mod gp;
 pub mod jobs;
 pub mod learners;
 pub mod linalg;
