@@ -125,7 +125,7 @@ fn deleting_a_near_duplicate_bv_barely_changes_the_posterior() {
     let xs = [-2.0, -1.0, 0.0, 1.0, 1.02, 2.0];
     for x in xs {
         gp.observe(&[x]);
-        gp.update(&[(x as f64).sin()]);
+        gp.update(&[x.sin()]);
     }
     let probe: Vec<f64> = (0..20).map(|i| -2.5 + 0.25 * i as f64).collect();
     let before: Vec<(f64, f64)> = probe
@@ -178,7 +178,7 @@ fn regression_hyper_gradient_matches_finite_differences() {
     let theta = gp.kernel_params().theta();
     let h = 1e-5;
     for j in 0..theta.len() {
-        let mut at = |delta: f64| {
+        let at = |delta: f64| {
             let mut t = theta.clone();
             t[j] += delta;
             let mut g = gp.clone();
@@ -259,8 +259,10 @@ fn adaptation_runs_keeps_bounds_and_improves_a_misspecified_lengthscale() {
 
 #[test]
 fn bad_parameters_are_errors() {
-    let mut p = SogpParams::default();
-    p.capacity = 0;
+    let p = SogpParams {
+        capacity: 0,
+        ..SogpParams::default()
+    };
     assert!(
         Sogp::new(3, 1, &p)
             .unwrap_err()
