@@ -6,6 +6,7 @@
 
 pub mod cli;
 pub mod cluster;
+pub mod experiments;
 pub mod features;
 pub mod figures;
 pub mod fsutil;

@@ -2,6 +2,7 @@
 //! Each subcommand lives in its own file with its `clap::Args` struct and a `run`.
 
 mod figures;
+pub mod recognition;
 pub mod session;
 pub mod simulate;
 
@@ -39,6 +40,8 @@ pub enum Command {
     Simulate(simulate::SimulateArgs),
     /// Render a figure saved as JSON to SVG, PNG or CSV.
     RenderFigure(figures::RenderFigureArgs),
+    /// Online object recognition (DS/GS) under the paper's supervised protocol.
+    Recognition(recognition::RecognitionArgs),
 }
 
 /// Run a subcommand.
@@ -49,5 +52,6 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Import(a) => session::import(a),
         Command::Simulate(a) => simulate::run(a),
         Command::RenderFigure(a) => figures::run(a),
+        Command::Recognition(a) => recognition::recognition(a),
     }
 }

@@ -1,0 +1,123 @@
+//! `recognition`, `clustering` and `bench-recognition`: the OIESGP experiments of the second
+//! paper from the shell, with machine-readable results (`--json OUT`).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use clap::Args;
+
+use crate::experiments::recognition::{RecognitionParams, RecognitionResult, run_recognition};
+use crate::features::FeatureSet;
+use crate::jobs::Progress;
+use crate::session::{self, Session};
+
+/// A native session file, or the iCub dataset folder (imported on the fly).
+pub fn open_session(path: &Path) -> anyhow::Result<Session> {
+    if path.is_dir() {
+        session::import_icub(path).with_context(|| format!("importing {}", path.display()))
+    } else {
+        session::load(path).with_context(|| format!("loading {}", path.display()))
+    }
+}
+
+fn write_json<T: serde::Serialize>(value: &T, out: Option<&Path>) -> anyhow::Result<()> {
+    if let Some(out) = out {
+        let text = serde_json::to_string_pretty(value)?;
+        std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;
+        println!("wrote {}", out.display());
+    }
+    Ok(())
+}
+
+#[derive(Args, Debug)]
+pub struct RecognitionArgs {
+    /// A native session file or the iCub dataset folder.
+    pub session: PathBuf,
+    /// ds (discriminative) or gs (generative).
+    #[arg(long, default_value = "gs")]
+    pub learner: String,
+    /// all, tactile or encoder.
+    #[arg(long, default_value = "all")]
+    pub features: String,
+    /// Repetitions of the protocol (the paper: 50).
+    #[arg(long, default_value_t = 50)]
+    pub reps: usize,
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Variance of Gaussian noise added to the raw taxels (the paper: 100, 1000).
+    #[arg(long, default_value_t = 0.0)]
+    pub noise: f64,
+    /// Switch hyperparameter adaptation off.
+    #[arg(long)]
+    pub no_adapt: bool,
+    /// BV budget of every expert.
+    #[arg(long, default_value_t = 50)]
+    pub capacity: usize,
+    /// Lags of the recursive kernel.
+    #[arg(long, default_value_t = 15)]
+    pub tau: usize,
+    /// Write the full result here as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+impl RecognitionArgs {
+    fn params(&self) -> anyhow::Result<RecognitionParams> {
+        let mut p = RecognitionParams {
+            learner: self.learner.parse()?,
+            features: self.features.parse::<FeatureSet>()?,
+            reps: self.reps,
+            seed: self.seed,
+            taxel_noise_variance: self.noise,
+            ..RecognitionParams::default()
+        };
+        for gp in [&mut p.ds.gp, &mut p.gs.gp] {
+            gp.capacity = self.capacity;
+            gp.tau = self.tau;
+            if self.no_adapt {
+                gp.adaptation = None;
+            }
+        }
+        p.validate()?;
+        Ok(p)
+    }
+}
+
+pub fn print_recognition(r: &RecognitionResult) {
+    let s = &r.summary;
+    println!(
+        "{:?} / {:?} features, {} repetitions, {:.1} s",
+        r.params.learner,
+        r.params.features,
+        r.repetitions.len(),
+        r.wall_seconds
+    );
+    println!("  all        {:.3} ({:.3})", s.all.mean, s.all.sd);
+    println!("  final 20%  {:.3} ({:.3})", s.final_20.mean, s.final_20.sd);
+    let sets: Vec<String> = s
+        .trial_sets
+        .iter()
+        .map(|m| format!("{:.3}", m.mean))
+        .collect();
+    println!("  trial sets {}", sets.join(" "));
+    let early: Vec<String> = r
+        .params
+        .early_fractions
+        .iter()
+        .zip(&s.early)
+        .map(|(f, m)| format!("{f:.1}:{:.3}", m.mean))
+        .collect();
+    println!("  early      {}", early.join(" "));
+    println!(
+        "  per step   predict {:.1} µs, train {:.1} µs (threads share the cores)",
+        s.predict_step_us, s.train_step_us
+    );
+}
+
+pub fn recognition(args: RecognitionArgs) -> anyhow::Result<()> {
+    let params = args.params()?;
+    let session = open_session(&args.session)?;
+    let result = run_recognition(&session, &params, &Progress::new())?;
+    print_recognition(&result);
+    write_json(&result, args.json.as_deref())
+}
