@@ -42,6 +42,8 @@ pub enum Command {
     RenderFigure(figures::RenderFigureArgs),
     /// Online object recognition (DS/GS) under the paper's supervised protocol.
     Recognition(recognition::RecognitionArgs),
+    /// Online clustering (DU/GU) over a novelty-threshold sweep, with k-means and SOM.
+    Clustering(recognition::ClusteringArgs),
 }
 
 /// Run a subcommand.
@@ -53,5 +55,6 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Simulate(a) => simulate::run(a),
         Command::RenderFigure(a) => figures::run(a),
         Command::Recognition(a) => recognition::recognition(a),
+        Command::Clustering(a) => recognition::clustering(a),
     }
 }

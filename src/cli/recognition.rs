@@ -121,3 +121,81 @@ pub fn recognition(args: RecognitionArgs) -> anyhow::Result<()> {
     print_recognition(&result);
     write_json(&result, args.json.as_deref())
 }
+
+#[derive(Args, Debug)]
+pub struct ClusteringArgs {
+    /// A native session file or the iCub dataset folder.
+    pub session: PathBuf,
+    /// du (discriminative) or gu (generative).
+    #[arg(long, default_value = "du")]
+    pub learner: String,
+    /// Novelty thresholds, comma separated (default 0.1, 0.15, …, 0.95).
+    #[arg(long, value_delimiter = ',')]
+    pub thresholds: Vec<f64>,
+    /// Random orders per threshold (the paper: 50).
+    #[arg(long, default_value_t = 50)]
+    pub reps: usize,
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// all, tactile or encoder.
+    #[arg(long, default_value = "all")]
+    pub features: String,
+    /// Switch hyperparameter adaptation off.
+    #[arg(long)]
+    pub no_adapt: bool,
+    /// Largest k of the k-means / SOM baselines (0: skip them).
+    #[arg(long, default_value_t = 20)]
+    pub baseline_max_k: usize,
+    /// Write the full result here as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+fn print_point(name: &str, p: &Option<crate::experiments::clustering::EffectivePoint>) {
+    match p {
+        Some(p) => println!(
+            "  {name:<8} at 10 effective: purity {:.3} ({:.3})  ARI {:.3} ({:.3})  NMI {:.3} ({:.3})  [{} runs]",
+            p.purity.mean, p.purity.sd, p.ari.mean, p.ari.sd, p.nmi.mean, p.nmi.sd, p.runs
+        ),
+        None => println!("  {name:<8} no run with 10 effective clusters"),
+    }
+}
+
+pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
+    use crate::experiments::clustering::{ClusteringParams, run_clustering};
+    let mut params = ClusteringParams {
+        learner: args.learner.parse()?,
+        features: args.features.parse::<FeatureSet>()?,
+        reps: args.reps,
+        seed: args.seed,
+        baseline_max_k: args.baseline_max_k,
+        ..ClusteringParams::default()
+    };
+    if !args.thresholds.is_empty() {
+        params.thresholds = args.thresholds.clone();
+    }
+    if args.no_adapt {
+        params.ds.gp.adaptation = None;
+        params.gs.gp.adaptation = None;
+    }
+    params.validate()?;
+    let session = open_session(&args.session)?;
+    let r = run_clustering(&session, &params, &Progress::new())?;
+    println!(
+        "{:?}, {} orders per threshold, {:.1} s",
+        params.learner, params.reps, r.wall_seconds
+    );
+    println!("  threshold  clusters  effective  purity   ARI     NMI");
+    for t in &r.sweep {
+        println!(
+            "  {:>9.2}  {:>8.1}  {:>9.1}  {:.3}   {:.3}   {:.3}",
+            t.threshold, t.clusters.mean, t.effective.mean, t.purity.mean, t.ari.mean, t.nmi.mean
+        );
+    }
+    print_point("learner", &r.at_10);
+    print_point("k-means", &r.kmeans_at_10);
+    print_point("SOM", &r.som_at_10);
+    let us = r.runs.iter().map(|x| x.learn_step_us).sum::<f64>() / r.runs.len().max(1) as f64;
+    println!("  learning phase {us:.1} µs per observation (threads share the cores)");
+    write_json(&r, args.json.as_deref())
+}

@@ -1,6 +1,7 @@
 //! Experiments: the papers' protocols as engine functions returning plain, serialisable
 //! results (for the CLI, the views and the figures).
 
+pub mod clustering;
 pub mod recognition;
 
 use crate::features::sequence::SequenceError;

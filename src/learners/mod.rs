@@ -1,13 +1,17 @@
 //! Online learners over OIESGP experts (DS, GS, DU, GU) and their novelty scores.
 
 pub mod ds;
+pub mod du;
 pub mod evt;
 pub mod gs;
+pub mod gu;
 
 use ndarray::{Array2, ArrayView2};
 
 pub use ds::{Ds, DsParams};
+pub use du::{Assignment, Du, DuParams, du_novelty};
 pub use gs::{Gs, GsParams};
+pub use gu::{Gu, GuParams};
 
 use crate::gp::{GpError, Sogp};
 
