@@ -44,6 +44,8 @@ pub enum Command {
     Recognition(recognition::RecognitionArgs),
     /// Online clustering (DU/GU) over a novelty-threshold sweep, with k-means and SOM.
     Clustering(recognition::ClusteringArgs),
+    /// Time per-observation prediction/training and the Table II protocol.
+    BenchRecognition(recognition::BenchArgs),
 }
 
 /// Run a subcommand.
@@ -56,5 +58,6 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::RenderFigure(a) => figures::run(a),
         Command::Recognition(a) => recognition::recognition(a),
         Command::Clustering(a) => recognition::clustering(a),
+        Command::BenchRecognition(a) => recognition::bench(a),
     }
 }

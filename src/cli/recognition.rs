@@ -143,6 +143,9 @@ pub struct ClusteringArgs {
     /// Switch hyperparameter adaptation off.
     #[arg(long)]
     pub no_adapt: bool,
+    /// GU: combine per-step novelties by their mean or their max.
+    #[arg(long, default_value = "mean")]
+    pub gu_aggregate: String,
     /// Largest k of the k-means / SOM baselines (0: skip them).
     #[arg(long, default_value_t = 20)]
     pub baseline_max_k: usize,
@@ -171,6 +174,11 @@ pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
         baseline_max_k: args.baseline_max_k,
         ..ClusteringParams::default()
     };
+    params.gu_aggregate = match args.gu_aggregate.as_str() {
+        "max" => crate::learners::GuAggregate::Max,
+        "mean" => crate::learners::GuAggregate::Mean,
+        other => anyhow::bail!("--gu-aggregate: `{other}` is not max or mean"),
+    };
     if !args.thresholds.is_empty() {
         params.thresholds = args.thresholds.clone();
     }
@@ -198,4 +206,109 @@ pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
     let us = r.runs.iter().map(|x| x.learn_step_us).sum::<f64>() / r.runs.len().max(1) as f64;
     println!("  learning phase {us:.1} µs per observation (threads share the cores)");
     write_json(&r, args.json.as_deref())
+}
+
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// Also time the whole Table II protocol on this session (native file or iCub folder).
+    pub session: Option<PathBuf>,
+    /// Repetitions of the protocol timing.
+    #[arg(long, default_value_t = 50)]
+    pub reps: usize,
+    /// Write the measurements here as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(serde::Serialize)]
+struct BenchReport {
+    steps: Vec<crate::experiments::recognition::StepBench>,
+    protocol: Vec<ProtocolTiming>,
+    threads: usize,
+}
+
+#[derive(serde::Serialize)]
+struct ProtocolTiming {
+    learner: String,
+    features: String,
+    reps: usize,
+    wall_seconds: f64,
+    all: f64,
+    final_20: f64,
+}
+
+pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
+    use crate::experiments::recognition::{StepBenchParams, SupervisedLearner, bench_steps};
+    let mut steps = Vec::new();
+    println!("per observation, one thread (34 inputs, 10 classes, adaptation on unless noted):");
+    let base = StepBenchParams::default();
+    let mut configs = vec![base.clone()];
+    for capacity in [25, 100] {
+        configs.push(StepBenchParams {
+            capacity,
+            ..base.clone()
+        });
+    }
+    for tau in [5, 30] {
+        configs.push(StepBenchParams {
+            tau,
+            ..base.clone()
+        });
+    }
+    configs.push(StepBenchParams {
+        adaptation: false,
+        ..base.clone()
+    });
+    for p in configs {
+        for learner in [SupervisedLearner::Ds, SupervisedLearner::Gs] {
+            let b = bench_steps(learner, &p)?;
+            println!(
+                "  {:?} budget {:>3} tau {:>2} adapt {:<5}: predict {:>7.1} µs/step, train {:>7.1} µs/step  ({:.0} BVs, {} adapting)",
+                learner,
+                p.capacity,
+                p.tau,
+                p.adaptation,
+                b.predict_step_us,
+                b.train_step_us,
+                b.mean_basis,
+                b.adapting
+            );
+            steps.push(b);
+        }
+    }
+    let mut protocol = Vec::new();
+    if let Some(path) = &args.session {
+        let session = open_session(path)?;
+        for learner in [SupervisedLearner::Ds, SupervisedLearner::Gs] {
+            let p = RecognitionParams {
+                learner,
+                reps: args.reps,
+                ..RecognitionParams::default()
+            };
+            let r = run_recognition(&session, &p, &Progress::new())?;
+            println!(
+                "  Table II protocol {:?}/all, {} reps: {:.1} s wall ({} threads)",
+                learner,
+                args.reps,
+                r.wall_seconds,
+                rayon::current_num_threads()
+            );
+            protocol.push(ProtocolTiming {
+                learner: format!("{learner:?}"),
+                features: "all".into(),
+                reps: args.reps,
+                wall_seconds: r.wall_seconds,
+                all: r.summary.all.mean,
+                final_20: r.summary.final_20.mean,
+            });
+        }
+    }
+    write_json(
+        &BenchReport {
+            steps,
+            protocol,
+            threads: rayon::current_num_threads(),
+        },
+        args.json.as_deref(),
+    )
 }

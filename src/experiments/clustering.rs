@@ -24,7 +24,7 @@ use crate::cluster::grasp_features::{Normalisation, Normaliser, session_features
 use crate::cluster::{Schedule, SequentialKMeansParams, SomParams, scores};
 use crate::features::{FeatureSet, SequenceParams, feature_sequences};
 use crate::jobs::Progress;
-use crate::learners::{Du, DuParams, DsParams, Gs, GsParams, Gu, GuParams};
+use crate::learners::{DsParams, Du, DuParams, Gs, GsParams, Gu, GuAggregate, GuParams};
 use crate::rng::Rng;
 use crate::session::Session;
 
@@ -41,7 +41,10 @@ impl FromStr for UnsupervisedLearner {
         match s {
             "du" => Ok(UnsupervisedLearner::Du),
             "gu" => Ok(UnsupervisedLearner::Gu),
-            other => Err(ExperimentError::param("learner", format!("`{other}` is not du or gu"))),
+            other => Err(ExperimentError::param(
+                "learner",
+                format!("`{other}` is not du or gu"),
+            )),
         }
     }
 }
@@ -58,6 +61,8 @@ pub struct ClusteringParams {
     pub label_set: String,
     pub ds: DsParams,
     pub gs: GsParams,
+    /// GU's combination of per-step novelties.
+    pub gu_aggregate: GuAggregate,
     /// Run sequential k-means and the SOM for 2 … `baseline_max_k` clusters (0: skip).
     pub baseline_max_k: usize,
 }
@@ -73,6 +78,7 @@ impl Default for ClusteringParams {
             label_set: "object".into(),
             ds: DsParams::default(),
             gs: GsParams::default(),
+            gu_aggregate: GuAggregate::Mean,
             baseline_max_k: 20,
         }
     }
@@ -87,7 +93,10 @@ impl ClusteringParams {
             return Err(ExperimentError::param("thresholds", "needs at least one"));
         }
         if self.thresholds.iter().any(|t| !(0.0..=1.0).contains(t)) {
-            return Err(ExperimentError::param("thresholds", "each must lie in [0, 1]"));
+            return Err(ExperimentError::param(
+                "thresholds",
+                "each must lie in [0, 1]",
+            ));
         }
         self.ds.validate()?;
         self.gs.validate()?;
@@ -175,6 +184,7 @@ fn one_run(
             &GuParams {
                 gs: params.gs.clone(),
                 threshold,
+                aggregate: params.gu_aggregate,
             },
         )?),
     };
@@ -189,8 +199,14 @@ fn one_run(
     }
     let learn_step_us = 1e6 * t0.elapsed().as_secs_f64() / steps.max(1) as f64;
     let (clusters, pred): (usize, Vec<usize>) = match &mut learner {
-        Learner::Du(l) => (l.n_clusters(), seqs.iter().map(|s| l.assign(s.view())).collect()),
-        Learner::Gu(l) => (l.n_clusters(), seqs.iter().map(|s| l.assign(s.view())).collect()),
+        Learner::Du(l) => (
+            l.n_clusters(),
+            seqs.iter().map(|s| l.assign(s.view())).collect(),
+        ),
+        Learner::Gu(l) => (
+            l.n_clusters(),
+            seqs.iter().map(|s| l.assign(s.view())).collect(),
+        ),
     };
     let sc = scores(labels, &pred);
     Ok(ClusteringRun {
@@ -213,7 +229,7 @@ fn distinct(pred: &[usize]) -> usize {
 }
 
 /// Group (effective, purity, ari, nmi) tuples by effective clusters.
-fn by_effective(points: impl Iterator<Item = (usize, f64, f64, f64)>) -> Vec<EffectivePoint> {
+fn by_effective(points: impl Iterator<Item = Scored>) -> Vec<EffectivePoint> {
     let mut groups: BTreeMap<usize, Vec<(f64, f64, f64)>> = BTreeMap::new();
     for (e, p, a, n) in points {
         groups.entry(e).or_default().push((p, a, n));
@@ -250,6 +266,8 @@ pub fn som_setup(k: usize, seed: u64) -> SomParams {
 }
 
 type Baselines = (Vec<EffectivePoint>, Vec<EffectivePoint>);
+/// (effective clusters, purity, ARI, NMI) of one clustering.
+type Scored = (usize, f64, f64, f64);
 
 fn baselines(
     session: &Session,
@@ -267,7 +285,7 @@ fn baselines(
     let jobs: Vec<(usize, usize)> = (2..=params.baseline_max_k.min(data.nrows()))
         .flat_map(|k| (0..params.reps).map(move |r| (k, r)))
         .collect();
-    let out: Vec<((usize, f64, f64, f64), (usize, f64, f64, f64))> = jobs
+    let out: Vec<(Scored, Scored)> = jobs
         .par_iter()
         .map(|&(k, r)| {
             let seed = Rng::stream(params.seed, (k * 100_000 + r) as u64).next_u64();

@@ -508,3 +508,112 @@ pub fn grasp_trace(
         distribution: dist.rows().into_iter().map(|r| r.to_vec()).collect(),
     })
 }
+
+/// Per-observation cost of the learners on synthetic data of a given size.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StepBenchParams {
+    pub dim: usize,
+    pub classes: usize,
+    pub capacity: usize,
+    pub tau: usize,
+    /// Training sequences per class before timing (fills the BV budget).
+    pub warmup_sequences: usize,
+    /// Steps of each timed sequence, and timed sequences.
+    pub steps: usize,
+    pub sequences: usize,
+    pub adaptation: bool,
+    pub seed: u64,
+}
+
+impl Default for StepBenchParams {
+    fn default() -> Self {
+        StepBenchParams {
+            dim: 34,
+            classes: 10,
+            capacity: 50,
+            tau: 15,
+            warmup_sequences: 8,
+            steps: 20,
+            sequences: 20,
+            adaptation: true,
+            seed: 0,
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StepBench {
+    pub params: StepBenchParams,
+    pub learner: SupervisedLearner,
+    /// Microseconds per prediction step over all classes.
+    pub predict_step_us: f64,
+    /// Microseconds per training step (DS: all experts observed, two updated; GS: one).
+    pub train_step_us: f64,
+    /// Mean BVs per expert and experts still adapting when timed.
+    pub mean_basis: f64,
+    pub adapting: usize,
+}
+
+fn synthetic_sequence(dim: usize, steps: usize, class: usize, rng: &mut Rng) -> Array2<f64> {
+    let mut x = Array2::zeros((steps, dim));
+    for j in 0..dim {
+        let mut v = 0.1 * ((class * 7 + j * 3) % 10) as f64;
+        for t in 0..steps {
+            v = (v + 0.05 * rng.normal()).clamp(0.0, 1.0);
+            x[[t, j]] = v;
+        }
+    }
+    x
+}
+
+/// Time per-observation prediction and training on one thread.
+pub fn bench_steps(
+    learner: SupervisedLearner,
+    params: &StepBenchParams,
+) -> Result<StepBench, ExperimentError> {
+    let mut ds = DsParams::default();
+    let mut gs = GsParams::default();
+    for gp in [&mut ds.gp, &mut gs.gp] {
+        gp.capacity = params.capacity;
+        gp.tau = params.tau;
+        if !params.adaptation {
+            gp.adaptation = None;
+        }
+    }
+    let mut l = new_learner(learner, params.dim, params.classes, &ds, &gs)?;
+    let mut rng = Rng::new(params.seed);
+    for _ in 0..params.warmup_sequences {
+        for c in 0..params.classes {
+            let s = synthetic_sequence(params.dim, params.steps, c, &mut rng);
+            l.train_sequence(s.view(), c);
+        }
+    }
+    let seqs: Vec<(usize, Array2<f64>)> = (0..params.sequences)
+        .map(|i| {
+            let c = i % params.classes;
+            (c, synthetic_sequence(params.dim, params.steps, c, &mut rng))
+        })
+        .collect();
+    let mean_basis =
+        l.models().iter().map(|m| m.n_basis() as f64).sum::<f64>() / l.models().len().max(1) as f64;
+    let adapting = l.models().iter().filter(|m| m.adapting()).count();
+    let total_steps = (params.sequences * params.steps).max(1) as f64;
+    let t0 = Instant::now();
+    for (_, s) in &seqs {
+        l.predict_sequence(s.view());
+    }
+    let predict_step_us = 1e6 * t0.elapsed().as_secs_f64() / total_steps;
+    let t0 = Instant::now();
+    for (c, s) in &seqs {
+        l.train_sequence(s.view(), *c);
+    }
+    let train_step_us = 1e6 * t0.elapsed().as_secs_f64() / total_steps;
+    Ok(StepBench {
+        params: params.clone(),
+        learner,
+        predict_step_us,
+        train_step_us,
+        mean_basis,
+        adapting,
+    })
+}

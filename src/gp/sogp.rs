@@ -25,7 +25,7 @@ use ndarray::Array2;
 use serde::{Deserialize, Serialize};
 
 use super::GpError;
-use super::kernel::{KernelParams, RecursiveArd};
+use super::kernel::{KernelParams, RecursiveArd, dot};
 use super::normal::{log_norm_cdf, pdf_over_cdf};
 use super::sngd::{Sngd, SngdParams};
 
@@ -284,13 +284,15 @@ impl Sogp {
         }
         let (n, s) = (self.n, self.stride);
         for i in 0..n {
-            let row = &self.c[i * s..i * s + n];
-            self.ck[i] = row.iter().zip(&self.k[..n]).map(|(a, b)| a * b).sum();
+            self.ck[i] = dot(&self.c[i * s..i * s + n], &self.k[..n]);
         }
-        for d in 0..self.n_out {
-            self.mean[d] = (0..n)
-                .map(|i| self.k[i] * self.alpha[i * self.n_out + d])
-                .sum();
+        let no = self.n_out;
+        self.mean.fill(0.0);
+        for i in 0..n {
+            let ki = self.k[i];
+            for (m, a) in self.mean.iter_mut().zip(&self.alpha[i * no..(i + 1) * no]) {
+                *m += ki * a;
+            }
         }
         self.observed = Some(self.version);
     }
@@ -388,7 +390,7 @@ impl Sogp {
     fn posterior_update(&mut self, r: f64) {
         let (n, s, no) = (self.n, self.stride, self.n_out);
         for i in 0..n {
-            self.ehat[i] = (0..n).map(|j| self.q[i * s + j] * self.k[j]).sum();
+            self.ehat[i] = dot(&self.q[i * s..i * s + n], &self.k[..n]);
         }
         let sf2 = self.kernel.sigma_f2();
         let kqk: f64 = (0..n).map(|i| self.k[i] * self.ehat[i]).sum();

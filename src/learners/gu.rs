@@ -5,7 +5,8 @@
 //! Where the paper is silent (notes Sec. 7): Σ = diag(predictive variance incl. noise) and
 //! m = the number of training points the winning expert has seen, as the reference code's
 //! `OnlineLocalMemOGP`; the winner is the GS decision (argmax of the final posterior); the
-//! per-step novelties are averaged over the grasp, as DU averages its per-step scores.
+//! per-step novelties are combined over the grasp by [`GuAggregate`] (the mean, as DU
+//! averages its per-step scores, or the maximum: a grasp is novel where any step is).
 
 use ndarray::ArrayView2;
 use serde::{Deserialize, Serialize};
@@ -14,11 +15,20 @@ use super::du::Assignment;
 use super::evt::evt_novelty;
 use super::{Gs, GsParams, LearnerError, SequenceClassifier, argmax_of_last};
 
+/// How the per-step novelties of a grasp become one score.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GuAggregate {
+    Mean,
+    Max,
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GuParams {
     pub gs: GsParams,
     /// theta_U in [0, 1]: the lower, the more clusters.
     pub threshold: f64,
+    pub aggregate: GuAggregate,
 }
 
 impl Default for GuParams {
@@ -26,6 +36,7 @@ impl Default for GuParams {
         GuParams {
             gs: GsParams::default(),
             threshold: 0.3,
+            aggregate: GuAggregate::Mean,
         }
     }
 }
@@ -43,6 +54,7 @@ impl GuParams {
 pub struct Gu {
     gs: Gs,
     threshold: f64,
+    aggregate: GuAggregate,
     residual: Vec<f64>,
     variance: Vec<f64>,
 }
@@ -53,6 +65,7 @@ impl Gu {
         Ok(Gu {
             gs: Gs::new(dim, &params.gs)?,
             threshold: params.threshold,
+            aggregate: params.aggregate,
             residual: vec![0.0; dim],
             variance: vec![0.0; dim],
         })
@@ -66,22 +79,27 @@ impl Gu {
         &self.gs
     }
 
-    /// Mean over the steps of nu_G under expert `c`.
+    /// nu_G of a grasp under expert `c`, combined over the steps.
     pub fn novelty(&mut self, c: usize, seq: ArrayView2<f64>) -> f64 {
         let m = self.gs.models()[c].seen();
         let (means, vars) = self.gs.expert_predictions(c, seq);
         if vars.is_empty() {
             return 1.0;
         }
-        let mut sum = 0.0;
+        let (mut sum, mut max) = (0.0, 0.0f64);
         for ((o, mu), v) in seq.rows().into_iter().zip(means.rows()).zip(&vars) {
             for ((r, x), y) in self.residual.iter_mut().zip(o).zip(mu) {
                 *r = x - y;
             }
             self.variance.fill(*v);
-            sum += evt_novelty(&self.residual, &self.variance, m);
+            let nu = evt_novelty(&self.residual, &self.variance, m);
+            sum += nu;
+            max = max.max(nu);
         }
-        sum / vars.len() as f64
+        match self.aggregate {
+            GuAggregate::Mean => sum / vars.len() as f64,
+            GuAggregate::Max => max,
+        }
     }
 
     /// Assign one grasp (opening a cluster if it is novel) and train on it.
