@@ -86,11 +86,14 @@ impl RecognitionArgs {
 pub fn print_recognition(r: &RecognitionResult) {
     let s = &r.summary;
     println!(
-        "{:?} / {:?} features, {} repetitions, {:.1} s",
+        "{:?} / {:?} features, {} repetitions, {:.1} s wall, {} s CPU",
         r.params.learner,
         r.params.features,
         r.repetitions.len(),
-        r.wall_seconds
+        r.wall_seconds,
+        r.cpu_seconds
+            .map(|c| format!("{c:.1}"))
+            .unwrap_or("?".into())
     );
     println!("  all        {:.3} ({:.3})", s.all.mean, s.all.sd);
     println!("  final 20%  {:.3} ({:.3})", s.final_20.mean, s.final_20.sd);
@@ -233,6 +236,7 @@ struct ProtocolTiming {
     features: String,
     reps: usize,
     wall_seconds: f64,
+    cpu_seconds: Option<f64>,
     all: f64,
     final_20: f64,
 }
@@ -287,10 +291,11 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
             };
             let r = run_recognition(&session, &p, &Progress::new())?;
             println!(
-                "  Table II protocol {:?}/all, {} reps: {:.1} s wall ({} threads)",
+                "  Table II protocol {:?}/all, {} reps: {:.1} s wall, {:.1} s CPU ({} threads)",
                 learner,
                 args.reps,
                 r.wall_seconds,
+                r.cpu_seconds.unwrap_or(f64::NAN),
                 rayon::current_num_threads()
             );
             protocol.push(ProtocolTiming {
@@ -298,6 +303,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
                 features: "all".into(),
                 reps: args.reps,
                 wall_seconds: r.wall_seconds,
+                cpu_seconds: r.cpu_seconds,
                 all: r.summary.all.mean,
                 final_20: r.summary.final_20.mean,
             });

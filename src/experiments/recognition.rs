@@ -188,6 +188,8 @@ pub struct RecognitionResult {
     pub summary: RecognitionSummary,
     pub repetitions: Vec<RepetitionResult>,
     pub wall_seconds: f64,
+    /// CPU seconds of the whole process over the run (None where /proc is missing).
+    pub cpu_seconds: Option<f64>,
 }
 
 /// A fresh learner of the chosen kind with one expert per class.
@@ -371,6 +373,7 @@ pub fn run_recognition(
 ) -> Result<RecognitionResult, ExperimentError> {
     params.validate()?;
     let start = Instant::now();
+    let cpu_start = cpu_seconds(true);
     let (labels, classes) = session_labels(session, &params.label_set)?;
     let feats = feature_sequences(
         session,
@@ -404,6 +407,7 @@ pub fn run_recognition(
         summary,
         repetitions: reps,
         wall_seconds: start.elapsed().as_secs_f64(),
+        cpu_seconds: cpu_seconds(true).zip(cpu_start).map(|(b, a)| b - a),
     })
 }
 
@@ -509,6 +513,23 @@ pub fn grasp_trace(
     })
 }
 
+/// CPU seconds (user + system) used so far by the calling thread, or by the whole process
+/// with `process = true`, from Linux's /proc (clock ticks of 10 ms); None elsewhere. The
+/// machine is shared, so wall-clock times mix in other work: CPU time does not.
+pub fn cpu_seconds(process: bool) -> Option<f64> {
+    let path = if process {
+        "/proc/self/stat"
+    } else {
+        "/proc/thread-self/stat"
+    };
+    let text = std::fs::read_to_string(path).ok()?;
+    let after = &text[text.rfind(')')? + 1..];
+    let f: Vec<&str> = after.split_whitespace().collect();
+    let utime: f64 = f.get(11)?.parse().ok()?;
+    let stime: f64 = f.get(12)?.parse().ok()?;
+    Some((utime + stime) / 100.0)
+}
+
 /// Per-observation cost of the learners on synthetic data of a given size.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StepBenchParams {
@@ -534,7 +555,7 @@ impl Default for StepBenchParams {
             tau: 15,
             warmup_sequences: 8,
             steps: 20,
-            sequences: 20,
+            sequences: 60,
             adaptation: true,
             seed: 0,
         }
@@ -545,10 +566,13 @@ impl Default for StepBenchParams {
 pub struct StepBench {
     pub params: StepBenchParams,
     pub learner: SupervisedLearner,
-    /// Microseconds per prediction step over all classes.
+    /// Wall-clock microseconds per prediction step over all classes.
     pub predict_step_us: f64,
-    /// Microseconds per training step (DS: all experts observed, two updated; GS: one).
+    /// Wall-clock microseconds per training step (DS: all experts observed, two updated).
     pub train_step_us: f64,
+    /// The same in CPU time of the timing thread (None where /proc is missing).
+    pub predict_step_cpu_us: Option<f64>,
+    pub train_step_cpu_us: Option<f64>,
     /// Mean BVs per expert and experts still adapting when timed.
     pub mean_basis: f64,
     pub adapting: usize,
@@ -598,21 +622,26 @@ pub fn bench_steps(
         l.models().iter().map(|m| m.n_basis() as f64).sum::<f64>() / l.models().len().max(1) as f64;
     let adapting = l.models().iter().filter(|m| m.adapting()).count();
     let total_steps = (params.sequences * params.steps).max(1) as f64;
-    let t0 = Instant::now();
+    let per_step = |a: Option<f64>, b: Option<f64>| Some(1e6 * (b? - a?) / total_steps);
+    let (t0, c0) = (Instant::now(), cpu_seconds(false));
     for (_, s) in &seqs {
         l.predict_sequence(s.view());
     }
     let predict_step_us = 1e6 * t0.elapsed().as_secs_f64() / total_steps;
-    let t0 = Instant::now();
+    let predict_step_cpu_us = per_step(c0, cpu_seconds(false));
+    let (t0, c0) = (Instant::now(), cpu_seconds(false));
     for (c, s) in &seqs {
         l.train_sequence(s.view(), *c);
     }
     let train_step_us = 1e6 * t0.elapsed().as_secs_f64() / total_steps;
+    let train_step_cpu_us = per_step(c0, cpu_seconds(false));
     Ok(StepBench {
         params: params.clone(),
         learner,
         predict_step_us,
         train_step_us,
+        predict_step_cpu_us,
+        train_step_cpu_us,
         mean_basis,
         adapting,
     })
