@@ -10,6 +10,7 @@ pub mod experiments;
 pub mod features;
 pub mod figures;
 pub mod fsutil;
+pub mod gp;
 pub mod jobs;
 pub mod learners;
 pub mod linalg;

@@ -3,6 +3,7 @@
 
 pub mod baselines;
 mod figures;
+pub mod recognition;
 pub mod session;
 pub mod simulate;
 
@@ -42,6 +43,12 @@ pub enum Command {
     RenderFigure(figures::RenderFigureArgs),
     /// Sequential k-means, SOM and RBF SVM baselines on the per-grasp Table I features.
     Baselines(baselines::BaselinesArgs),
+    /// Online object recognition (DS/GS) under the paper's supervised protocol.
+    Recognition(recognition::RecognitionArgs),
+    /// Online clustering (DU/GU) over a novelty-threshold sweep, with k-means and SOM.
+    Clustering(recognition::ClusteringArgs),
+    /// Time per-observation prediction/training and the Table II protocol.
+    BenchRecognition(recognition::BenchArgs),
 }
 
 /// Run a subcommand.
@@ -53,5 +60,8 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Simulate(a) => simulate::run(a),
         Command::RenderFigure(a) => figures::run(a),
         Command::Baselines(a) => baselines::run(a),
+        Command::Recognition(a) => recognition::recognition(a),
+        Command::Clustering(a) => recognition::clustering(a),
+        Command::BenchRecognition(a) => recognition::bench(a),
     }
 }

@@ -1,4 +1,40 @@
-//! Experiments: the papers' protocols run end to end, and what they leave behind.
+//! Experiments: the papers' protocols as engine functions returning plain, serialisable
+//! results (for the CLI, the views and the figures), and what they leave behind.
 
 pub mod baselines_report;
+pub mod clustering;
+pub mod recognition;
 pub mod report;
+
+use crate::features::sequence::SequenceError;
+use crate::jobs::Cancelled;
+use crate::learners::LearnerError;
+
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ExperimentError {
+    #[error("invalid parameter `{name}`: {reason}")]
+    InvalidParameter { name: &'static str, reason: String },
+    #[error("invalid data: {0}")]
+    Data(String),
+    #[error(transparent)]
+    Features(#[from] SequenceError),
+    #[error(transparent)]
+    Learner(#[from] LearnerError),
+    #[error("cancelled")]
+    Cancelled,
+}
+
+impl From<Cancelled> for ExperimentError {
+    fn from(_: Cancelled) -> Self {
+        ExperimentError::Cancelled
+    }
+}
+
+impl ExperimentError {
+    pub(crate) fn param(name: &'static str, reason: impl Into<String>) -> ExperimentError {
+        ExperimentError::InvalidParameter {
+            name,
+            reason: reason.into(),
+        }
+    }
+}

@@ -2,5 +2,7 @@
 //! patches, normalisation.
 
 mod moments;
+pub mod sequence;
 
 pub use moments::FingerStats;
+pub use sequence::{FeatureSequences, FeatureSet, SequenceParams, feature_sequences};

@@ -1,0 +1,320 @@
+//! `recognition`, `clustering` and `bench-recognition`: the OIESGP experiments of the second
+//! paper from the shell, with machine-readable results (`--json OUT`).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use clap::Args;
+
+use crate::experiments::recognition::{RecognitionParams, RecognitionResult, run_recognition};
+use crate::features::FeatureSet;
+use crate::jobs::Progress;
+use crate::session::{self, Session};
+
+/// A native session file, or the iCub dataset folder (imported on the fly).
+pub fn open_session(path: &Path) -> anyhow::Result<Session> {
+    if path.is_dir() {
+        session::import_icub(path).with_context(|| format!("importing {}", path.display()))
+    } else {
+        session::load(path).with_context(|| format!("loading {}", path.display()))
+    }
+}
+
+fn write_json<T: serde::Serialize>(value: &T, out: Option<&Path>) -> anyhow::Result<()> {
+    if let Some(out) = out {
+        let text = serde_json::to_string_pretty(value)?;
+        std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;
+        println!("wrote {}", out.display());
+    }
+    Ok(())
+}
+
+#[derive(Args, Debug)]
+pub struct RecognitionArgs {
+    /// A native session file or the iCub dataset folder.
+    pub session: PathBuf,
+    /// ds (discriminative) or gs (generative).
+    #[arg(long, default_value = "gs")]
+    pub learner: String,
+    /// all, tactile or encoder.
+    #[arg(long, default_value = "all")]
+    pub features: String,
+    /// Repetitions of the protocol (the paper: 50).
+    #[arg(long, default_value_t = 50)]
+    pub reps: usize,
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Variance of Gaussian noise added to the raw taxels (the paper: 100, 1000).
+    #[arg(long, default_value_t = 0.0)]
+    pub noise: f64,
+    /// Switch hyperparameter adaptation off.
+    #[arg(long)]
+    pub no_adapt: bool,
+    /// BV budget of every expert.
+    #[arg(long, default_value_t = 50)]
+    pub capacity: usize,
+    /// Lags of the recursive kernel.
+    #[arg(long, default_value_t = 15)]
+    pub tau: usize,
+    /// Write the full result here as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+impl RecognitionArgs {
+    fn params(&self) -> anyhow::Result<RecognitionParams> {
+        let mut p = RecognitionParams {
+            learner: self.learner.parse()?,
+            features: self.features.parse::<FeatureSet>()?,
+            reps: self.reps,
+            seed: self.seed,
+            taxel_noise_variance: self.noise,
+            ..RecognitionParams::default()
+        };
+        for gp in [&mut p.ds.gp, &mut p.gs.gp] {
+            gp.capacity = self.capacity;
+            gp.tau = self.tau;
+            if self.no_adapt {
+                gp.adaptation = None;
+            }
+        }
+        p.validate()?;
+        Ok(p)
+    }
+}
+
+pub fn print_recognition(r: &RecognitionResult) {
+    let s = &r.summary;
+    println!(
+        "{:?} / {:?} features, {} repetitions, {:.1} s wall, {} s CPU",
+        r.params.learner,
+        r.params.features,
+        r.repetitions.len(),
+        r.wall_seconds,
+        r.cpu_seconds
+            .map(|c| format!("{c:.1}"))
+            .unwrap_or("?".into())
+    );
+    println!("  all        {:.3} ({:.3})", s.all.mean, s.all.sd);
+    println!("  final 20%  {:.3} ({:.3})", s.final_20.mean, s.final_20.sd);
+    let sets: Vec<String> = s
+        .trial_sets
+        .iter()
+        .map(|m| format!("{:.3}", m.mean))
+        .collect();
+    println!("  trial sets {}", sets.join(" "));
+    let early: Vec<String> = r
+        .params
+        .early_fractions
+        .iter()
+        .zip(&s.early)
+        .map(|(f, m)| format!("{f:.1}:{:.3}", m.mean))
+        .collect();
+    println!("  early      {}", early.join(" "));
+    println!(
+        "  per step   predict {:.1} µs, train {:.1} µs (threads share the cores)",
+        s.predict_step_us, s.train_step_us
+    );
+}
+
+pub fn recognition(args: RecognitionArgs) -> anyhow::Result<()> {
+    let params = args.params()?;
+    let session = open_session(&args.session)?;
+    let result = run_recognition(&session, &params, &Progress::new())?;
+    print_recognition(&result);
+    write_json(&result, args.json.as_deref())
+}
+
+#[derive(Args, Debug)]
+pub struct ClusteringArgs {
+    /// A native session file or the iCub dataset folder.
+    pub session: PathBuf,
+    /// du (discriminative) or gu (generative).
+    #[arg(long, default_value = "du")]
+    pub learner: String,
+    /// Novelty thresholds, comma separated (default 0.1, 0.15, …, 0.95).
+    #[arg(long, value_delimiter = ',')]
+    pub thresholds: Vec<f64>,
+    /// Random orders per threshold (the paper: 50).
+    #[arg(long, default_value_t = 50)]
+    pub reps: usize,
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// all, tactile or encoder.
+    #[arg(long, default_value = "all")]
+    pub features: String,
+    /// Switch hyperparameter adaptation off.
+    #[arg(long)]
+    pub no_adapt: bool,
+    /// GU: combine per-step novelties by their mean or their max.
+    #[arg(long, default_value = "mean")]
+    pub gu_aggregate: String,
+    /// Largest k of the k-means / SOM baselines (0: skip them).
+    #[arg(long, default_value_t = 20)]
+    pub baseline_max_k: usize,
+    /// Write the full result here as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+fn print_point(name: &str, p: &Option<crate::experiments::clustering::EffectivePoint>) {
+    match p {
+        Some(p) => println!(
+            "  {name:<8} at 10 effective: purity {:.3} ({:.3})  ARI {:.3} ({:.3})  NMI {:.3} ({:.3})  [{} runs]",
+            p.purity.mean, p.purity.sd, p.ari.mean, p.ari.sd, p.nmi.mean, p.nmi.sd, p.runs
+        ),
+        None => println!("  {name:<8} no run with 10 effective clusters"),
+    }
+}
+
+pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
+    use crate::experiments::clustering::{ClusteringParams, run_clustering};
+    let mut params = ClusteringParams {
+        learner: args.learner.parse()?,
+        features: args.features.parse::<FeatureSet>()?,
+        reps: args.reps,
+        seed: args.seed,
+        baseline_max_k: args.baseline_max_k,
+        ..ClusteringParams::default()
+    };
+    params.gu_aggregate = match args.gu_aggregate.as_str() {
+        "max" => crate::learners::GuAggregate::Max,
+        "mean" => crate::learners::GuAggregate::Mean,
+        other => anyhow::bail!("--gu-aggregate: `{other}` is not max or mean"),
+    };
+    if !args.thresholds.is_empty() {
+        params.thresholds = args.thresholds.clone();
+    }
+    if args.no_adapt {
+        params.ds.gp.adaptation = None;
+        params.gs.gp.adaptation = None;
+    }
+    params.validate()?;
+    let session = open_session(&args.session)?;
+    let r = run_clustering(&session, &params, &Progress::new())?;
+    println!(
+        "{:?}, {} orders per threshold, {:.1} s",
+        params.learner, params.reps, r.wall_seconds
+    );
+    println!("  threshold  clusters  effective  purity   ARI     NMI");
+    for t in &r.sweep {
+        println!(
+            "  {:>9.2}  {:>8.1}  {:>9.1}  {:.3}   {:.3}   {:.3}",
+            t.threshold, t.clusters.mean, t.effective.mean, t.purity.mean, t.ari.mean, t.nmi.mean
+        );
+    }
+    print_point("learner", &r.at_10);
+    print_point("k-means", &r.kmeans_at_10);
+    print_point("SOM", &r.som_at_10);
+    let us = r.runs.iter().map(|x| x.learn_step_us).sum::<f64>() / r.runs.len().max(1) as f64;
+    println!("  learning phase {us:.1} µs per observation (threads share the cores)");
+    write_json(&r, args.json.as_deref())
+}
+
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// Also time the whole Table II protocol on this session (native file or iCub folder).
+    pub session: Option<PathBuf>,
+    /// Repetitions of the protocol timing.
+    #[arg(long, default_value_t = 50)]
+    pub reps: usize,
+    /// Write the measurements here as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(serde::Serialize)]
+struct BenchReport {
+    steps: Vec<crate::experiments::recognition::StepBench>,
+    protocol: Vec<ProtocolTiming>,
+    threads: usize,
+}
+
+#[derive(serde::Serialize)]
+struct ProtocolTiming {
+    learner: String,
+    features: String,
+    reps: usize,
+    wall_seconds: f64,
+    cpu_seconds: Option<f64>,
+    all: f64,
+    final_20: f64,
+}
+
+pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
+    use crate::experiments::recognition::{StepBenchParams, SupervisedLearner, bench_steps};
+    let mut steps = Vec::new();
+    println!("per observation, one thread (34 inputs, 10 classes, adaptation on unless noted):");
+    let base = StepBenchParams::default();
+    let mut configs = vec![base.clone()];
+    for capacity in [25, 100] {
+        configs.push(StepBenchParams {
+            capacity,
+            ..base.clone()
+        });
+    }
+    for tau in [5, 30] {
+        configs.push(StepBenchParams {
+            tau,
+            ..base.clone()
+        });
+    }
+    configs.push(StepBenchParams {
+        adaptation: false,
+        ..base.clone()
+    });
+    for p in configs {
+        for learner in [SupervisedLearner::Ds, SupervisedLearner::Gs] {
+            let b = bench_steps(learner, &p)?;
+            println!(
+                "  {:?} budget {:>3} tau {:>2} adapt {:<5}: predict {:>7.1} µs/step, train {:>7.1} µs/step  ({:.0} BVs, {} adapting)",
+                learner,
+                p.capacity,
+                p.tau,
+                p.adaptation,
+                b.predict_step_us,
+                b.train_step_us,
+                b.mean_basis,
+                b.adapting
+            );
+            steps.push(b);
+        }
+    }
+    let mut protocol = Vec::new();
+    if let Some(path) = &args.session {
+        let session = open_session(path)?;
+        for learner in [SupervisedLearner::Ds, SupervisedLearner::Gs] {
+            let p = RecognitionParams {
+                learner,
+                reps: args.reps,
+                ..RecognitionParams::default()
+            };
+            let r = run_recognition(&session, &p, &Progress::new())?;
+            println!(
+                "  Table II protocol {:?}/all, {} reps: {:.1} s wall, {:.1} s CPU ({} threads)",
+                learner,
+                args.reps,
+                r.wall_seconds,
+                r.cpu_seconds.unwrap_or(f64::NAN),
+                rayon::current_num_threads()
+            );
+            protocol.push(ProtocolTiming {
+                learner: format!("{learner:?}"),
+                features: "all".into(),
+                reps: args.reps,
+                wall_seconds: r.wall_seconds,
+                cpu_seconds: r.cpu_seconds,
+                all: r.summary.all.mean,
+                final_20: r.summary.final_20.mean,
+            });
+        }
+    }
+    write_json(
+        &BenchReport {
+            steps,
+            protocol,
+            threads: rayon::current_num_threads(),
+        },
+        args.json.as_deref(),
+    )
+}

@@ -1,0 +1,382 @@
+//! The unsupervised experiments of the second paper (Sec. VII, Figs. 11–13, Table IV).
+//!
+//! One run = one random order of all grasps (`Rng::stream(seed, rep)`, the same orders at
+//! every threshold) and one novelty threshold: the learner (DU or GU) goes once over the
+//! grasps (learning phase), then every grasp is re-assigned to the learned models. Scores
+//! (purity, ARI, NMI) compare that re-assignment with the true objects; "clusters" counts
+//! the clusters created, "effective" those that receive at least one grasp on
+//! re-assignment. Runs are grouped by effective clusters for the NMI curve (Fig. 13) and the
+//! scores at 10 effective clusters (Table IV). Sequential k-means and the SOM run on the
+//! z-scored Table I features with as many centres / units as effective clusters wanted,
+//! over the same number of seeded orders.
+
+use std::collections::BTreeMap;
+use std::str::FromStr;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::ExperimentError;
+use super::recognition::{MeanSd, session_labels};
+use crate::cluster::grasp_features::{Normalisation, Normaliser, session_features};
+use crate::cluster::{Schedule, SequentialKMeansParams, SomParams, scores};
+use crate::features::{FeatureSet, SequenceParams, feature_sequences};
+use crate::jobs::Progress;
+use crate::learners::{DsParams, Du, DuParams, Gs, GsParams, Gu, GuAggregate, GuParams};
+use crate::rng::Rng;
+use crate::session::Session;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum UnsupervisedLearner {
+    Du,
+    Gu,
+}
+
+impl FromStr for UnsupervisedLearner {
+    type Err = ExperimentError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "du" => Ok(UnsupervisedLearner::Du),
+            "gu" => Ok(UnsupervisedLearner::Gu),
+            other => Err(ExperimentError::param(
+                "learner",
+                format!("`{other}` is not du or gu"),
+            )),
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ClusteringParams {
+    pub learner: UnsupervisedLearner,
+    pub features: FeatureSet,
+    /// Novelty thresholds to sweep (the paper: 0.1 … 0.95).
+    pub thresholds: Vec<f64>,
+    /// Random orders per threshold (the paper: 50).
+    pub reps: usize,
+    pub seed: u64,
+    pub label_set: String,
+    pub ds: DsParams,
+    pub gs: GsParams,
+    /// GU's combination of per-step novelties.
+    pub gu_aggregate: GuAggregate,
+    /// Run sequential k-means and the SOM for 2 … `baseline_max_k` clusters (0: skip).
+    pub baseline_max_k: usize,
+}
+
+impl Default for ClusteringParams {
+    fn default() -> Self {
+        ClusteringParams {
+            learner: UnsupervisedLearner::Du,
+            features: FeatureSet::All,
+            thresholds: (2..=19).map(|i| i as f64 * 0.05).collect(),
+            reps: 50,
+            seed: 0,
+            label_set: "object".into(),
+            ds: DsParams::default(),
+            gs: GsParams::default(),
+            gu_aggregate: GuAggregate::Mean,
+            baseline_max_k: 20,
+        }
+    }
+}
+
+impl ClusteringParams {
+    pub fn validate(&self) -> Result<(), ExperimentError> {
+        if self.reps == 0 {
+            return Err(ExperimentError::param("reps", "must be at least 1"));
+        }
+        if self.thresholds.is_empty() {
+            return Err(ExperimentError::param("thresholds", "needs at least one"));
+        }
+        if self.thresholds.iter().any(|t| !(0.0..=1.0).contains(t)) {
+            return Err(ExperimentError::param(
+                "thresholds",
+                "each must lie in [0, 1]",
+            ));
+        }
+        self.ds.validate()?;
+        self.gs.validate()?;
+        Ok(())
+    }
+}
+
+/// One learning run at one threshold.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ClusteringRun {
+    pub threshold: f64,
+    pub rep: usize,
+    pub clusters: usize,
+    pub effective: usize,
+    pub purity: f64,
+    pub ari: f64,
+    pub nmi: f64,
+    /// Microseconds per observation of the learning phase (predict + novelty + train).
+    pub learn_step_us: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ThresholdSummary {
+    pub threshold: f64,
+    pub clusters: MeanSd,
+    pub effective: MeanSd,
+    pub purity: MeanSd,
+    pub ari: MeanSd,
+    pub nmi: MeanSd,
+}
+
+/// Scores of every run that ended with `effective` effective clusters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EffectivePoint {
+    pub effective: usize,
+    pub runs: usize,
+    pub purity: MeanSd,
+    pub ari: MeanSd,
+    pub nmi: MeanSd,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ClusteringResult {
+    pub params: ClusteringParams,
+    pub runs: Vec<ClusteringRun>,
+    /// Figs. 11–12.
+    pub sweep: Vec<ThresholdSummary>,
+    /// Fig. 13 for the learner.
+    pub by_effective: Vec<EffectivePoint>,
+    pub kmeans: Vec<EffectivePoint>,
+    pub som: Vec<EffectivePoint>,
+    /// Table IV rows (None when no run reached exactly 10 effective clusters).
+    pub at_10: Option<EffectivePoint>,
+    pub kmeans_at_10: Option<EffectivePoint>,
+    pub som_at_10: Option<EffectivePoint>,
+    /// The SOM set-up of the baseline (grid 2 × ⌈k/2⌉ for k units).
+    pub som_setup: SomParams,
+    pub wall_seconds: f64,
+}
+
+enum Learner {
+    Du(Du),
+    Gu(Gu),
+}
+
+fn one_run(
+    params: &ClusteringParams,
+    seqs: &[ndarray::Array2<f64>],
+    labels: &[usize],
+    dim: usize,
+    threshold: f64,
+    rep: usize,
+) -> Result<ClusteringRun, ExperimentError> {
+    let order = Rng::stream(params.seed, rep as u64).permutation(seqs.len());
+    let mut learner = match params.learner {
+        UnsupervisedLearner::Du => Learner::Du(Du::new(
+            dim,
+            &DuParams {
+                ds: params.ds.clone(),
+                threshold,
+            },
+        )?),
+        UnsupervisedLearner::Gu => Learner::Gu(Gu::new(
+            dim,
+            &GuParams {
+                gs: params.gs.clone(),
+                threshold,
+                aggregate: params.gu_aggregate,
+            },
+        )?),
+    };
+    let t0 = Instant::now();
+    let mut steps = 0;
+    for &g in &order {
+        steps += seqs[g].nrows();
+        match &mut learner {
+            Learner::Du(l) => l.learn(seqs[g].view())?,
+            Learner::Gu(l) => l.learn(seqs[g].view())?,
+        };
+    }
+    let learn_step_us = 1e6 * t0.elapsed().as_secs_f64() / steps.max(1) as f64;
+    let (clusters, pred): (usize, Vec<usize>) = match &mut learner {
+        Learner::Du(l) => (
+            l.n_clusters(),
+            seqs.iter().map(|s| l.assign(s.view())).collect(),
+        ),
+        Learner::Gu(l) => (
+            l.n_clusters(),
+            seqs.iter().map(|s| l.assign(s.view())).collect(),
+        ),
+    };
+    let sc = scores(labels, &pred);
+    Ok(ClusteringRun {
+        threshold,
+        rep,
+        clusters,
+        effective: distinct(&pred),
+        purity: sc.purity,
+        ari: sc.ari,
+        nmi: sc.nmi,
+        learn_step_us,
+    })
+}
+
+fn distinct(pred: &[usize]) -> usize {
+    let mut v = pred.to_vec();
+    v.sort_unstable();
+    v.dedup();
+    v.len()
+}
+
+/// Group (effective, purity, ari, nmi) tuples by effective clusters.
+fn by_effective(points: impl Iterator<Item = Scored>) -> Vec<EffectivePoint> {
+    let mut groups: BTreeMap<usize, Vec<(f64, f64, f64)>> = BTreeMap::new();
+    for (e, p, a, n) in points {
+        groups.entry(e).or_default().push((p, a, n));
+    }
+    groups
+        .into_iter()
+        .map(|(effective, v)| EffectivePoint {
+            effective,
+            runs: v.len(),
+            purity: MeanSd::of(v.iter().map(|x| x.0)),
+            ari: MeanSd::of(v.iter().map(|x| x.1)),
+            nmi: MeanSd::of(v.iter().map(|x| x.2)),
+        })
+        .collect()
+}
+
+fn at(points: &[EffectivePoint], k: usize) -> Option<EffectivePoint> {
+    points.iter().find(|p| p.effective == k).cloned()
+}
+
+/// The SOM of the baseline with `k` units.
+pub fn som_setup(k: usize, seed: u64) -> SomParams {
+    let (rows, cols) = if k < 2 { (1, 1) } else { (2, k.div_ceil(2)) };
+    SomParams {
+        rows,
+        cols,
+        radius: Schedule::Exponential {
+            start: (cols as f64 / 2.0).max(1.0),
+            end: 0.3,
+        },
+        seed,
+        ..SomParams::default()
+    }
+}
+
+type Baselines = (Vec<EffectivePoint>, Vec<EffectivePoint>);
+/// (effective clusters, purity, ARI, NMI) of one clustering.
+type Scored = (usize, f64, f64, f64);
+
+fn baselines(
+    session: &Session,
+    labels: &[usize],
+    params: &ClusteringParams,
+) -> Result<Baselines, ExperimentError> {
+    if params.baseline_max_k < 2 {
+        return Ok((Vec::new(), Vec::new()));
+    }
+    let cluster_err = |e: crate::cluster::ClusterError| ExperimentError::Data(e.to_string());
+    let raw = session_features(session).map_err(cluster_err)?;
+    let data = Normaliser::fit(Normalisation::ZScore, raw.view())
+        .and_then(|n| n.transform(raw.view()))
+        .map_err(cluster_err)?;
+    let jobs: Vec<(usize, usize)> = (2..=params.baseline_max_k.min(data.nrows()))
+        .flat_map(|k| (0..params.reps).map(move |r| (k, r)))
+        .collect();
+    let out: Vec<(Scored, Scored)> = jobs
+        .par_iter()
+        .map(|&(k, r)| {
+            let seed = Rng::stream(params.seed, (k * 100_000 + r) as u64).next_u64();
+            let km = SequentialKMeansParams { k, passes: 1, seed }
+                .fit(data.view())
+                .and_then(|m| m.assign(data.view()))
+                .map_err(cluster_err)?;
+            let som = som_setup(k, seed)
+                .fit(data.view())
+                .and_then(|m| m.assign(data.view()))
+                .map_err(cluster_err)?;
+            let (a, b) = (scores(labels, &km), scores(labels, &som));
+            Ok((
+                (distinct(&km), a.purity, a.ari, a.nmi),
+                (distinct(&som), b.purity, b.ari, b.nmi),
+            ))
+        })
+        .collect::<Result<_, ExperimentError>>()?;
+    Ok((
+        by_effective(out.iter().map(|x| x.0)),
+        by_effective(out.iter().map(|x| x.1)),
+    ))
+}
+
+pub fn run_clustering(
+    session: &Session,
+    params: &ClusteringParams,
+    progress: &Progress,
+) -> Result<ClusteringResult, ExperimentError> {
+    params.validate()?;
+    let start = Instant::now();
+    let (labels, _) = session_labels(session, &params.label_set)?;
+    let feats = feature_sequences(
+        session,
+        &SequenceParams {
+            features: params.features,
+            taxel_noise_variance: 0.0,
+            seed: params.seed,
+        },
+    )?;
+    // Fail early on parameters the learners reject.
+    Gs::new(feats.dim(), &params.gs)?;
+    let jobs: Vec<(f64, usize)> = params
+        .thresholds
+        .iter()
+        .flat_map(|&t| (0..params.reps).map(move |r| (t, r)))
+        .collect();
+    let done = AtomicUsize::new(0);
+    progress.set(0.0, "clustering: starting");
+    let runs: Vec<ClusteringRun> = jobs
+        .par_iter()
+        .map(|&(t, r)| {
+            progress.checkpoint()?;
+            let run = one_run(params, &feats.sequences, &labels, feats.dim(), t, r)?;
+            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+            progress.set(
+                d as f64 / jobs.len() as f64,
+                format!("clustering: {d}/{} runs", jobs.len()),
+            );
+            Ok(run)
+        })
+        .collect::<Result<_, ExperimentError>>()?;
+    let sweep = params
+        .thresholds
+        .iter()
+        .map(|&t| {
+            let rs: Vec<&ClusteringRun> = runs.iter().filter(|r| r.threshold == t).collect();
+            ThresholdSummary {
+                threshold: t,
+                clusters: MeanSd::of(rs.iter().map(|r| r.clusters as f64)),
+                effective: MeanSd::of(rs.iter().map(|r| r.effective as f64)),
+                purity: MeanSd::of(rs.iter().map(|r| r.purity)),
+                ari: MeanSd::of(rs.iter().map(|r| r.ari)),
+                nmi: MeanSd::of(rs.iter().map(|r| r.nmi)),
+            }
+        })
+        .collect();
+    let by_eff = by_effective(runs.iter().map(|r| (r.effective, r.purity, r.ari, r.nmi)));
+    progress.checkpoint()?;
+    let (kmeans, som) = baselines(session, &labels, params)?;
+    Ok(ClusteringResult {
+        params: params.clone(),
+        at_10: at(&by_eff, 10),
+        kmeans_at_10: at(&kmeans, 10),
+        som_at_10: at(&som, 10),
+        runs,
+        sweep,
+        by_effective: by_eff,
+        kmeans,
+        som,
+        som_setup: som_setup(10, params.seed),
+        wall_seconds: start.elapsed().as_secs_f64(),
+    })
+}

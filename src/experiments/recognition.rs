@@ -1,0 +1,648 @@
+//! The supervised protocol of the second paper (Sec. V-D1, Table II, Figs. 6–9) for DS and
+//! GS, repeated with seeds and run in parallel over the repetitions.
+//!
+//! One repetition: every class's grasps are shuffled; one grasp per class is taught first
+//! (in random class order, no prediction); the remaining grasps follow in stratified random
+//! order (rounds holding one grasp of every class still left, each round shuffled). Each
+//! grasp is predicted, then trained on, over the first 1 − `test_fraction` of that order;
+//! the last `test_fraction` is predicted only. Scores: "all" = accuracy over every
+//! predicted grasp, "final 20%" = accuracy over the test part, accuracy per trial set (the
+//! predicted order cut into `trial_sets` equal parts, Fig. 6), the confusion matrix over all
+//! predicted grasps (Fig. 7), and early classification on the test part: the decision from
+//! the first ⌈f·T⌉ steps for each fraction f (Fig. 9).
+
+use std::str::FromStr;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use ndarray::{Array2, s};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::ExperimentError;
+use crate::features::{FeatureSequences, FeatureSet, SequenceParams, feature_sequences};
+use crate::jobs::Progress;
+use crate::learners::{Ds, DsParams, Gs, GsParams, SequenceClassifier, lengthscales};
+use crate::rng::Rng;
+use crate::session::Session;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SupervisedLearner {
+    Ds,
+    Gs,
+}
+
+impl FromStr for SupervisedLearner {
+    type Err = ExperimentError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "ds" => Ok(SupervisedLearner::Ds),
+            "gs" => Ok(SupervisedLearner::Gs),
+            other => Err(ExperimentError::param(
+                "learner",
+                format!("`{other}` is not ds or gs"),
+            )),
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RecognitionParams {
+    pub learner: SupervisedLearner,
+    pub features: FeatureSet,
+    /// Repetitions of the protocol (the paper: 50).
+    pub reps: usize,
+    pub seed: u64,
+    /// Share of the predicted order that is test only (the paper: 0.2).
+    pub test_fraction: f64,
+    /// Trial sets of Fig. 6.
+    pub trial_sets: usize,
+    /// Label set holding the classes.
+    pub label_set: String,
+    /// Variance of Gaussian noise on the raw taxels (Fig. 8: 100 and 1000); 0 for none.
+    pub taxel_noise_variance: f64,
+    /// Fractions of each test sequence for early classification.
+    pub early_fractions: Vec<f64>,
+    pub ds: DsParams,
+    pub gs: GsParams,
+}
+
+impl Default for RecognitionParams {
+    fn default() -> Self {
+        RecognitionParams {
+            learner: SupervisedLearner::Gs,
+            features: FeatureSet::All,
+            reps: 50,
+            seed: 0,
+            test_fraction: 0.2,
+            trial_sets: 10,
+            label_set: "object".into(),
+            taxel_noise_variance: 0.0,
+            early_fractions: (1..=10).map(|i| i as f64 / 10.0).collect(),
+            ds: DsParams::default(),
+            gs: GsParams::default(),
+        }
+    }
+}
+
+impl RecognitionParams {
+    pub fn validate(&self) -> Result<(), ExperimentError> {
+        if self.reps == 0 {
+            return Err(ExperimentError::param("reps", "must be at least 1"));
+        }
+        if !(self.test_fraction > 0.0 && self.test_fraction < 1.0) {
+            return Err(ExperimentError::param(
+                "test_fraction",
+                "must lie in (0, 1)",
+            ));
+        }
+        if self.trial_sets == 0 {
+            return Err(ExperimentError::param("trial_sets", "must be at least 1"));
+        }
+        if self
+            .early_fractions
+            .iter()
+            .any(|f| !(*f > 0.0 && *f <= 1.0))
+        {
+            return Err(ExperimentError::param(
+                "early_fractions",
+                "each must lie in (0, 1]",
+            ));
+        }
+        self.ds.validate()?;
+        self.gs.validate()?;
+        SequenceParams {
+            features: self.features,
+            taxel_noise_variance: self.taxel_noise_variance,
+            seed: self.seed,
+        }
+        .validate()?;
+        Ok(())
+    }
+}
+
+/// Mean and (population) standard deviation over repetitions.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MeanSd {
+    pub mean: f64,
+    pub sd: f64,
+}
+
+impl MeanSd {
+    pub fn of(v: impl IntoIterator<Item = f64>) -> MeanSd {
+        let v: Vec<f64> = v.into_iter().filter(|x| x.is_finite()).collect();
+        if v.is_empty() {
+            return MeanSd { mean: 0.0, sd: 0.0 };
+        }
+        let n = v.len() as f64;
+        let mean = v.iter().sum::<f64>() / n;
+        let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n;
+        MeanSd {
+            mean,
+            sd: var.sqrt(),
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RepetitionResult {
+    pub rep: usize,
+    /// Accuracy over every predicted grasp ("All" of Table II).
+    pub all: f64,
+    /// Accuracy over the test part ("Final 20%").
+    pub final_20: f64,
+    pub trial_sets: Vec<f64>,
+    /// Early-classification accuracy on the test part, one per fraction.
+    pub early: Vec<f64>,
+    /// Counts [true class][predicted class] over every predicted grasp.
+    pub confusion: Vec<Vec<usize>>,
+    /// Learned lengthscales [class][feature] at the end.
+    pub lengthscales: Vec<Vec<f64>>,
+    /// Seconds spent predicting / training and the steps each covered.
+    pub predict_seconds: f64,
+    pub predict_steps: usize,
+    pub train_seconds: f64,
+    pub train_steps: usize,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RecognitionSummary {
+    pub all: MeanSd,
+    pub final_20: MeanSd,
+    pub trial_sets: Vec<MeanSd>,
+    pub early: Vec<MeanSd>,
+    pub confusion: Vec<Vec<usize>>,
+    /// Mean over repetitions of the learned lengthscales [class][feature].
+    pub lengthscales: Vec<Vec<f64>>,
+    /// Mean microseconds per prediction step (all classes) and per training step.
+    pub predict_step_us: f64,
+    pub train_step_us: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RecognitionResult {
+    pub params: RecognitionParams,
+    pub classes: Vec<String>,
+    pub feature_names: Vec<String>,
+    pub summary: RecognitionSummary,
+    pub repetitions: Vec<RepetitionResult>,
+    pub wall_seconds: f64,
+    /// CPU seconds of the whole process over the run (None where /proc is missing).
+    pub cpu_seconds: Option<f64>,
+}
+
+/// A fresh learner of the chosen kind with one expert per class.
+pub fn new_learner(
+    kind: SupervisedLearner,
+    dim: usize,
+    n_classes: usize,
+    ds: &DsParams,
+    gs: &GsParams,
+) -> Result<Box<dyn SequenceClassifier>, ExperimentError> {
+    let mut l: Box<dyn SequenceClassifier> = match kind {
+        SupervisedLearner::Ds => Box::new(Ds::new(dim, ds)?),
+        SupervisedLearner::Gs => Box::new(Gs::new(dim, gs)?),
+    };
+    for _ in 0..n_classes {
+        l.add_class()?;
+    }
+    Ok(l)
+}
+
+/// The class labels of the session under `label_set`, with the class names.
+pub fn session_labels(
+    session: &Session,
+    label_set: &str,
+) -> Result<(Vec<usize>, Vec<String>), ExperimentError> {
+    let set = session.label_set(label_set).ok_or_else(|| {
+        ExperimentError::param(
+            "label_set",
+            format!("the session has no label set `{label_set}`"),
+        )
+    })?;
+    let classes = session.label_sets[set].classes.clone();
+    let labels: Vec<usize> = session
+        .grasps
+        .iter()
+        .map(|g| g.labels.get(set).copied().unwrap_or(usize::MAX))
+        .collect();
+    if labels.iter().any(|&l| l >= classes.len()) {
+        return Err(ExperimentError::Data(format!(
+            "a grasp has no valid `{label_set}` label"
+        )));
+    }
+    Ok((labels, classes))
+}
+
+/// The protocol's order: one grasp per class first (the teaching phase), then the rest in
+/// stratified random rounds. Returns (teaching grasps, predicted order).
+pub fn protocol_order(
+    labels: &[usize],
+    n_classes: usize,
+    rng: &mut Rng,
+) -> (Vec<usize>, Vec<usize>) {
+    let mut per_class: Vec<Vec<usize>> = vec![Vec::new(); n_classes];
+    for (g, &l) in labels.iter().enumerate() {
+        per_class[l].push(g);
+    }
+    for v in &mut per_class {
+        rng.shuffle(v);
+    }
+    let mut classes: Vec<usize> = (0..n_classes)
+        .filter(|&c| !per_class[c].is_empty())
+        .collect();
+    rng.shuffle(&mut classes);
+    let teach: Vec<usize> = classes.iter().map(|&c| per_class[c][0]).collect();
+    let mut order = Vec::new();
+    let rounds = per_class.iter().map(|v| v.len()).max().unwrap_or(0);
+    for r in 1..rounds {
+        let mut round: Vec<usize> = (0..n_classes)
+            .filter_map(|c| per_class[c].get(r).copied())
+            .collect();
+        rng.shuffle(&mut round);
+        order.extend(round);
+    }
+    (teach, order)
+}
+
+fn accuracy(hits: &[bool]) -> f64 {
+    if hits.is_empty() {
+        return 0.0;
+    }
+    hits.iter().filter(|&&h| h).count() as f64 / hits.len() as f64
+}
+
+/// The step count that a fraction f of a T-step sequence covers: ⌈f·T⌉, at least 1.
+pub fn prefix_len(f: f64, t: usize) -> usize {
+    ((f * t as f64).ceil() as usize).clamp(1, t.max(1))
+}
+
+fn run_repetition(
+    params: &RecognitionParams,
+    session: &Session,
+    base: &FeatureSequences,
+    labels: &[usize],
+    n_classes: usize,
+    rep: usize,
+) -> Result<RepetitionResult, ExperimentError> {
+    let mut rng = Rng::stream(params.seed, rep as u64);
+    let noisy;
+    let feats = if params.taxel_noise_variance > 0.0 {
+        noisy = feature_sequences(
+            session,
+            &SequenceParams {
+                features: params.features,
+                taxel_noise_variance: params.taxel_noise_variance,
+                seed: rng.next_u64(),
+            },
+        )?;
+        &noisy
+    } else {
+        base
+    };
+    let seqs = &feats.sequences;
+    let mut learner = new_learner(
+        params.learner,
+        feats.dim(),
+        n_classes,
+        &params.ds,
+        &params.gs,
+    )?;
+    let (teach, order) = protocol_order(labels, n_classes, &mut rng);
+    let (mut train_s, mut train_steps) = (0.0, 0usize);
+    let (mut pred_s, mut pred_steps) = (0.0, 0usize);
+    for &g in &teach {
+        let t0 = Instant::now();
+        learner.train_sequence(seqs[g].view(), labels[g]);
+        train_s += t0.elapsed().as_secs_f64();
+        train_steps += seqs[g].nrows();
+    }
+    let n_test = ((params.test_fraction * order.len() as f64).round() as usize).min(order.len());
+    let n_train = order.len() - n_test;
+    let mut hits = Vec::with_capacity(order.len());
+    let mut confusion = vec![vec![0usize; n_classes]; n_classes];
+    let mut early_hits = vec![Vec::new(); params.early_fractions.len()];
+    for (i, &g) in order.iter().enumerate() {
+        let seq = seqs[g].view();
+        let t0 = Instant::now();
+        let dist = learner.predict_sequence(seq);
+        pred_s += t0.elapsed().as_secs_f64();
+        pred_steps += seq.nrows();
+        let pred = learner.decide(dist.view());
+        hits.push(pred == labels[g]);
+        confusion[labels[g]][pred] += 1;
+        if i < n_train {
+            let t0 = Instant::now();
+            learner.train_sequence(seq, labels[g]);
+            train_s += t0.elapsed().as_secs_f64();
+            train_steps += seq.nrows();
+        } else {
+            for (f, h) in params.early_fractions.iter().zip(early_hits.iter_mut()) {
+                let k = prefix_len(*f, dist.nrows());
+                h.push(learner.decide(dist.slice(s![..k, ..])) == labels[g]);
+            }
+        }
+    }
+    let set_len = order.len().div_ceil(params.trial_sets).max(1);
+    Ok(RepetitionResult {
+        rep,
+        all: accuracy(&hits),
+        final_20: accuracy(&hits[n_train..]),
+        trial_sets: hits.chunks(set_len).map(accuracy).collect(),
+        early: early_hits.iter().map(|h| accuracy(h)).collect(),
+        confusion,
+        lengthscales: lengthscales(learner.as_ref())
+            .rows()
+            .into_iter()
+            .map(|r| r.to_vec())
+            .collect(),
+        predict_seconds: pred_s,
+        predict_steps: pred_steps,
+        train_seconds: train_s,
+        train_steps,
+    })
+}
+
+/// Run the supervised protocol `params.reps` times (in parallel, each repetition on its own
+/// random stream, so results do not depend on the thread count).
+pub fn run_recognition(
+    session: &Session,
+    params: &RecognitionParams,
+    progress: &Progress,
+) -> Result<RecognitionResult, ExperimentError> {
+    params.validate()?;
+    let start = Instant::now();
+    let cpu_start = cpu_seconds(true);
+    let (labels, classes) = session_labels(session, &params.label_set)?;
+    let feats = feature_sequences(
+        session,
+        &SequenceParams {
+            features: params.features,
+            taxel_noise_variance: 0.0,
+            seed: params.seed,
+        },
+    )?;
+    let n_classes = classes.len();
+    let done = AtomicUsize::new(0);
+    progress.set(0.0, "recognition: starting");
+    let reps: Vec<RepetitionResult> = (0..params.reps)
+        .into_par_iter()
+        .map(|rep| {
+            progress.checkpoint()?;
+            let r = run_repetition(params, session, &feats, &labels, n_classes, rep)?;
+            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+            progress.set(
+                d as f64 / params.reps as f64,
+                format!("recognition: {d}/{} repetitions", params.reps),
+            );
+            Ok(r)
+        })
+        .collect::<Result<_, ExperimentError>>()?;
+    let summary = summarise(&reps, n_classes, feats.dim(), params);
+    Ok(RecognitionResult {
+        params: params.clone(),
+        classes,
+        feature_names: feats.names.clone(),
+        summary,
+        repetitions: reps,
+        wall_seconds: start.elapsed().as_secs_f64(),
+        cpu_seconds: cpu_seconds(true).zip(cpu_start).map(|(b, a)| b - a),
+    })
+}
+
+fn summarise(
+    reps: &[RepetitionResult],
+    n_classes: usize,
+    dim: usize,
+    params: &RecognitionParams,
+) -> RecognitionSummary {
+    let n_sets = reps.iter().map(|r| r.trial_sets.len()).max().unwrap_or(0);
+    let mut confusion = vec![vec![0usize; n_classes]; n_classes];
+    let mut ls = Array2::<f64>::zeros((n_classes, dim));
+    for r in reps {
+        for (a, b) in confusion.iter_mut().zip(&r.confusion) {
+            for (x, y) in a.iter_mut().zip(b) {
+                *x += y;
+            }
+        }
+        for (c, row) in r.lengthscales.iter().enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                ls[[c, j]] += v / reps.len() as f64;
+            }
+        }
+    }
+    let per_step = |secs: f64, steps: usize| {
+        if steps == 0 {
+            0.0
+        } else {
+            1e6 * secs / steps as f64
+        }
+    };
+    RecognitionSummary {
+        all: MeanSd::of(reps.iter().map(|r| r.all)),
+        final_20: MeanSd::of(reps.iter().map(|r| r.final_20)),
+        trial_sets: (0..n_sets)
+            .map(|i| MeanSd::of(reps.iter().filter_map(|r| r.trial_sets.get(i).copied())))
+            .collect(),
+        early: (0..params.early_fractions.len())
+            .map(|i| MeanSd::of(reps.iter().map(|r| r.early[i])))
+            .collect(),
+        confusion,
+        lengthscales: ls.rows().into_iter().map(|r| r.to_vec()).collect(),
+        predict_step_us: per_step(
+            reps.iter().map(|r| r.predict_seconds).sum(),
+            reps.iter().map(|r| r.predict_steps).sum(),
+        ),
+        train_step_us: per_step(
+            reps.iter().map(|r| r.train_seconds).sum(),
+            reps.iter().map(|r| r.train_steps).sum(),
+        ),
+    }
+}
+
+/// For the replay view: the class distribution at every step of grasp `grasp`, from a
+/// learner taught every other grasp in the protocol's seeded order.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GraspTrace {
+    pub grasp: usize,
+    pub true_class: usize,
+    pub classes: Vec<String>,
+    /// [step][class]
+    pub distribution: Vec<Vec<f64>>,
+    pub decided: usize,
+}
+
+pub fn grasp_trace(
+    session: &Session,
+    params: &RecognitionParams,
+    grasp: usize,
+) -> Result<GraspTrace, ExperimentError> {
+    params.validate()?;
+    let (labels, classes) = session_labels(session, &params.label_set)?;
+    if grasp >= labels.len() {
+        return Err(ExperimentError::param("grasp", format!("no grasp {grasp}")));
+    }
+    let feats = feature_sequences(
+        session,
+        &SequenceParams {
+            features: params.features,
+            taxel_noise_variance: params.taxel_noise_variance,
+            seed: params.seed,
+        },
+    )?;
+    let mut learner = new_learner(
+        params.learner,
+        feats.dim(),
+        classes.len(),
+        &params.ds,
+        &params.gs,
+    )?;
+    let mut rng = Rng::stream(params.seed, 0);
+    let (teach, order) = protocol_order(&labels, classes.len(), &mut rng);
+    for g in teach.into_iter().chain(order).filter(|&g| g != grasp) {
+        learner.train_sequence(feats.sequences[g].view(), labels[g]);
+    }
+    let dist = learner.predict_sequence(feats.sequences[grasp].view());
+    Ok(GraspTrace {
+        grasp,
+        true_class: labels[grasp],
+        classes,
+        decided: learner.decide(dist.view()),
+        distribution: dist.rows().into_iter().map(|r| r.to_vec()).collect(),
+    })
+}
+
+/// CPU seconds (user + system) used so far by the calling thread, or by the whole process
+/// with `process = true`, from Linux's /proc (clock ticks of 10 ms); None elsewhere. The
+/// machine is shared, so wall-clock times mix in other work: CPU time does not.
+pub fn cpu_seconds(process: bool) -> Option<f64> {
+    let path = if process {
+        "/proc/self/stat"
+    } else {
+        "/proc/thread-self/stat"
+    };
+    let text = std::fs::read_to_string(path).ok()?;
+    let after = &text[text.rfind(')')? + 1..];
+    let f: Vec<&str> = after.split_whitespace().collect();
+    let utime: f64 = f.get(11)?.parse().ok()?;
+    let stime: f64 = f.get(12)?.parse().ok()?;
+    Some((utime + stime) / 100.0)
+}
+
+/// Per-observation cost of the learners on synthetic data of a given size.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StepBenchParams {
+    pub dim: usize,
+    pub classes: usize,
+    pub capacity: usize,
+    pub tau: usize,
+    /// Training sequences per class before timing (fills the BV budget).
+    pub warmup_sequences: usize,
+    /// Steps of each timed sequence, and timed sequences.
+    pub steps: usize,
+    pub sequences: usize,
+    pub adaptation: bool,
+    pub seed: u64,
+}
+
+impl Default for StepBenchParams {
+    fn default() -> Self {
+        StepBenchParams {
+            dim: 34,
+            classes: 10,
+            capacity: 50,
+            tau: 15,
+            warmup_sequences: 8,
+            steps: 20,
+            sequences: 60,
+            adaptation: true,
+            seed: 0,
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StepBench {
+    pub params: StepBenchParams,
+    pub learner: SupervisedLearner,
+    /// Wall-clock microseconds per prediction step over all classes.
+    pub predict_step_us: f64,
+    /// Wall-clock microseconds per training step (DS: all experts observed, two updated).
+    pub train_step_us: f64,
+    /// The same in CPU time of the timing thread (None where /proc is missing).
+    pub predict_step_cpu_us: Option<f64>,
+    pub train_step_cpu_us: Option<f64>,
+    /// Mean BVs per expert and experts still adapting when timed.
+    pub mean_basis: f64,
+    pub adapting: usize,
+}
+
+fn synthetic_sequence(dim: usize, steps: usize, class: usize, rng: &mut Rng) -> Array2<f64> {
+    let mut x = Array2::zeros((steps, dim));
+    for j in 0..dim {
+        let mut v = 0.1 * ((class * 7 + j * 3) % 10) as f64;
+        for t in 0..steps {
+            v = (v + 0.05 * rng.normal()).clamp(0.0, 1.0);
+            x[[t, j]] = v;
+        }
+    }
+    x
+}
+
+/// Time per-observation prediction and training on one thread.
+pub fn bench_steps(
+    learner: SupervisedLearner,
+    params: &StepBenchParams,
+) -> Result<StepBench, ExperimentError> {
+    let mut ds = DsParams::default();
+    let mut gs = GsParams::default();
+    for gp in [&mut ds.gp, &mut gs.gp] {
+        gp.capacity = params.capacity;
+        gp.tau = params.tau;
+        if !params.adaptation {
+            gp.adaptation = None;
+        }
+    }
+    let mut l = new_learner(learner, params.dim, params.classes, &ds, &gs)?;
+    let mut rng = Rng::new(params.seed);
+    for _ in 0..params.warmup_sequences {
+        for c in 0..params.classes {
+            let s = synthetic_sequence(params.dim, params.steps, c, &mut rng);
+            l.train_sequence(s.view(), c);
+        }
+    }
+    let seqs: Vec<(usize, Array2<f64>)> = (0..params.sequences)
+        .map(|i| {
+            let c = i % params.classes;
+            (c, synthetic_sequence(params.dim, params.steps, c, &mut rng))
+        })
+        .collect();
+    let mean_basis =
+        l.models().iter().map(|m| m.n_basis() as f64).sum::<f64>() / l.models().len().max(1) as f64;
+    let adapting = l.models().iter().filter(|m| m.adapting()).count();
+    let total_steps = (params.sequences * params.steps).max(1) as f64;
+    let per_step = |a: Option<f64>, b: Option<f64>| Some(1e6 * (b? - a?) / total_steps);
+    let (t0, c0) = (Instant::now(), cpu_seconds(false));
+    for (_, s) in &seqs {
+        l.predict_sequence(s.view());
+    }
+    let predict_step_us = 1e6 * t0.elapsed().as_secs_f64() / total_steps;
+    let predict_step_cpu_us = per_step(c0, cpu_seconds(false));
+    let (t0, c0) = (Instant::now(), cpu_seconds(false));
+    for (c, s) in &seqs {
+        l.train_sequence(s.view(), *c);
+    }
+    let train_step_us = 1e6 * t0.elapsed().as_secs_f64() / total_steps;
+    let train_step_cpu_us = per_step(c0, cpu_seconds(false));
+    Ok(StepBench {
+        params: params.clone(),
+        learner,
+        predict_step_us,
+        train_step_us,
+        predict_step_cpu_us,
+        train_step_cpu_us,
+        mean_basis,
+        adapting,
+    })
+}

@@ -1,0 +1,155 @@
+//! DS: the discriminative supervised learner (paper Sec. IV-A): one probit OIESGP expert per
+//! class, one-vs-all, with the inputs' shared window.
+//!
+//! - Per step, q_c = Φ(μ_c/σ_c) (eq. 24) and p_c = q_c/Σ q (eq. 26); nothing accumulates
+//!   over time inside the learner (as in the reference code).
+//! - A grasp's class is the argmax of p averaged over the steps seen: our reading of eq. 27
+//!   ("the highest probability throughout the sequence"), which the paper leaves ambiguous.
+//! - Training: at each step the true class's expert gets +1 and the most probable wrong
+//!   expert gets −1 (the paper's closest-model scheme; the code's `TRAIN_SEC` takes the
+//!   second best by q and skips the negative when that is the true class).
+
+use ndarray::{Array2, ArrayView2};
+use serde::{Deserialize, Serialize};
+
+use super::{LearnerError, SequenceClassifier};
+use crate::gp::{Likelihood, Sogp, SogpParams, Window};
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DsParams {
+    pub gp: SogpParams,
+}
+
+impl Default for DsParams {
+    /// The paper's discriminative settings: lengthscales 1.0, probit, adaptation on.
+    fn default() -> Self {
+        DsParams {
+            gp: SogpParams {
+                lengthscale: 1.0,
+                likelihood: Likelihood::Probit,
+                ..SogpParams::default()
+            },
+        }
+    }
+}
+
+impl DsParams {
+    pub fn validate(&self) -> Result<(), LearnerError> {
+        self.gp.validate()?;
+        if self.gp.likelihood != Likelihood::Probit {
+            return Err(LearnerError::param(
+                "gp.likelihood",
+                "DS needs the probit likelihood",
+            ));
+        }
+        Ok(())
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Ds {
+    params: DsParams,
+    dim: usize,
+    models: Vec<Sogp>,
+    window: Window,
+    q: Vec<f64>,
+}
+
+impl Ds {
+    pub fn new(dim: usize, params: &DsParams) -> Result<Ds, LearnerError> {
+        params.validate()?;
+        // Builds one expert to check the dimension before any class exists.
+        Sogp::new(dim, 1, &params.gp)?;
+        Ok(Ds {
+            params: params.clone(),
+            dim,
+            models: Vec::new(),
+            window: Window::new(dim, params.gp.tau),
+            q: Vec::new(),
+        })
+    }
+
+    /// Push o_t and evaluate every expert; q_c into `self.q`.
+    fn observe(&mut self, o: &[f64]) {
+        self.window.push(o);
+        for (m, q) in self.models.iter_mut().zip(self.q.iter_mut()) {
+            m.observe(self.window.as_slice());
+            *q = m.probability();
+        }
+    }
+
+    /// The un-normalised q_c of the last step (for DU's novelty).
+    pub fn q(&self) -> &[f64] {
+        &self.q
+    }
+
+    /// q (T × C) and p (T × C) over a sequence.
+    pub fn predict_q_and_p(&mut self, seq: ArrayView2<f64>) -> (Array2<f64>, Array2<f64>) {
+        let c = self.models.len();
+        let seq = seq.as_standard_layout();
+        let steps = super::steps(&seq, self.dim);
+        let mut qs = Array2::zeros((steps.len() / self.dim, c));
+        let mut ps = Array2::zeros((steps.len() / self.dim, c));
+        self.window.reset();
+        for (t, o) in steps.chunks_exact(self.dim).enumerate() {
+            self.observe(o);
+            let sum: f64 = self.q.iter().sum();
+            for j in 0..c {
+                qs[[t, j]] = self.q[j];
+                ps[[t, j]] = if sum > 0.0 {
+                    self.q[j] / sum
+                } else {
+                    1.0 / c as f64
+                };
+            }
+        }
+        (qs, ps)
+    }
+}
+
+impl SequenceClassifier for Ds {
+    fn dim(&self) -> usize {
+        self.dim
+    }
+
+    fn n_classes(&self) -> usize {
+        self.models.len()
+    }
+
+    fn add_class(&mut self) -> Result<usize, LearnerError> {
+        self.models.push(Sogp::new(self.dim, 1, &self.params.gp)?);
+        self.q.push(0.5);
+        Ok(self.models.len() - 1)
+    }
+
+    fn models(&self) -> &[Sogp] {
+        &self.models
+    }
+
+    fn predict_sequence(&mut self, seq: ArrayView2<f64>) -> Array2<f64> {
+        self.predict_q_and_p(seq).1
+    }
+
+    fn train_sequence(&mut self, seq: ArrayView2<f64>, class: usize) {
+        if class >= self.models.len() {
+            return;
+        }
+        let seq = seq.as_standard_layout();
+        self.window.reset();
+        for o in super::steps(&seq, self.dim).chunks_exact(self.dim) {
+            self.observe(o);
+            let wrong = (0..self.models.len())
+                .filter(|&c| c != class)
+                .max_by(|&a, &b| self.q[a].total_cmp(&self.q[b]));
+            // Both updates reuse the kernel vectors of this step's observation.
+            self.models[class].update(&[1.0]);
+            if let Some(w) = wrong {
+                self.models[w].update(&[-1.0]);
+            }
+        }
+    }
+
+    fn decide(&self, dist: ArrayView2<f64>) -> usize {
+        super::argmax_of_mean(dist)
+    }
+}

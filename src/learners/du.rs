@@ -1,0 +1,111 @@
+//! DU: the discriminative unsupervised learner (paper Sec. IV-A2): DS experts as clusters,
+//! a new cluster when the novelty nu_D = 1 − (1/T) Σ_t max(0, 2 q_t(c_s|o) − 1) (eq. 28)
+//! exceeds the threshold theta_D.
+//!
+//! Where the paper is silent: the winner s is fixed per grasp (the DS decision, argmax of
+//! the mean p over the grasp), and a grasp is trained into its cluster with DS's rule (the
+//! most probable other cluster gets the negatives), also when it opens a new cluster.
+
+use ndarray::ArrayView2;
+use serde::{Deserialize, Serialize};
+
+use super::{Ds, DsParams, LearnerError, SequenceClassifier, argmax_of_mean};
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DuParams {
+    pub ds: DsParams,
+    /// theta_D in [0, 1]: the lower, the more clusters.
+    pub threshold: f64,
+}
+
+impl Default for DuParams {
+    fn default() -> Self {
+        DuParams {
+            ds: DsParams::default(),
+            threshold: 0.3,
+        }
+    }
+}
+
+impl DuParams {
+    pub fn validate(&self) -> Result<(), LearnerError> {
+        if !(0.0..=1.0).contains(&self.threshold) {
+            return Err(LearnerError::param("threshold", "must lie in [0, 1]"));
+        }
+        self.ds.validate()
+    }
+}
+
+/// What learning one grasp did.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Assignment {
+    pub cluster: usize,
+    pub novelty: f64,
+    pub created: bool,
+}
+
+#[derive(Clone, Debug)]
+pub struct Du {
+    ds: Ds,
+    threshold: f64,
+}
+
+/// nu_D of eq. 28 from the q of cluster s at every step.
+pub fn du_novelty(q: impl ExactSizeIterator<Item = f64>) -> f64 {
+    let t = q.len();
+    if t == 0 {
+        return 1.0;
+    }
+    1.0 - q.map(|q| (2.0 * q - 1.0).max(0.0)).sum::<f64>() / t as f64
+}
+
+impl Du {
+    pub fn new(dim: usize, params: &DuParams) -> Result<Du, LearnerError> {
+        params.validate()?;
+        Ok(Du {
+            ds: Ds::new(dim, &params.ds)?,
+            threshold: params.threshold,
+        })
+    }
+
+    pub fn n_clusters(&self) -> usize {
+        self.ds.n_classes()
+    }
+
+    pub fn learner(&self) -> &Ds {
+        &self.ds
+    }
+
+    /// Assign one grasp (opening a cluster if it is novel) and train on it.
+    pub fn learn(&mut self, seq: ArrayView2<f64>) -> Result<Assignment, LearnerError> {
+        if self.ds.n_classes() == 0 {
+            let c = self.ds.add_class()?;
+            self.ds.train_sequence(seq, c);
+            return Ok(Assignment {
+                cluster: c,
+                novelty: 1.0,
+                created: true,
+            });
+        }
+        let (q, p) = self.ds.predict_q_and_p(seq);
+        let s = argmax_of_mean(p.view());
+        let novelty = du_novelty(q.column(s).iter().copied());
+        let (cluster, created) = if novelty > self.threshold {
+            (self.ds.add_class()?, true)
+        } else {
+            (s, false)
+        };
+        self.ds.train_sequence(seq, cluster);
+        Ok(Assignment {
+            cluster,
+            novelty,
+            created,
+        })
+    }
+
+    /// The cluster of a grasp under the learned models (no training).
+    pub fn assign(&mut self, seq: ArrayView2<f64>) -> usize {
+        let p = self.ds.predict_sequence(seq);
+        argmax_of_mean(p.view())
+    }
+}

@@ -1,0 +1,167 @@
+//! GS: the generative supervised learner (paper Sec. IV-B): one regression OIESGP expert per
+//! class predicting the next observation from the window of the previous ones, and a Bayes
+//! filter over the classes (eq. 29) with independent Gaussian likelihoods (eq. 30) whose
+//! variance is the noisy predictive variance.
+//!
+//! - The filter runs in log space and is renormalised each step (the reference code keeps
+//!   an unnormalised product in probability space that can under- or overflow).
+//! - Expert c is trained on the pairs (window of o_1 … o_{t−1}, o_t), t = 1 … T, the first
+//!   window being all padding; prediction scores o_t against the same windows, so every
+//!   step of a grasp is scored (the first from the experts' "start of grasp" prediction).
+//! - A grasp's class is the argmax of the posterior at its last step (the paper's rule).
+
+use ndarray::{Array2, ArrayView2};
+use serde::{Deserialize, Serialize};
+
+use super::{LearnerError, SequenceClassifier};
+use crate::gp::{Likelihood, Sogp, SogpParams, Window};
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GsParams {
+    pub gp: SogpParams,
+}
+
+impl Default for GsParams {
+    /// The paper's generative settings: lengthscales 10.0, regression, adaptation on.
+    fn default() -> Self {
+        GsParams {
+            gp: SogpParams {
+                lengthscale: 10.0,
+                likelihood: Likelihood::Regression,
+                ..SogpParams::default()
+            },
+        }
+    }
+}
+
+impl GsParams {
+    pub fn validate(&self) -> Result<(), LearnerError> {
+        self.gp.validate()?;
+        if self.gp.likelihood != Likelihood::Regression {
+            return Err(LearnerError::param(
+                "gp.likelihood",
+                "GS needs the regression likelihood",
+            ));
+        }
+        Ok(())
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Gs {
+    params: GsParams,
+    dim: usize,
+    models: Vec<Sogp>,
+    window: Window,
+    log_post: Vec<f64>,
+}
+
+/// ln N(o | μ, S·I) summed over the dimensions.
+pub(crate) fn log_likelihood(o: &[f64], mean: &[f64], var: f64) -> f64 {
+    let sq: f64 = o.iter().zip(mean).map(|(a, b)| (a - b) * (a - b)).sum();
+    -0.5 * o.len() as f64 * (2.0 * std::f64::consts::PI * var).ln() - sq / (2.0 * var)
+}
+
+impl Gs {
+    pub fn new(dim: usize, params: &GsParams) -> Result<Gs, LearnerError> {
+        params.validate()?;
+        Sogp::new(dim, dim, &params.gp)?;
+        Ok(Gs {
+            params: params.clone(),
+            dim,
+            models: Vec::new(),
+            window: Window::new(dim, params.gp.tau),
+            log_post: Vec::new(),
+        })
+    }
+
+    /// Expert `c`'s prediction of every step of `seq` (means T × D, predictive variances T).
+    pub fn expert_predictions(
+        &mut self,
+        c: usize,
+        seq: ArrayView2<f64>,
+    ) -> (Array2<f64>, Vec<f64>) {
+        let seq = seq.as_standard_layout();
+        let steps = super::steps(&seq, self.dim);
+        let mut means = Array2::zeros((steps.len() / self.dim, self.dim));
+        let mut vars = Vec::with_capacity(steps.len() / self.dim);
+        self.window.reset();
+        for (t, o) in steps.chunks_exact(self.dim).enumerate() {
+            let m = &mut self.models[c];
+            m.observe(self.window.as_slice());
+            for (d, v) in m.mean().iter().enumerate() {
+                means[[t, d]] = *v;
+            }
+            vars.push(m.predictive_variance());
+            self.window.push(o);
+        }
+        (means, vars)
+    }
+}
+
+impl SequenceClassifier for Gs {
+    fn dim(&self) -> usize {
+        self.dim
+    }
+
+    fn n_classes(&self) -> usize {
+        self.models.len()
+    }
+
+    fn add_class(&mut self) -> Result<usize, LearnerError> {
+        self.models
+            .push(Sogp::new(self.dim, self.dim, &self.params.gp)?);
+        self.log_post.push(0.0);
+        Ok(self.models.len() - 1)
+    }
+
+    fn models(&self) -> &[Sogp] {
+        &self.models
+    }
+
+    fn predict_sequence(&mut self, seq: ArrayView2<f64>) -> Array2<f64> {
+        let c = self.models.len();
+        let seq = seq.as_standard_layout();
+        let steps = super::steps(&seq, self.dim);
+        let mut out = Array2::zeros((steps.len() / self.dim, c));
+        self.window.reset();
+        self.log_post.fill(-(c as f64).ln());
+        for (t, o) in steps.chunks_exact(self.dim).enumerate() {
+            for (m, lp) in self.models.iter_mut().zip(self.log_post.iter_mut()) {
+                m.observe(self.window.as_slice());
+                *lp += log_likelihood(o, m.mean(), m.predictive_variance());
+            }
+            let top = self
+                .log_post
+                .iter()
+                .cloned()
+                .fold(f64::NEG_INFINITY, f64::max);
+            let z: f64 = self.log_post.iter().map(|v| (v - top).exp()).sum();
+            let ln_z = top + z.ln();
+            for (j, lp) in self.log_post.iter_mut().enumerate() {
+                *lp -= ln_z;
+                out[[t, j]] = lp.exp();
+            }
+            self.window.push(o);
+        }
+        out
+    }
+
+    fn train_sequence(&mut self, seq: ArrayView2<f64>, class: usize) {
+        if class >= self.models.len() {
+            return;
+        }
+        let seq = seq.as_standard_layout();
+        self.window.reset();
+        for o in super::steps(&seq, self.dim).chunks_exact(self.dim) {
+            let m = &mut self.models[class];
+            m.observe(self.window.as_slice());
+            m.update(o);
+            self.window.push(o);
+        }
+    }
+
+    fn decide(&self, dist: ArrayView2<f64>) -> usize {
+        super::argmax_of_last(dist)
+    }
+}

@@ -1,0 +1,128 @@
+use tactile_workbench::gp::{KernelParams, RecursiveArd, Window};
+use tactile_workbench::rng::Rng;
+
+fn params(dim: usize, rng: &mut Rng) -> KernelParams {
+    KernelParams {
+        lengthscales: (0..dim).map(|_| rng.range(0.5, 2.0)).collect(),
+        sigma_rho: 1.01,
+        sigma_f: 1.3,
+        sigma_n: 0.1,
+    }
+}
+
+#[test]
+fn recursion_matches_hand_unrolled_definition() {
+    let mut rng = Rng::new(1);
+    let (dim, tau) = (3, 4);
+    let p = params(dim, &mut rng);
+    let k = RecursiveArd::new(dim, tau, p.clone()).unwrap();
+    let a: Vec<f64> = (0..dim * tau).map(|_| rng.normal()).collect();
+    let b: Vec<f64> = (0..dim * tau).map(|_| rng.normal()).collect();
+    let mut kk = 1.0;
+    for lag in 0..tau {
+        let d: f64 = (0..dim)
+            .map(|j| ((a[lag * dim + j] - b[lag * dim + j]) / p.lengthscales[j]).powi(2))
+            .sum();
+        kk = (-0.5 * d).exp() * ((kk - 1.0) / p.sigma_rho).exp();
+    }
+    assert!((k.eval(&a, &b) - 1.69 * kk).abs() < 1e-12);
+    assert!((k.eval(&a, &a) - 1.69).abs() < 1e-12, "k(x, x) = sigma_f²");
+    assert!((k.eval(&a, &b) - k.eval(&b, &a)).abs() < 1e-15);
+}
+
+#[test]
+fn newest_lag_weighs_most_and_padding_is_neutral() {
+    let (dim, tau) = (1, 3);
+    let k = RecursiveArd::new(
+        dim,
+        tau,
+        KernelParams {
+            lengthscales: vec![1.0],
+            sigma_rho: 1.01,
+            sigma_f: 1.0,
+            sigma_n: 0.1,
+        },
+    )
+    .unwrap();
+    let base = [0.0, 0.0, 0.0];
+    let old = k.eval(&base, &[1.0, 0.0, 0.0]);
+    let new = k.eval(&base, &[0.0, 0.0, 1.0]);
+    assert!(
+        new < old,
+        "a difference at the newest lag lowers k more: {new} vs {old}"
+    );
+    // A window at the start of a sequence is zero padded: one push equals [0, 0, x].
+    let mut w = Window::new(dim, tau);
+    w.push(&[0.7]);
+    assert_eq!(w.as_slice(), &[0.0, 0.0, 0.7]);
+    w.push(&[0.2]);
+    assert_eq!(w.as_slice(), &[0.0, 0.7, 0.2]);
+    w.reset();
+    assert_eq!(w.as_slice(), &[0.0, 0.0, 0.0]);
+}
+
+#[test]
+fn recursive_derivatives_match_finite_differences() {
+    let mut rng = Rng::new(7);
+    let (dim, tau) = (4, 5);
+    for trial in 0..5 {
+        let p = params(dim, &mut rng);
+        let a: Vec<f64> = (0..dim * tau).map(|_| rng.normal() * 0.7).collect();
+        let b: Vec<f64> = (0..dim * tau).map(|_| rng.normal() * 0.7).collect();
+        let unit = |p: &KernelParams| {
+            let k = RecursiveArd::new(dim, tau, p.clone()).unwrap();
+            let (mut sa, mut sb) = (vec![0.0; a.len()], vec![0.0; b.len()]);
+            k.scale_into(&a, &mut sa);
+            k.scale_into(&b, &mut sb);
+            k.unit_scaled(&sa, &sb)
+        };
+        let k = RecursiveArd::new(dim, tau, p.clone()).unwrap();
+        let (mut sa, mut sb) = (vec![0.0; a.len()], vec![0.0; b.len()]);
+        k.scale_into(&a, &mut sa);
+        k.scale_into(&b, &mut sb);
+        let mut g = vec![0.0; dim + 1];
+        let value = k.unit_scaled_grad(&sa, &sb, &mut g);
+        assert!((value - unit(&p)).abs() < 1e-14);
+        let h: f64 = 1e-6;
+        for (j, &gj) in g.iter().enumerate() {
+            let (mut hi, mut lo) = (p.clone(), p.clone());
+            if j < dim {
+                hi.lengthscales[j] *= h.exp();
+                lo.lengthscales[j] *= (-h).exp();
+            } else {
+                hi.sigma_rho += h;
+                lo.sigma_rho -= h;
+            }
+            let fd = (unit(&hi) - unit(&lo)) / (2.0 * h);
+            assert!(
+                (fd - gj).abs() < 1e-7 * (1.0 + fd.abs()),
+                "trial {trial}, parameter {j}: analytic {gj} vs finite difference {fd}"
+            );
+        }
+    }
+}
+
+#[test]
+fn bad_parameters_are_errors_naming_the_parameter() {
+    let bad = KernelParams {
+        lengthscales: vec![1.0, -1.0],
+        sigma_rho: 1.01,
+        sigma_f: 1.0,
+        sigma_n: 0.1,
+    };
+    let e = RecursiveArd::new(2, 3, bad).unwrap_err().to_string();
+    assert!(e.contains("lengthscales"), "{e}");
+    let e = RecursiveArd::new(
+        1,
+        0,
+        KernelParams {
+            lengthscales: vec![1.0],
+            sigma_rho: 1.01,
+            sigma_f: 1.0,
+            sigma_n: 0.1,
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("tau"), "{e}");
+}

@@ -1,0 +1,107 @@
+use ndarray::Array2;
+use tactile_workbench::gp::SngdParams;
+use tactile_workbench::learners::{Ds, DsParams, Gs, GsParams, SequenceClassifier};
+use tactile_workbench::rng::Rng;
+
+/// Three classes of 2-D sequences: noisy ramps with class-specific slopes and offsets.
+fn sequence(class: usize, rng: &mut Rng) -> Array2<f64> {
+    let t_len = 12 + rng.below(5);
+    Array2::from_shape_fn((t_len, 2), |(t, d)| {
+        let x = t as f64 / t_len as f64;
+        let slope = [0.2, 0.6, 0.9][class];
+        let offset = [0.1, 0.3, 0.0][class];
+        let v = if d == 0 {
+            offset + slope * x
+        } else {
+            0.5 - 0.4 * slope * x
+        };
+        v + 0.02 * rng.normal()
+    })
+}
+
+fn run(learner: &mut dyn SequenceClassifier, seed: u64) -> (f64, Vec<Vec<f64>>) {
+    let mut rng = Rng::new(seed);
+    for _ in 0..3 {
+        learner.add_class().unwrap();
+    }
+    for _ in 0..6 {
+        for c in 0..3 {
+            let s = sequence(c, &mut rng);
+            learner.train_sequence(s.view(), c);
+        }
+    }
+    let mut correct = 0;
+    let mut first = Vec::new();
+    for i in 0..30 {
+        let c = i % 3;
+        let s = sequence(c, &mut rng);
+        let dist = learner.predict_sequence(s.view());
+        assert_eq!(dist.dim(), (s.nrows(), 3));
+        for row in dist.rows() {
+            assert!(row.iter().all(|p| p.is_finite() && *p >= 0.0));
+            assert!((row.sum() - 1.0).abs() < 1e-9);
+        }
+        if i == 0 {
+            first = dist.rows().into_iter().map(|r| r.to_vec()).collect();
+        }
+        correct += usize::from(learner.decide(dist.view()) == c);
+    }
+    (correct as f64 / 30.0, first)
+}
+
+fn small(mut p: tactile_workbench::gp::SogpParams) -> tactile_workbench::gp::SogpParams {
+    p.tau = 4;
+    p.capacity = 20;
+    p.adaptation = Some(SngdParams {
+        start_after: 40,
+        ..Default::default()
+    });
+    p
+}
+
+#[test]
+fn ds_learns_three_classes_deterministically() {
+    let mut p = DsParams::default();
+    p.gp = small(p.gp);
+    let (acc, first) = run(&mut Ds::new(2, &p).unwrap(), 1);
+    assert!(acc >= 0.9, "DS accuracy {acc}");
+    let (acc2, first2) = run(&mut Ds::new(2, &p).unwrap(), 1);
+    assert_eq!((acc, first), (acc2, first2), "same seed, same numbers");
+}
+
+#[test]
+fn gs_learns_three_classes_and_its_filter_sharpens() {
+    let mut p = GsParams::default();
+    p.gp = small(p.gp);
+    let mut gs = Gs::new(2, &p).unwrap();
+    let (acc, first) = run(&mut gs, 2);
+    assert!(acc >= 0.9, "GS accuracy {acc}");
+    // The Bayes filter accumulates evidence: the true class (0) gains over the grasp.
+    assert!(first.last().unwrap()[0] >= first[0][0]);
+    assert!(gs.models().iter().all(|m| m.n_basis() <= 20));
+}
+
+#[test]
+fn untrained_learners_give_uniform_distributions() {
+    let mut ds = Ds::new(2, &DsParams::default()).unwrap();
+    let mut gs = Gs::new(2, &GsParams::default()).unwrap();
+    let s = Array2::from_elem((5, 2), 0.3);
+    for l in [&mut ds as &mut dyn SequenceClassifier, &mut gs] {
+        for _ in 0..4 {
+            l.add_class().unwrap();
+        }
+        let dist = l.predict_sequence(s.view());
+        assert!(dist.iter().all(|p| (p - 0.25).abs() < 1e-12));
+    }
+}
+
+#[test]
+fn wrong_likelihood_is_a_parameter_error() {
+    let mut p = DsParams::default();
+    p.gp.likelihood = tactile_workbench::gp::Likelihood::Regression;
+    let e = Ds::new(2, &p).unwrap_err().to_string();
+    assert!(e.contains("likelihood"), "{e}");
+    let mut p = GsParams::default();
+    p.gp.capacity = 0;
+    assert!(Gs::new(2, &p).unwrap_err().to_string().contains("capacity"));
+}

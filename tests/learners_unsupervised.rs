@@ -1,0 +1,119 @@
+use ndarray::Array2;
+use tactile_workbench::cluster::purity;
+use tactile_workbench::gp::SngdParams;
+use tactile_workbench::learners::{Du, DuParams, Gu, GuAggregate, GuParams, du_novelty};
+use tactile_workbench::rng::Rng;
+
+fn sequence(class: usize, rng: &mut Rng) -> Array2<f64> {
+    Array2::from_shape_fn((10, 2), |(t, d)| {
+        let x = t as f64 / 10.0;
+        let centre = [0.1, 0.5, 0.9][class];
+        let v = if d == 0 { centre } else { centre * x };
+        v + 0.01 * rng.normal()
+    })
+}
+
+fn data(seed: u64) -> (Vec<Array2<f64>>, Vec<usize>) {
+    let mut rng = Rng::new(seed);
+    let labels: Vec<usize> = (0..24).map(|i| i % 3).collect();
+    (
+        labels.iter().map(|&c| sequence(c, &mut rng)).collect(),
+        labels,
+    )
+}
+
+/// Experts whose lengthscale is short against the gaps between the objects.
+fn small(mut p: tactile_workbench::gp::SogpParams) -> tactile_workbench::gp::SogpParams {
+    p.lengthscale = 0.15;
+    p.tau = 3;
+    p.capacity = 15;
+    p.adaptation = Some(SngdParams {
+        start_after: 40,
+        ..Default::default()
+    });
+    p
+}
+
+#[test]
+fn du_novelty_matches_eq_28() {
+    assert_eq!(du_novelty([1.0, 1.0].into_iter()), 0.0);
+    assert_eq!(du_novelty([0.5, 0.2].into_iter()), 1.0);
+    assert!((du_novelty([1.0, 0.5].into_iter()) - 0.5).abs() < 1e-15);
+    assert!((du_novelty([0.75].into_iter()) - 0.5).abs() < 1e-15);
+}
+
+#[test]
+fn du_finds_separated_objects_and_threshold_one_keeps_one_cluster() {
+    let (seqs, labels) = data(3);
+    let mut p = DuParams::default();
+    p.ds.gp = small(p.ds.gp);
+    p.threshold = 0.5;
+    let mut du = Du::new(2, &p).unwrap();
+    for s in &seqs {
+        du.learn(s.view()).unwrap();
+    }
+    assert!(du.n_clusters() >= 3, "{} clusters", du.n_clusters());
+    let pred: Vec<usize> = seqs.iter().map(|s| du.assign(s.view())).collect();
+    assert!(purity(&labels, &pred) >= 0.95);
+    p.threshold = 1.0;
+    let mut one = Du::new(2, &p).unwrap();
+    for s in &seqs {
+        let a = one.learn(s.view()).unwrap();
+        assert!((0.0..=1.0).contains(&a.novelty));
+    }
+    assert_eq!(one.n_clusters(), 1);
+}
+
+#[test]
+fn gu_finds_separated_objects_and_threshold_one_keeps_one_cluster() {
+    let (seqs, labels) = data(4);
+    // Far from its data an expert predicts its broad prior, where few steps look extreme:
+    // the mean over steps needs a low threshold.
+    for (aggregate, threshold) in [(GuAggregate::Max, 0.5), (GuAggregate::Mean, 0.05)] {
+        let mut p = GuParams::default();
+        p.gs.gp = small(p.gs.gp);
+        p.threshold = threshold;
+        p.aggregate = aggregate;
+        let mut gu = Gu::new(2, &p).unwrap();
+        for s in &seqs {
+            gu.learn(s.view()).unwrap();
+        }
+        assert!(
+            gu.n_clusters() >= 3,
+            "{aggregate:?}: {} clusters",
+            gu.n_clusters()
+        );
+        let pred: Vec<usize> = seqs.iter().map(|s| gu.assign(s.view())).collect();
+        assert!(purity(&labels, &pred) >= 0.95, "{aggregate:?}");
+        p.threshold = 1.0;
+        let mut one = Gu::new(2, &p).unwrap();
+        for s in &seqs {
+            one.learn(s.view()).unwrap();
+        }
+        assert_eq!(one.n_clusters(), 1);
+    }
+}
+
+#[test]
+fn thresholds_outside_the_unit_interval_are_errors() {
+    let p = DuParams {
+        threshold: 1.5,
+        ..DuParams::default()
+    };
+    assert!(
+        Du::new(2, &p)
+            .unwrap_err()
+            .to_string()
+            .contains("threshold")
+    );
+    let p = GuParams {
+        threshold: -0.1,
+        ..GuParams::default()
+    };
+    assert!(
+        Gu::new(2, &p)
+            .unwrap_err()
+            .to_string()
+            .contains("threshold")
+    );
+}

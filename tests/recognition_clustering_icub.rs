@@ -1,0 +1,64 @@
+//! DU and GU on the real iCub dataset, one random order per threshold (the full sweep with
+//! 50 orders runs from the CLI): the shapes of the paper's Figs. 11–12.
+
+use std::path::Path;
+
+use tactile_workbench::experiments::clustering::{
+    ClusteringParams, UnsupervisedLearner, run_clustering,
+};
+use tactile_workbench::jobs::Progress;
+use tactile_workbench::session::{Session, import_icub};
+
+const ICUB: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/datasets/icub-grasp");
+
+fn icub() -> Option<Session> {
+    if !Path::new(ICUB).exists() {
+        eprintln!("skipping: {ICUB} is absent");
+        return None;
+    }
+    Some(import_icub(Path::new(ICUB)).expect("the iCub dataset imports"))
+}
+
+#[test]
+fn du_scores_fall_with_the_threshold_and_its_best_nmi_is_high() {
+    let Some(s) = icub() else { return };
+    let p = ClusteringParams {
+        learner: UnsupervisedLearner::Du,
+        thresholds: vec![0.4, 0.7],
+        reps: 1,
+        seed: 5,
+        baseline_max_k: 0,
+        ..ClusteringParams::default()
+    };
+    let r = run_clustering(&s, &p, &Progress::new()).unwrap();
+    let (lo, hi) = (&r.sweep[0], &r.sweep[1]);
+    eprintln!("{:?}", r.sweep);
+    assert!(lo.effective.mean > hi.effective.mean);
+    assert!(lo.purity.mean > hi.purity.mean);
+    assert!(lo.ari.mean > hi.ari.mean);
+    assert!(lo.nmi.mean >= 0.90, "DU NMI at 0.4: {}", lo.nmi.mean);
+    for run in &r.runs {
+        assert!(run.effective <= run.clusters);
+    }
+}
+
+#[test]
+fn gu_creates_fewer_clusters_as_the_threshold_rises() {
+    let Some(s) = icub() else { return };
+    let p = ClusteringParams {
+        learner: UnsupervisedLearner::Gu,
+        thresholds: vec![0.05, 0.2],
+        reps: 1,
+        seed: 5,
+        baseline_max_k: 10,
+        ..ClusteringParams::default()
+    };
+    let r = run_clustering(&s, &p, &Progress::new()).unwrap();
+    eprintln!("{:?}", r.sweep);
+    let (lo, hi) = (&r.sweep[0], &r.sweep[1]);
+    assert!(lo.clusters.mean > hi.clusters.mean);
+    assert!(lo.purity.mean > hi.purity.mean);
+    assert!(lo.nmi.mean > 0.75, "GU NMI at 0.05: {}", lo.nmi.mean);
+    // Baselines ran for 2..=10 clusters on the Table I features.
+    assert!(!r.kmeans.is_empty() && !r.som.is_empty());
+}
