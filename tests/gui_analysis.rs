@@ -108,3 +108,55 @@ fn a_cancelled_job_leaves_the_app_usable() {
     h.run_ok();
     h.get_by_label_contains("Frame 1 /");
 }
+
+#[test]
+fn recognition_and_clustering_views_show_the_papers_figures() {
+    let mut h = harness();
+    h.state_mut().view = View::Recognition;
+    h.run_ok();
+    h.state_mut().analyses.recognition.reps = 1;
+    h.get_by_label("Run").click();
+    h.step();
+    h.step();
+    assert!(h.state().analyses.busy());
+    wait_for_jobs(&mut h, Duration::from_secs(300));
+    assert_eq!(
+        h.state().analyses.results.len(),
+        1,
+        "messages: {:?}",
+        h.state().analyses.messages
+    );
+    for title in [
+        "Accuracy as trials progress",
+        "Confusion matrix",
+        "Early classification",
+    ] {
+        h.get_by_label(title);
+    }
+    let acc = h.state().analyses.results[0]
+        .score("accuracy (final 20%)")
+        .unwrap();
+    h.get_by_label(&format!("{acc:.4}"));
+
+    h.state_mut().view = View::Clustering;
+    h.run_ok();
+    h.state_mut().analyses.clustering.reps = 1;
+    h.state_mut().analyses.clustering.thresholds = [0.2, 0.4, 0.1];
+    assert_eq!(
+        h.state().analyses.clustering.threshold_list(),
+        vec![0.2, 0.3, 0.4]
+    );
+    h.get_by_label("Run").click();
+    h.step();
+    h.step();
+    wait_for_jobs(&mut h, Duration::from_secs(300));
+    assert_eq!(
+        h.state().analyses.results.len(),
+        2,
+        "messages: {:?}",
+        h.state().analyses.messages
+    );
+    h.get_by_label("Purity, ARI and NMI against the novelty threshold");
+    h.get_by_label("Clusters against the novelty threshold");
+    h.get_by_label("NMI against effective clusters");
+}

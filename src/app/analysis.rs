@@ -10,8 +10,13 @@ use super::figure_view;
 use super::loader::LoadedSession;
 use crate::cluster::baselines::{BaselinesParams, run_baselines};
 use crate::cluster::grasp_features::session_features;
+use crate::experiments::ExperimentError;
 use crate::experiments::baselines_report::baselines_report;
+use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_clustering};
+use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
+use crate::experiments::recognition_report::{clustering_report, recognition_report};
 use crate::experiments::report::{self, AnalysisKind, AnalysisResult, date_text};
+use crate::features::sequence::FeatureSet;
 use crate::figures::{self, Format, RenderOptions};
 use crate::jobs::{Job, JobError, Outcome};
 
@@ -78,6 +83,75 @@ impl Default for BaselinesForm {
     }
 }
 
+/// Supervised recognition form: a few repetitions by default so the view answers quickly;
+/// the CLI runs the paper's 50.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct RecognitionForm {
+    pub learner: SupervisedLearner,
+    pub features: FeatureSet,
+    pub reps: usize,
+    pub noise_variance: f64,
+    pub seed: u64,
+}
+
+impl Default for RecognitionForm {
+    fn default() -> Self {
+        RecognitionForm {
+            learner: SupervisedLearner::Ds,
+            features: FeatureSet::All,
+            reps: 3,
+            noise_variance: 0.0,
+            seed: 0,
+        }
+    }
+}
+
+/// Unsupervised clustering form.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct ClusteringForm {
+    pub learner: UnsupervisedLearner,
+    pub reps: usize,
+    pub seed: u64,
+    /// Novelty thresholds swept: from, to, step (the paper: 0.1 to 0.95).
+    pub thresholds: [f64; 3],
+}
+
+impl Default for ClusteringForm {
+    fn default() -> Self {
+        ClusteringForm {
+            learner: UnsupervisedLearner::Du,
+            reps: 2,
+            seed: 0,
+            thresholds: [0.1, 0.95, 0.05],
+        }
+    }
+}
+
+impl ClusteringForm {
+    pub fn threshold_list(&self) -> Vec<f64> {
+        let [from, to, step] = self.thresholds;
+        if step.is_nan() || step <= 0.0 || to < from {
+            return vec![from];
+        }
+        let n = ((to - from) / step + 1e-9).floor() as usize;
+        (0..=n)
+            .map(|i| ((from + i as f64 * step) * 1e6).round() / 1e6)
+            .collect()
+    }
+}
+
+fn experiment_error(e: ExperimentError) -> JobError {
+    match e {
+        ExperimentError::Cancelled => JobError::Cancelled,
+        other => JobError::failed(other),
+    }
+}
+
+/// An object-recognition session: encoders, sequences and `object` labels.
+fn recognition_ready(s: &LoadedSession) -> bool {
+    s.session.label_set("object").is_some() && !s.session.encoders.is_empty()
+}
+
 #[derive(Default)]
 pub struct Analyses {
     pub results: Vec<AnalysisResult>,
@@ -86,6 +160,8 @@ pub struct Analyses {
     pub shown: std::collections::HashMap<AnalysisKind, usize>,
     pub export: ExportSettings,
     pub baselines: BaselinesForm,
+    pub recognition: RecognitionForm,
+    pub clustering: ClusteringForm,
     /// Messages of finished jobs (errors and exports), newest last.
     pub messages: Vec<String>,
     /// A view the user asked to open from the speed-against-accuracy chart.
@@ -420,6 +496,169 @@ impl Analyses {
         });
         ui.separator();
         self.results_ui(ui, AnalysisKind::Baselines, &s.session.meta.name);
+    }
+
+    pub fn recognition_ui(&mut self, ui: &mut egui::Ui, s: &LoadedSession, ctx: &egui::Context) {
+        ui.heading("Object recognition: online OIESGP experts (DS, GS)");
+        let running = self
+            .jobs
+            .iter()
+            .any(|j| j.kind == Some(AnalysisKind::Recognition));
+        let f = &mut self.recognition;
+        ui.horizontal(|ui| {
+            egui::ComboBox::from_label("Learner")
+                .selected_text(format!("{:?}", f.learner).to_uppercase())
+                .show_ui(ui, |ui| {
+                    ui.selectable_value(
+                        &mut f.learner,
+                        SupervisedLearner::Ds,
+                        "DS (discriminative)",
+                    );
+                    ui.selectable_value(&mut f.learner, SupervisedLearner::Gs, "GS (generative)");
+                });
+            egui::ComboBox::from_label("Features")
+                .selected_text(crate::experiments::recognition_report::features_text(
+                    f.features,
+                ))
+                .show_ui(ui, |ui| {
+                    ui.selectable_value(&mut f.features, FeatureSet::All, "all features (34)");
+                    ui.selectable_value(
+                        &mut f.features,
+                        FeatureSet::Tactile,
+                        "tactile features (25)",
+                    );
+                    ui.selectable_value(
+                        &mut f.features,
+                        FeatureSet::Encoder,
+                        "encoder features (9)",
+                    );
+                });
+            ui.add(
+                egui::DragValue::new(&mut f.reps)
+                    .range(1..=50)
+                    .prefix("repetitions "),
+            );
+            egui::ComboBox::from_label("Taxel noise σ²")
+                .selected_text(format!("{}", f.noise_variance))
+                .show_ui(ui, |ui| {
+                    for v in [0.0, 100.0, 1000.0] {
+                        ui.selectable_value(&mut f.noise_variance, v, format!("{v}"));
+                    }
+                });
+            ui.add(egui::DragValue::new(&mut f.seed).prefix("seed "));
+        });
+        let ready = recognition_ready(s);
+        if !ready {
+            ui.label("(needs an object-recognition session: encoders and `object` labels)");
+        }
+        if ui
+            .add_enabled(!running && ready, egui::Button::new("Run"))
+            .clicked()
+        {
+            let f = self.recognition.clone();
+            let session = s.session.clone();
+            self.spawn(
+                ctx,
+                Some(AnalysisKind::Recognition),
+                format!("Recognition on {}", session.meta.name),
+                move |p| {
+                    let params = RecognitionParams {
+                        learner: f.learner,
+                        features: f.features,
+                        reps: f.reps,
+                        seed: f.seed,
+                        taxel_noise_variance: f.noise_variance,
+                        ..Default::default()
+                    };
+                    let r = run_recognition(&session, &params, p).map_err(experiment_error)?;
+                    Ok(JobOutput::Result(Box::new(recognition_report(
+                        &session.meta.name,
+                        &r,
+                    ))))
+                },
+            );
+        }
+        ui.separator();
+        self.results_ui(ui, AnalysisKind::Recognition, &s.session.meta.name);
+    }
+
+    pub fn clustering_ui(&mut self, ui: &mut egui::Ui, s: &LoadedSession, ctx: &egui::Context) {
+        ui.heading("Clustering: online OIESGP experts without labels (DU, GU)");
+        let running = self
+            .jobs
+            .iter()
+            .any(|j| j.kind == Some(AnalysisKind::Clustering));
+        let f = &mut self.clustering;
+        ui.horizontal(|ui| {
+            egui::ComboBox::from_label("Learner")
+                .selected_text(format!("{:?}", f.learner).to_uppercase())
+                .show_ui(ui, |ui| {
+                    ui.selectable_value(
+                        &mut f.learner,
+                        UnsupervisedLearner::Du,
+                        "DU (discriminative)",
+                    );
+                    ui.selectable_value(
+                        &mut f.learner,
+                        UnsupervisedLearner::Gu,
+                        "GU (generative, EVT novelty)",
+                    );
+                });
+            ui.add(
+                egui::DragValue::new(&mut f.reps)
+                    .range(1..=50)
+                    .prefix("repetitions "),
+            );
+            ui.add(egui::DragValue::new(&mut f.seed).prefix("seed "));
+            ui.label("thresholds");
+            ui.add(
+                egui::DragValue::new(&mut f.thresholds[0])
+                    .range(0.01..=0.99)
+                    .speed(0.01)
+                    .prefix("from "),
+            );
+            ui.add(
+                egui::DragValue::new(&mut f.thresholds[1])
+                    .range(0.01..=0.99)
+                    .speed(0.01)
+                    .prefix("to "),
+            );
+            ui.add(
+                egui::DragValue::new(&mut f.thresholds[2])
+                    .range(0.01..=0.5)
+                    .speed(0.01)
+                    .prefix("step "),
+            );
+        });
+        let ready = recognition_ready(s);
+        if ui
+            .add_enabled(!running && ready, egui::Button::new("Run"))
+            .clicked()
+        {
+            let f = self.clustering.clone();
+            let session = s.session.clone();
+            self.spawn(
+                ctx,
+                Some(AnalysisKind::Clustering),
+                format!("Clustering on {}", session.meta.name),
+                move |p| {
+                    let params = ClusteringParams {
+                        learner: f.learner,
+                        reps: f.reps,
+                        seed: f.seed,
+                        thresholds: f.threshold_list(),
+                        ..Default::default()
+                    };
+                    let r = run_clustering(&session, &params, p).map_err(experiment_error)?;
+                    Ok(JobOutput::Result(Box::new(clustering_report(
+                        &session.meta.name,
+                        &r,
+                    ))))
+                },
+            );
+        }
+        ui.separator();
+        self.results_ui(ui, AnalysisKind::Clustering, &s.session.meta.name);
     }
 
     pub fn speed_accuracy_ui(&mut self, ui: &mut egui::Ui) {

@@ -28,16 +28,26 @@ const MAX_RECENT: usize = 10;
 pub enum View {
     #[default]
     Replay,
+    Recognition,
+    Clustering,
     Baselines,
     SpeedAccuracy,
 }
 
 impl View {
-    pub const ALL: [View; 3] = [View::Replay, View::Baselines, View::SpeedAccuracy];
+    pub const ALL: [View; 5] = [
+        View::Replay,
+        View::Recognition,
+        View::Clustering,
+        View::Baselines,
+        View::SpeedAccuracy,
+    ];
 
     pub fn title(self) -> &'static str {
         match self {
             View::Replay => "Replay",
+            View::Recognition => "Recognition",
+            View::Clustering => "Clustering",
             View::Baselines => "Baselines",
             View::SpeedAccuracy => "Speed vs accuracy",
         }
@@ -46,7 +56,9 @@ impl View {
     fn of(kind: AnalysisKind) -> View {
         match kind {
             AnalysisKind::Baselines => View::Baselines,
-            _ => View::SpeedAccuracy,
+            AnalysisKind::Recognition => View::Recognition,
+            AnalysisKind::Clustering => View::Clustering,
+            AnalysisKind::Stability => View::SpeedAccuracy,
         }
     }
 }
@@ -413,15 +425,20 @@ impl WorkbenchApp {
         let active = self.browser.active;
         let ctx = ui.ctx().clone();
         egui::CentralPanel::default_margins().show(ui, |ui| match self.view {
-            View::Baselines => match self.sessions.get(active) {
-                Some(s) => {
-                    egui::ScrollArea::vertical()
-                        .show(ui, |ui| self.analyses.baselines_ui(ui, s, &ctx));
+            View::Baselines | View::Recognition | View::Clustering => {
+                match self.sessions.get(active) {
+                    Some(s) => {
+                        egui::ScrollArea::vertical().show(ui, |ui| match self.view {
+                            View::Recognition => self.analyses.recognition_ui(ui, s, &ctx),
+                            View::Clustering => self.analyses.clustering_ui(ui, s, &ctx),
+                            _ => self.analyses.baselines_ui(ui, s, &ctx),
+                        });
+                    }
+                    None => {
+                        ui.label("Open a session first.");
+                    }
                 }
-                None => {
-                    ui.label("Open a session first.");
-                }
-            },
+            }
             View::SpeedAccuracy => {
                 egui::ScrollArea::vertical().show(ui, |ui| self.analyses.speed_accuracy_ui(ui));
             }

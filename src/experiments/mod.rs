@@ -4,6 +4,7 @@
 pub mod baselines_report;
 pub mod clustering;
 pub mod recognition;
+pub mod recognition_report;
 pub mod report;
 
 use crate::features::sequence::SequenceError;

@@ -1,0 +1,363 @@
+//! Supervised and unsupervised OIESGP results as analysis results with the second paper's
+//! figures: accuracy as trials progress (Fig. 6), the confusion matrix (Fig. 7), early
+//! classification (Fig. 9), lengthscale relevance; purity, ARI and NMI against the novelty
+//! threshold (Fig. 11), clusters and effective clusters (Fig. 12), NMI against effective
+//! clusters with k-means and SOM (Fig. 13) and the scores at 10 effective clusters (Table IV).
+
+use std::collections::BTreeMap;
+
+use super::clustering::{ClusteringResult, EffectivePoint, UnsupervisedLearner};
+use super::recognition::{MeanSd, RecognitionResult, SupervisedLearner};
+use super::report::{AnalysisKind, AnalysisResult, now_unix};
+use crate::features::sequence::FeatureSet;
+use crate::figures::{
+    Axis, AxisTitle, BarGroup, ColorScale, ErrorDisplay, ErrorRange, Figure, FigureKind, Heatmap,
+    Orientation, Series, SeriesStyle,
+};
+
+fn with_band(name: &str, x: Vec<f64>, stats: &[&MeanSd]) -> Series {
+    let y = stats.iter().map(|s| s.mean).collect();
+    let mut s = Series::new(name, x, y).style(SeriesStyle::LineMarkers);
+    s.error = Some(ErrorRange {
+        display: ErrorDisplay::Band,
+        lower: stats.iter().map(|s| s.mean - s.sd).collect(),
+        upper: stats.iter().map(|s| s.mean + s.sd).collect(),
+    });
+    s
+}
+
+pub fn features_text(f: FeatureSet) -> &'static str {
+    match f {
+        FeatureSet::All => "all features",
+        FeatureSet::Tactile => "tactile features",
+        FeatureSet::Encoder => "encoder features",
+    }
+}
+
+/// Scores, timings and figures of a supervised run on `session`.
+pub fn recognition_report(session: &str, r: &RecognitionResult) -> AnalysisResult {
+    let p = &r.params;
+    let learner = match p.learner {
+        SupervisedLearner::Ds => "DS",
+        SupervisedLearner::Gs => "GS",
+    };
+    let noise = if p.taxel_noise_variance > 0.0 {
+        format!(", noise σ² = {}", p.taxel_noise_variance)
+    } else {
+        String::new()
+    };
+    let label = format!("{learner}, {}{noise}", features_text(p.features));
+    let s = &r.summary;
+    let reps = r.repetitions.len();
+    let mut figures = Vec::new();
+
+    let x: Vec<f64> = (1..=s.trial_sets.len()).map(|i| i as f64).collect();
+    let stats: Vec<&MeanSd> = s.trial_sets.iter().collect();
+    let test_from = (1.0 - p.test_fraction) * s.trial_sets.len() as f64 + 0.5;
+    figures.push((
+        "accuracy-by-trials".to_string(),
+        Figure::chart(
+            "Accuracy as trials progress",
+            Axis::new(
+                format!("set of trials (order cut into {} parts)", p.trial_sets),
+                "",
+            ),
+            Axis::new("accuracy", "").including(0.0, 1.0),
+            vec![with_band(learner, x, &stats)],
+        )
+        .ref_line(Orientation::Vertical, test_from, "test only from here")
+        .subtitle(format!("{label}; mean ± sd over {reps} seeded orders")),
+    ));
+
+    let n = r.classes.len();
+    let mut confusion = vec![vec![0.0; n]; n];
+    for (t, row) in s.confusion.iter().enumerate() {
+        let total: usize = row.iter().sum();
+        for (c, &k) in row.iter().enumerate() {
+            if t < n && c < n {
+                confusion[t][c] = if total > 0 {
+                    k as f64 / total as f64
+                } else {
+                    f64::NAN
+                };
+            }
+        }
+    }
+    let mut heat = Heatmap {
+        x: AxisTitle {
+            title: "predicted class".into(),
+            unit: String::new(),
+        },
+        y: AxisTitle {
+            title: "true class".into(),
+            unit: String::new(),
+        },
+        columns: r.classes.clone(),
+        rows: r.classes.clone(),
+        values: confusion,
+        colors: ColorScale::viridis("share of the true class", ""),
+        annotate: true,
+        marked: Vec::new(),
+    };
+    heat.colors.limits = Some([0.0, 1.0]);
+    figures.push((
+        "confusion".to_string(),
+        Figure::new("Confusion matrix", FigureKind::Heatmap(heat))
+            .subtitle(format!("{label}; every predicted grasp, {reps} orders")),
+    ));
+
+    if !s.early.is_empty() {
+        let x: Vec<f64> = p
+            .early_fractions
+            .iter()
+            .take(s.early.len())
+            .copied()
+            .collect();
+        let stats: Vec<&MeanSd> = s.early.iter().collect();
+        figures.push((
+            "early-classification".to_string(),
+            Figure::chart(
+                "Early classification",
+                Axis::new("share of the sequence seen", ""),
+                Axis::new("accuracy on the final 20%", "").including(0.0, 1.0),
+                vec![with_band(learner, x, &stats)],
+            )
+            .subtitle(label.clone()),
+        ));
+    }
+
+    if !s.lengthscales.is_empty() && !r.feature_names.is_empty() {
+        // Relevance = 1 / lengthscale: a short lengthscale means the class model's output
+        // changes quickly with that feature.
+        let values: Vec<Vec<f64>> = s
+            .lengthscales
+            .iter()
+            .map(|row| {
+                row.iter()
+                    .map(|&l| if l > 0.0 { (1.0 / l).log10() } else { f64::NAN })
+                    .collect()
+            })
+            .collect();
+        let heat = Heatmap {
+            x: AxisTitle {
+                title: "feature".into(),
+                unit: String::new(),
+            },
+            y: AxisTitle {
+                title: "class model".into(),
+                unit: String::new(),
+            },
+            columns: r.feature_names.clone(),
+            rows: r.classes.iter().take(values.len()).cloned().collect(),
+            values,
+            colors: ColorScale::viridis("relevance log10(1 / lengthscale)", ""),
+            annotate: false,
+            marked: Vec::new(),
+        };
+        figures.push((
+            "lengthscales".to_string(),
+            Figure::new(
+                "Feature relevance from the learned lengthscales",
+                FigureKind::Heatmap(heat),
+            )
+            .subtitle(format!("{label}; mean over {reps} orders")),
+        ));
+    }
+
+    let mean_train: f64 =
+        r.repetitions.iter().map(|x| x.train_seconds).sum::<f64>() / reps.max(1) as f64;
+    let parameters = BTreeMap::from([
+        ("learner".to_string(), learner.to_string()),
+        (
+            "features".to_string(),
+            features_text(p.features).to_string(),
+        ),
+        ("repetitions".to_string(), reps.to_string()),
+        ("seed".to_string(), p.seed.to_string()),
+        (
+            "taxel noise variance".to_string(),
+            p.taxel_noise_variance.to_string(),
+        ),
+        ("test fraction".to_string(), p.test_fraction.to_string()),
+    ]);
+    AnalysisResult {
+        kind: AnalysisKind::Recognition,
+        label,
+        session: session.to_string(),
+        parameters,
+        scores: vec![
+            ("accuracy (all)".into(), s.all.mean),
+            ("accuracy (all) sd".into(), s.all.sd),
+            ("accuracy (final 20%)".into(), s.final_20.mean),
+            ("accuracy (final 20%) sd".into(), s.final_20.sd),
+            ("prediction step (µs)".into(), s.predict_step_us),
+            ("training step (µs)".into(), s.train_step_us),
+        ],
+        headline: Some(("accuracy (final 20%)".into(), s.final_20.mean)),
+        train_seconds: mean_train,
+        predict_seconds_per_sample: Some(s.predict_step_us * 1e-6),
+        created: now_unix(),
+        figures,
+    }
+}
+
+fn effective_series(name: &str, points: &[EffectivePoint]) -> Series {
+    let x: Vec<f64> = points.iter().map(|p| p.effective as f64).collect();
+    let stats: Vec<&MeanSd> = points.iter().map(|p| &p.nmi).collect();
+    with_band(name, x, &stats)
+}
+
+/// Scores, timings and figures of an unsupervised threshold sweep on `session`.
+pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult {
+    let p = &r.params;
+    let learner = match p.learner {
+        UnsupervisedLearner::Du => "DU",
+        UnsupervisedLearner::Gu => "GU",
+    };
+    let label = format!("{learner}, {}", features_text(p.features));
+    let th: Vec<f64> = r.sweep.iter().map(|s| s.threshold).collect();
+    let reps = p.reps;
+    let mut figures = vec![
+        (
+            "scores-vs-threshold".to_string(),
+            Figure::chart(
+                "Purity, ARI and NMI against the novelty threshold",
+                Axis::new("novelty threshold", ""),
+                Axis::new("score", "").including(0.0, 1.0),
+                vec![
+                    with_band(
+                        "purity",
+                        th.clone(),
+                        &r.sweep.iter().map(|s| &s.purity).collect::<Vec<_>>(),
+                    ),
+                    with_band(
+                        "ARI",
+                        th.clone(),
+                        &r.sweep.iter().map(|s| &s.ari).collect::<Vec<_>>(),
+                    ),
+                    with_band(
+                        "NMI",
+                        th.clone(),
+                        &r.sweep.iter().map(|s| &s.nmi).collect::<Vec<_>>(),
+                    ),
+                ],
+            )
+            .subtitle(format!("{label}; mean ± sd over {reps} seeded orders")),
+        ),
+        (
+            "clusters-vs-threshold".to_string(),
+            Figure::chart(
+                "Clusters against the novelty threshold",
+                Axis::new("novelty threshold", ""),
+                Axis::new("number of clusters", ""),
+                vec![
+                    with_band(
+                        "clusters created",
+                        th.clone(),
+                        &r.sweep.iter().map(|s| &s.clusters).collect::<Vec<_>>(),
+                    ),
+                    with_band(
+                        "effective clusters",
+                        th.clone(),
+                        &r.sweep.iter().map(|s| &s.effective).collect::<Vec<_>>(),
+                    ),
+                ],
+            )
+            .subtitle(format!(
+                "{label}; effective = clusters used when every sample is re-assigned"
+            )),
+        ),
+    ];
+    let mut nmi = vec![effective_series(learner, &r.by_effective)];
+    if !r.kmeans.is_empty() {
+        nmi.push(effective_series("sequential k-means", &r.kmeans));
+    }
+    if !r.som.is_empty() {
+        nmi.push(effective_series("SOM", &r.som));
+    }
+    figures.push((
+        "nmi-vs-effective".to_string(),
+        Figure::chart(
+            "NMI against effective clusters",
+            Axis::new("effective clusters", ""),
+            Axis::new("normalised mutual information", ""),
+            nmi,
+        )
+        .subtitle(format!(
+            "{label} against k-means and SOM on the Table I features"
+        )),
+    ));
+    let mut scores = Vec::new();
+    let mut groups = Vec::new();
+    for (name, point) in [
+        (learner, &r.at_10),
+        ("sequential k-means", &r.kmeans_at_10),
+        ("SOM", &r.som_at_10),
+    ] {
+        if let Some(pt) = point {
+            groups.push(
+                BarGroup::new(name, vec![pt.purity.mean, pt.ari.mean, pt.nmi.mean]).errors(vec![
+                    pt.purity.sd,
+                    pt.ari.sd,
+                    pt.nmi.sd,
+                ]),
+            );
+            scores.push((format!("{name} purity at 10"), pt.purity.mean));
+            scores.push((format!("{name} ARI at 10"), pt.ari.mean));
+            scores.push((format!("{name} NMI at 10"), pt.nmi.mean));
+        }
+    }
+    if !groups.is_empty() {
+        figures.push((
+            "scores-at-10".to_string(),
+            Figure::bars(
+                "Scores at 10 effective clusters",
+                AxisTitle {
+                    title: "score".into(),
+                    unit: String::new(),
+                },
+                Axis::new("value", "").including(0.0, 1.0),
+                vec!["purity".into(), "ARI".into(), "NMI".into()],
+                groups,
+            )
+            .subtitle("runs whose re-assignment used 10 clusters; mean ± sd"),
+        ));
+    }
+    let headline = r
+        .at_10
+        .as_ref()
+        .map(|pt| (format!("{learner} NMI at 10"), pt.nmi.mean));
+    let runs = r.runs.len().max(1) as f64;
+    let mean_step_us = r.runs.iter().map(|x| x.learn_step_us).sum::<f64>() / runs;
+    scores.push(("learning step (µs)".into(), mean_step_us));
+    let parameters = BTreeMap::from([
+        ("learner".to_string(), learner.to_string()),
+        (
+            "features".to_string(),
+            features_text(p.features).to_string(),
+        ),
+        ("repetitions".to_string(), reps.to_string()),
+        ("seed".to_string(), p.seed.to_string()),
+        (
+            "thresholds".to_string(),
+            format!(
+                "{} from {:.2} to {:.2}",
+                th.len(),
+                th.first().unwrap_or(&0.0),
+                th.last().unwrap_or(&0.0)
+            ),
+        ),
+    ]);
+    AnalysisResult {
+        kind: AnalysisKind::Clustering,
+        label,
+        session: session.to_string(),
+        parameters,
+        scores,
+        headline,
+        train_seconds: r.wall_seconds / (r.sweep.len().max(1) * reps.max(1)) as f64,
+        predict_seconds_per_sample: None,
+        created: now_unix(),
+        figures,
+    }
+}
