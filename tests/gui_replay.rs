@@ -100,6 +100,27 @@ fn filters_and_replays_an_object_recognition_grasp() {
     h.get_by_label("Joint encoders");
     h.get_by_label("Per-finger feature");
 
+    // The recognition forms as the hand closes: DS's class distribution at each step.
+    h.get_by_label("Show the recognition as the hand closes")
+        .click();
+    let t = std::time::Instant::now();
+    while (h.state().analyses.busy() || h.state().analyses.trace.is_none())
+        && t.elapsed() < std::time::Duration::from_secs(120)
+    {
+        h.step();
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    h.run_ok();
+    assert!(
+        h.state().analyses.trace.is_some(),
+        "messages: {:?}",
+        h.state().analyses.messages
+    );
+    h.get_by_label_contains("Class distribution at step 1 (true: sponge");
+    h.key_press(egui::Key::ArrowRight);
+    h.run_ok();
+    h.get_by_label_contains("Class distribution at step 2 (true: sponge");
+
     // Filtering by object keeps only that object's grasps.
     h.state_mut().browser.object = Some("mug".into());
     h.run_ok();

@@ -13,7 +13,9 @@ use crate::cluster::grasp_features::session_features;
 use crate::experiments::ExperimentError;
 use crate::experiments::baselines_report::baselines_report;
 use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_clustering};
-use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
+use crate::experiments::recognition::{
+    GraspTrace, RecognitionParams, SupervisedLearner, grasp_trace, run_recognition,
+};
 use crate::experiments::recognition_report::{clustering_report, recognition_report};
 use crate::experiments::report::{self, AnalysisKind, AnalysisResult, date_text};
 use crate::features::sequence::FeatureSet;
@@ -31,6 +33,15 @@ pub enum JobOutput {
     Result(Box<AnalysisResult>),
     Message(String),
     Project(report::Project),
+    Trace(Box<ReplayTrace>),
+}
+
+/// The class distribution at every step of one grasp, for the replay view.
+pub struct ReplayTrace {
+    pub session: String,
+    pub grasp: usize,
+    pub learner: SupervisedLearner,
+    pub trace: GraspTrace,
 }
 
 /// Export settings shared by every view.
@@ -166,6 +177,8 @@ pub struct Analyses {
     pub messages: Vec<String>,
     /// A view the user asked to open from the speed-against-accuracy chart.
     pub open_request: Option<AnalysisKind>,
+    /// The last recognition trace computed for the replay.
+    pub trace: Option<ReplayTrace>,
 }
 
 impl Analyses {
@@ -191,6 +204,7 @@ impl Analyses {
                     self.shown.insert(kind, self.results.len() - 1);
                 }
                 Some(Outcome::Done(JobOutput::Message(m))) => self.messages.push(m),
+                Some(Outcome::Done(JobOutput::Trace(t))) => self.trace = Some(*t),
                 Some(Outcome::Done(JobOutput::Project(p))) => {
                     self.messages.push(format!(
                         "opened a project with {} results (sessions: {})",
@@ -659,6 +673,45 @@ impl Analyses {
         }
         ui.separator();
         self.results_ui(ui, AnalysisKind::Clustering, &s.session.meta.name);
+    }
+
+    /// Teach a learner every other grasp, then record its class distribution at each step
+    /// of `grasp` (in the background).
+    pub fn request_trace(
+        &mut self,
+        ctx: &egui::Context,
+        s: &LoadedSession,
+        grasp: usize,
+        learner: SupervisedLearner,
+    ) {
+        if self
+            .jobs
+            .iter()
+            .any(|j| j.title.starts_with("Recognition trace"))
+        {
+            return;
+        }
+        let session = s.session.clone();
+        self.spawn(
+            ctx,
+            None,
+            format!("Recognition trace of grasp {}", grasp + 1),
+            move |p| {
+                p.set(0.1, "teaching the other grasps");
+                let params = RecognitionParams {
+                    learner,
+                    reps: 1,
+                    ..Default::default()
+                };
+                let trace = grasp_trace(&session, &params, grasp).map_err(experiment_error)?;
+                Ok(JobOutput::Trace(Box::new(ReplayTrace {
+                    session: session.meta.name.clone(),
+                    grasp,
+                    learner,
+                    trace,
+                })))
+            },
+        );
     }
 
     pub fn speed_accuracy_ui(&mut self, ui: &mut egui::Ui) {

@@ -444,9 +444,16 @@ impl WorkbenchApp {
             }
             View::Replay => match self.selected {
                 Some((s, g)) if s < self.sessions.len() => {
-                    egui::ScrollArea::vertical().show(ui, |ui| {
-                        self.replay.ui(ui, &self.sessions[s], g);
-                    });
+                    let action = egui::ScrollArea::vertical()
+                        .show(ui, |ui| {
+                            self.replay
+                                .ui(ui, &self.sessions[s], g, self.analyses.trace.as_ref())
+                        })
+                        .inner;
+                    if let replay::ReplayAction::Trace(learner) = action {
+                        self.analyses
+                            .request_trace(&ctx, &self.sessions[s], g, learner);
+                    }
                 }
                 _ => {
                     ui.heading("Replay");

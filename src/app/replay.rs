@@ -2,11 +2,13 @@
 //! heatmaps in each sensor's layout, and encoder and per-finger feature traces with a
 //! cursor at the current frame.
 
-use egui::{ComboBox, Vec2};
-use egui_plot::{Legend, Line, Plot, PlotPoints, VLine};
+use egui::{Color32, ComboBox, Vec2};
+use egui_plot::{Bar, BarChart, Legend, Line, Plot, PlotPoints, VLine};
 
+use super::analysis::ReplayTrace;
 use super::heatmap::{colour_bar, sensor_heatmap};
 use super::loader::LoadedSession;
+use crate::experiments::recognition::{GraspTrace, SupervisedLearner};
 use crate::features::FingerStats;
 
 pub const SPEEDS: [f32; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
@@ -18,6 +20,9 @@ pub struct Replay {
     pub speed: f32,
     /// Which per-finger statistic the feature trace shows (index into FingerStats::NAMES).
     pub stat: usize,
+    /// The learner whose class distribution is drawn beside the heatmaps.
+    #[serde(default = "default_learner")]
+    pub learner: SupervisedLearner,
     #[serde(skip)]
     carry: f64,
 }
@@ -29,9 +34,21 @@ impl Default for Replay {
             playing: false,
             speed: 1.0,
             stat: 0,
+            learner: default_learner(),
             carry: 0.0,
         }
     }
+}
+
+fn default_learner() -> SupervisedLearner {
+    SupervisedLearner::Ds
+}
+
+/// What the replay asks the app to do.
+pub enum ReplayAction {
+    None,
+    /// Compute the recognition trace of this grasp with this learner.
+    Trace(SupervisedLearner),
 }
 
 impl Replay {
@@ -75,11 +92,18 @@ impl Replay {
         true
     }
 
-    pub fn ui(&mut self, ui: &mut egui::Ui, s: &LoadedSession, grasp: usize) {
+    pub fn ui(
+        &mut self,
+        ui: &mut egui::Ui,
+        s: &LoadedSession,
+        grasp: usize,
+        trace: Option<&ReplayTrace>,
+    ) -> ReplayAction {
+        let mut action = ReplayAction::None;
         let session = &s.session;
         let Some(g) = session.grasps.get(grasp) else {
             ui.label("Select a grasp in the browser.");
-            return;
+            return action;
         };
         let n = g.frames.len();
         self.frame = self.frame.min(n - 1);
@@ -175,7 +199,32 @@ impl Replay {
                 &format!("pressure ({unit})"),
                 cell.y + 20.0,
             );
+            let trace = trace.filter(|t| {
+                t.session == session.meta.name && t.grasp == grasp && t.learner == self.learner
+            });
+            if let Some(t) = trace {
+                class_distribution(ui, &t.trace, self.frame, cell.y + 20.0);
+            }
         });
+        if session.label_set("object").is_some() && !session.encoders.is_empty() {
+            ui.horizontal(|ui| {
+                ComboBox::from_label("Recognition learner")
+                    .selected_text(format!("{:?}", self.learner).to_uppercase())
+                    .show_ui(ui, |ui| {
+                        ui.selectable_value(&mut self.learner, SupervisedLearner::Ds, "DS");
+                        ui.selectable_value(&mut self.learner, SupervisedLearner::Gs, "GS");
+                    });
+                if ui
+                    .button("Show the recognition as the hand closes")
+                    .on_hover_text(
+                        "Teach the learner every other grasp, then classify this one step by step",
+                    )
+                    .clicked()
+                {
+                    action = ReplayAction::Trace(self.learner);
+                }
+            });
+        }
 
         ui.separator();
         let t_now = f.t;
@@ -222,7 +271,57 @@ impl Replay {
                 }
                 plot.vline(VLine::new("current frame", t_now));
             });
+        action
     }
+}
+
+/// The learner's class distribution at the current step (bars), decided class marked.
+fn class_distribution(ui: &mut egui::Ui, t: &GraspTrace, frame: usize, height: f32) {
+    ui.vertical(|ui| {
+        let step = frame.min(t.distribution.len().saturating_sub(1));
+        let p = t.distribution.get(step).cloned().unwrap_or_default();
+        let best = (0..p.len()).max_by(|&a, &b| p[a].total_cmp(&p[b]));
+        ui.label(format!(
+            "Class distribution at step {} (true: {}; now: {})",
+            step + 1,
+            t.classes.get(t.true_class).map_or("?", String::as_str),
+            best.and_then(|b| t.classes.get(b))
+                .map_or("?", String::as_str)
+        ));
+        let classes = t.classes.clone();
+        let bars: Vec<Bar> = p
+            .iter()
+            .enumerate()
+            .map(|(c, &v)| {
+                let color = if c == t.true_class {
+                    Color32::from_rgb(0, 158, 115)
+                } else {
+                    Color32::from_rgb(0, 114, 178)
+                };
+                Bar::new(c as f64, v)
+                    .width(0.8)
+                    .fill(color)
+                    .name(classes.get(c).cloned().unwrap_or_default())
+            })
+            .collect();
+        Plot::new("class_distribution")
+            .height(height)
+            .width(420.0)
+            .include_y(0.0)
+            .include_y(1.0)
+            .y_axis_label("probability")
+            .x_axis_formatter(move |m, _| {
+                let i = m.value.round();
+                if (m.value - i).abs() < 1e-6 && i >= 0.0 {
+                    classes.get(i as usize).cloned().unwrap_or_default()
+                } else {
+                    String::new()
+                }
+            })
+            .show(ui, |plot| {
+                plot.bar_chart(BarChart::new("p(class | observations)", bars))
+            });
+    });
 }
 
 #[cfg(test)]
