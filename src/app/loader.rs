@@ -79,17 +79,7 @@ pub fn open(source: &Source) -> Result<LoadedSession, String> {
                 .ok_or_else(|| format!("no bundled sample named {name}"))?;
             session::native::from_str(text, Path::new(name)).map_err(|e| e.to_string())?
         }
-        Source::File(path) if path.is_dir() => {
-            session::import_icub(path).map_err(|e| e.to_string())?
-        }
-        Source::File(path)
-            if path
-                .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("csv")) =>
-        {
-            session::import_bts3(path).map_err(|e| e.to_string())?
-        }
-        Source::File(path) => session::load(path).map_err(|e| e.to_string())?,
+        Source::File(path) => session::open(path).map_err(|e| e.to_string())?,
     };
     Ok(LoadedSession {
         source: source.clone(),

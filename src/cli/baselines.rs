@@ -1,7 +1,7 @@
 //! `baselines`: sequential k-means, SOM and the offline RBF SVM on the Table I per-grasp
 //! features (the second paper's Tables II and IV, Fig. 13).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
@@ -10,7 +10,6 @@ use crate::cluster::baselines::{BaselinesParams, BaselinesResult, ScoreSummary, 
 use crate::cluster::grasp_features::{Normalisation, session_features};
 use crate::cluster::{Schedule, SomParams};
 use crate::jobs::Progress;
-use crate::session::{self, Session};
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum NormalisationArg {
@@ -81,14 +80,6 @@ pub struct BaselinesArgs {
     pub cv_repeats: usize,
 }
 
-fn open(path: &Path) -> anyhow::Result<Session> {
-    if path.is_dir() {
-        session::import_icub(path).with_context(|| format!("importing {}", path.display()))
-    } else {
-        session::load(path).with_context(|| format!("loading {}", path.display()))
-    }
-}
-
 fn line(name: &str, s: &ScoreSummary) -> String {
     format!(
         "{name:<20} {:.3} ({:.3})  {:.3} ({:.3})  {:.3} ({:.3})  {:.1}",
@@ -157,7 +148,7 @@ pub fn run(a: BaselinesArgs) -> anyhow::Result<()> {
             a.k
         );
     }
-    let session = open(&a.session)?;
+    let session = super::recognition::open_session(&a.session)?;
     let set = session
         .label_set(&a.label_set)
         .with_context(|| format!("the session has no label set {:?}", a.label_set))?;

@@ -3,6 +3,7 @@
 
 pub mod baselines;
 mod figures;
+pub mod paper_figures;
 pub mod recognition;
 pub mod session;
 pub mod simulate;
@@ -39,6 +40,8 @@ pub enum Command {
     Import(session::ImportArgs),
     /// Regenerate the sample sessions from a seed.
     Simulate(simulate::SimulateArgs),
+    /// Run an experiment and write all its figures (SVG, PNG, CSV, index).
+    PaperFigures(paper_figures::PaperFiguresArgs),
     /// Render a figure saved as JSON to SVG, PNG or CSV.
     RenderFigure(figures::RenderFigureArgs),
     /// Sequential k-means, SOM and RBF SVM baselines on the per-grasp Table I features.
@@ -58,6 +61,7 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Validate(a) => session::validate(a),
         Command::Import(a) => session::import(a),
         Command::Simulate(a) => simulate::run(a),
+        Command::PaperFigures(a) => paper_figures::run(a),
         Command::RenderFigure(a) => figures::run(a),
         Command::Baselines(a) => baselines::run(a),
         Command::Recognition(a) => recognition::recognition(a),

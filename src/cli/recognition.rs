@@ -11,13 +11,9 @@ use crate::features::FeatureSet;
 use crate::jobs::Progress;
 use crate::session::{self, Session};
 
-/// A native session file, or the iCub dataset folder (imported on the fly).
+/// A native session file, a BTS3 CSV or the iCub dataset folder (imported on the fly).
 pub fn open_session(path: &Path) -> anyhow::Result<Session> {
-    if path.is_dir() {
-        session::import_icub(path).with_context(|| format!("importing {}", path.display()))
-    } else {
-        session::load(path).with_context(|| format!("loading {}", path.display()))
-    }
+    session::open(path).with_context(|| format!("opening {}", path.display()))
 }
 
 fn write_json<T: serde::Serialize>(value: &T, out: Option<&Path>) -> anyhow::Result<()> {

@@ -15,3 +15,18 @@ pub use icub::{import_icub, import_icub_with};
 pub use model::*;
 pub use native::{load, save};
 pub use validate::validate;
+
+/// Open a session from any supported path: an iCub dataset folder, a BTS3 `.csv`, or a
+/// native session file.
+pub fn open(path: &std::path::Path) -> Result<Session, SessionError> {
+    if path.is_dir() {
+        import_icub(path)
+    } else if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+    {
+        import_bts3(path)
+    } else {
+        load(path)
+    }
+}

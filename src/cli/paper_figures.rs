@@ -1,0 +1,143 @@
+//! `paper-figures`: run an experiment headless and write every figure of it (SVG, PNG,
+//! CSV and an index), so a paper's figures are regenerated in one command.
+
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+
+use super::recognition::open_session;
+use crate::cluster::baselines::{BaselinesParams, grid_for, run_baselines};
+use crate::cluster::grasp_features::session_features;
+use crate::experiments::baselines_report::baselines_report;
+use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_clustering};
+use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
+use crate::experiments::recognition_report::{clustering_report, recognition_report};
+use crate::experiments::report::{AnalysisResult, figure_set, speed_accuracy};
+use crate::features::FeatureSet;
+use crate::figures::{FigureEntry, Format, RenderOptions, export_all};
+use crate::jobs::Progress;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Experiment {
+    /// DS and GS on all, tactile and encoder features; noise σ² 100 and 1000 (Figs. 6–9).
+    Recognition,
+    /// DU and GU threshold sweeps with k-means and SOM (Figs. 11–13, Table IV).
+    Clustering,
+    /// k-means, SOM and RBF SVM on the Table I features.
+    Baselines,
+}
+
+#[derive(Args, Debug)]
+pub struct PaperFiguresArgs {
+    /// Session: a native file, a BTS3 CSV or the iCub dataset folder.
+    pub session: PathBuf,
+    #[arg(long, value_enum)]
+    pub experiment: Experiment,
+    /// Output folder (created if missing).
+    #[arg(short, long)]
+    pub out_dir: PathBuf,
+    /// Repetitions (seeded orders); the papers use 50.
+    #[arg(long, default_value_t = 50)]
+    pub reps: usize,
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    #[arg(long, default_value_t = 960)]
+    pub width: u32,
+    #[arg(long, default_value_t = 640)]
+    pub height: u32,
+    #[arg(long, default_value_t = 96.0)]
+    pub dpi: f64,
+}
+
+pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
+    let session = open_session(&a.session)?;
+    let name = session.meta.name.clone();
+    let progress = Progress::new();
+    let mut results: Vec<AnalysisResult> = Vec::new();
+    match a.experiment {
+        Experiment::Recognition => {
+            let mut settings = Vec::new();
+            for learner in [SupervisedLearner::Ds, SupervisedLearner::Gs] {
+                for features in [FeatureSet::All, FeatureSet::Tactile, FeatureSet::Encoder] {
+                    settings.push((learner, features, 0.0));
+                }
+                for noise in [100.0, 1000.0] {
+                    settings.push((learner, FeatureSet::All, noise));
+                }
+            }
+            for (learner, features, noise) in settings {
+                let params = RecognitionParams {
+                    learner,
+                    features,
+                    reps: a.reps,
+                    seed: a.seed,
+                    taxel_noise_variance: noise,
+                    ..Default::default()
+                };
+                let r = run_recognition(&session, &params, &progress)?;
+                let report = recognition_report(&name, &r);
+                eprintln!("{}: final 20% {:.3}", report.label, r.summary.final_20.mean);
+                results.push(report);
+            }
+        }
+        Experiment::Clustering => {
+            for learner in [UnsupervisedLearner::Du, UnsupervisedLearner::Gu] {
+                let params = ClusteringParams {
+                    learner,
+                    reps: a.reps,
+                    seed: a.seed,
+                    ..Default::default()
+                };
+                let r = run_clustering(&session, &params, &progress)?;
+                let report = clustering_report(&name, &r);
+                eprintln!("{}: done in {:.1} s", report.label, r.wall_seconds);
+                results.push(report);
+            }
+        }
+        Experiment::Baselines => {
+            let set = session
+                .label_set("object")
+                .ok_or_else(|| anyhow::anyhow!("the session has no `object` label set"))?;
+            let truth = session.labels_of(set);
+            let features = session_features(&session)?;
+            let (rows, cols) = grid_for(10);
+            let mut params = BaselinesParams {
+                orders: a.reps,
+                seed: a.seed,
+                ..Default::default()
+            };
+            params.som.rows = rows;
+            params.som.cols = cols;
+            let t0 = std::time::Instant::now();
+            let r = run_baselines(features.view(), &truth, &params, &progress)?;
+            results.push(baselines_report(&name, &r, t0.elapsed().as_secs_f64()));
+        }
+    }
+    let mut set = figure_set(&results);
+    if let Some(f) = speed_accuracy(&results) {
+        set.entries.push(FigureEntry {
+            name: "speed-against-accuracy".into(),
+            figure: f,
+            parameters: Default::default(),
+            session: name.clone(),
+            date: crate::experiments::report::date_text(crate::experiments::report::now_unix()),
+        });
+    }
+    let opts = RenderOptions {
+        width: a.width,
+        height: a.height,
+        dpi: a.dpi,
+    };
+    let index = export_all(
+        &set,
+        &a.out_dir,
+        &[Format::Svg, Format::Png, Format::Csv],
+        &opts,
+    )?;
+    println!(
+        "wrote {} figures to {}",
+        index.entries.len(),
+        a.out_dir.display()
+    );
+    Ok(())
+}
