@@ -484,6 +484,8 @@ impl eframe::App for EframeApp {
             if !self.app.is_loading() && !self.app.sessions.is_empty() {
                 println!("first frame: {first:.0} ms; sessions shown: {ms:.0} ms");
                 ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+                // Report once: frames may still be drawn while the window closes.
+                self.measure_from = None;
             }
         }
     }

@@ -177,7 +177,7 @@ impl Replay {
             .first()
             .map(|x| match x.transform {
                 crate::session::ValueTransform::Identity => x.unit.clone(),
-                _ => "pressure-like units".into(),
+                _ => "reading below rest".into(),
             })
             .unwrap_or_default();
         let cell = Vec2::new(130.0, 170.0);
@@ -196,7 +196,8 @@ impl Replay {
             colour_bar(
                 ui,
                 s.pressure_range,
-                &format!("pressure ({unit})"),
+                "pressure",
+                &unit,
                 cell.y + 20.0,
             );
             let trace = trace.filter(|t| {

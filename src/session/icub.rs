@@ -268,7 +268,7 @@ pub fn import_icub_with(dir: &Path, options: &IcubOptions) -> Result<Session, Se
             ),
         },
         sensors,
-        encoders: (7..7 + ENCODERS).map(|j| format!("joint {j}")).collect(),
+        encoders: (7..7 + ENCODERS).map(|j| format!("joint {j:02}")).collect(),
         label_sets: vec![LabelSet {
             name: "object".into(),
             classes: classes.iter().map(|s| s.to_string()).collect(),

@@ -408,7 +408,7 @@ pub fn object_recognition(seed: u64) -> Session {
                 transform: ValueTransform::Reversed { offset: 255.0 },
             })
             .collect(),
-        encoders: (7..16).map(|j| format!("joint {j}")).collect(),
+        encoders: (7..16).map(|j| format!("joint {j:02}")).collect(),
         label_sets: vec![LabelSet {
             name: "object".into(),
             classes: RECOGNITION_OBJECTS.iter().map(|s| s.to_string()).collect(),
