@@ -148,7 +148,7 @@ pub fn exp_nonpos(x: f64) -> f64 {
 
 /// Σ (a_i − b_i)² with four independent accumulators, so that the sum vectorises (a single
 /// running sum is one long chain of dependent additions).
-#[inline]
+#[inline(always)]
 pub fn sq_dist(a: &[f64], b: &[f64]) -> f64 {
     let mut acc = [0.0f64; 4];
     let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
@@ -264,6 +264,32 @@ impl RecursiveArd {
     /// stored back to back in `bvs`, into `out`. Lags run in the outer loop so that the
     /// recursion of all BVs advances together (the exps vectorise); `d` is scratch (≥ n).
     pub fn unit_many(&self, x: &[f64], bvs: &[f64], n: usize, d: &mut [f64], out: &mut [f64]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            unsafe { self.unit_many_avx2(x, bvs, n, d, out) };
+            return;
+        }
+        self.unit_many_portable(x, bvs, n, d, out);
+    }
+
+    /// The same code compiled for AVX2 (four f64 lanes instead of SSE2's two). Rust never
+    /// reorders or fuses floating-point operations, so the results are bit-identical.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn unit_many_avx2(
+        &self,
+        x: &[f64],
+        bvs: &[f64],
+        n: usize,
+        d: &mut [f64],
+        out: &mut [f64],
+    ) {
+        self.unit_many_portable(x, bvs, n, d, out);
+    }
+
+    #[inline(always)]
+    fn unit_many_portable(&self, x: &[f64], bvs: &[f64], n: usize, d: &mut [f64], out: &mut [f64]) {
         let (w, dim) = (self.window_len(), self.dim);
         let inv_rho = 1.0 / self.params.sigma_rho;
         out[..n].fill(1.0);
@@ -282,6 +308,22 @@ impl RecursiveArd {
     /// K_tau and its derivatives (recursive, eqs. 22–23 in the parameters of `theta`):
     /// `grad[j]` = ∂K/∂ln l_j for j < dim, `grad[dim]` = ∂K/∂sigma_rho.
     pub fn unit_scaled_grad(&self, a: &[f64], b: &[f64], grad: &mut [f64]) -> f64 {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { self.unit_scaled_grad_avx2(a, b, grad) };
+        }
+        self.unit_scaled_grad_portable(a, b, grad)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn unit_scaled_grad_avx2(&self, a: &[f64], b: &[f64], grad: &mut [f64]) -> f64 {
+        self.unit_scaled_grad_portable(a, b, grad)
+    }
+
+    #[inline(always)]
+    fn unit_scaled_grad_portable(&self, a: &[f64], b: &[f64], grad: &mut [f64]) -> f64 {
         let rho = self.params.sigma_rho;
         let inv_rho = 1.0 / rho;
         grad[..=self.dim].fill(0.0);
