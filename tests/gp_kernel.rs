@@ -126,3 +126,34 @@ fn bad_parameters_are_errors_naming_the_parameter() {
     .to_string();
     assert!(e.contains("tau"), "{e}");
 }
+
+#[test]
+fn fast_exp_matches_the_library_exp() {
+    use tactile_workbench::gp::kernel::exp_nonpos;
+    let mut x = 0.0;
+    while x > -745.0 {
+        let (a, b) = (exp_nonpos(x), x.exp());
+        if x >= -700.0 {
+            assert!((a - b).abs() <= 4e-16 * b, "exp({x}): {a} vs {b}");
+        } else {
+            assert!(a < 1e-303);
+        }
+        x -= 0.0137;
+    }
+    assert_eq!(exp_nonpos(0.0), 1.0);
+}
+
+#[test]
+fn many_bvs_at_once_equal_one_at_a_time() {
+    let mut rng = Rng::new(3);
+    let (dim, tau, n) = (5, 4, 7);
+    let k = RecursiveArd::new(dim, tau, params(dim, &mut rng)).unwrap();
+    let x: Vec<f64> = (0..dim * tau).map(|_| rng.normal()).collect();
+    let bvs: Vec<f64> = (0..n * dim * tau).map(|_| rng.normal()).collect();
+    let (mut d, mut out) = (vec![0.0; n], vec![0.0; n]);
+    k.unit_many(&x, &bvs, n, &mut d, &mut out);
+    for i in 0..n {
+        let one = k.unit_scaled(&x, &bvs[i * dim * tau..(i + 1) * dim * tau]);
+        assert_eq!(out[i], one);
+    }
+}

@@ -262,14 +262,17 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
     for p in configs {
         for learner in [SupervisedLearner::Ds, SupervisedLearner::Gs] {
             let b = bench_steps(learner, &p)?;
+            let cpu = |v: Option<f64>| v.map_or("?".to_string(), |v| format!("{v:.0}"));
             println!(
-                "  {:?} budget {:>3} tau {:>2} adapt {:<5}: predict {:>7.1} µs/step, train {:>7.1} µs/step  ({:.0} BVs, {} adapting)",
+                "  {:?} budget {:>3} tau {:>2} adapt {:<5}: predict {:>7.1} µs/step (cpu {}), train {:>7.1} µs/step (cpu {})  ({:.0} BVs, {} adapting)",
                 learner,
                 p.capacity,
                 p.tau,
                 p.adaptation,
                 b.predict_step_us,
+                cpu(b.predict_step_cpu_us),
                 b.train_step_us,
+                cpu(b.train_step_cpu_us),
                 b.mean_basis,
                 b.adapting
             );

@@ -111,9 +111,44 @@ impl KernelParams {
     }
 }
 
+/// exp(x) for x ≤ 0 (the kernel's exponents are never positive), branch-free so that loops
+/// over many BVs vectorise: Cody–Waite reduction x = k ln 2 + r, |r| ≤ ln2/2, a degree-12
+/// Taylor polynomial (truncation below 2e-16 relative) and 2^k built from its exponent bits.
+/// Arguments below −700 are clamped (the result, < 1e-304, is 0 for every use here).
+#[inline(always)]
+pub fn exp_nonpos(x: f64) -> f64 {
+    const MAGIC: f64 = 6_755_399_441_055_744.0; // 1.5·2^52: adding it rounds to an integer
+    // fdlibm's split of ln 2: k·LN2_HI is exact for |k| < 2^11.
+    const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
+    const LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
+    let x = x.clamp(-700.0, 0.0);
+    let t = x * std::f64::consts::LOG2_E + MAGIC;
+    let k = t - MAGIC;
+    let r = (x - k * LN2_HI) - k * LN2_LO;
+    let mut p = 1.0 / 479_001_600.0;
+    for c in [
+        1.0 / 39_916_800.0,
+        1.0 / 3_628_800.0,
+        1.0 / 362_880.0,
+        1.0 / 40_320.0,
+        1.0 / 5_040.0,
+        1.0 / 720.0,
+        1.0 / 120.0,
+        1.0 / 24.0,
+        1.0 / 6.0,
+        0.5,
+        1.0,
+        1.0,
+    ] {
+        p = p * r + c;
+    }
+    // The low bits of t hold k; adding the bias and shifting gives the bits of 2^k.
+    p * f64::from_bits(t.to_bits().wrapping_add(1023) << 52)
+}
+
 /// Σ (a_i − b_i)² with four independent accumulators, so that the sum vectorises (a single
 /// running sum is one long chain of dependent additions).
-#[inline]
+#[inline(always)]
 pub fn sq_dist(a: &[f64], b: &[f64]) -> f64 {
     let mut acc = [0.0f64; 4];
     let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
@@ -220,18 +255,75 @@ impl RecursiveArd {
         let mut k = 1.0;
         for (la, lb) in a.chunks_exact(self.dim).zip(b.chunks_exact(self.dim)) {
             let d = sq_dist(la, lb);
-            // Both windows still padding: the factor is exactly 1 (no exp needed).
-            if d == 0.0 && k == 1.0 {
-                continue;
-            }
-            k = (-0.5 * d + (k - 1.0) * inv_rho).exp();
+            k = exp_nonpos(-0.5 * d + (k - 1.0) * inv_rho);
         }
         k
+    }
+
+    /// Unit K_tau between the scaled window `x` and each of the first `n` scaled windows
+    /// stored back to back in `bvs`, into `out`. Lags run in the outer loop so that the
+    /// recursion of all BVs advances together (the exps vectorise); `d` is scratch (≥ n).
+    pub fn unit_many(&self, x: &[f64], bvs: &[f64], n: usize, d: &mut [f64], out: &mut [f64]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            unsafe { self.unit_many_avx2(x, bvs, n, d, out) };
+            return;
+        }
+        self.unit_many_portable(x, bvs, n, d, out);
+    }
+
+    /// The same code compiled for AVX2 (four f64 lanes instead of SSE2's two). Rust never
+    /// reorders or fuses floating-point operations, so the results are bit-identical.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn unit_many_avx2(
+        &self,
+        x: &[f64],
+        bvs: &[f64],
+        n: usize,
+        d: &mut [f64],
+        out: &mut [f64],
+    ) {
+        self.unit_many_portable(x, bvs, n, d, out);
+    }
+
+    #[inline(always)]
+    fn unit_many_portable(&self, x: &[f64], bvs: &[f64], n: usize, d: &mut [f64], out: &mut [f64]) {
+        let (w, dim) = (self.window_len(), self.dim);
+        let inv_rho = 1.0 / self.params.sigma_rho;
+        out[..n].fill(1.0);
+        for lag in 0..self.tau {
+            let xl = &x[lag * dim..(lag + 1) * dim];
+            for (i, di) in d[..n].iter_mut().enumerate() {
+                let o = i * w + lag * dim;
+                *di = sq_dist(xl, &bvs[o..o + dim]);
+            }
+            for (k, di) in out[..n].iter_mut().zip(&d[..n]) {
+                *k = exp_nonpos(-0.5 * di + (*k - 1.0) * inv_rho);
+            }
+        }
     }
 
     /// K_tau and its derivatives (recursive, eqs. 22–23 in the parameters of `theta`):
     /// `grad[j]` = ∂K/∂ln l_j for j < dim, `grad[dim]` = ∂K/∂sigma_rho.
     pub fn unit_scaled_grad(&self, a: &[f64], b: &[f64], grad: &mut [f64]) -> f64 {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { self.unit_scaled_grad_avx2(a, b, grad) };
+        }
+        self.unit_scaled_grad_portable(a, b, grad)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn unit_scaled_grad_avx2(&self, a: &[f64], b: &[f64], grad: &mut [f64]) -> f64 {
+        self.unit_scaled_grad_portable(a, b, grad)
+    }
+
+    #[inline(always)]
+    fn unit_scaled_grad_portable(&self, a: &[f64], b: &[f64], grad: &mut [f64]) -> f64 {
         let rho = self.params.sigma_rho;
         let inv_rho = 1.0 / rho;
         grad[..=self.dim].fill(0.0);
@@ -239,7 +331,7 @@ impl RecursiveArd {
         for (la, lb) in a.chunks_exact(self.dim).zip(b.chunks_exact(self.dim)) {
             let d = sq_dist(la, lb);
             let k_prev = k;
-            k = (-0.5 * d + (k_prev - 1.0) * inv_rho).exp();
+            k = exp_nonpos(-0.5 * d + (k_prev - 1.0) * inv_rho);
             for ((g, x), y) in grad[..self.dim].iter_mut().zip(la).zip(lb) {
                 *g = k * (*g * inv_rho + (x - y) * (x - y));
             }

@@ -166,6 +166,8 @@ pub struct Sogp {
     k: Vec<f64>,
     ck: Vec<f64>,
     ehat: Vec<f64>,
+    /// Per-BV squared lag distances (kernel scratch).
+    dist: Vec<f64>,
     mean: Vec<f64>,
     qv: Vec<f64>,
     y_tmp: Vec<f64>,
@@ -210,6 +212,7 @@ impl Sogp {
             k: vec![0.0; stride],
             ck: vec![0.0; stride],
             ehat: vec![0.0; stride],
+            dist: vec![0.0; stride],
             mean: vec![0.0; n_out],
             qv: vec![0.0; n_out],
             y_tmp: vec![0.0; n_out],
@@ -279,10 +282,17 @@ impl Sogp {
     fn refresh(&mut self) {
         self.kernel.scale_into(&self.x_raw, &mut self.x_scaled);
         let sf2 = self.kernel.sigma_f2();
-        for i in 0..self.n {
-            self.k[i] = sf2 * self.kernel.unit_scaled(&self.x_scaled, self.bv(i));
-        }
         let (n, s) = (self.n, self.stride);
+        self.kernel.unit_many(
+            &self.x_scaled,
+            &self.bv_scaled,
+            n,
+            &mut self.dist,
+            &mut self.k,
+        );
+        for k in &mut self.k[..n] {
+            *k *= sf2;
+        }
         for i in 0..n {
             self.ck[i] = dot(&self.c[i * s..i * s + n], &self.k[..n]);
         }
