@@ -2,5 +2,7 @@
 //! patches, normalisation.
 
 mod moments;
+mod patches;
 
 pub use moments::FingerStats;
+pub use patches::{KeyFramePatches, PatchError, PatchScaling, Standardizer};
