@@ -6,6 +6,7 @@
 
 pub mod cli;
 pub mod cluster;
+pub mod experiments;
 pub mod features;
 pub mod figures;
 pub mod fsutil;
@@ -14,6 +15,7 @@ pub mod learners;
 pub mod linalg;
 pub mod rng;
 pub mod session;
+pub mod sparse;
 pub mod special;
 pub mod svm;
 

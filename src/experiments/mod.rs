@@ -1,0 +1,3 @@
+//! Experiments: protocols that combine features, models and evaluation into results.
+
+pub mod stability;
