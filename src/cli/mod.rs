@@ -5,6 +5,7 @@ pub mod baselines;
 mod figures;
 pub mod session;
 pub mod simulate;
+pub mod stability;
 
 use std::path::PathBuf;
 
@@ -42,6 +43,11 @@ pub enum Command {
     RenderFigure(figures::RenderFigureArgs),
     /// Sequential k-means, SOM and RBF SVM baselines on the per-grasp Table I features.
     Baselines(baselines::BaselinesArgs),
+    /// Grasp stability by sparse coding and a linear SVM (the first paper): grid search,
+    /// 10-fold and leave-objects-out scores, the raw-value baseline and the analyses.
+    Stability(stability::StabilityArgs),
+    /// Time the grasp-stability pipeline on BTS3 palm-down (dictionary, coding, CV, grid).
+    BenchStability(stability::BenchStabilityArgs),
 }
 
 /// Run a subcommand.
@@ -53,5 +59,7 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Simulate(a) => simulate::run(a),
         Command::RenderFigure(a) => figures::run(a),
         Command::Baselines(a) => baselines::run(a),
+        Command::Stability(a) => stability::run(a),
+        Command::BenchStability(a) => stability::run_bench(a),
     }
 }
