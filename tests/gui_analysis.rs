@@ -160,3 +160,39 @@ fn recognition_and_clustering_views_show_the_papers_figures() {
     h.get_by_label("Clusters against the novelty threshold");
     h.get_by_label("NMI against effective clusters");
 }
+
+#[test]
+fn stability_view_shows_the_first_papers_figures() {
+    let mut h = harness();
+    h.get_by_label("Simulated grasp stability").click();
+    h.run_ok();
+    h.state_mut().view = View::Stability;
+    h.run_ok();
+    h.state_mut().analyses.stability.num_bases = 8;
+    h.get_by_label("Run").click();
+    h.step();
+    h.step();
+    assert!(h.state().analyses.busy());
+    wait_for_jobs(&mut h, Duration::from_secs(300));
+    assert_eq!(
+        h.state().analyses.results.len(),
+        1,
+        "messages: {:?}",
+        h.state().analyses.messages
+    );
+    for title in [
+        "Basis images",
+        "Basis usage per label",
+        "Basis usage differential",
+        "Coefficient differential",
+        "A patch and its reconstruction",
+    ] {
+        h.get_by_label(title);
+    }
+    h.get_by_label_contains("Confusion map, stratified 10-fold");
+    let wsr = h.state().analyses.results[0]
+        .score("weighted success rate (10-fold)")
+        .unwrap();
+    h.get_by_label(&format!("{wsr:.4}"));
+    assert!(wsr > 0.6, "the sample's failures are learnable: {wsr}");
+}

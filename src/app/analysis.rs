@@ -18,6 +18,10 @@ use crate::experiments::recognition::{
 };
 use crate::experiments::recognition_report::{clustering_report, recognition_report};
 use crate::experiments::report::{self, AnalysisKind, AnalysisResult, date_text};
+use crate::experiments::stability::{
+    Config, DataOptions, GridSpec, StabilityData, StabilityError, StabilityOptions,
+};
+use crate::experiments::stability_report::stability_report;
 use crate::features::sequence::FeatureSet;
 use crate::figures::{self, Format, RenderOptions};
 use crate::jobs::{Job, JobError, Outcome};
@@ -117,6 +121,29 @@ impl Default for RecognitionForm {
     }
 }
 
+/// Grasp-stability form: one configuration, or a grid search with the parsimony rule.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct StabilityForm {
+    pub num_bases: usize,
+    pub beta: f64,
+    pub gamma: f64,
+    pub grid: bool,
+    /// Grid over num_bases: from, to, step.
+    pub bases: [usize; 3],
+}
+
+impl Default for StabilityForm {
+    fn default() -> Self {
+        StabilityForm {
+            num_bases: 29,
+            beta: 1.0,
+            gamma: 1.0,
+            grid: false,
+            bases: [5, 60, 5],
+        }
+    }
+}
+
 /// Unsupervised clustering form.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct ClusteringForm {
@@ -173,6 +200,7 @@ pub struct Analyses {
     pub baselines: BaselinesForm,
     pub recognition: RecognitionForm,
     pub clustering: ClusteringForm,
+    pub stability: StabilityForm,
     /// Messages of finished jobs (errors and exports), newest last.
     pub messages: Vec<String>,
     /// A view the user asked to open from the speed-against-accuracy chart.
@@ -510,6 +538,96 @@ impl Analyses {
         });
         ui.separator();
         self.results_ui(ui, AnalysisKind::Baselines, &s.session.meta.name);
+    }
+
+    pub fn stability_ui(&mut self, ui: &mut egui::Ui, s: &LoadedSession, ctx: &egui::Context) {
+        ui.heading("Grasp stability: sparse coding of tactile images and a linear SVM");
+        let running = self
+            .jobs
+            .iter()
+            .any(|j| j.kind == Some(AnalysisKind::Stability));
+        let f = &mut self.stability;
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut f.grid, "Grid search (β and γ over 0.5, 1, 2)");
+            if f.grid {
+                ui.add(
+                    egui::DragValue::new(&mut f.bases[0])
+                        .range(1..=200)
+                        .prefix("bases from "),
+                );
+                ui.add(
+                    egui::DragValue::new(&mut f.bases[1])
+                        .range(1..=200)
+                        .prefix("to "),
+                );
+                ui.add(
+                    egui::DragValue::new(&mut f.bases[2])
+                        .range(1..=50)
+                        .prefix("step "),
+                );
+            } else {
+                ui.add(
+                    egui::DragValue::new(&mut f.num_bases)
+                        .range(1..=200)
+                        .prefix("num_bases "),
+                );
+                ui.add(
+                    egui::DragValue::new(&mut f.beta)
+                        .range(1e-4..=1e4)
+                        .speed(0.05)
+                        .prefix("β "),
+                );
+                ui.add(
+                    egui::DragValue::new(&mut f.gamma)
+                        .range(1e-4..=1e4)
+                        .speed(0.05)
+                        .prefix("γ "),
+                );
+            }
+        });
+        ui.label("Pressures are z-scored per taxel over the session; β and γ use the 0.5·|x − Da|² + λ·|a|₁ convention.");
+        let ready = !s.session.label_sets.is_empty();
+        if ui
+            .add_enabled(!running && ready, egui::Button::new("Run"))
+            .clicked()
+        {
+            let f = self.stability.clone();
+            let session = s.session.clone();
+            self.spawn(
+                ctx,
+                Some(AnalysisKind::Stability),
+                format!("Grasp stability on {}", session.meta.name),
+                move |p| {
+                    let data = StabilityData::from_session(&session, &DataOptions::default())
+                        .map_err(JobError::failed)?;
+                    let mut opts = StabilityOptions {
+                        single: Config {
+                            num_bases: f.num_bases,
+                            beta: f.beta,
+                            gamma: f.gamma,
+                        },
+                        ..Default::default()
+                    };
+                    if f.grid {
+                        let [from, to, step] = f.bases;
+                        opts.grid = Some(GridSpec {
+                            num_bases: (from..=to.max(from)).step_by(step.max(1)).collect(),
+                            beta: vec![0.5, 1.0, 2.0],
+                            gamma: vec![0.5, 1.0, 2.0],
+                        });
+                    }
+                    let r = crate::experiments::stability::run(&data, &opts, p).map_err(
+                        |e| match e {
+                            StabilityError::Cancelled => JobError::Cancelled,
+                            other => JobError::failed(other),
+                        },
+                    )?;
+                    Ok(JobOutput::Result(Box::new(stability_report(&r))))
+                },
+            );
+        }
+        ui.separator();
+        self.results_ui(ui, AnalysisKind::Stability, &s.session.meta.name);
     }
 
     pub fn recognition_ui(&mut self, ui: &mut egui::Ui, s: &LoadedSession, ctx: &egui::Context) {

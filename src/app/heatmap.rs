@@ -119,20 +119,50 @@ pub fn colour_bar(ui: &mut egui::Ui, range: (f64, f64), title: &str, unit: &str,
     let width = 120.0;
     let (rect, _) = ui.allocate_exact_size(Vec2::new(width, height), Sense::hover());
     let painter = ui.painter_at(rect);
-    let bar = Rect::from_min_size(rect.min + Vec2::new(4.0, 34.0), Vec2::new(14.0, height - 44.0));
+    let bar = Rect::from_min_size(
+        rect.min + Vec2::new(4.0, 34.0),
+        Vec2::new(14.0, height - 44.0),
+    );
     let steps = 48;
     for k in 0..steps {
         let t0 = k as f32 / steps as f32;
         let seg = Rect::from_min_max(
-            Pos2::new(bar.min.x, bar.max.y - (t0 + 1.0 / steps as f32) * bar.height()),
+            Pos2::new(
+                bar.min.x,
+                bar.max.y - (t0 + 1.0 / steps as f32) * bar.height(),
+            ),
             Pos2::new(bar.max.x, bar.max.y - t0 * bar.height()),
         );
         painter.rect_filled(seg, 0.0, viridis(t0 as f64 + 0.5 / steps as f64));
     }
     let text = ui.visuals().text_color();
     let font = FontId::proportional(11.0);
-    painter.text(Pos2::new(bar.max.x + 4.0, bar.min.y), Align2::LEFT_CENTER, format!("{:.0}", range.1), font.clone(), text);
-    painter.text(Pos2::new(bar.max.x + 4.0, bar.max.y), Align2::LEFT_CENTER, format!("{:.0}", range.0), font.clone(), text);
-    painter.text(Pos2::new(rect.min.x, rect.min.y + 6.0), Align2::LEFT_CENTER, title, font.clone(), text);
-    painter.text(Pos2::new(rect.min.x, rect.min.y + 20.0), Align2::LEFT_CENTER, format!("({unit})"), font, text);
+    painter.text(
+        Pos2::new(bar.max.x + 4.0, bar.min.y),
+        Align2::LEFT_CENTER,
+        format!("{:.0}", range.1),
+        font.clone(),
+        text,
+    );
+    painter.text(
+        Pos2::new(bar.max.x + 4.0, bar.max.y),
+        Align2::LEFT_CENTER,
+        format!("{:.0}", range.0),
+        font.clone(),
+        text,
+    );
+    painter.text(
+        Pos2::new(rect.min.x, rect.min.y + 6.0),
+        Align2::LEFT_CENTER,
+        title,
+        font.clone(),
+        text,
+    );
+    painter.text(
+        Pos2::new(rect.min.x, rect.min.y + 20.0),
+        Align2::LEFT_CENTER,
+        format!("({unit})"),
+        font,
+        text,
+    );
 }

@@ -28,6 +28,7 @@ const MAX_RECENT: usize = 10;
 pub enum View {
     #[default]
     Replay,
+    Stability,
     Recognition,
     Clustering,
     Baselines,
@@ -35,8 +36,9 @@ pub enum View {
 }
 
 impl View {
-    pub const ALL: [View; 5] = [
+    pub const ALL: [View; 6] = [
         View::Replay,
+        View::Stability,
         View::Recognition,
         View::Clustering,
         View::Baselines,
@@ -46,6 +48,7 @@ impl View {
     pub fn title(self) -> &'static str {
         match self {
             View::Replay => "Replay",
+            View::Stability => "Grasp stability",
             View::Recognition => "Recognition",
             View::Clustering => "Clustering",
             View::Baselines => "Baselines",
@@ -58,7 +61,7 @@ impl View {
             AnalysisKind::Baselines => View::Baselines,
             AnalysisKind::Recognition => View::Recognition,
             AnalysisKind::Clustering => View::Clustering,
-            AnalysisKind::Stability => View::SpeedAccuracy,
+            AnalysisKind::Stability => View::Stability,
         }
     }
 }
@@ -425,12 +428,13 @@ impl WorkbenchApp {
         let active = self.browser.active;
         let ctx = ui.ctx().clone();
         egui::CentralPanel::default_margins().show(ui, |ui| match self.view {
-            View::Baselines | View::Recognition | View::Clustering => {
+            View::Stability | View::Baselines | View::Recognition | View::Clustering => {
                 match self.sessions.get(active) {
                     Some(s) => {
                         egui::ScrollArea::vertical().show(ui, |ui| match self.view {
                             View::Recognition => self.analyses.recognition_ui(ui, s, &ctx),
                             View::Clustering => self.analyses.clustering_ui(ui, s, &ctx),
+                            View::Stability => self.analyses.stability_ui(ui, s, &ctx),
                             _ => self.analyses.baselines_ui(ui, s, &ctx),
                         });
                     }

@@ -193,13 +193,7 @@ impl Replay {
                     sensor_heatmap(ui, sensor, &p, s.pressure_range, cell);
                 });
             }
-            colour_bar(
-                ui,
-                s.pressure_range,
-                "pressure",
-                &unit,
-                cell.y + 20.0,
-            );
+            colour_bar(ui, s.pressure_range, "pressure", &unit, cell.y + 20.0);
             let trace = trace.filter(|t| {
                 t.session == session.meta.name && t.grasp == grasp && t.learner == self.learner
             });

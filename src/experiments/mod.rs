@@ -7,6 +7,7 @@ pub mod recognition;
 pub mod recognition_report;
 pub mod report;
 pub mod stability;
+pub mod stability_report;
 
 use crate::features::sequence::SequenceError;
 use crate::jobs::Cancelled;

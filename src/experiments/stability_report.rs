@@ -1,0 +1,420 @@
+//! The grasp-stability pipeline's report as an analysis result with the first paper's
+//! figures: score against the number of bases (Fig. 5), the β × γ map at the chosen number
+//! of bases, basis images raw and filtered (Fig. 6), confusion maps (Fig. 7), per-label
+//! basis usage (Figs. 8–9), the usage differential (Fig. 10), the coefficient differential
+//! (Fig. 11) and a patch's reconstruction (Fig. 2).
+
+use std::collections::BTreeMap;
+
+use super::report::{AnalysisKind, AnalysisResult, now_unix};
+use super::stability::{GridImage as PatchImage, StabilityReport};
+use crate::figures::{
+    Axis, AxisTitle, BarGroup, ColorScale, ErrorDisplay, ErrorRange, Figure, FigureKind, GridImage,
+    Heatmap, ImageGrid, Orientation, Series, SeriesStyle,
+};
+use crate::svm::eval::CvResult;
+
+fn image(caption: String, img: &PatchImage) -> GridImage {
+    let values = (0..img.rows)
+        .map(|r| {
+            (0..img.cols)
+                .map(|c| {
+                    img.pixels
+                        .get(r * img.cols + c)
+                        .copied()
+                        .flatten()
+                        .unwrap_or(f64::NAN)
+                })
+                .collect()
+        })
+        .collect();
+    GridImage { caption, values }
+}
+
+fn confusion(title: &str, cv: &CvResult, success: &str, failure: &str) -> Figure {
+    let m = cv.confusion.matrix;
+    let share = |t: usize, p: usize| {
+        let total = m[t][0] + m[t][1];
+        if total == 0 {
+            f64::NAN
+        } else {
+            m[t][p] as f64 / total as f64
+        }
+    };
+    let mut heat = Heatmap {
+        x: AxisTitle {
+            title: "predicted".into(),
+            unit: String::new(),
+        },
+        y: AxisTitle {
+            title: "true outcome".into(),
+            unit: String::new(),
+        },
+        columns: vec![success.into(), failure.into()],
+        rows: vec![success.into(), failure.into()],
+        values: vec![
+            vec![share(0, 0), share(0, 1)],
+            vec![share(1, 0), share(1, 1)],
+        ],
+        colors: ColorScale::viridis("share of the true class", ""),
+        annotate: true,
+        marked: Vec::new(),
+    };
+    heat.colors.limits = Some([0.0, 1.0]);
+    Figure::new(title, FigureKind::Heatmap(heat)).subtitle(format!(
+        "weighted success rate {:.1}%, failure recall {:.1}%",
+        100.0 * cv.weighted_success_rate,
+        100.0 * cv.failure_recall
+    ))
+}
+
+fn signed_bars(title: &str, y: &str, name: &str, values: &[f64]) -> Figure {
+    let mut f = Figure::bars(
+        title,
+        AxisTitle {
+            title: "basis".into(),
+            unit: String::new(),
+        },
+        Axis::new(y, ""),
+        (1..=values.len()).map(|i| i.to_string()).collect(),
+        vec![BarGroup::new(name, values.to_vec())],
+    );
+    if let FigureKind::Bars(b) = &mut f.kind {
+        b.sign_colors = true;
+    }
+    f
+}
+
+/// Scores, timings and figures of a grasp-stability run.
+pub fn stability_report(r: &StabilityReport) -> AnalysisResult {
+    let p = &r.parsimonious;
+    let cfg = p.config;
+    let label = format!(
+        "sparse coding + SVM, K = {}, β = {}, γ = {}",
+        cfg.num_bases, cfg.beta, cfg.gamma
+    );
+    let (ok, bad) = (r.success_class.as_str(), r.failure_class.as_str());
+    let mut figures = Vec::new();
+
+    if let Some(g) = &r.grid {
+        let k: Vec<f64> = g
+            .best_per_num_bases
+            .iter()
+            .map(|c| c.config.num_bases as f64)
+            .collect();
+        let wsr: Vec<f64> = g
+            .best_per_num_bases
+            .iter()
+            .map(|c| c.fold_wsr_mean)
+            .collect();
+        let mut s =
+            Series::new("best (β, γ) per number of bases", k, wsr).style(SeriesStyle::LineMarkers);
+        s.error = Some(ErrorRange {
+            display: ErrorDisplay::Bars,
+            lower: g
+                .best_per_num_bases
+                .iter()
+                .map(|c| c.fold_wsr_mean - c.fold_wsr_se)
+                .collect(),
+            upper: g
+                .best_per_num_bases
+                .iter()
+                .map(|c| c.fold_wsr_mean + c.fold_wsr_se)
+                .collect(),
+        });
+        figures.push((
+            "score-vs-bases".to_string(),
+            Figure::chart(
+                "Weighted success rate against the number of bases",
+                Axis::new("number of bases", ""),
+                Axis::new("weighted success rate (fold mean)", ""),
+                vec![s],
+            )
+            .ref_line(
+                Orientation::Vertical,
+                g.parsimonious.config.num_bases as f64,
+                "parsimonious choice",
+            )
+            .ref_line(
+                Orientation::Vertical,
+                g.best.config.num_bases as f64,
+                "best",
+            )
+            .subtitle(format!(
+                "{}; bars: ± 1 standard error over folds",
+                r.selection_cv
+            )),
+        ));
+        let nb = g.best.config.num_bases;
+        let cells: Vec<_> = g
+            .cells
+            .iter()
+            .filter(|c| c.config.num_bases == nb)
+            .collect();
+        let betas = sorted(cells.iter().map(|c| c.config.beta));
+        let gammas = sorted(cells.iter().map(|c| c.config.gamma));
+        let mut values = vec![vec![f64::NAN; gammas.len()]; betas.len()];
+        let mut marked = Vec::new();
+        for c in &cells {
+            let (Some(i), Some(j)) = (
+                betas.iter().position(|&b| b == c.config.beta),
+                gammas.iter().position(|&x| x == c.config.gamma),
+            ) else {
+                continue;
+            };
+            values[i][j] = c.fold_wsr_mean;
+            if c.config == g.best.config {
+                marked.push([i, j]);
+            }
+        }
+        figures.push((
+            "beta-gamma".to_string(),
+            Figure::new(
+                format!("Weighted success rate over β × γ at K = {nb}"),
+                FigureKind::Heatmap(Heatmap {
+                    x: AxisTitle {
+                        title: "γ (coding penalty)".into(),
+                        unit: String::new(),
+                    },
+                    y: AxisTitle {
+                        title: "β (learning penalty)".into(),
+                        unit: String::new(),
+                    },
+                    columns: gammas.iter().map(|v| format!("{v}")).collect(),
+                    rows: betas.iter().map(|v| format!("{v}")).collect(),
+                    values,
+                    colors: ColorScale::viridis("weighted success rate", ""),
+                    annotate: true,
+                    marked,
+                }),
+            )
+            .subtitle("the best cell is marked"),
+        ));
+    }
+
+    let raw: Vec<GridImage> = r
+        .analyses
+        .basis_images
+        .iter()
+        .filter_map(|b| {
+            b.raw
+                .as_ref()
+                .map(|img| image(format!("basis {}", b.basis + 1), img))
+        })
+        .collect();
+    if !raw.is_empty() {
+        figures.push((
+            "bases-raw".to_string(),
+            Figure::new(
+                "Basis images",
+                FigureKind::ImageGrid(ImageGrid {
+                    images: raw,
+                    columns: 10,
+                    colors: ColorScale::diverging("basis weight", ""),
+                }),
+            )
+            .subtitle(format!(
+                "K = {}, drawn in the sensor's layout",
+                cfg.num_bases
+            )),
+        ));
+        let filtered: Vec<GridImage> = r
+            .analyses
+            .basis_images
+            .iter()
+            .filter_map(|b| {
+                b.filtered
+                    .as_ref()
+                    .map(|img| image(format!("basis {}", b.basis + 1), img))
+            })
+            .collect();
+        if !filtered.is_empty() {
+            figures.push((
+                "bases-filtered".to_string(),
+                Figure::new(
+                    "Basis images, filtered",
+                    FigureKind::ImageGrid(ImageGrid {
+                        images: filtered,
+                        columns: 10,
+                        colors: ColorScale::diverging("basis weight", ""),
+                    }),
+                )
+                .subtitle(r.analyses.filter.clone()),
+            ));
+        }
+    }
+
+    figures.push((
+        "confusion-kfold".to_string(),
+        confusion(&format!("Confusion map, {}", r.kfold_cv), &p.kfold, ok, bad),
+    ));
+    figures.push((
+        "confusion-objects".to_string(),
+        confusion(
+            &format!("Confusion map, {} (new objects)", r.objects_cv),
+            &p.objects,
+            ok,
+            bad,
+        ),
+    ));
+
+    let u = &r.analyses.usage;
+    let k = u.grasp_usage_success.len();
+    figures.push((
+        "basis-usage".to_string(),
+        Figure::bars(
+            "Basis usage per label",
+            AxisTitle {
+                title: "basis".into(),
+                unit: String::new(),
+            },
+            Axis::new("share of grasps using the basis", "").including(0.0, 1.0),
+            (1..=k).map(|i| i.to_string()).collect(),
+            vec![
+                BarGroup::new(ok, u.grasp_usage_success.clone()),
+                BarGroup::new(bad, u.grasp_usage_failure.clone()),
+            ],
+        ),
+    ));
+    figures.push((
+        "usage-differential".to_string(),
+        signed_bars(
+            "Basis usage differential",
+            &format!("usage ({ok}) − usage ({bad})"),
+            "differential",
+            &u.usage_differential,
+        ),
+    ));
+    figures.push((
+        "coefficient-differential".to_string(),
+        signed_bars(
+            "Coefficient differential",
+            &format!("mean |coefficient| ({ok}) − ({bad})"),
+            "differential",
+            &u.coefficient_differential,
+        ),
+    ));
+
+    if let Some(rec) = r.analyses.reconstructions.first() {
+        let layout_img = r.analyses.basis_images.first().and_then(|b| b.raw.as_ref());
+        if let Some(shape) = layout_img {
+            // The patch, each basis it uses scaled by its coefficient, and the reconstruction,
+            // all in the sensor's layout (Fig. 2).
+            let as_image = |caption: String, values: &[f64]| {
+                let mut img = PatchImage {
+                    rows: shape.rows,
+                    cols: shape.cols,
+                    pixels: shape.pixels.clone(),
+                };
+                let mut k = 0;
+                for px in img.pixels.iter_mut() {
+                    if px.is_some() {
+                        *px = values.get(k).copied();
+                        k += 1;
+                    }
+                }
+                image(caption, &img)
+            };
+            let mut images = vec![as_image("patch".into(), &rec.patch)];
+            for &(b, coef) in rec.terms.iter().take(8) {
+                if let Some(basis) = r.analyses.basis_images.iter().find(|x| x.basis == b) {
+                    images.push(as_image(
+                        format!("{coef:+.2} × basis {}", b + 1),
+                        &basis.values,
+                    ));
+                }
+            }
+            images.push(as_image(
+                format!("reconstruction (error {:.0}%)", 100.0 * rec.relative_error),
+                &rec.reconstruction,
+            ));
+            figures.push((
+                "reconstruction".to_string(),
+                Figure::new(
+                    "A patch and its reconstruction",
+                    FigureKind::ImageGrid(ImageGrid {
+                        images,
+                        columns: 10,
+                        colors: ColorScale::diverging("standardised pressure", ""),
+                    }),
+                )
+                .subtitle(format!(
+                    "grasp {} ({}), sensor {}; {} bases used",
+                    rec.grasp + 1,
+                    if rec.failure { bad } else { ok },
+                    rec.sensor + 1,
+                    rec.terms.len()
+                )),
+            ));
+        }
+    }
+
+    let train = p.dictionary_secs;
+    let parameters = BTreeMap::from([
+        ("num_bases".to_string(), cfg.num_bases.to_string()),
+        ("beta".to_string(), cfg.beta.to_string()),
+        ("gamma".to_string(), cfg.gamma.to_string()),
+        ("scaling".to_string(), r.scaling.clone()),
+        ("objective convention".to_string(), r.convention.clone()),
+        ("model selection".to_string(), r.selection_cv.clone()),
+    ]);
+    AnalysisResult {
+        kind: AnalysisKind::Stability,
+        label,
+        session: r.session.clone(),
+        parameters,
+        scores: vec![
+            (
+                "weighted success rate (10-fold)".into(),
+                p.kfold.weighted_success_rate,
+            ),
+            ("failure recall (10-fold)".into(), p.kfold.failure_recall),
+            (
+                "weighted success rate (new objects)".into(),
+                p.objects.weighted_success_rate,
+            ),
+            (
+                "failure recall (new objects)".into(),
+                p.objects.failure_recall,
+            ),
+            ("average sparsity".into(), p.sparsity),
+            ("active bases per patch".into(), p.active_bases_per_patch),
+            (
+                "active bases per patch (success)".into(),
+                r.analyses.active_bases_per_patch[1],
+            ),
+            (
+                "active bases per patch (failure)".into(),
+                r.analyses.active_bases_per_patch[2],
+            ),
+            ("dictionary objective F".into(), p.dictionary_objective),
+            (
+                "raw linear SVM WSR (10-fold)".into(),
+                r.baseline.kfold.weighted_success_rate,
+            ),
+            (
+                "raw linear SVM WSR (new objects)".into(),
+                r.baseline.objects.weighted_success_rate,
+            ),
+        ],
+        headline: Some((
+            "weighted success rate (10-fold)".into(),
+            p.kfold.weighted_success_rate,
+        )),
+        train_seconds: train.max(1e-6),
+        predict_seconds_per_sample: None,
+        created: now_unix(),
+        figures,
+    }
+}
+
+fn sorted(values: impl Iterator<Item = f64>) -> Vec<f64> {
+    let mut out: Vec<f64> = Vec::new();
+    for v in values {
+        if !out.contains(&v) {
+            out.push(v);
+        }
+    }
+    out.sort_by(f64::total_cmp);
+    out
+}
