@@ -1,0 +1,248 @@
+//! The basis step by the Lagrange dual (Lee et al. 2007, Sec. 3).
+//!
+//! With the codes `A` (N × K) fixed, `min_D ||X − A D||²_F` subject to `||d_j||² ≤ c` has
+//! the Lagrangian dual, over one multiplier λ_j ≥ 0 per basis,
+//!
+//! ```text
+//! min_λ≥0 φ(λ) = tr(Pᵀ M(λ)⁻¹ P) + c Σ_j λ_j,   M(λ) = AᵀA + diag(λ),  P = AᵀX
+//! ∂φ/∂λ_j = c − ||d_j||²,   ∂²φ/∂λ_i∂λ_j = 2 (D Dᵀ)_ij (M⁻¹)_ij,   D = M⁻¹ P
+//! ```
+//!
+//! (`D Dᵀ = M⁻¹ P Pᵀ M⁻¹`), after which the dictionary is the closed form `D = M⁻¹ P`.
+//! We minimise φ by projected Newton (Bertsekas 1982: Newton on the multipliers that are
+//! positive or have a negative gradient, the others held at 0; Armijo backtracking along
+//! the projected arc), warm-started from the previous multipliers. It needs only the
+//! K × K and K × n sufficient statistics `AᵀA`, `AᵀX`, so its cost does not depend on N.
+//! Bases whose codes are all zero have no say in the objective; they are excluded here
+//! (the learner re-seeds them).
+
+use ndarray::{Array2, ArrayView2};
+
+use super::dense::{self, chol_solve, chol_solve_rows, cholesky};
+
+const MAX_NEWTON: usize = 50;
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DualStats {
+    pub newton_steps: usize,
+    pub converged: bool,
+    /// Largest projected-gradient entry at the end (≈ violation of ||d_j||² ≤ c or of
+    /// complementary slackness).
+    pub kkt_violation: f64,
+}
+
+struct DualWork {
+    k: usize,
+    m: Vec<f64>,
+    l: Vec<f64>,
+    minv: Vec<f64>,
+    d: Vec<f64>,
+}
+
+impl DualWork {
+    /// Factor M(λ) and compute D = M⁻¹ P; returns φ(λ) or None if M is not positive definite.
+    fn eval(&mut self, ata: &[f64], p: &[f64], n: usize, c: f64, lambda: &[f64]) -> Option<f64> {
+        let k = self.k;
+        self.m.copy_from_slice(ata);
+        for j in 0..k {
+            self.m[j * k + j] += lambda[j];
+        }
+        cholesky(k, &self.m, &mut self.l).ok()?;
+        // D = M⁻¹ P (P is K × n row-major), all columns at once; φ adds tr(Pᵀ D).
+        self.d.copy_from_slice(p);
+        chol_solve_rows(k, &self.l, &mut self.d, n);
+        let phi = c * lambda.iter().sum::<f64>() + dense::dot(p, &self.d);
+        Some(phi)
+    }
+
+    fn inverse(&mut self) {
+        let k = self.k;
+        self.minv.iter_mut().for_each(|v| *v = 0.0);
+        for j in 0..k {
+            self.minv[j * k + j] = 1.0;
+        }
+        chol_solve_rows(k, &self.l, &mut self.minv, k);
+    }
+}
+
+/// Solve the basis step. `ata` = AᵀA (K × K), `atx` = AᵀX (K × n), `c` the squared-norm
+/// bound, `lambda` the multipliers (in/out: warm start and result). Returns the new
+/// dictionary (K × n) and statistics. Rows `j` with `ata[j][j] == 0` (unused bases) are
+/// returned as zero rows with λ_j = 0; the caller decides what to do with them.
+pub fn basis_step_dual(
+    ata: ArrayView2<f64>,
+    atx: ArrayView2<f64>,
+    c: f64,
+    lambda: &mut [f64],
+) -> (Array2<f64>, DualStats) {
+    let (k_all, n) = atx.dim();
+    assert_eq!(ata.dim(), (k_all, k_all));
+    assert_eq!(lambda.len(), k_all);
+    let used: Vec<usize> = (0..k_all).filter(|&j| ata[[j, j]] > 0.0).collect();
+    let k = used.len();
+    let mut out = Array2::<f64>::zeros((k_all, n));
+    for j in 0..k_all {
+        if ata[[j, j]] <= 0.0 {
+            lambda[j] = 0.0;
+        }
+    }
+    if k == 0 {
+        return (
+            out,
+            DualStats {
+                newton_steps: 0,
+                converged: true,
+                kkt_violation: 0.0,
+            },
+        );
+    }
+    let mut ata_u = vec![0.0; k * k];
+    let mut p = vec![0.0; k * n];
+    let mut lam = vec![0.0; k];
+    for (a, &i) in used.iter().enumerate() {
+        for (b, &j) in used.iter().enumerate() {
+            ata_u[a * k + b] = ata[[i, j]];
+        }
+        for col in 0..n {
+            p[a * n + col] = atx[[i, col]];
+        }
+        lam[a] = lambda[i].max(0.0);
+    }
+    let mut w = DualWork {
+        k,
+        m: vec![0.0; k * k],
+        l: vec![0.0; k * k],
+        minv: vec![0.0; k * k],
+        d: vec![0.0; k * n],
+    };
+    // A singular AᵀA at λ = 0 (e.g. two bases always used together) makes φ infinite
+    // there; start from a small positive λ in that case.
+    let mut phi = match w.eval(&ata_u, &p, n, c, &lam) {
+        Some(v) => v,
+        None => {
+            let mean_diag = (0..k).map(|j| ata_u[j * k + j]).sum::<f64>() / k as f64;
+            lam.iter_mut().for_each(|v| *v = v.max(1e-6 * mean_diag));
+            w.eval(&ata_u, &p, n, c, &lam).unwrap_or(f64::INFINITY)
+        }
+    };
+    let tol = 1e-10 * c;
+    let eps0 = 1e-3 * (0..k).map(|j| ata_u[j * k + j]).sum::<f64>() / k as f64;
+    let mut grad = vec![0.0; k];
+    let mut hess = vec![0.0; k * k];
+    let mut hl = vec![0.0; k * k];
+    let mut dir = vec![0.0; k];
+    let mut trial = vec![0.0; k];
+    let mut free: Vec<usize> = Vec::with_capacity(k);
+    let mut stats = DualStats::default();
+    for _ in 0..MAX_NEWTON {
+        // Gradient c − ||d_j||² and the projected-gradient test.
+        let mut viol = 0.0f64;
+        for j in 0..k {
+            let nrm: f64 = w.d[j * n..(j + 1) * n].iter().map(|v| v * v).sum();
+            grad[j] = c - nrm;
+            let pg = if lam[j] > 0.0 {
+                grad[j].abs()
+            } else {
+                (-grad[j]).max(0.0)
+            };
+            viol = viol.max(pg);
+        }
+        stats.kkt_violation = viol;
+        if viol <= tol {
+            stats.converged = true;
+            break;
+        }
+        stats.newton_steps += 1;
+        // Free set (Bertsekas' ε-active rule): a multiplier within ε of 0 whose gradient
+        // pushes it down is held at its bound; ε = min(ε0, ||λ − [λ − ∇φ]₊||).
+        let wk: f64 = (0..k)
+            .map(|j| {
+                let r = lam[j] - (lam[j] - grad[j]).max(0.0);
+                r * r
+            })
+            .sum::<f64>()
+            .sqrt();
+        let eps = wk.min(eps0);
+        free.clear();
+        for j in 0..k {
+            if !(lam[j] <= eps && grad[j] > 0.0) {
+                free.push(j);
+            }
+        }
+        w.inverse();
+        // Hessian on the free set: 2 (D Dᵀ)_ij (M⁻¹)_ij.
+        let f = free.len();
+        for (a, &i) in free.iter().enumerate() {
+            for (b, &j) in free.iter().enumerate().take(a + 1) {
+                let ddt: f64 = (0..n).map(|col| w.d[i * n + col] * w.d[j * n + col]).sum();
+                let h = 2.0 * ddt * w.minv[i * k + j];
+                hess[a * f + b] = h;
+                hess[b * f + a] = h;
+            }
+        }
+        let mut rhs: Vec<f64> = free.iter().map(|&j| grad[j]).collect();
+        if cholesky(f, &hess[..f * f], &mut hl[..f * f]).is_err() {
+            // Positive semidefinite only: add a ridge proportional to its diagonal.
+            let md = (0..f).map(|a| hess[a * f + a]).fold(0.0f64, f64::max);
+            for a in 0..f {
+                hess[a * f + a] += 1e-10 * md + 1e-300;
+            }
+            if cholesky(f, &hess[..f * f], &mut hl[..f * f]).is_err() {
+                break;
+            }
+        }
+        let mut sol = vec![0.0; f];
+        chol_solve(f, f, &hl, &rhs, &mut sol);
+        // Newton decrement on the free set: below rounding of φ, λ is optimal to
+        // machine precision (the gradient test above can sit at its rounding floor).
+        let dec: f64 = (0..f).map(|a| rhs[a] * sol[a]).sum();
+        if 0.5 * dec <= 1e-14 * (1.0 + phi.abs()) {
+            stats.converged = true;
+            break;
+        }
+        dir.iter_mut().for_each(|v| *v = 0.0);
+        for (a, &j) in free.iter().enumerate() {
+            dir[j] = -sol[a];
+        }
+        rhs.clear();
+        // Armijo along the projected arc λ(t) = max(0, λ + t dir).
+        let mut t = 1.0;
+        let mut accepted = false;
+        for _ in 0..40 {
+            let mut pred = 0.0;
+            for j in 0..k {
+                trial[j] = (lam[j] + t * dir[j]).max(0.0);
+                pred += grad[j] * (trial[j] - lam[j]);
+            }
+            if let Some(ft) = w.eval(&ata_u, &p, n, c, &trial)
+                && ft < phi
+                && ft <= phi + 1e-4 * pred.min(0.0)
+            {
+                lam.copy_from_slice(&trial);
+                phi = ft;
+                accepted = true;
+                break;
+            }
+            t *= 0.5;
+        }
+        if !accepted {
+            // At the optimum to rounding: restore D for the current λ and stop.
+            if let Some(v) = w.eval(&ata_u, &p, n, c, &lam) {
+                phi = v;
+            }
+            break;
+        }
+    }
+    let _ = phi;
+    for (a, &i) in used.iter().enumerate() {
+        lambda[i] = lam[a];
+        let row = &w.d[a * n..(a + 1) * n];
+        // Enforce the bound exactly (the dual leaves it satisfied to ~1e-10 relative).
+        let nrm2: f64 = row.iter().map(|v| v * v).sum();
+        let scale = if nrm2 > c { (c / nrm2).sqrt() } else { 1.0 };
+        for col in 0..n {
+            out[[i, col]] = row[col] * scale;
+        }
+    }
+    (out, stats)
+}
