@@ -1,1 +1,30 @@
+//! Support vector machines and their evaluation: the linear SVM (dual coordinate descent
+//! and primal Newton), the RBF-kernel SVM (SMO), cross-validation folds and the paper's
+//! scores.
+
+pub mod eval;
 pub mod kernel_svm;
+pub mod linear;
+
+pub use eval::{
+    Confusion, CvResult, FoldScore, Folds, cross_validate, gather, group_k_fold, mean_se,
+    stratified_k_fold,
+};
+pub use linear::{ClassWeight, LinearSvm, LinearSvmParams, Loss, Solver};
+
+/// Errors of the SVM engine: bad parameters or data, never a panic.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SvmError {
+    #[error("invalid parameter: {0}")]
+    Param(String),
+    #[error("invalid data: {0}")]
+    Data(String),
+    #[error("cancelled")]
+    Cancelled,
+}
+
+impl From<crate::jobs::Cancelled> for SvmError {
+    fn from(_: crate::jobs::Cancelled) -> Self {
+        SvmError::Cancelled
+    }
+}
