@@ -16,6 +16,7 @@ pub mod learners;
 pub mod linalg;
 pub mod rng;
 pub mod session;
+pub mod sparse;
 pub mod special;
 pub mod svm;
 

@@ -6,6 +6,7 @@ pub mod clustering;
 pub mod recognition;
 pub mod recognition_report;
 pub mod report;
+pub mod stability;
 
 use crate::features::sequence::SequenceError;
 use crate::jobs::Cancelled;
