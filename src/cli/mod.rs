@@ -7,6 +7,7 @@ pub mod paper_figures;
 pub mod recognition;
 pub mod session;
 pub mod simulate;
+pub mod stability;
 
 use std::path::PathBuf;
 
@@ -52,6 +53,11 @@ pub enum Command {
     Clustering(recognition::ClusteringArgs),
     /// Time per-observation prediction/training and the Table II protocol.
     BenchRecognition(recognition::BenchArgs),
+    /// Grasp stability by sparse coding and a linear SVM (the first paper): grid search,
+    /// 10-fold and leave-objects-out scores, the raw-value baseline and the analyses.
+    Stability(stability::StabilityArgs),
+    /// Time the grasp-stability pipeline on BTS3 palm-down (dictionary, coding, CV, grid).
+    BenchStability(stability::BenchStabilityArgs),
 }
 
 /// Run a subcommand.
@@ -67,5 +73,7 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Recognition(a) => recognition::recognition(a),
         Command::Clustering(a) => recognition::clustering(a),
         Command::BenchRecognition(a) => recognition::bench(a),
+        Command::Stability(a) => stability::run(a),
+        Command::BenchStability(a) => stability::run_bench(a),
     }
 }

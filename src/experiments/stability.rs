@@ -114,7 +114,11 @@ impl StabilityData {
             Some(name) => session.label_set(name).ok_or_else(|| {
                 StabilityError::Param(format!(
                     "no label set {name:?}; the session has {:?}",
-                    session.label_sets.iter().map(|l| &l.name).collect::<Vec<_>>()
+                    session
+                        .label_sets
+                        .iter()
+                        .map(|l| &l.name)
+                        .collect::<Vec<_>>()
                 ))
             })?,
             None => session
@@ -122,7 +126,9 @@ impl StabilityData {
                 .iter()
                 .position(|l| {
                     let n = l.name.to_lowercase();
-                    ["outcome", "stab", "slip", "success", "fail"].iter().any(|k| n.contains(k))
+                    ["outcome", "stab", "slip", "success", "fail"]
+                        .iter()
+                        .any(|k| n.contains(k))
                 })
                 .unwrap_or(0),
         };
@@ -139,7 +145,9 @@ impl StabilityData {
                 .iter()
                 .position(|c| {
                     let c = c.to_lowercase();
-                    ["fail", "slip", "drop", "unstable", "lost"].iter().any(|k| c.contains(k))
+                    ["fail", "slip", "drop", "unstable", "lost"]
+                        .iter()
+                        .any(|k| c.contains(k))
                 })
                 .or((ls.classes.len() == 2).then_some(1))
                 .ok_or_else(|| {
@@ -160,7 +168,12 @@ impl StabilityData {
         let objects = session
             .grasps
             .iter()
-            .map(|g| object_names.iter().position(|o| *o == g.object).unwrap_or(0))
+            .map(|g| {
+                object_names
+                    .iter()
+                    .position(|o| *o == g.object)
+                    .unwrap_or(0)
+            })
             .collect();
         let patches = KeyFramePatches::from_session(session, opts.scaling)?;
         let success_name = if ls.classes.len() == 2 {
@@ -203,7 +216,11 @@ impl StabilityData {
             PatchScaling::ZScorePerTaxel => Some(Standardizer::fit(pressures.view())),
             PatchScaling::None => None,
         };
-        let patches = KeyFramePatches { pressures, scaler, ..self.patches.clone() };
+        let patches = KeyFramePatches {
+            pressures,
+            scaler,
+            ..self.patches.clone()
+        };
         let data = StabilityData {
             x: patches.patches(),
             patches,
@@ -291,7 +308,10 @@ impl Default for PipelineSettings {
     fn default() -> Self {
         PipelineSettings {
             dictionary: DictionaryParams::default(),
-            svm: LinearSvmParams { loss: crate::svm::Loss::SquaredHinge, ..Default::default() },
+            svm: LinearSvmParams {
+                loss: crate::svm::Loss::SquaredHinge,
+                ..Default::default()
+            },
             cv_seed: 0,
         }
     }
@@ -307,7 +327,11 @@ pub struct Config {
 
 impl std::fmt::Display for Config {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "num_bases {}, beta {}, gamma {}", self.num_bases, self.beta, self.gamma)
+        write!(
+            f,
+            "num_bases {}, beta {}, gamma {}",
+            self.num_bases, self.beta, self.gamma
+        )
     }
 }
 
@@ -377,9 +401,20 @@ impl GridSpec {
     /// taxel (which is 1 for z-scored data).
     pub fn default_for(data: &StabilityData) -> Self {
         let energy = data.x.iter().map(|v| v * v).sum::<f64>() / data.x.len().max(1) as f64;
-        let scale = if data.patches.scaling == PatchScaling::None { energy.max(1e-12) } else { 1.0 };
-        let log = [0.25, 0.5, 1.0, 2.0, 4.0].iter().map(|v| v * scale).collect::<Vec<_>>();
-        GridSpec { num_bases: (2..=60).collect(), beta: log.clone(), gamma: log }
+        let scale = if data.patches.scaling == PatchScaling::None {
+            energy.max(1e-12)
+        } else {
+            1.0
+        };
+        let log = [0.25, 0.5, 1.0, 2.0, 4.0]
+            .iter()
+            .map(|v| v * scale)
+            .collect::<Vec<_>>();
+        GridSpec {
+            num_bases: (2..=60).collect(),
+            beta: log.clone(),
+            gamma: log,
+        }
     }
 
     /// The benchmark grid: num_bases 5..=60 step 5 × beta, gamma ∈ {0.5, 1, 2} (108 cells).
@@ -404,7 +439,9 @@ impl GridSpec {
         }
         for (name, v) in [("beta", &self.beta), ("gamma", &self.gamma)] {
             if let Some(b) = v.iter().find(|b| !(**b > 0.0 && b.is_finite())) {
-                return Err(StabilityError::Param(format!("{name} must be finite and > 0, got {b}")));
+                return Err(StabilityError::Param(format!(
+                    "{name} must be finite and > 0, got {b}"
+                )));
             }
         }
         Ok(())
@@ -461,7 +498,11 @@ pub fn grid_search(
         .par_iter()
         .map(|&(k, beta)| {
             progress.checkpoint()?;
-            let params = DictionaryParams { num_bases: k, beta, ..settings.dictionary.clone() };
+            let params = DictionaryParams {
+                num_bases: k,
+                beta,
+                ..settings.dictionary.clone()
+            };
             let fit = params.fit(data.x.view(), progress)?;
             let mut cells = Vec::with_capacity(spec.gamma.len());
             for &gamma in &spec.gamma {
@@ -470,7 +511,11 @@ pub fn grid_search(
                     score_codes(data, &fit.dictionary, gamma, &folds, &settings.svm)?;
                 let (sparsity, active) = sparsity_of(codes.view());
                 cells.push(CellResult {
-                    config: Config { num_bases: k, beta, gamma },
+                    config: Config {
+                        num_bases: k,
+                        beta,
+                        gamma,
+                    },
                     weighted_success_rate: cvr.weighted_success_rate,
                     failure_recall: cvr.failure_recall,
                     fold_wsr_mean: cvr.fold_wsr_mean,
@@ -534,12 +579,13 @@ pub fn choose(
     let per_k: Vec<CellResult> = ks
         .iter()
         .filter_map(|&k| {
-            cells.iter().filter(|c| c.config.num_bases == k).fold(None, |acc: Option<&CellResult>, c| {
-                match acc {
+            cells.iter().filter(|c| c.config.num_bases == k).fold(
+                None,
+                |acc: Option<&CellResult>, c| match acc {
                     Some(a) if !better(c, a) => Some(a),
                     _ => Some(c),
-                }
-            })
+                },
+            )
         })
         .cloned()
         .collect();
@@ -623,7 +669,10 @@ impl StabilityModel {
         let mut img = vec![0.0; expected];
         match &self.scaler {
             Some(s) => s.transform_into(pressures, &mut img),
-            None => img.iter_mut().zip(pressures.iter()).for_each(|(o, v)| *o = *v),
+            None => img
+                .iter_mut()
+                .zip(pressures.iter())
+                .for_each(|(o, v)| *o = *v),
         }
         let patches = ArrayView2::from_shape((self.sensors, self.dim), &img)
             .map_err(|e| StabilityError::Data(e.to_string()))?;
@@ -755,7 +804,9 @@ fn taxel_coords(layout: &Layout) -> Vec<(f64, f64)> {
                 (c as f64, r as f64)
             })
             .collect(),
-        Layout::Points { positions, radius, .. } => {
+        Layout::Points {
+            positions, radius, ..
+        } => {
             let d = (2.0 * radius).max(1e-9);
             positions.iter().map(|p| (p.x / d, p.y / d)).collect()
         }
@@ -877,7 +928,14 @@ pub fn reconstruct(
     let row = grasp * data.sensor_count() + sensor;
     let patch = data.x.row(row);
     let code = dict.encode(data.x.slice(ndarray::s![row..row + 1, ..]), gamma)?;
-    Ok(reconstruction_of(data, dict, grasp, sensor, patch, code.row(0)))
+    Ok(reconstruction_of(
+        data,
+        dict,
+        grasp,
+        sensor,
+        patch,
+        code.row(0),
+    ))
 }
 
 fn reconstruction_of(
@@ -888,8 +946,12 @@ fn reconstruction_of(
     patch: ArrayView1<f64>,
     code: ArrayView1<f64>,
 ) -> Reconstruction {
-    let mut terms: Vec<(usize, f64)> =
-        code.iter().enumerate().filter(|(_, v)| **v != 0.0).map(|(j, v)| (j, *v)).collect();
+    let mut terms: Vec<(usize, f64)> = code
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| **v != 0.0)
+        .map(|(j, v)| (j, *v))
+        .collect();
     terms.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()).then(a.0.cmp(&b.0)));
     let rec = dict.reconstruct(code);
     let err = (&patch - &rec).mapv(|v| v * v).sum().sqrt();
@@ -954,15 +1016,29 @@ pub fn analyse(
         }
     }
     let div = |v: &[f64], n: f64| -> Vec<f64> {
-        v.iter().map(|x| if n > 0.0 { x / n } else { 0.0 }).collect()
-    };
-    let patches_of = [grasps_of[0] as f64 * s as f64, grasps_of[1] as f64 * s as f64];
-    let mean_abs = |l: usize| -> Vec<f64> {
-        (0..k)
-            .map(|j| if patch_use[l][j] > 0.0 { coef_sum[l][j] / patch_use[l][j] } else { 0.0 })
+        v.iter()
+            .map(|x| if n > 0.0 { x / n } else { 0.0 })
             .collect()
     };
-    let gu = [div(&grasp_use[0], grasps_of[0] as f64), div(&grasp_use[1], grasps_of[1] as f64)];
+    let patches_of = [
+        grasps_of[0] as f64 * s as f64,
+        grasps_of[1] as f64 * s as f64,
+    ];
+    let mean_abs = |l: usize| -> Vec<f64> {
+        (0..k)
+            .map(|j| {
+                if patch_use[l][j] > 0.0 {
+                    coef_sum[l][j] / patch_use[l][j]
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    };
+    let gu = [
+        div(&grasp_use[0], grasps_of[0] as f64),
+        div(&grasp_use[1], grasps_of[1] as f64),
+    ];
     let ma = [mean_abs(0), mean_abs(1)];
     let diff = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x - y).collect::<Vec<_>>();
     let usage = BasisUsage {
@@ -1046,7 +1122,11 @@ impl Default for StabilityOptions {
             kfold: CvScheme::KFold { k: 10 },
             objects: CvScheme::LeaveObjectsOut { folds: None },
             grid: None,
-            single: Config { num_bases: 29, beta: 1.0, gamma: 1.0 },
+            single: Config {
+                num_bases: 29,
+                beta: 1.0,
+                gamma: 1.0,
+            },
         }
     }
 }
@@ -1106,12 +1186,27 @@ pub fn run(
         ),
         None => (opts.single, None, opts.single, None),
     };
-    let (mut best, bd) =
-        evaluate_config(data, best_cfg, s, opts.kfold, opts.objects, best_dict, progress)?;
+    let (mut best, bd) = evaluate_config(
+        data,
+        best_cfg,
+        s,
+        opts.kfold,
+        opts.objects,
+        best_dict,
+        progress,
+    )?;
     let (parsimonious, pd) = if pars_cfg == best_cfg {
         (best.clone(), bd.clone())
     } else {
-        evaluate_config(data, pars_cfg, s, opts.kfold, opts.objects, pars_dict, progress)?
+        evaluate_config(
+            data,
+            pars_cfg,
+            s,
+            opts.kfold,
+            opts.objects,
+            pars_dict,
+            progress,
+        )?
     };
     // Keep the learning statistics of the grid's cells where they exist.
     if let Some(g) = &grid {

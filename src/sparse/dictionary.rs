@@ -442,7 +442,12 @@ fn sufficient_statistics(codes: ArrayView2<f64>, x: ArrayView2<f64>) -> (Array2<
     let mut idx: Vec<(usize, f64)> = Vec::with_capacity(k);
     for (a, xr) in codes.rows().into_iter().zip(x.rows()) {
         idx.clear();
-        idx.extend(a.iter().enumerate().filter(|(_, v)| **v != 0.0).map(|(j, v)| (j, *v)));
+        idx.extend(
+            a.iter()
+                .enumerate()
+                .filter(|(_, v)| **v != 0.0)
+                .map(|(j, v)| (j, *v)),
+        );
         for &(p, ap) in &idx {
             for &(q, aq) in &idx {
                 ata[[p, q]] += ap * aq;

@@ -484,7 +484,11 @@ fn primal_newton(
                 let v = o[i] < 1.0;
                 if v != in_h[i] {
                     in_h[i] = v;
-                    let s = if v { 2.0 * p.costs[i] } else { -2.0 * p.costs[i] };
+                    let s = if v {
+                        2.0 * p.costs[i]
+                    } else {
+                        -2.0 * p.costs[i]
+                    };
                     let x = p.row(i);
                     for a in 0..d {
                         let f = s * x[a];

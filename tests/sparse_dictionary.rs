@@ -1,0 +1,326 @@
+//! Dictionary learning: the objective decreases monotonically, the norm bound holds, the
+//! Lagrange dual basis step equals a projected-gradient reference, the epsilon-L1 Newton
+//! step is optimal, seeds reproduce, bad parameters are errors and cancel works.
+
+use ndarray::{Array2, ArrayView2};
+use tactile_workbench::jobs::Progress;
+use tactile_workbench::rng::Rng;
+use tactile_workbench::sparse::{
+    CodePenalty, DictInit, Dictionary, DictionaryParams, EpsL1Newton, SparseError, basis_step_dual,
+    eps_l1_objective, l1_optimality_violation, objective,
+};
+
+/// Patches that are sparse combinations of a hidden dictionary plus noise.
+fn synthetic(n: usize, dim: usize, k_true: usize, seed: u64) -> Array2<f64> {
+    let mut rng = Rng::new(seed);
+    let atoms: Vec<Vec<f64>> = (0..k_true)
+        .map(|_| (0..dim).map(|_| rng.normal()).collect())
+        .collect();
+    let mut x = Array2::<f64>::zeros((n, dim));
+    for i in 0..n {
+        for _ in 0..3 {
+            let j = rng.below(k_true);
+            let w = 2.0 * rng.normal();
+            for t in 0..dim {
+                x[[i, t]] += w * atoms[j][t];
+            }
+        }
+        for t in 0..dim {
+            x[[i, t]] += 0.1 * rng.normal();
+        }
+    }
+    x
+}
+
+fn check_norms(d: &Dictionary, c: f64) {
+    for row in d.atoms.rows() {
+        let n2 = row.dot(&row);
+        assert!(n2 <= c * (1.0 + 1e-9), "basis norm² {n2} exceeds {c}");
+    }
+}
+
+#[test]
+fn learning_decreases_the_objective_monotonically_and_respects_the_norm_bound() {
+    let x = synthetic(400, 12, 8, 1);
+    for init in [DictInit::Svd, DictInit::Patches, DictInit::Random] {
+        for penalty in [CodePenalty::L1, CodePenalty::EpsilonL1 { epsilon: 0.01 }] {
+            for (k, beta, c) in [(6, 0.5, 1.0), (16, 1.0, 1.0), (10, 0.2, 2.0)] {
+                let p = DictionaryParams {
+                    num_bases: k,
+                    beta,
+                    penalty,
+                    norm_bound: c,
+                    init,
+                    max_iter: 25,
+                    tol: 0.0,
+                    ..Default::default()
+                };
+                let fit = p.fit(x.view(), &Progress::new()).unwrap();
+                check_norms(&fit.dictionary, c);
+                // The recorded sequence F(codes), F(basis), F(codes), … never increases.
+                let mut last = f64::INFINITY;
+                for h in &fit.history {
+                    let tol = 1e-9 * (1.0 + last.abs());
+                    assert!(
+                        h.objective_after_codes <= last + tol,
+                        "{init:?} {penalty:?} K={k}: code step raised F {last} → {}",
+                        h.objective_after_codes
+                    );
+                    assert!(
+                        h.objective_after_basis <= h.objective_after_codes + tol,
+                        "{init:?} {penalty:?} K={k}: basis step raised F"
+                    );
+                    last = h.objective_after_basis;
+                }
+                // The reported F is the L1 objective at the final codes.
+                let f = objective(
+                    x.view(),
+                    fit.dictionary.atoms.view(),
+                    fit.codes.view(),
+                    CodePenalty::L1,
+                    beta,
+                );
+                assert!((f - fit.objective).abs() <= 1e-9 * f.abs());
+                // Learning helps: lower than the all-zero code.
+                let zero = 0.5 * x.iter().map(|v| v * v).sum::<f64>() / x.nrows() as f64;
+                assert!(fit.objective < 0.8 * zero);
+            }
+        }
+    }
+}
+
+#[test]
+fn final_codes_are_exact_l1_solutions() {
+    let x = synthetic(200, 10, 6, 2);
+    let p = DictionaryParams {
+        num_bases: 14,
+        beta: 0.3,
+        ..Default::default()
+    };
+    let fit = p.fit(x.view(), &Progress::new()).unwrap();
+    let d = &fit.dictionary.atoms;
+    let g = d.dot(&d.t());
+    let g = g.as_slice().unwrap();
+    let codes = fit.dictionary.encode(x.view(), 0.7).unwrap();
+    for (i, row) in x.rows().into_iter().enumerate() {
+        let c = d.dot(&row);
+        let a = codes.row(i).to_vec();
+        assert!(l1_optimality_violation(g, c.as_slice().unwrap(), 0.7, &a) <= 1e-8);
+        let a2 = fit.codes.row(i).to_vec();
+        assert!(l1_optimality_violation(g, c.as_slice().unwrap(), 0.3, &a2) <= 1e-8);
+    }
+}
+
+/// Projected gradient on ||X − A D||² subject to ||d_j||² ≤ c (rows projected on the ball).
+fn projected_gradient(x: ArrayView2<f64>, a: ArrayView2<f64>, c: f64) -> Array2<f64> {
+    let ata = a.t().dot(&a);
+    let atx = a.t().dot(&x);
+    // Step 1/L with L = 2 λ_max(AᵀA) ≤ 2 trace.
+    let step = 1.0 / (2.0 * ata.diag().sum());
+    let mut d = Array2::<f64>::zeros(atx.raw_dim());
+    for _ in 0..400_000 {
+        let grad = (ata.dot(&d) - &atx) * 2.0;
+        let mut next = &d - &(grad * step);
+        for mut row in next.rows_mut() {
+            let n2 = row.dot(&row);
+            if n2 > c {
+                row.mapv_inplace(|v| v * (c / n2).sqrt());
+            }
+        }
+        let change = (&next - &d).iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        d = next;
+        if change < 1e-14 {
+            break;
+        }
+    }
+    d
+}
+
+#[test]
+fn lagrange_dual_basis_step_matches_projected_gradient() {
+    let mut rng = Rng::new(5);
+    let (n, dim, k) = (60, 5, 4);
+    let x = Array2::from_shape_fn((n, dim), |_| rng.normal());
+    // Codes of very different scales: some constraints active, some not.
+    let scales = [0.2, 1.0, 5.0, 0.05];
+    let a = Array2::from_shape_fn((n, k), |(_, j)| {
+        if rng.bernoulli(0.5) {
+            scales[j] * rng.normal()
+        } else {
+            0.0
+        }
+    });
+    for c in [1.0, 0.3, 10.0] {
+        let mut lambda = vec![0.0; k];
+        let (d, stats) =
+            basis_step_dual(a.t().dot(&a).view(), a.t().dot(&x).view(), c, &mut lambda);
+        assert!(stats.converged, "{stats:?}");
+        let reference = projected_gradient(x.view(), a.view(), c);
+        let diff = (&d - &reference).iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(
+            diff < 1e-6,
+            "c = {c}: dual vs projected gradient differ by {diff}"
+        );
+        // Complementary slackness: λ_j > 0 only where the bound is active.
+        for j in 0..k {
+            let n2 = d.row(j).dot(&d.row(j));
+            assert!(n2 <= c * (1.0 + 1e-9));
+            if lambda[j] > 1e-8 {
+                assert!(
+                    (n2 - c).abs() < 1e-6 * c,
+                    "λ_{j} = {} but ||d||² = {n2}",
+                    lambda[j]
+                );
+            }
+        }
+        // Warm-starting from the optimal multipliers converges at once to the same D.
+        let (d2, _) = basis_step_dual(a.t().dot(&a).view(), a.t().dot(&x).view(), c, &mut lambda);
+        assert!((&d2 - &d).iter().all(|v| v.abs() < 1e-9));
+    }
+}
+
+#[test]
+fn epsilon_l1_newton_reaches_a_stationary_point() {
+    let mut rng = Rng::new(11);
+    let (k, n) = (20, 12);
+    let d = Array2::from_shape_fn((k, n), |_| rng.normal());
+    let g = d.dot(&d.t());
+    let g = g.as_slice().unwrap();
+    let mut nw = EpsL1Newton::new(k);
+    for trial in 0..20 {
+        let x: Vec<f64> = (0..n).map(|_| rng.normal()).collect();
+        let c: Vec<f64> = (0..k)
+            .map(|j| (0..n).map(|t| d[[j, t]] * x[t]).sum())
+            .collect();
+        let (beta, eps) = (0.5 + trial as f64 * 0.1, 0.01);
+        let mut a = vec![0.0; k];
+        let (_, ok) = nw.solve(g, &c, beta, eps, &mut a);
+        assert!(ok);
+        // Gradient G a − c + β a / sqrt(a² + ε) vanishes.
+        for j in 0..k {
+            let grad: f64 = (0..k).map(|i| g[j * k + i] * a[i]).sum::<f64>() - c[j]
+                + beta * a[j] / (a[j] * a[j] + eps).sqrt();
+            assert!(grad.abs() < 1e-7, "trial {trial}: gradient {grad}");
+        }
+        // And it is a minimum: random perturbations only raise the objective.
+        let f = eps_l1_objective(g, &c, beta, eps, &a);
+        for _ in 0..10 {
+            let b: Vec<f64> = a.iter().map(|v| v + 1e-3 * rng.normal()).collect();
+            assert!(eps_l1_objective(g, &c, beta, eps, &b) >= f);
+        }
+    }
+}
+
+#[test]
+fn same_seed_same_dictionary_and_thread_count_does_not_matter() {
+    let x = synthetic(300, 10, 6, 3);
+    let p = DictionaryParams {
+        num_bases: 12,
+        init: DictInit::Random,
+        seed: 9,
+        ..Default::default()
+    };
+    let a = p.fit(x.view(), &Progress::new()).unwrap();
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let b = one.install(|| p.fit(x.view(), &Progress::new()).unwrap());
+    assert_eq!(a.dictionary, b.dictionary);
+    assert_eq!(a.objective, b.objective);
+    assert_eq!(a.codes, b.codes);
+    let other = DictionaryParams {
+        seed: 10,
+        ..p.clone()
+    }
+    .fit(x.view(), &Progress::new())
+    .unwrap();
+    assert_ne!(a.dictionary, other.dictionary);
+}
+
+#[test]
+fn bad_parameters_and_data_are_errors_and_cancel_stops() {
+    let x = synthetic(50, 6, 4, 4);
+    let bad = [
+        DictionaryParams {
+            num_bases: 0,
+            ..Default::default()
+        },
+        DictionaryParams {
+            beta: -1.0,
+            ..Default::default()
+        },
+        DictionaryParams {
+            beta: f64::NAN,
+            ..Default::default()
+        },
+        DictionaryParams {
+            norm_bound: 0.0,
+            ..Default::default()
+        },
+        DictionaryParams {
+            max_iter: 0,
+            ..Default::default()
+        },
+        DictionaryParams {
+            penalty: CodePenalty::EpsilonL1 { epsilon: 0.0 },
+            ..Default::default()
+        },
+    ];
+    for p in bad {
+        assert!(
+            matches!(
+                p.fit(x.view(), &Progress::new()),
+                Err(SparseError::Param(_))
+            ),
+            "{p:?}"
+        );
+    }
+    let mut nan = x.clone();
+    nan[[3, 2]] = f64::NAN;
+    let p = DictionaryParams::default();
+    assert!(matches!(
+        p.fit(nan.view(), &Progress::new()),
+        Err(SparseError::Data(_))
+    ));
+    assert!(matches!(
+        p.fit(Array2::zeros((0, 6)).view(), &Progress::new()),
+        Err(SparseError::Data(_))
+    ));
+    let d = p.fit(x.view(), &Progress::new()).unwrap().dictionary;
+    assert!(matches!(
+        d.encode(Array2::zeros((3, 5)).view(), 1.0),
+        Err(SparseError::Data(_))
+    ));
+    assert!(matches!(
+        d.encode(x.view(), -1.0),
+        Err(SparseError::Param(_))
+    ));
+    let cancelled = Progress::new();
+    cancelled.cancel();
+    assert_eq!(
+        p.fit(x.view(), &cancelled).unwrap_err(),
+        SparseError::Cancelled
+    );
+}
+
+#[test]
+fn unused_bases_are_reseeded_without_raising_the_objective() {
+    // Far more bases than the data need, with a large penalty: many go unused.
+    let x = synthetic(120, 6, 2, 6);
+    let p = DictionaryParams {
+        num_bases: 30,
+        beta: 2.0,
+        max_iter: 30,
+        tol: 0.0,
+        ..Default::default()
+    };
+    let fit = p.fit(x.view(), &Progress::new()).unwrap();
+    assert!(fit.reseeded > 0);
+    check_norms(&fit.dictionary, 1.0);
+    let mut last = f64::INFINITY;
+    for h in &fit.history {
+        assert!(h.objective_after_codes <= last + 1e-9 * last.abs().max(1.0));
+        last = h.objective_after_basis;
+    }
+}

@@ -1,0 +1,142 @@
+//! Scores and folds on hand-computed cases: weighted success rate, failure recall,
+//! confusion, stratified k-fold, leave-objects-out (never one object in train and test),
+//! and cross validation bookkeeping.
+
+use ndarray::Array2;
+use tactile_workbench::rng::Rng;
+use tactile_workbench::svm::{
+    Confusion, LinearSvmParams, cross_validate, group_k_fold, mean_se, stratified_k_fold,
+};
+
+#[test]
+fn weighted_success_rate_and_failure_recall_by_hand() {
+    // 6 successes (false), 4 failures (true).
+    let truth = [
+        false, false, false, false, false, false, true, true, true, true,
+    ];
+    let pred = [
+        false, false, false, false, true, true, true, true, true, false,
+    ];
+    let c = Confusion::from_predictions(&truth, &pred);
+    assert_eq!(c.matrix, [[4, 2], [1, 3]]);
+    assert_eq!(
+        (c.total_successes(), c.total_failures(), c.total()),
+        (6, 4, 10)
+    );
+    // CCS/TS = 4/6, CCF/TF = 3/4, WSR = (4/6 + 3/4) / 2 = 17/24.
+    assert!((c.success_recall().unwrap() - 4.0 / 6.0).abs() < 1e-15);
+    assert!((c.failure_recall().unwrap() - 0.75).abs() < 1e-15);
+    assert!((c.weighted_success_rate().unwrap() - 17.0 / 24.0).abs() < 1e-15);
+    assert!((c.accuracy().unwrap() - 0.7).abs() < 1e-15);
+    // The paper's numbers: 405 successes, 135 failures.
+    let paper = Confusion {
+        matrix: [[300, 105], [22, 113]],
+    };
+    assert!((paper.failure_recall().unwrap() - 113.0 / 135.0).abs() < 1e-15);
+    // Undefined without one class.
+    let only = Confusion::from_predictions(&[false, false], &[false, true]);
+    assert_eq!(only.weighted_success_rate(), None);
+    assert_eq!(only.failure_recall(), None);
+    let mut sum = c;
+    sum.add(&only);
+    assert_eq!(sum.matrix, [[5, 3], [1, 3]]);
+}
+
+#[test]
+fn mean_and_standard_error_by_hand() {
+    let (m, se) = mean_se(&[0.8, 0.9, 1.0]);
+    assert!((m - 0.9).abs() < 1e-15);
+    // sd = 0.1, se = 0.1 / sqrt(3).
+    assert!((se - 0.1 / 3f64.sqrt()).abs() < 1e-12);
+    assert_eq!(mean_se(&[0.5]), (0.5, 0.0));
+}
+
+#[test]
+fn stratified_folds_keep_class_proportions_and_sizes() {
+    let labels: Vec<bool> = (0..103).map(|i| i % 4 == 0).collect(); // 26 true, 77 false
+    let f = stratified_k_fold(&labels, 10, 3).unwrap();
+    assert_eq!(f.count, 10);
+    let sizes: Vec<usize> = (0..10).map(|k| f.test_indices(k).len()).collect();
+    assert!(
+        sizes.iter().max().unwrap() - sizes.iter().min().unwrap() <= 1,
+        "{sizes:?}"
+    );
+    assert_eq!(sizes.iter().sum::<usize>(), 103);
+    for k in 0..10 {
+        let pos = f.test_indices(k).iter().filter(|&&i| labels[i]).count();
+        assert!((2..=3).contains(&pos), "fold {k} has {pos} positives");
+        // Train and test partition the samples.
+        let (tr, te) = (f.train_indices(k), f.test_indices(k));
+        assert_eq!(tr.len() + te.len(), 103);
+        assert!(te.iter().all(|i| !tr.contains(i)));
+    }
+    // Seeded: same seed same folds, another seed other folds.
+    assert_eq!(f, stratified_k_fold(&labels, 10, 3).unwrap());
+    assert_ne!(f, stratified_k_fold(&labels, 10, 4).unwrap());
+    assert!(stratified_k_fold(&labels, 1, 0).is_err());
+    assert!(stratified_k_fold(&labels[..5], 10, 0).is_err());
+}
+
+#[test]
+fn leave_objects_out_never_splits_an_object() {
+    let mut rng = Rng::new(1);
+    let groups: Vec<usize> = (0..300).map(|_| rng.below(17)).collect();
+    for k in [None, Some(5), Some(10)] {
+        let f = group_k_fold(&groups, k, 2).unwrap();
+        for g in 0..17 {
+            let folds: std::collections::BTreeSet<usize> = (0..300)
+                .filter(|&i| groups[i] == g)
+                .map(|i| f.fold_of[i])
+                .collect();
+            assert!(folds.len() <= 1, "object {g} in folds {folds:?}");
+        }
+        for fold in 0..f.count {
+            let train = f.train_indices(fold);
+            for &i in &f.test_indices(fold) {
+                assert!(train.iter().all(|&t| groups[t] != groups[i]));
+            }
+        }
+    }
+    // One fold per object when none is given.
+    assert_eq!(group_k_fold(&groups, None, 0).unwrap().count, 17);
+    // Balanced: with 10 folds no fold is more than one object's size above the smallest.
+    let f = group_k_fold(&groups, Some(5), 0).unwrap();
+    let sizes: Vec<usize> = (0..5).map(|k| f.test_indices(k).len()).collect();
+    let max_group = (0..17)
+        .map(|g| groups.iter().filter(|&&x| x == g).count())
+        .max()
+        .unwrap();
+    assert!(sizes.iter().max().unwrap() - sizes.iter().min().unwrap() <= max_group);
+    assert!(group_k_fold(&groups, Some(18), 0).is_err());
+    assert!(group_k_fold(&[0, 0, 0], None, 0).is_err());
+}
+
+#[test]
+fn cross_validation_tests_every_sample_once_and_is_deterministic() {
+    let mut rng = Rng::new(2);
+    let n = 120;
+    let y: Vec<bool> = (0..n).map(|i| i % 3 == 0).collect();
+    let x = Array2::from_shape_fn((n, 4), |(i, j)| {
+        rng.normal() + if y[i] && j == 0 { 1.5 } else { 0.0 }
+    });
+    let folds = stratified_k_fold(&y, 10, 0).unwrap();
+    let p = LinearSvmParams::default();
+    let r = cross_validate(x.view(), &y, &folds, &p).unwrap();
+    assert_eq!(r.confusion.total(), n);
+    assert_eq!(r.folds.len(), 10);
+    assert_eq!(r.folds.iter().map(|f| f.test).sum::<usize>(), n);
+    // The pooled confusion is the sum of the folds' and matches the predictions.
+    assert_eq!(Confusion::from_predictions(&y, &r.predictions), r.confusion);
+    assert_eq!(
+        r.weighted_success_rate,
+        r.confusion.weighted_success_rate().unwrap()
+    );
+    assert!(r.weighted_success_rate > 0.7);
+    // Same numbers on one thread.
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let r1 = one.install(|| cross_validate(x.view(), &y, &folds, &p).unwrap());
+    assert_eq!(r, r1);
+}
