@@ -102,8 +102,8 @@ fn data_are_patches_of_the_key_frame_z_scored_per_taxel() {
     // Patch row g·S + s is sensor s of grasp g, from the pressures (100 − reading).
     let sc = d.patches.scaler.as_ref().unwrap();
     let p = s.frame_pressures(&s.grasps[7].frames[0], 1);
-    for t in 0..6 {
-        let z = (p[t] - sc.mean[6 + t]) / sc.sd[6 + t];
+    for (t, pt) in p.iter().enumerate() {
+        let z = (pt - sc.mean[6 + t]) / sc.sd[6 + t];
         assert!((d.x[[7 * 2 + 1, t]] - z).abs() < 1e-12);
     }
     // Without scaling the patches are the pressures.
@@ -196,6 +196,11 @@ fn grid_search_gives_the_same_numbers_on_any_thread_count() {
             })
     };
     let (a, b) = (run(1), run(3));
+    // Progress reaches 1 only at the end (learners inside the grid do not report theirs).
+    let p = Progress::new();
+    stability::grid_search(&d, &spec, &settings, CvScheme::KFold { k: 5 }, &p).unwrap();
+    assert_eq!(p.fraction(), 1.0);
+    assert!(p.message().contains("12/12"), "{}", p.message());
     assert_eq!(a.cells.len(), 12);
     assert_eq!(
         a.cells.iter().map(scores).collect::<Vec<_>>(),
