@@ -28,9 +28,16 @@ use super::GpError;
 use super::kernel::{KernelParams, RecursiveArd, dot};
 use super::normal::{log_norm_cdf, pdf_over_cdf};
 use super::sngd::{Sngd, SngdParams};
+use crate::linalg::Cholesky;
 
 /// Smallest latent variance a prediction may report (the C++ clamp).
 const VAR_FLOOR: f64 = 1e-12;
+
+/// Updates between two checks of Q = K_B⁻¹ against the Gram matrix (a check costs about
+/// n/2 updates' kernel evaluations, so this keeps it near 2 % of the training time).
+const DRIFT_CHECK_EVERY: usize = 1024;
+/// Largest max_i |(Q·K_B)_ii − 1| tolerated before Q is rebuilt.
+const DRIFT_TOL: f64 = 1e-6;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -174,6 +181,7 @@ pub struct Sogp {
     observed: Option<u64>,
     version: u64,
     seen: usize,
+    inverse_rebuilds: usize,
     adaptation_params: Option<SngdParams>,
     adapt: Option<Box<Adaptation>>,
     adaptation_finished: bool,
@@ -219,6 +227,7 @@ impl Sogp {
             observed: None,
             version: 0,
             seen: 0,
+            inverse_rebuilds: 0,
             adaptation_params: params.adaptation.clone(),
             adapt: None,
             adaptation_finished: false,
@@ -257,6 +266,79 @@ impl Sogp {
     pub fn inverse_gram(&self) -> Array2<f64> {
         let (n, s) = (self.n, self.stride);
         Array2::from_shape_fn((n, n), |(i, j)| self.q[i * s + j])
+    }
+
+    /// How many times Q was rebuilt because it had drifted from K_B⁻¹.
+    pub fn inverse_rebuilds(&self) -> usize {
+        self.inverse_rebuilds
+    }
+
+    /// The BVs' Gram matrix K_B (row-major, n × n).
+    fn gram(&self) -> Vec<f64> {
+        let n = self.n;
+        let sf2 = self.kernel.sigma_f2();
+        let mut k = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..=i {
+                let v = sf2 * self.kernel.unit_scaled(self.bv(i), self.bv(j));
+                k[i * n + j] = v;
+                k[j * n + i] = v;
+            }
+        }
+        k
+    }
+
+    /// max_i |(Q·K_B)_ii − 1| for a candidate Q (stride `s`), infinite if Q is not finite.
+    fn diag_residual(q: &[f64], s: usize, gram: &[f64], n: usize) -> f64 {
+        let mut worst = 0.0f64;
+        for i in 0..n {
+            let qk = dot(&q[i * s..i * s + n], &gram[i * n..(i + 1) * n]);
+            let e = (qk - 1.0).abs();
+            if !e.is_finite() {
+                return f64::INFINITY;
+            }
+            worst = worst.max(e);
+        }
+        worst
+    }
+
+    /// Drift of Q from K_B⁻¹: max_i |(Q·K_B)_ii − 1| (0 for an exact inverse, infinite if
+    /// Q holds a non-finite value).
+    pub fn inverse_drift(&self) -> f64 {
+        Self::diag_residual(&self.q, self.stride, &self.gram(), self.n)
+    }
+
+    /// Detect and repair the drift of Q. The rank-one growth and the (Q + C) deletions
+    /// update Q = K_B⁻¹ incrementally, so rounding accumulates over long runs at the
+    /// budget; every [`DRIFT_CHECK_EVERY`] updates the diagonal of Q·K_B is compared with
+    /// 1 and, past [`DRIFT_TOL`] (or on a non-finite entry), Q is recomputed from K_B by
+    /// Cholesky with jitter. The new Q is kept only if it is closer to the inverse (jitter
+    /// on a near-singular K_B may not help). α and C are left alone: they are the
+    /// posterior, and Q only drives the novelty γ and the deletion scores.
+    fn check_inverse(&mut self) {
+        let (n, s) = (self.n, self.stride);
+        let gram = self.gram();
+        let drift = Self::diag_residual(&self.q, s, &gram, n);
+        if drift <= DRIFT_TOL {
+            return;
+        }
+        let k = Array2::from_shape_fn((n, n), |(i, j)| gram[i * n + j]);
+        let sf2 = self.kernel.sigma_f2();
+        let Ok((chol, _)) = Cholesky::with_jitter(k.view(), 1e-12 * sf2, 1e-3 * sf2) else {
+            return;
+        };
+        let inv = chol.inverse();
+        let mut q = vec![0.0; s * s];
+        for i in 0..n {
+            for j in 0..n {
+                q[i * s + j] = inv[[i, j]];
+            }
+        }
+        if Self::diag_residual(&q, s, &gram, n) < drift {
+            self.q = q;
+            self.inverse_rebuilds += 1;
+            self.version += 1;
+        }
     }
 
     /// The BVs' raw windows (n × tau·dim) and their targets (n × n_out).
@@ -360,6 +442,9 @@ impl Sogp {
         self.seen += 1;
         if self.n > self.cap {
             self.delete_least_informative();
+        }
+        if self.seen.is_multiple_of(DRIFT_CHECK_EVERY) {
+            self.check_inverse();
         }
         self.after_update();
     }
@@ -720,6 +805,49 @@ impl Sogp {
                 (logp, buf.grad)
             }
             None => (f64::NEG_INFINITY, vec![0.0; buf.grad.len()]),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_drifted_inverse_is_detected_and_rebuilt() {
+        let p = SogpParams {
+            capacity: 8,
+            tau: 2,
+            adaptation: None,
+            likelihood: Likelihood::Regression,
+            ..SogpParams::default()
+        };
+        let mut gp = Sogp::new(1, 1, &p).unwrap();
+        // Train until the next update is a drift check, with the budget full.
+        for t in 0..DRIFT_CHECK_EVERY - 1 {
+            let x = [(t as f64 * 0.37).sin(), (t as f64 * 0.11).cos()];
+            gp.observe(&x);
+            gp.update(&[x[1]]);
+        }
+        assert!(gp.inverse_drift() < DRIFT_TOL, "{}", gp.inverse_drift());
+        assert_eq!(gp.inverse_rebuilds(), 0);
+        // Force a drift: perturb Q symmetrically.
+        let (n, s) = (gp.n, gp.stride);
+        assert!(n >= 2);
+        gp.q[s] += 1e-2;
+        gp.q[1] += 1e-2;
+        gp.q[0] *= 1.05;
+        assert!(gp.inverse_drift() > DRIFT_TOL);
+        gp.observe(&[0.3, -0.2]);
+        gp.update(&[0.1]);
+        assert_eq!(gp.inverse_rebuilds(), 1);
+        assert!(gp.inverse_drift() < DRIFT_TOL, "{}", gp.inverse_drift());
+        // Q is again the inverse of K_B within rounding.
+        let k = Array2::from_shape_vec((gp.n, gp.n), gp.gram()).unwrap();
+        let qk = gp.inverse_gram().dot(&k);
+        for ((i, j), v) in qk.indexed_iter() {
+            let want = if i == j { 1.0 } else { 0.0 };
+            assert!((v - want).abs() < 1e-6, "QK[{i},{j}] = {v}");
         }
     }
 }
