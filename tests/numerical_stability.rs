@@ -205,6 +205,33 @@ fn supervised_learners_on_degenerate_sequences() {
     }
 }
 
+/// Inputs so large that every expert's Gaussian log-likelihood is −∞ (GS used to return
+/// NaN: −∞ − (−∞) in the normalisation).
+#[test]
+fn learners_on_huge_inputs_stay_nan_free() {
+    for big in [1e6, 1e200, f64::MAX] {
+        let seq =
+            Array2::from_shape_fn((10, 2), |(t, j)| if (t + j) % 2 == 0 { big } else { -big });
+        for (name, mut l) in supervised() {
+            l.add_class().unwrap();
+            l.add_class().unwrap();
+            l.train_sequence(seq.view(), 0);
+            let d = l.predict_sequence(seq.view());
+            assert_distribution(&d, &format!("{name} at {big}"));
+        }
+        let mut dp = DuParams::default();
+        small_gp(&mut dp.ds.gp);
+        let mut gp = GuParams::default();
+        small_gp(&mut gp.gs.gp);
+        let (mut du, mut gu) = (Du::new(2, &dp).unwrap(), Gu::new(2, &gp).unwrap());
+        for _ in 0..3 {
+            for a in [du.learn(seq.view()).unwrap(), gu.learn(seq.view()).unwrap()] {
+                assert!((0.0..=1.0).contains(&a.novelty), "{big}: {a:?}");
+            }
+        }
+    }
+}
+
 #[test]
 fn unsupervised_learners_on_degenerate_sequences() {
     let zeros = Array2::<f64>::zeros((20, 2));

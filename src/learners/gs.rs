@@ -127,9 +127,17 @@ impl SequenceClassifier for Gs {
         self.window.reset();
         self.log_post.fill(-(c as f64).ln());
         for (t, o) in steps.chunks_exact(self.dim).enumerate() {
-            for (m, lp) in self.models.iter_mut().zip(self.log_post.iter_mut()) {
+            // The step's log-likelihoods go into `out` first: a step so far from every
+            // expert that all of them give −∞ (e.g. inputs of 1e200) carries no evidence
+            // and is skipped, since adding it would make −∞ − (−∞) = NaN below.
+            for (j, m) in self.models.iter_mut().enumerate() {
                 m.observe(self.window.as_slice());
-                *lp += log_likelihood(o, m.mean(), m.predictive_variance());
+                out[[t, j]] = log_likelihood(o, m.mean(), m.predictive_variance());
+            }
+            if out.row(t).iter().any(|ll| *ll > f64::NEG_INFINITY) {
+                for (j, lp) in self.log_post.iter_mut().enumerate() {
+                    *lp += out[[t, j]];
+                }
             }
             let top = self
                 .log_post
