@@ -336,6 +336,9 @@ fn svm_one_class_training_predicts_that_class() {
     let cv = cross_validate(&svm(), x.view(), &[0, 0, 0, 0, 1], 5, 1).unwrap();
     assert!(cv.accuracy.is_finite() && (0.0..=1.0).contains(&cv.accuracy));
     assert!((cv.accuracy - 0.8).abs() < 1e-12, "{cv:?}");
+    // The fold that holds the only sample of class 1 is reported.
+    assert_eq!(cv.one_class_folds.len(), 1, "{cv:?}");
+    assert_eq!(cv.fold_accuracy[cv.one_class_folds[0]], 0.0);
 }
 
 #[test]
@@ -372,5 +375,6 @@ fn svm_perfectly_separable_data() {
         assert!(m.rho.is_finite() && m.coef.iter().all(|v| v.is_finite()));
         let cv = cross_validate(&p, x.view(), &y, 5, 3).unwrap();
         assert_eq!(cv.accuracy, 1.0);
+        assert!(cv.one_class_folds.is_empty());
     }
 }

@@ -266,6 +266,8 @@ impl KernelSvmParams {
     }
 
     /// Train on the rows of `x` with class ids `y` (arbitrary ids, at least one sample).
+    /// With a single class there is nothing to separate: the model has that one class,
+    /// no machine, and predicts it everywhere.
     pub fn fit(&self, x: ArrayView2<f64>, y: &[usize]) -> Result<KernelSvm, KernelSvmError> {
         self.validate()?;
         check_features(x)?;
@@ -409,6 +411,11 @@ pub struct CvResult {
     /// Correct predictions over all held-out samples / samples.
     pub accuracy: f64,
     pub fold_accuracy: Vec<f64>,
+    /// Folds whose training samples held a single class (a class too rare for the number
+    /// of folds): no machine could be trained there and the fold's model predicts that
+    /// class for every sample (the fallback of [`KernelSvmParams::fit`]).
+    #[serde(default)]
+    pub one_class_folds: Vec<usize>,
 }
 
 /// Stratified fold of every sample: each class's samples, in a seeded random order, are
@@ -456,10 +463,14 @@ pub fn cross_validate(
     let fold_of = stratified_folds(y, folds, seed);
     let mut correct = 0;
     let mut fold_accuracy = Vec::with_capacity(folds);
+    let mut one_class_folds = Vec::new();
     for f in 0..folds {
         let train: Vec<usize> = (0..y.len()).filter(|&i| fold_of[i] != f).collect();
         let test: Vec<usize> = (0..y.len()).filter(|&i| fold_of[i] == f).collect();
         let model = params.fit(x.select(ndarray::Axis(0), &train).view(), &pick(y, &train))?;
+        if model.classes.len() < 2 {
+            one_class_folds.push(f);
+        }
         let pred = model.predict(x.select(ndarray::Axis(0), &test).view())?;
         let ok = pred
             .iter()
@@ -474,6 +485,7 @@ pub fn cross_validate(
         seed,
         accuracy: correct as f64 / y.len() as f64,
         fold_accuracy,
+        one_class_folds,
     })
 }
 
