@@ -196,6 +196,11 @@ fn grid_search_gives_the_same_numbers_on_any_thread_count() {
             })
     };
     let (a, b) = (run(1), run(3));
+    // Progress reaches 1 only at the end (learners inside the grid do not report theirs).
+    let p = Progress::new();
+    stability::grid_search(&d, &spec, &settings, CvScheme::KFold { k: 5 }, &p).unwrap();
+    assert_eq!(p.fraction(), 1.0);
+    assert!(p.message().contains("12/12"), "{}", p.message());
     assert_eq!(a.cells.len(), 12);
     assert_eq!(
         a.cells.iter().map(scores).collect::<Vec<_>>(),

@@ -503,7 +503,7 @@ pub fn grid_search(
                 beta,
                 ..settings.dictionary.clone()
             };
-            let fit = params.fit(data.x.view(), progress)?;
+            let fit = params.fit_within(data.x.view(), progress)?;
             let mut cells = Vec::with_capacity(spec.gamma.len());
             for &gamma in &spec.gamma {
                 progress.checkpoint()?;
@@ -544,6 +544,11 @@ pub fn grid_search(
         cells.extend(c);
         dicts.push(d);
     }
+    // Workers report out of order; the last word is the whole grid.
+    progress.set(
+        1.0,
+        format!("grid search: {total}/{total} configurations done"),
+    );
     let dict_of = |cell: &CellResult| -> Dictionary {
         let i = tasks
             .iter()
@@ -711,7 +716,7 @@ pub fn evaluate_config(
                 beta: config.beta,
                 ..settings.dictionary.clone()
             };
-            let fit = params.fit(data.x.view(), progress)?;
+            let fit = params.fit_within(data.x.view(), progress)?;
             (fit.dictionary, fit.objective, fit.iterations)
         }
     };

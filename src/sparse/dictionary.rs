@@ -128,6 +128,25 @@ impl DictionaryParams {
         x: ArrayView2<f64>,
         progress: &Progress,
     ) -> Result<DictionaryFit, SparseError> {
+        self.fit_reporting(x, progress, true)
+    }
+
+    /// As [`fit`](Self::fit), but only checking `progress` for a cancel, without
+    /// reporting its own fraction (for a learner inside a larger job, e.g. a grid search).
+    pub fn fit_within(
+        &self,
+        x: ArrayView2<f64>,
+        progress: &Progress,
+    ) -> Result<DictionaryFit, SparseError> {
+        self.fit_reporting(x, progress, false)
+    }
+
+    fn fit_reporting(
+        &self,
+        x: ArrayView2<f64>,
+        progress: &Progress,
+        report: bool,
+    ) -> Result<DictionaryFit, SparseError> {
         self.validate()?;
         check_data(x)?;
         let start = Instant::now();
@@ -180,7 +199,9 @@ impl DictionaryParams {
                 objective_after_basis: f_basis,
                 secs: start.elapsed().as_secs_f64(),
             });
-            progress.set_fraction(iterations as f64 / self.max_iter as f64);
+            if report {
+                progress.set_fraction(iterations as f64 / self.max_iter as f64);
+            }
             if prev.is_finite() && (prev - f_codes) <= self.tol * f_codes.abs() {
                 d = d_new;
                 converged = true;

@@ -9,18 +9,14 @@
 //! from a warm start. (The reference code runs nonlinear conjugate gradient to a 0.005 tolerance
 //! for at most 100 iterations; Newton converges quadratically on this small problem.)
 
-use super::dense::{chol_solve, cholesky};
+use super::dense::{self, chol_solve, cholesky};
 
 /// `0.5 aᵀ G a − cᵀ a + β Σ sqrt(a² + ε)`.
 pub fn eps_l1_objective(g: &[f64], c: &[f64], beta: f64, epsilon: f64, a: &[f64]) -> f64 {
     let k = c.len();
     let mut f = 0.0;
     for i in 0..k {
-        let row = &g[i * k..(i + 1) * k];
-        let mut gi = 0.0;
-        for j in 0..k {
-            gi += row[j] * a[j];
-        }
+        let gi = dense::dot(&g[i * k..(i + 1) * k], a);
         f += 0.5 * a[i] * gi - c[i] * a[i] + beta * (a[i] * a[i] + epsilon).sqrt();
     }
     f
@@ -66,14 +62,17 @@ impl EpsL1Newton {
         for it in 0..self.max_iter {
             for i in 0..k {
                 let row = &g[i * k..(i + 1) * k];
-                let mut gi = 0.0;
-                for j in 0..k {
-                    gi += row[j] * a[j];
-                }
                 let r = (a[i] * a[i] + epsilon).sqrt();
-                self.grad[i] = gi - c[i] + beta * a[i] / r;
-                self.h[i * k..(i + 1) * k].copy_from_slice(row);
-                self.h[i * k + i] += beta * epsilon / (r * r * r);
+                self.grad[i] = dense::dot(row, a) - c[i] + beta * a[i] / r;
+            }
+            let gmax = self.grad.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if gmax <= gtol {
+                return (it, true);
+            }
+            self.h.copy_from_slice(g);
+            for i in 0..k {
+                let r2 = a[i] * a[i] + epsilon;
+                self.h[i * k + i] += beta * epsilon / (r2 * r2.sqrt());
             }
             if cholesky(k, &self.h, &mut self.l).is_err() {
                 // Cannot happen for ε > 0 except through overflow: add a ridge and retry.
@@ -84,13 +83,18 @@ impl EpsL1Newton {
                     return (it, false);
                 }
             }
-            let gmax = self.grad.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            if gmax <= gtol {
-                return (it, true);
-            }
             chol_solve(k, k, &self.l, &self.grad, &mut self.step);
             // Newton decrement²: gradᵀ H⁻¹ grad.
-            let dec: f64 = (0..k).map(|i| self.grad[i] * self.step[i]).sum();
+            let dec = dense::dot(&self.grad, &self.step);
+            if dec <= 1e-12 * (1.0 + f.abs()) {
+                // Inside the region of quadratic convergence, where Armijo's test is lost
+                // in the rounding of f: take the full step.
+                for i in 0..k {
+                    a[i] -= self.step[i];
+                }
+                f = eps_l1_objective(g, c, beta, epsilon, a);
+                continue;
+            }
             let mut t = 1.0;
             loop {
                 for i in 0..k {
@@ -103,7 +107,7 @@ impl EpsL1Newton {
                     break;
                 }
                 t *= 0.5;
-                if t < 1e-12 {
+                if t < 1e-9 {
                     // No decrease left at rounding level of f.
                     return (it, gmax <= 1e3 * gtol);
                 }
