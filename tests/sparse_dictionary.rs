@@ -162,15 +162,11 @@ fn lagrange_dual_basis_step_matches_projected_gradient() {
             "c = {c}: dual vs projected gradient differ by {diff}"
         );
         // Complementary slackness: λ_j > 0 only where the bound is active.
-        for j in 0..k {
+        for (j, &lj) in lambda.iter().enumerate() {
             let n2 = d.row(j).dot(&d.row(j));
             assert!(n2 <= c * (1.0 + 1e-9));
-            if lambda[j] > 1e-8 {
-                assert!(
-                    (n2 - c).abs() < 1e-6 * c,
-                    "λ_{j} = {} but ||d||² = {n2}",
-                    lambda[j]
-                );
+            if lj > 1e-8 {
+                assert!((n2 - c).abs() < 1e-6 * c, "λ_{j} = {lj} but ||d||² = {n2}");
             }
         }
         // Warm-starting from the optimal multipliers converges at once to the same D.

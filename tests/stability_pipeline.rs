@@ -102,8 +102,8 @@ fn data_are_patches_of_the_key_frame_z_scored_per_taxel() {
     // Patch row g·S + s is sensor s of grasp g, from the pressures (100 − reading).
     let sc = d.patches.scaler.as_ref().unwrap();
     let p = s.frame_pressures(&s.grasps[7].frames[0], 1);
-    for t in 0..6 {
-        let z = (p[t] - sc.mean[6 + t]) / sc.sd[6 + t];
+    for (t, pt) in p.iter().enumerate() {
+        let z = (pt - sc.mean[6 + t]) / sc.sd[6 + t];
         assert!((d.x[[7 * 2 + 1, t]] - z).abs() < 1e-12);
     }
     // Without scaling the patches are the pressures.

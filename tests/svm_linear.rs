@@ -274,7 +274,7 @@ fn standardisation_is_fitted_on_the_training_data_and_reused() {
     // The raw-space decision function equals the standardised one.
     for i in 0..10 {
         let row = x.row(i);
-        let mut z = vec![0.0; 4];
+        let mut z = [0.0; 4];
         for j in 0..3 {
             z[j] = (row[j] - sc.mean[j]) / sc.sd[j];
         }

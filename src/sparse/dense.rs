@@ -39,7 +39,8 @@ pub fn cholesky(s: usize, a: &[f64], l: &mut [f64]) -> Result<(), usize> {
             li[j] = sum / lj[j];
         }
         let sum = a[i * s + i] - dot(&li[..i], &li[..i]);
-        if !(sum > PIVOT_TOL * a[i * s + i]) || !sum.is_finite() {
+        // (NaN fails the first test.)
+        if sum.is_nan() || sum <= PIVOT_TOL * a[i * s + i] || sum.is_infinite() {
             return Err(i);
         }
         li[i] = sum.sqrt();

@@ -116,7 +116,7 @@ impl DictionaryParams {
         if self.max_iter == 0 {
             return p("max_iter must be at least 1".into());
         }
-        if !(self.tol >= 0.0) {
+        if self.tol.is_nan() || self.tol < 0.0 {
             return p(format!("tol must be ≥ 0, got {}", self.tol));
         }
         Ok(())

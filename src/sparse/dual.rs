@@ -44,8 +44,8 @@ impl DualWork {
     fn eval(&mut self, ata: &[f64], p: &[f64], n: usize, c: f64, lambda: &[f64]) -> Option<f64> {
         let k = self.k;
         self.m.copy_from_slice(ata);
-        for j in 0..k {
-            self.m[j * k + j] += lambda[j];
+        for (j, l) in lambda.iter().enumerate() {
+            self.m[j * k + j] += l;
         }
         cholesky(k, &self.m, &mut self.l).ok()?;
         // D = M⁻¹ P (P is K × n row-major), all columns at once; φ adds tr(Pᵀ D).

@@ -70,8 +70,8 @@ impl EpsL1Newton {
                 return (it, true);
             }
             self.h.copy_from_slice(g);
-            for i in 0..k {
-                let r2 = a[i] * a[i] + epsilon;
+            for (i, ai) in a.iter().enumerate() {
+                let r2 = ai * ai + epsilon;
                 self.h[i * k + i] += beta * epsilon / (r2 * r2.sqrt());
             }
             if cholesky(k, &self.h, &mut self.l).is_err() {
@@ -89,16 +89,14 @@ impl EpsL1Newton {
             if dec <= 1e-12 * (1.0 + f.abs()) {
                 // Inside the region of quadratic convergence, where Armijo's test is lost
                 // in the rounding of f: take the full step.
-                for i in 0..k {
-                    a[i] -= self.step[i];
-                }
+                a.iter_mut().zip(&self.step).for_each(|(ai, si)| *ai -= si);
                 f = eps_l1_objective(g, c, beta, epsilon, a);
                 continue;
             }
             let mut t = 1.0;
             loop {
-                for i in 0..k {
-                    self.trial[i] = a[i] - t * self.step[i];
+                for ((tr, ai), si) in self.trial.iter_mut().zip(a.iter()).zip(&self.step) {
+                    *tr = ai - t * si;
                 }
                 let ft = eps_l1_objective(g, c, beta, epsilon, &self.trial);
                 if ft <= f - 1e-4 * t * dec {

@@ -221,9 +221,9 @@ impl FeatureSign {
         for p in 0..s {
             let (mut gc, mut gdp) = (0.0, 0.0);
             let row = &self.gs[p * s..(p + 1) * s];
-            for r in 0..s {
-                gc += row[r] * self.cur[r];
-                gdp += row[r] * self.d[r];
+            for ((g, c), d) in row.iter().zip(&self.cur[..s]).zip(&self.d[..s]) {
+                gc += g * c;
+                gdp += g * d;
             }
             self.gcur[p] = gc;
             self.gd[p] = gdp;
@@ -300,9 +300,9 @@ impl FeatureSign {
         for p in 0..s {
             let row = &self.gs[p * s..(p + 1) * s];
             let (mut gc, mut gv) = (0.0, 0.0);
-            for q in 0..s {
-                gc += row[q] * self.cur[q];
-                gv += row[q] * self.d[q];
+            for ((g, c), d) in row.iter().zip(&self.cur[..s]).zip(&self.d[..s]) {
+                gc += g * c;
+                gv += g * d;
             }
             slope += (gc - c[self.active[p]]) * self.d[p];
             curv += 0.5 * self.d[p] * gv;

@@ -116,7 +116,7 @@ fn fill_with_patches(d: &mut Array2<f64>, from: usize, x: ArrayView2<f64>, rng: 
 pub(crate) fn normalise_rows(d: &mut Array2<f64>, c: f64, rng: &mut Rng) {
     for mut row in d.rows_mut() {
         let mut nrm = row.dot(&row).sqrt();
-        if !(nrm > 1e-300) {
+        if nrm.is_nan() || nrm <= 1e-300 {
             for v in row.iter_mut() {
                 *v = rng.normal();
             }
@@ -187,11 +187,11 @@ mod tests {
     fn jacobi_diagonalises() {
         let a = array![[4.0, 1.0, 0.5], [1.0, 3.0, 0.2], [0.5, 0.2, 1.0]];
         let (vals, vecs) = symmetric_eigen(a.view());
-        for i in 0..3 {
+        for (i, &val) in vals.iter().enumerate() {
             let v = vecs.column(i);
             let av = a.dot(&v);
             for r in 0..3 {
-                assert!((av[r] - vals[i] * v[r]).abs() < 1e-12);
+                assert!((av[r] - val * v[r]).abs() < 1e-12);
             }
         }
     }

@@ -226,7 +226,8 @@ pub fn cross_validate(
         super::linear::Solver::PrimalNewton => Some(params.fit(x, y)?),
         _ => None,
     };
-    let per_fold: Vec<Result<(FoldScore, Vec<(usize, bool)>), SvmError>> = (0..folds.count)
+    type FoldOut = Result<(FoldScore, Vec<(usize, bool)>), SvmError>;
+    let per_fold: Vec<FoldOut> = (0..folds.count)
         .into_par_iter()
         .map(|f| {
             let train = folds.train_indices(f);

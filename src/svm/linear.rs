@@ -126,7 +126,7 @@ impl LinearSvmParams {
         if !(self.bias >= 0.0 && self.bias.is_finite()) {
             return bad(format!("bias must be finite and ≥ 0, got {}", self.bias));
         }
-        if !(self.tol > 0.0) {
+        if self.tol.is_nan() || self.tol <= 0.0 {
             return bad(format!("tol must be > 0, got {}", self.tol));
         }
         if self.max_epochs == 0 {
@@ -247,13 +247,13 @@ impl LinearSvmParams {
                 let w0 = init.filter(|m| m.weights.len() == d).map(|m| {
                     let mut w0 = vec![0.0; stride];
                     let mut b = m.intercept;
-                    for j in 0..d {
+                    for (j, (w0j, wj)) in w0.iter_mut().zip(m.weights.iter()).enumerate() {
                         let (mean, sd) = match &scaler {
                             Some(sc) => (sc.mean[j], sc.sd[j]),
                             None => (0.0, 1.0),
                         };
-                        w0[j] = m.weights[j] * sd;
-                        b += m.weights[j] * mean;
+                        *w0j = wj * sd;
+                        b += wj * mean;
                     }
                     if self.bias > 0.0 {
                         w0[d] = b / self.bias;
@@ -513,8 +513,8 @@ fn primal_newton(
         // Exact line search: φ'(t) = wᵀp + t pᵀp − 2 Σ C_i max(0, 1 − o_i − t δ_i) δ_i.
         let wp = dense::dot(&w, &dir);
         let pp = dense::dot(&dir, &dir);
-        for i in 0..n {
-            delta[i] = p.ys[i] * dense::dot(&dir, p.row(i));
+        for (i, di) in delta.iter_mut().enumerate() {
+            *di = p.ys[i] * dense::dot(&dir, p.row(i));
         }
         let dphi = |t: f64| -> (f64, f64) {
             let (mut d1, mut d2) = (wp + t * pp, pp);
