@@ -273,7 +273,7 @@ impl Analyses {
                     .unwrap_or_default();
                 ui.add(
                     ProgressBar::new(p.fraction() as f32)
-                        .desired_width(260.0)
+                        .desired_width(560.0)
                         .show_percentage()
                         .text(format!("{}{eta}", p.message())),
                 );

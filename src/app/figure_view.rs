@@ -45,7 +45,9 @@ pub fn show(ui: &mut egui::Ui, id: &str, figure: &Figure, height: f32) {
     match &figure.kind {
         FigureKind::Chart(chart) => {
             let (xs, ys) = (chart.x.scale, chart.y.scale);
+            // Views scroll as pages: the wheel scrolls the page, it does not pan the plot.
             let mut plot = Plot::new(id)
+                .allow_scroll(false)
                 .height(height)
                 .legend(Legend::default())
                 .x_axis_label(chart.x.text())
@@ -151,6 +153,7 @@ pub fn show(ui: &mut egui::Ui, id: &str, figure: &Figure, height: f32) {
             let n_groups = bars.groups.len().max(1) as f64;
             let width = 0.8 / n_groups;
             Plot::new(id)
+                .allow_scroll(false)
                 .height(height)
                 .legend(Legend::default())
                 .x_axis_label(figures_axis_text(&bars.x.title, &bars.x.unit))

@@ -227,6 +227,7 @@ impl Replay {
         if !session.encoders.is_empty() {
             ui.label("Joint encoders");
             Plot::new("encoder_trace")
+                .allow_scroll(false)
                 .height(height)
                 .legend(Legend::default())
                 .x_axis_label("time (s)")
@@ -248,6 +249,7 @@ impl Replay {
                 }
             });
         Plot::new("finger_trace")
+            .allow_scroll(false)
             .height(height)
             .legend(Legend::default())
             .x_axis_label("time (s)")
@@ -300,6 +302,7 @@ fn class_distribution(ui: &mut egui::Ui, t: &GraspTrace, frame: usize, height: f
             })
             .collect();
         Plot::new("class_distribution")
+            .allow_scroll(false)
             .height(height)
             .width(420.0)
             .include_y(0.0)
