@@ -198,7 +198,7 @@ pub fn show(ui: &mut egui::Ui, id: &str, figure: &Figure, height: f32) {
             let cols = h.values.first().map_or(0, Vec::len);
             ui.horizontal(|ui| {
                 let label_w = 110.0;
-                let avail = (ui.available_width() - 100.0 - label_w).max(100.0);
+                let avail = (ui.available_width() - 180.0 - label_w).max(100.0);
                 let cell = (avail / cols.max(1) as f32)
                     .min((height - 40.0) / rows.max(1) as f32)
                     .clamp(4.0, 60.0);
@@ -380,7 +380,7 @@ fn image_cell(ui: &mut egui::Ui, img: &figures::GridImage, map: ColorMap, limits
 }
 
 fn colour_bar(ui: &mut egui::Ui, scale: &ColorScale, limits: (f64, f64), height: f32) {
-    let (rect, _) = ui.allocate_exact_size(Vec2::new(90.0, height), Sense::hover());
+    let (rect, _) = ui.allocate_exact_size(Vec2::new(170.0, height), Sense::hover());
     let painter = ui.painter_at(rect);
     let bar = Rect::from_min_size(
         rect.min + Vec2::new(4.0, 20.0),
