@@ -13,6 +13,16 @@ pub fn validate(session: &Session, path: &Path) -> Result<(), SessionError> {
         return Err(err("sensors".into(), "the session has no sensors".into()));
     }
     for (s, sensor) in session.sensors.iter().enumerate() {
+        // The grid size comes from the file: rows × cols must not overflow before
+        // `taxel_count` multiplies them (found by fuzzing, tests/fuzz_regressions.rs).
+        if let Some((rows, cols)) = sensor.layout.grid_shape()
+            && rows.checked_mul(cols).is_none()
+        {
+            return Err(err(
+                format!("sensors[{s}].layout"),
+                format!("a {rows} × {cols} grid is too large"),
+            ));
+        }
         let n = sensor.layout.taxel_count();
         if n == 0 {
             return Err(err(
