@@ -50,3 +50,15 @@ fn sparse_grid_whose_area_overflows_is_rejected() {
     assert!(e.contains("sensors[0].layout"), "{e}");
     assert!(e.contains("too large"), "{e}");
 }
+
+#[test]
+fn sparse_grid_with_a_huge_area_is_rejected_before_anything_draws_it() {
+    // 10^9 × 10^9 does not overflow, but an image of it could never be allocated.
+    let e = load_error(&session_with_layout(
+        r#"{"kind":"sparse_grid","rows":1000000000,"cols":1000000000,"cells":[[0,0],[0,1]]}"#,
+    ));
+    assert!(
+        e.contains("sensors[0].layout") && e.contains("too large"),
+        "{e}"
+    );
+}

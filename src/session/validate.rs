@@ -6,6 +6,10 @@ use std::path::Path;
 
 use super::{Layout, Session, SessionError, ValueTransform};
 
+/// Largest grid area accepted: far above any tactile sensor (the BioTac SP's grid has 72
+/// cells), small enough that drawing the grid's image is cheap.
+pub const MAX_GRID_CELLS: usize = 65_536;
+
 /// Check `session`; errors name `path` and the field.
 pub fn validate(session: &Session, path: &Path) -> Result<(), SessionError> {
     let err = |field: String, msg: String| SessionError::field(path, field, msg);
@@ -14,9 +18,12 @@ pub fn validate(session: &Session, path: &Path) -> Result<(), SessionError> {
     }
     for (s, sensor) in session.sensors.iter().enumerate() {
         // The grid size comes from the file: rows × cols must not overflow before
-        // `taxel_count` multiplies them (found by fuzzing, tests/fuzz_regressions.rs).
+        // `taxel_count` multiplies them (found by fuzzing, tests/fuzz_regressions.rs), and
+        // images of the grid are drawn cell by cell, so its area is bounded too.
         if let Some((rows, cols)) = sensor.layout.grid_shape()
-            && rows.checked_mul(cols).is_none()
+            && rows
+                .checked_mul(cols)
+                .is_none_or(|area| area > MAX_GRID_CELLS)
         {
             return Err(err(
                 format!("sensors[{s}].layout"),
