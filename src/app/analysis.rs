@@ -586,7 +586,11 @@ impl Analyses {
             }
         });
         ui.label("Pressures are z-scored per taxel over the session; β and γ use the 0.5·|x − Da|² + λ·|a|₁ convention.");
-        let ready = !s.session.label_sets.is_empty();
+        // The pipeline predicts a two-class outcome (success / failure).
+        let ready = s.session.label_sets.iter().any(|l| l.classes.len() == 2);
+        if !ready {
+            ui.label("(needs a session with a two-class outcome label, e.g. success / failure)");
+        }
         if ui
             .add_enabled(!running && ready, egui::Button::new("Run"))
             .clicked()
