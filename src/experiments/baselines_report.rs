@@ -4,7 +4,7 @@
 
 use std::collections::BTreeMap;
 
-use super::report::{AnalysisKind, AnalysisResult, now_unix};
+use super::report::{AnalysisKind, AnalysisResult, distinct_sorted, now_unix};
 use crate::cluster::baselines::{BaselinesResult, ScoreSummary};
 use crate::figures::{
     Axis, AxisTitle, BarGroup, ColorScale, ErrorDisplay, ErrorRange, Figure, FigureKind, Heatmap,
@@ -84,8 +84,8 @@ pub fn baselines_report(session: &str, r: &BaselinesResult, train_seconds: f64) 
     ];
     let mut headline = Some(("k-means NMI".to_string(), r.kmeans.mean.nmi));
     if let Some(svm) = &r.svm {
-        let cs: Vec<f64> = dedup(svm.grid.iter().map(|c| c.c));
-        let gs: Vec<f64> = dedup(svm.grid.iter().map(|c| c.gamma));
+        let cs: Vec<f64> = distinct_sorted(svm.grid.iter().map(|c| c.c));
+        let gs: Vec<f64> = distinct_sorted(svm.grid.iter().map(|c| c.gamma));
         let mut values = vec![vec![f64::NAN; gs.len()]; cs.len()];
         let mut marked = Vec::new();
         for cell in &svm.grid {
@@ -151,15 +151,4 @@ pub fn baselines_report(session: &str, r: &BaselinesResult, train_seconds: f64) 
         created: now_unix(),
         figures,
     }
-}
-
-fn dedup(values: impl Iterator<Item = f64>) -> Vec<f64> {
-    let mut out: Vec<f64> = Vec::new();
-    for v in values {
-        if !out.contains(&v) {
-            out.push(v);
-        }
-    }
-    out.sort_by(f64::total_cmp);
-    out
 }

@@ -90,6 +90,18 @@ pub fn date_text(unix: u64) -> String {
     )
 }
 
+/// The distinct values, ascending: the axes of a grid-search map.
+pub fn distinct_sorted(values: impl Iterator<Item = f64>) -> Vec<f64> {
+    let mut out: Vec<f64> = Vec::new();
+    for v in values {
+        if !out.contains(&v) {
+            out.push(v);
+        }
+    }
+    out.sort_by(f64::total_cmp);
+    out
+}
+
 /// Every figure of `results`, named for export (`<analysis>-<label>-<figure>`).
 pub fn figure_set(results: &[AnalysisResult]) -> FigureSet {
     let slug = |s: &str| {

@@ -6,7 +6,7 @@
 
 use std::collections::BTreeMap;
 
-use super::report::{AnalysisKind, AnalysisResult, now_unix};
+use super::report::{AnalysisKind, AnalysisResult, distinct_sorted, now_unix};
 use super::stability::{GridImage as PatchImage, StabilityReport};
 use crate::figures::{
     Axis, AxisTitle, BarGroup, ColorScale, ErrorDisplay, ErrorRange, Figure, FigureKind, GridImage,
@@ -151,8 +151,8 @@ pub fn stability_report(r: &StabilityReport) -> AnalysisResult {
             .iter()
             .filter(|c| c.config.num_bases == nb)
             .collect();
-        let betas = sorted(cells.iter().map(|c| c.config.beta));
-        let gammas = sorted(cells.iter().map(|c| c.config.gamma));
+        let betas = distinct_sorted(cells.iter().map(|c| c.config.beta));
+        let gammas = distinct_sorted(cells.iter().map(|c| c.config.gamma));
         let mut values = vec![vec![f64::NAN; gammas.len()]; betas.len()];
         let mut marked = Vec::new();
         for c in &cells {
@@ -406,15 +406,4 @@ pub fn stability_report(r: &StabilityReport) -> AnalysisResult {
         created: now_unix(),
         figures,
     }
-}
-
-fn sorted(values: impl Iterator<Item = f64>) -> Vec<f64> {
-    let mut out: Vec<f64> = Vec::new();
-    for v in values {
-        if !out.contains(&v) {
-            out.push(v);
-        }
-    }
-    out.sort_by(f64::total_cmp);
-    out
 }

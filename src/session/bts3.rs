@@ -9,7 +9,7 @@
 
 use std::path::Path;
 
-use super::error::{parse_number, shorten};
+use super::error::{parse_number, read_text, shorten};
 use super::{
     Frame, Grasp, LabelSet, Layout, Sensor, Session, SessionError, SessionMeta, ValueTransform,
     validate,
@@ -50,16 +50,7 @@ fn expected_header() -> Vec<String> {
 
 /// Import the palm-down CSV.
 pub fn import_bts3(path: &Path) -> Result<Session, SessionError> {
-    let bytes = std::fs::read(path).map_err(|e| SessionError::io(path, &e))?;
-    let text = std::str::from_utf8(&bytes).map_err(|e| {
-        let line = bytes[..e.valid_up_to()]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count()
-            + 1;
-        SessionError::line(path, line, "the file is not valid UTF-8 text")
-    })?;
-    parse_bts3(text, path)
+    parse_bts3(&read_text(path)?, path)
 }
 
 /// Parse the CSV text (`path` names it in errors).

@@ -117,6 +117,16 @@ pub(crate) fn parse_number(
     }
 }
 
+/// Read a text file, naming the line of the first byte that is not UTF-8.
+pub(crate) fn read_text(path: &Path) -> Result<String, SessionError> {
+    let bytes = std::fs::read(path).map_err(|e| SessionError::io(path, &e))?;
+    String::from_utf8(bytes).map_err(|e| {
+        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line = valid.iter().filter(|&&c| c == b'\n').count() + 1;
+        SessionError::line(path, line, "the file is not valid UTF-8 text")
+    })
+}
+
 /// Keep messages readable when a field holds a long run of garbage.
 pub(crate) fn shorten(s: &str) -> String {
     const MAX: usize = 40;

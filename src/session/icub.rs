@@ -9,7 +9,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::error::parse_number;
+use super::error::{parse_number, read_text};
 use super::{
     Frame, Grasp, LabelSet, Layout, Sensor, Session, SessionError, SessionMeta, TaxelPos,
     ValueTransform, validate,
@@ -147,19 +147,6 @@ pub fn parse_trial(text: &str, path: &Path) -> Result<Vec<Frame>, SessionError> 
         });
     }
     Ok(frames)
-}
-
-fn read_text(path: &Path) -> Result<String, SessionError> {
-    let bytes = std::fs::read(path).map_err(|e| SessionError::io(path, &e))?;
-    String::from_utf8(bytes).map_err(|e| {
-        let b = e.as_bytes();
-        let line = b[..e.utf8_error().valid_up_to()]
-            .iter()
-            .filter(|&&c| c == b'\n')
-            .count()
-            + 1;
-        SessionError::line(path, line, "the file is not valid UTF-8 text")
-    })
 }
 
 /// The folder holding the trial files: `dir` itself or its `iCubGraspDataset` child.

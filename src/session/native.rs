@@ -28,6 +28,7 @@ use std::path::Path;
 
 use serde::Deserialize;
 
+use super::error::read_text;
 use super::{FORMAT_VERSION, Location, Session, SessionError, validate};
 use crate::fsutil;
 
@@ -111,16 +112,7 @@ pub fn from_str(text: &str, path: &Path) -> Result<Session, SessionError> {
 
 /// Read a native session file.
 pub fn load(path: &Path) -> Result<Session, SessionError> {
-    let bytes = std::fs::read(path).map_err(|e| SessionError::io(path, &e))?;
-    let text = std::str::from_utf8(&bytes).map_err(|e| {
-        let line = bytes[..e.valid_up_to()]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count()
-            + 1;
-        SessionError::line(path, line, "the file is not valid UTF-8 text")
-    })?;
-    from_str(text, path)
+    from_str(&read_text(path)?, path)
 }
 
 /// Serialise a session in the native format.
