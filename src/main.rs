@@ -6,7 +6,12 @@ fn main() -> std::process::ExitCode {
     let args = Cli::parse();
     let result = match args.command {
         Some(command) => cli::run(command),
-        None => open_window(args.files, args.measure_startup, started),
+        None => open_window(
+            args.files,
+            args.measure_startup,
+            args.measure_frames,
+            started,
+        ),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
@@ -21,15 +26,23 @@ fn main() -> std::process::ExitCode {
 fn open_window(
     files: Vec<std::path::PathBuf>,
     measure_startup: bool,
+    measure_frames: Option<f64>,
     started: std::time::Instant,
 ) -> anyhow::Result<()> {
-    tactile_workbench::app::run(files, measure_startup.then_some(started))
+    use tactile_workbench::app::Measure;
+    let measure = match (measure_frames, measure_startup) {
+        (Some(seconds), _) => Some(Measure::Frames { seconds }),
+        (None, true) => Some(Measure::Startup(started)),
+        (None, false) => None,
+    };
+    tactile_workbench::app::run(files, measure)
 }
 
 #[cfg(not(feature = "gui"))]
 fn open_window(
     _files: Vec<std::path::PathBuf>,
     _measure_startup: bool,
+    _measure_frames: Option<f64>,
     _started: std::time::Instant,
 ) -> anyhow::Result<()> {
     anyhow::bail!("this build has no window (built without the `gui` feature); see --help")

@@ -595,43 +595,47 @@ impl Analyses {
             .add_enabled(!running && ready, egui::Button::new("Run"))
             .clicked()
         {
-            let f = self.stability.clone();
-            let session = s.session.clone();
-            self.spawn(
-                ctx,
-                Some(AnalysisKind::Stability),
-                format!("Grasp stability on {}", session.meta.name),
-                move |p| {
-                    let data = StabilityData::from_session(&session, &DataOptions::default())
-                        .map_err(JobError::failed)?;
-                    let mut opts = StabilityOptions {
-                        single: Config {
-                            num_bases: f.num_bases,
-                            beta: f.beta,
-                            gamma: f.gamma,
-                        },
-                        ..Default::default()
-                    };
-                    if f.grid {
-                        let [from, to, step] = f.bases;
-                        opts.grid = Some(GridSpec {
-                            num_bases: (from..=to.max(from)).step_by(step.max(1)).collect(),
-                            beta: vec![0.5, 1.0, 2.0],
-                            gamma: vec![0.5, 1.0, 2.0],
-                        });
-                    }
-                    let r = crate::experiments::stability::run(&data, &opts, p).map_err(
-                        |e| match e {
-                            StabilityError::Cancelled => JobError::Cancelled,
-                            other => JobError::failed(other),
-                        },
-                    )?;
-                    Ok(JobOutput::Result(Box::new(stability_report(&r))))
-                },
-            );
+            self.start_stability(ctx, s);
         }
         ui.separator();
         self.results_ui(ui, AnalysisKind::Stability, &s.session.meta.name);
+    }
+
+    /// Run the stability form's pipeline on `s` in the background.
+    pub fn start_stability(&mut self, ctx: &egui::Context, s: &LoadedSession) {
+        let f = self.stability.clone();
+        let session = s.session.clone();
+        self.spawn(
+            ctx,
+            Some(AnalysisKind::Stability),
+            format!("Grasp stability on {}", session.meta.name),
+            move |p| {
+                let data = StabilityData::from_session(&session, &DataOptions::default())
+                    .map_err(JobError::failed)?;
+                let mut opts = StabilityOptions {
+                    single: Config {
+                        num_bases: f.num_bases,
+                        beta: f.beta,
+                        gamma: f.gamma,
+                    },
+                    ..Default::default()
+                };
+                if f.grid {
+                    let [from, to, step] = f.bases;
+                    opts.grid = Some(GridSpec {
+                        num_bases: (from..=to.max(from)).step_by(step.max(1)).collect(),
+                        beta: vec![0.5, 1.0, 2.0],
+                        gamma: vec![0.5, 1.0, 2.0],
+                    });
+                }
+                let r =
+                    crate::experiments::stability::run(&data, &opts, p).map_err(|e| match e {
+                        StabilityError::Cancelled => JobError::Cancelled,
+                        other => JobError::failed(other),
+                    })?;
+                Ok(JobOutput::Result(Box::new(stability_report(&r))))
+            },
+        );
     }
 
     pub fn recognition_ui(&mut self, ui: &mut egui::Ui, s: &LoadedSession, ctx: &egui::Context) {

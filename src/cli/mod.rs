@@ -29,6 +29,10 @@ pub struct Cli {
     /// quit (a startup benchmark).
     #[arg(long)]
     pub measure_startup: bool,
+    /// Open the window, run a 108-cell grid search on the grasp-stability sample in its view,
+    /// print the UI time per frame over at most SECONDS, and quit (a frame-time benchmark).
+    #[arg(long, value_name = "SECONDS")]
+    pub measure_frames: Option<f64>,
 }
 
 #[derive(Subcommand, Debug)]
