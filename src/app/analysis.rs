@@ -214,6 +214,11 @@ impl Analyses {
         !self.jobs.is_empty()
     }
 
+    /// A job of this analysis is running (one at a time per analysis).
+    pub fn is_running(&self, kind: AnalysisKind) -> bool {
+        self.jobs.iter().any(|j| j.kind == Some(kind))
+    }
+
     /// Collect finished jobs. Returns true when something changed.
     pub fn poll(&mut self) -> bool {
         let mut changed = false;
@@ -469,10 +474,7 @@ impl Analyses {
 
     pub fn baselines_ui(&mut self, ui: &mut egui::Ui, s: &LoadedSession, ctx: &egui::Context) {
         ui.heading("Baselines: sequential k-means, SOM and RBF SVM on the Table I features");
-        let running = self
-            .jobs
-            .iter()
-            .any(|j| j.kind == Some(AnalysisKind::Baselines));
+        let running = self.is_running(AnalysisKind::Baselines);
         ui.horizontal(|ui| {
             ui.add(
                 egui::DragValue::new(&mut self.baselines.orders)
@@ -542,10 +544,7 @@ impl Analyses {
 
     pub fn stability_ui(&mut self, ui: &mut egui::Ui, s: &LoadedSession, ctx: &egui::Context) {
         ui.heading("Grasp stability: sparse coding of tactile images and a linear SVM");
-        let running = self
-            .jobs
-            .iter()
-            .any(|j| j.kind == Some(AnalysisKind::Stability));
+        let running = self.is_running(AnalysisKind::Stability);
         let f = &mut self.stability;
         ui.horizontal(|ui| {
             ui.checkbox(&mut f.grid, "Grid search (β and γ over 0.5, 1, 2)");
@@ -640,10 +639,7 @@ impl Analyses {
 
     pub fn recognition_ui(&mut self, ui: &mut egui::Ui, s: &LoadedSession, ctx: &egui::Context) {
         ui.heading("Object recognition: online OIESGP experts (DS, GS)");
-        let running = self
-            .jobs
-            .iter()
-            .any(|j| j.kind == Some(AnalysisKind::Recognition));
+        let running = self.is_running(AnalysisKind::Recognition);
         let f = &mut self.recognition;
         ui.horizontal(|ui| {
             egui::ComboBox::from_label("Learner")
@@ -724,10 +720,7 @@ impl Analyses {
 
     pub fn clustering_ui(&mut self, ui: &mut egui::Ui, s: &LoadedSession, ctx: &egui::Context) {
         ui.heading("Clustering: online OIESGP experts without labels (DU, GU)");
-        let running = self
-            .jobs
-            .iter()
-            .any(|j| j.kind == Some(AnalysisKind::Clustering));
+        let running = self.is_running(AnalysisKind::Clustering);
         let f = &mut self.clustering;
         ui.horizontal(|ui| {
             egui::ComboBox::from_label("Learner")
