@@ -76,6 +76,56 @@ impl ExportSettings {
             dpi: self.dpi,
         }
     }
+
+    /// The folder, size and DPI form shown above each view's figures.
+    fn ui(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            let caption = ui.label("Export folder");
+            let mut dir = self.dir.display().to_string();
+            if ui
+                .text_edit_singleline(&mut dir)
+                .labelled_by(caption.id)
+                .changed()
+            {
+                self.dir = PathBuf::from(dir);
+            }
+            ui.add(
+                egui::DragValue::new(&mut self.width)
+                    .range(200..=6000)
+                    .prefix("width "),
+            );
+            ui.add(
+                egui::DragValue::new(&mut self.height)
+                    .range(150..=6000)
+                    .prefix("height "),
+            );
+            ui.add(
+                egui::DragValue::new(&mut self.dpi)
+                    .range(48.0..=600.0)
+                    .prefix("DPI "),
+            );
+        });
+    }
+
+    /// Write `figure` as SVG, PNG and CSV named `name`; returns the message to show.
+    fn write(&self, figure: &figures::Figure, name: &str) -> String {
+        let opts = self.options();
+        let mut written = Vec::new();
+        let result = std::fs::create_dir_all(&self.dir)
+            .map_err(|e| format!("{}: {e}", self.dir.display()))
+            .and_then(|_| {
+                for f in [Format::Svg, Format::Png, Format::Csv] {
+                    let path = self.dir.join(format!("{name}.{}", f.extension()));
+                    figures::write_figure(figure, &path, &opts).map_err(|e| e.to_string())?;
+                    written.push(path.display().to_string());
+                }
+                Ok(())
+            });
+        match result {
+            Ok(()) => format!("exported {}", written.join(", ")),
+            Err(e) => format!("export failed: {e}"),
+        }
+    }
 }
 
 /// Baselines form: few orders by default so the view answers in seconds.
@@ -368,54 +418,6 @@ impl Analyses {
         );
     }
 
-    fn export_one(&mut self, figure: &figures::Figure, name: &str) {
-        let opts = self.export.options();
-        let mut written = Vec::new();
-        let result = std::fs::create_dir_all(&self.export.dir)
-            .map_err(|e| format!("{}: {e}", self.export.dir.display()))
-            .and_then(|_| {
-                for f in [Format::Svg, Format::Png, Format::Csv] {
-                    let path = self.export.dir.join(format!("{name}.{}", f.extension()));
-                    figures::write_figure(figure, &path, &opts).map_err(|e| e.to_string())?;
-                    written.push(path.display().to_string());
-                }
-                Ok(())
-            });
-        self.messages.push(match result {
-            Ok(()) => format!("exported {}", written.join(", ")),
-            Err(e) => format!("export failed: {e}"),
-        });
-    }
-
-    fn export_settings_ui(&mut self, ui: &mut egui::Ui) {
-        ui.horizontal(|ui| {
-            let caption = ui.label("Export folder");
-            let mut dir = self.export.dir.display().to_string();
-            if ui
-                .text_edit_singleline(&mut dir)
-                .labelled_by(caption.id)
-                .changed()
-            {
-                self.export.dir = PathBuf::from(dir);
-            }
-            ui.add(
-                egui::DragValue::new(&mut self.export.width)
-                    .range(200..=6000)
-                    .prefix("width "),
-            );
-            ui.add(
-                egui::DragValue::new(&mut self.export.height)
-                    .range(150..=6000)
-                    .prefix("height "),
-            );
-            ui.add(
-                egui::DragValue::new(&mut self.export.dpi)
-                    .range(48.0..=600.0)
-                    .prefix("DPI "),
-            );
-        });
-    }
-
     fn results_ui(&mut self, ui: &mut egui::Ui, kind: AnalysisKind, session: &str) {
         let mine: Vec<usize> = (0..self.results.len())
             .filter(|&i| self.results[i].kind == kind && self.results[i].session == session)
@@ -440,7 +442,8 @@ impl Analyses {
                 }
             }
         });
-        let r = self.results[shown].clone();
+        // Borrow the result (it holds every figure): nothing is copied per frame.
+        let r = &self.results[shown];
         egui::Grid::new(("scores", kind as u8))
             .striped(true)
             .show(ui, |ui| {
@@ -458,7 +461,8 @@ impl Analyses {
                     ui.end_row();
                 }
             });
-        self.export_settings_ui(ui);
+        self.export.ui(ui);
+        let mut message = None;
         for (name, fig) in &r.figures {
             ui.separator();
             if ui
@@ -466,10 +470,11 @@ impl Analyses {
                 .clicked()
             {
                 let file = format!("{}-{name}", r.label.replace([' ', ',', '='], "_"));
-                self.export_one(fig, &file);
+                message = Some(self.export.write(fig, &file));
             }
             figure_view::show(ui, &format!("{shown}-{name}"), fig, 300.0);
         }
+        self.messages.extend(message);
     }
 
     pub fn baselines_ui(&mut self, ui: &mut egui::Ui, s: &LoadedSession, ctx: &egui::Context) {
@@ -837,12 +842,13 @@ impl Analyses {
         ui.heading("Speed against accuracy");
         match report::speed_accuracy(&self.results) {
             Some(fig) => {
-                self.export_settings_ui(ui);
+                self.export.ui(ui);
                 if ui
                     .button("Export speed-against-accuracy (SVG, PNG, CSV)")
                     .clicked()
                 {
-                    self.export_one(&fig, "speed-against-accuracy");
+                    let m = self.export.write(&fig, "speed-against-accuracy");
+                    self.messages.push(m);
                 }
                 figure_view::show(ui, "speed-accuracy", &fig, 420.0);
                 ui.label("Open a model's views:");
