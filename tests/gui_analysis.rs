@@ -1,7 +1,9 @@
 //! The analysis views: a job starts from a view, shows progress, can be cancelled, and its
-//! result's figures and numbers appear (found by accessible label). Results survive a
-//! project save and re-open.
+//! result's figures and numbers appear (found by accessible label). The project file's
+//! round trip is tested in `experiments::report`.
 #![cfg(feature = "gui")]
+
+mod common;
 
 use std::time::{Duration, Instant};
 
@@ -10,24 +12,7 @@ use egui_kittest::kittest::Queryable;
 use tactile_workbench::app::{View, WorkbenchApp};
 
 fn harness() -> Harness<'static, WorkbenchApp> {
-    let app = WorkbenchApp::new(&egui::Context::default(), None, Vec::new());
-    let mut h = Harness::builder()
-        .with_size(egui::Vec2::new(1400.0, 1000.0))
-        .with_step_dt(1.0 / 60.0)
-        .build_ui_state(
-            |ui, app: &mut WorkbenchApp| {
-                app.tick(ui.ctx());
-                app.show(ui);
-            },
-            app,
-        );
-    let t = Instant::now();
-    while (h.state().is_loading() || h.state().sessions.len() < 2)
-        && t.elapsed() < Duration::from_secs(30)
-    {
-        h.step();
-        std::thread::sleep(Duration::from_millis(10));
-    }
+    let mut h = common::gui::workbench(1400.0, 1000.0);
     h.get_by_label("Simulated object recognition").click();
     h.run_ok();
     h

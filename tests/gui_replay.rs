@@ -2,38 +2,14 @@
 //! and its replay is stepped with buttons and keys, all by accessible labels.
 #![cfg(feature = "gui")]
 
+mod common;
+
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use tactile_workbench::app::WorkbenchApp;
 
 fn harness() -> Harness<'static, WorkbenchApp> {
-    let app = WorkbenchApp::new(&egui::Context::default(), None, Vec::new());
-    let mut h = Harness::builder()
-        .with_size(egui::Vec2::new(1400.0, 900.0))
-        .with_step_dt(1.0 / 60.0)
-        .build_ui_state(
-            |ui, app: &mut WorkbenchApp| {
-                app.tick(ui.ctx());
-                app.show(ui);
-            },
-            app,
-        );
-    // The samples load on a worker thread: wait for them (bounded).
-    for _ in 0..500 {
-        h.step();
-        if !h.state().is_loading() && h.state().sessions.len() == 2 {
-            break;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    assert_eq!(
-        h.state().sessions.len(),
-        2,
-        "errors: {:?}",
-        h.state().errors
-    );
-    h.run_ok();
-    h
+    common::gui::workbench(1400.0, 900.0)
 }
 
 #[test]

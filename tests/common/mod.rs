@@ -1,6 +1,9 @@
 //! Shared helpers of the integration tests.
 #![allow(dead_code)] // each test binary uses a different subset
 
+#[cfg(feature = "gui")]
+pub mod gui;
+
 use std::path::PathBuf;
 
 /// `../shared/datasets/<rel>` beside the checkout, or None (with the reason printed) when

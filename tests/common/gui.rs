@@ -1,0 +1,37 @@
+//! The workbench in an egui_kittest harness, opened on the bundled sample sessions.
+
+use std::time::{Duration, Instant};
+
+use egui_kittest::Harness;
+use tactile_workbench::app::WorkbenchApp;
+
+/// A harness of `width` × `height` at 60 frames per second, returned once both samples
+/// have loaded on their worker thread (bounded wait).
+pub fn workbench(width: f32, height: f32) -> Harness<'static, WorkbenchApp> {
+    let app = WorkbenchApp::new(&egui::Context::default(), None, Vec::new());
+    let mut h = Harness::builder()
+        .with_size(egui::Vec2::new(width, height))
+        .with_step_dt(1.0 / 60.0)
+        .build_ui_state(
+            |ui, app: &mut WorkbenchApp| {
+                app.tick(ui.ctx());
+                app.show(ui);
+            },
+            app,
+        );
+    let t = Instant::now();
+    while (h.state().is_loading() || h.state().sessions.len() < 2)
+        && t.elapsed() < Duration::from_secs(30)
+    {
+        h.step();
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    assert_eq!(
+        h.state().sessions.len(),
+        2,
+        "errors: {:?}",
+        h.state().errors
+    );
+    h.run_ok();
+    h
+}
