@@ -26,6 +26,21 @@ fn with_band(name: &str, x: Vec<f64>, stats: &[&MeanSd]) -> Series {
     s
 }
 
+/// The parameters every OIESGP result lists.
+fn common_parameters(
+    learner: &str,
+    features: FeatureSet,
+    reps: usize,
+    seed: u64,
+) -> BTreeMap<String, String> {
+    BTreeMap::from([
+        ("learner".to_string(), learner.to_string()),
+        ("features".to_string(), features_text(features).to_string()),
+        ("repetitions".to_string(), reps.to_string()),
+        ("seed".to_string(), seed.to_string()),
+    ])
+}
+
 pub fn features_text(f: FeatureSet) -> &'static str {
     match f {
         FeatureSet::All => "all features",
@@ -166,14 +181,8 @@ pub fn recognition_report(session: &str, r: &RecognitionResult) -> AnalysisResul
 
     let mean_train: f64 =
         r.repetitions.iter().map(|x| x.train_seconds).sum::<f64>() / reps.max(1) as f64;
-    let parameters = BTreeMap::from([
-        ("learner".to_string(), learner.to_string()),
-        (
-            "features".to_string(),
-            features_text(p.features).to_string(),
-        ),
-        ("repetitions".to_string(), reps.to_string()),
-        ("seed".to_string(), p.seed.to_string()),
+    let mut parameters = common_parameters(learner, p.features, reps, p.seed);
+    parameters.extend([
         (
             "taxel noise variance".to_string(),
             p.taxel_noise_variance.to_string(),
@@ -330,24 +339,16 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
     let runs = r.runs.len().max(1) as f64;
     let mean_step_us = r.runs.iter().map(|x| x.learn_step_us).sum::<f64>() / runs;
     scores.push(("learning step (µs)".into(), mean_step_us));
-    let parameters = BTreeMap::from([
-        ("learner".to_string(), learner.to_string()),
-        (
-            "features".to_string(),
-            features_text(p.features).to_string(),
+    let mut parameters = common_parameters(learner, p.features, reps, p.seed);
+    parameters.extend([(
+        "thresholds".to_string(),
+        format!(
+            "{} from {:.2} to {:.2}",
+            th.len(),
+            th.first().unwrap_or(&0.0),
+            th.last().unwrap_or(&0.0)
         ),
-        ("repetitions".to_string(), reps.to_string()),
-        ("seed".to_string(), p.seed.to_string()),
-        (
-            "thresholds".to_string(),
-            format!(
-                "{} from {:.2} to {:.2}",
-                th.len(),
-                th.first().unwrap_or(&0.0),
-                th.last().unwrap_or(&0.0)
-            ),
-        ),
-    ]);
+    )]);
     AnalysisResult {
         kind: AnalysisKind::Clustering,
         label,
