@@ -194,13 +194,13 @@ impl Replay {
                 });
             }
             colour_bar(ui, s.pressure_range, "pressure", &unit, cell.y + 20.0);
-            let trace = trace.filter(|t| {
-                t.session == session.meta.name && t.grasp == grasp && t.learner == self.learner
-            });
-            if let Some(t) = trace {
-                class_distribution(ui, &t.trace, self.frame, cell.y + 20.0);
-            }
         });
+        let trace = trace.filter(|t| {
+            t.session == session.meta.name && t.grasp == grasp && t.learner == self.learner
+        });
+        if let Some(t) = trace {
+            class_distribution(ui, &t.trace, self.frame, 160.0);
+        }
         if session.label_set("object").is_some() && !session.encoders.is_empty() {
             ui.horizontal(|ui| {
                 ComboBox::from_label("Recognition learner")
@@ -274,6 +274,8 @@ impl Replay {
 
 /// The learner's class distribution at the current step (bars), decided class marked.
 fn class_distribution(ui: &mut egui::Ui, t: &GraspTrace, frame: usize, height: f32) {
+    // A row of its own under the heatmaps: never wider than the page.
+    let width = ui.available_width().min(520.0);
     ui.vertical(|ui| {
         let step = frame.min(t.distribution.len().saturating_sub(1));
         let p = t.distribution.get(step).cloned().unwrap_or_default();
@@ -304,7 +306,7 @@ fn class_distribution(ui: &mut egui::Ui, t: &GraspTrace, frame: usize, height: f
         Plot::new("class_distribution")
             .allow_scroll(false)
             .height(height)
-            .width(420.0)
+            .width(width)
             .include_y(0.0)
             .include_y(1.0)
             .y_axis_label("probability")
