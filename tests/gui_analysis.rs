@@ -144,6 +144,42 @@ fn recognition_and_clustering_views_show_the_papers_figures() {
     h.get_by_label("Purity, ARI and NMI against the novelty threshold");
     h.get_by_label("Clusters against the novelty threshold");
     h.get_by_label("NMI against effective clusters");
+
+    // Each threshold's clustering counts every grasp once.
+    let details = &h.state().analyses.results[1].details[0];
+    let grasps = h
+        .state()
+        .sessions
+        .iter()
+        .map(|s| s.session.grasps.len() as f64)
+        .find(|&n| {
+            let tactile_workbench::figures::FigureKind::Heatmap(m) = &details.items[0].1.kind
+            else {
+                return false;
+            };
+            m.values.iter().flatten().sum::<f64>() == n
+        })
+        .expect("the contingency counts a session's grasps");
+    assert_eq!(details.items.len(), 3);
+    for (_, fig) in &details.items {
+        let tactile_workbench::figures::FigureKind::Heatmap(m) = &fig.kind else {
+            panic!("a contingency heatmap");
+        };
+        assert_eq!(m.values.iter().flatten().sum::<f64>(), grasps);
+    }
+
+    // The threshold marker shows the clustering at its threshold; the slider moves it.
+    h.get_by_label("Clustering at novelty threshold 0.2");
+    h.get_by_role_and_label(egui::accesskit::Role::Slider, "novelty threshold")
+        .focus();
+    h.run_ok();
+    h.key_press(egui::Key::ArrowRight);
+    h.run_ok();
+    h.get_by_label("Clustering at novelty threshold 0.3");
+    assert!(
+        h.query_by_label("Clustering at novelty threshold 0.2")
+            .is_none()
+    );
 }
 
 #[test]
@@ -180,4 +216,12 @@ fn stability_view_shows_the_first_papers_figures() {
         .unwrap();
     h.get_by_label(&format!("{wsr:.4}"));
     assert!(wsr > 0.6, "the sample's failures are learnable: {wsr}");
+
+    // A click on a basis image shows that basis's usage by label.
+    assert_eq!(h.get_all_by_label_contains("Click a basis").count(), 2);
+    h.get_all_by_label("show basis 3").next().unwrap().click();
+    h.run_ok();
+    h.get_by_label("Basis 3: usage by label");
+    let usage = &h.state().analyses.results[0].details[0].items[2].1;
+    assert_eq!(usage.title, "Basis 3: usage by label");
 }

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use egui::{ProgressBar, RichText};
 
-use super::figure_view;
+use super::figure_view::{self, Selection};
 use super::loader::LoadedSession;
 use crate::cluster::baselines::{BaselinesParams, run_baselines};
 use crate::cluster::grasp_features::session_features;
@@ -246,6 +246,8 @@ pub struct Analyses {
     pub jobs: Vec<RunningJob>,
     /// The result shown in each analysis view (index into `results`).
     pub shown: std::collections::HashMap<AnalysisKind, usize>,
+    /// The detail item selected through a figure: (result index, figure name) -> item.
+    pub selected: std::collections::HashMap<(usize, String), usize>,
     pub export: ExportSettings,
     pub baselines: BaselinesForm,
     pub recognition: RecognitionForm,
@@ -465,14 +467,73 @@ impl Analyses {
         let mut message = None;
         for (name, fig) in &r.figures {
             ui.separator();
+            let file = format!("{}-{name}", r.label.replace([' ', ',', '='], "_"));
             if ui
                 .button(format!("Export {name} (SVG, PNG, CSV)"))
                 .clicked()
             {
-                let file = format!("{}-{name}", r.label.replace([' ', ',', '='], "_"));
                 message = Some(self.export.write(fig, &file));
             }
-            figure_view::show(ui, &format!("{shown}-{name}"), fig, 300.0);
+            let id = format!("{shown}-{name}");
+            let Some(details) = r.details_of(name).filter(|d| !d.items.is_empty()) else {
+                figure_view::show(ui, &id, fig, 300.0, Selection::None);
+                continue;
+            };
+            let key = (shown, name.clone());
+            let chart = matches!(fig.kind, figures::FigureKind::Chart(_));
+            let mut sel = self.selected.get(&key).copied();
+            if chart {
+                // A chart always carries its marker; a slider moves it too.
+                let mut i = sel.unwrap_or(0).min(details.items.len() - 1);
+                let keys: Vec<f64> = details.items.iter().map(|x| x.0).collect();
+                ui.add(
+                    egui::Slider::new(&mut i, 0..=details.items.len() - 1)
+                        .text(&details.selector)
+                        .custom_formatter(move |v, _| format!("{}", keys[v as usize]))
+                        .custom_parser(|_| None),
+                );
+                sel = Some(i);
+            }
+            let selection = match (chart, sel) {
+                (true, Some(i)) => Selection::Marker(details.items[i].0),
+                _ => Selection::Image(sel),
+            };
+            let act = figure_view::show(ui, &id, fig, 300.0, selection);
+            if let Some(x) = act.marker_x {
+                sel = details.nearest(x);
+            }
+            if act.clicked_image.is_some() {
+                sel = act.clicked_image;
+            }
+            match sel.and_then(|i| details.items.get(i)) {
+                Some((_, detail)) => {
+                    ui.group(|ui| {
+                        if ui
+                            .button(format!("Export this {} (SVG, PNG, CSV)", details.selector))
+                            .clicked()
+                        {
+                            let file = format!(
+                                "{file}-{}",
+                                detail.title.replace([' ', ',', ':', '='], "_")
+                            );
+                            message = Some(self.export.write(detail, &file));
+                        }
+                        figure_view::show(
+                            ui,
+                            &format!("{id}-detail"),
+                            detail,
+                            220.0,
+                            Selection::None,
+                        );
+                    });
+                }
+                None => {
+                    ui.label(format!("Click a {} to see it in detail.", details.selector));
+                }
+            }
+            if let Some(i) = sel {
+                self.selected.insert(key, i);
+            }
         }
         self.messages.extend(message);
     }
@@ -850,7 +911,19 @@ impl Analyses {
                     let m = self.export.write(&fig, "speed-against-accuracy");
                     self.messages.push(m);
                 }
-                figure_view::show(ui, "speed-accuracy", &fig, 420.0);
+                let act = figure_view::show(ui, "speed-accuracy", &fig, 420.0, Selection::None);
+                // Clicking a model's point opens its view, like its button below.
+                let sources = report::speed_accuracy_sources(&self.results);
+                if let Some((series, k)) = act.clicked_point
+                    && let figures::FigureKind::Chart(c) = &fig.kind
+                    && c.series
+                        .get(series)
+                        .is_some_and(|s| s.name == "trained models")
+                    && let Some(&i) = sources.get(k)
+                {
+                    self.shown.insert(self.results[i].kind, i);
+                    self.open_request = Some(self.results[i].kind);
+                }
                 ui.label("Open a model's views:");
                 ui.horizontal_wrapped(|ui| {
                     for i in 0..self.results.len() {

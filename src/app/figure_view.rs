@@ -36,8 +36,36 @@ fn tick_text(scale: Scale, v: f64) -> String {
     }
 }
 
+/// What a figure lets the user select, and what is selected now.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Selection {
+    /// Nothing to select.
+    None,
+    /// Images of an image grid can be clicked; this one (if any) is highlighted.
+    Image(Option<usize>),
+    /// A chart carries a marker at this x value (data units) that the pointer drags.
+    Marker(f64),
+}
+
+/// What the user did to a figure this frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Interaction {
+    pub clicked_image: Option<usize>,
+    /// Where the marker was dragged or clicked to (data units).
+    pub marker_x: Option<f64>,
+    /// A marker point of a chart was clicked: (series, point) indices.
+    pub clicked_point: Option<(usize, usize)>,
+}
+
 /// Draw `figure` in the available width, `height` points tall.
-pub fn show(ui: &mut egui::Ui, id: &str, figure: &Figure, height: f32) {
+pub fn show(
+    ui: &mut egui::Ui,
+    id: &str,
+    figure: &Figure,
+    height: f32,
+    selection: Selection,
+) -> Interaction {
+    let mut interaction = Interaction::default();
     ui.strong(&figure.title);
     if let Some(sub) = &figure.subtitle {
         ui.label(sub);
@@ -64,7 +92,23 @@ pub fn show(ui: &mut egui::Ui, id: &str, figure: &Figure, height: f32) {
                     .include_y(coord(ys, lo).unwrap_or(lo))
                     .include_y(coord(ys, hi).unwrap_or(hi));
             }
-            plot.show(ui, |p| {
+            let marker = match selection {
+                Selection::Marker(x) => coord(xs, x),
+                _ => None,
+            };
+            if marker.is_some() {
+                // A drag moves the marker instead of panning the plot.
+                plot = plot.allow_drag(false);
+            }
+            let accent = ui.visuals().selection.bg_fill;
+            let shown = plot.show(ui, |p| {
+                if let Some(x) = marker {
+                    p.vline(
+                        VLine::new(format!("selected {}", chart.x.title), x)
+                            .color(accent)
+                            .width(2.5),
+                    );
+                }
                 for (i, s) in chart.series.iter().enumerate() {
                     let color = rgb(s.color.unwrap_or_else(|| series_color(i)));
                     let pts: Vec<[f64; 2]> =
@@ -147,6 +191,18 @@ pub fn show(ui: &mut egui::Ui, id: &str, figure: &Figure, height: f32) {
                     }
                 }
             });
+            let r = &shown.response;
+            if marker.is_some()
+                && (r.dragged() || r.clicked())
+                && let Some(pos) = r.interact_pointer_pos()
+            {
+                let x = shown.transform.value_from_position(pos).x;
+                interaction.marker_x = Some(if xs == Scale::Log { 10f64.powf(x) } else { x });
+            } else if r.clicked()
+                && let Some(pos) = r.interact_pointer_pos()
+            {
+                interaction.clicked_point = nearest_marker(chart, &shown.transform, pos, 12.0);
+            }
         }
         FigureKind::Bars(bars) => {
             let categories = bars.categories.clone();
@@ -311,10 +367,17 @@ pub fn show(ui: &mut egui::Ui, id: &str, figure: &Figure, height: f32) {
             let per_row = if g.columns > 0 { g.columns } else { 10 };
             ui.horizontal(|ui| {
                 ui.vertical(|ui| {
-                    for chunk in g.images.chunks(per_row) {
+                    for (row, chunk) in g.images.chunks(per_row).enumerate() {
                         ui.horizontal(|ui| {
-                            for img in chunk {
-                                image_cell(ui, img, g.colors.map, limits);
+                            for (k, img) in chunk.iter().enumerate() {
+                                let i = row * per_row + k;
+                                let state = match selection {
+                                    Selection::Image(sel) => Some(sel == Some(i)),
+                                    _ => None,
+                                };
+                                if image_cell(ui, img, g.colors.map, limits, state) {
+                                    interaction.clicked_image = Some(i);
+                                }
                             }
                         });
                     }
@@ -323,6 +386,35 @@ pub fn show(ui: &mut egui::Ui, id: &str, figure: &Figure, height: f32) {
             });
         }
     }
+    interaction
+}
+
+/// The marker point of `chart` drawn nearest to `pos`, if within `radius` points.
+fn nearest_marker(
+    chart: &figures::Chart,
+    transform: &egui_plot::PlotTransform,
+    pos: Pos2,
+    radius: f32,
+) -> Option<(usize, usize)> {
+    let (xs, ys) = (chart.x.scale, chart.y.scale);
+    let mut best: Option<(f32, (usize, usize))> = None;
+    for (i, s) in chart.series.iter().enumerate() {
+        if !matches!(s.style, SeriesStyle::Markers | SeriesStyle::LineMarkers) {
+            continue;
+        }
+        for (k, (&x, &y)) in s.x.iter().zip(&s.y).enumerate() {
+            let (Some(x), Some(y)) = (coord(xs, x), coord(ys, y)) else {
+                continue;
+            };
+            let d = transform
+                .position_from_point(&PlotPoint::new(x, y))
+                .distance(pos);
+            if d <= radius && best.is_none_or(|(b, _)| d < b) {
+                best = Some((d, (i, k)));
+            }
+        }
+    }
+    best.map(|(_, hit)| hit)
 }
 
 fn figures_axis_text(title: &str, unit: &str) -> String {
@@ -341,15 +433,32 @@ fn short(v: f64) -> String {
     }
 }
 
-fn image_cell(ui: &mut egui::Ui, img: &figures::GridImage, map: ColorMap, limits: (f64, f64)) {
+/// One image of a grid; `selected` is None when images are not clickable, else whether
+/// this one is the selected one. Returns whether it was clicked.
+fn image_cell(
+    ui: &mut egui::Ui,
+    img: &figures::GridImage,
+    map: ColorMap,
+    limits: (f64, f64),
+    selected: Option<bool>,
+) -> bool {
     let rows = img.values.len();
     let cols = img.values.first().map_or(0, Vec::len);
     let cell = (56.0 / rows.max(cols).max(1) as f32).max(3.0);
     ui.vertical(|ui| {
-        let (rect, response) = ui.allocate_exact_size(
-            Vec2::new(cell * cols as f32, cell * rows as f32),
-            Sense::hover(),
-        );
+        let sense = if selected.is_some() {
+            Sense::click()
+        } else {
+            Sense::hover()
+        };
+        let (rect, response) =
+            ui.allocate_exact_size(Vec2::new(cell * cols as f32, cell * rows as f32), sense);
+        if selected.is_some() {
+            let caption = img.caption.clone();
+            response.widget_info(|| {
+                egui::WidgetInfo::labeled(egui::Role::Button, true, format!("show {caption}"))
+            });
+        }
         let painter = ui.painter_at(rect);
         let mut hover = None;
         for (r, row) in img.values.iter().enumerate() {
@@ -370,13 +479,29 @@ fn image_cell(ui: &mut egui::Ui, img: &figures::GridImage, map: ColorMap, limits
                 }
             }
         }
+        if selected == Some(true) {
+            painter.rect_stroke(
+                rect,
+                0.0,
+                Stroke::new(2.0, ui.visuals().selection.bg_fill),
+                egui::StrokeKind::Outside,
+            );
+        }
+        let clicked = response.clicked();
         if let Some(v) = hover {
+            let response = if selected.is_some() {
+                response.on_hover_cursor(egui::CursorIcon::PointingHand)
+            } else {
+                response
+            };
             response.on_hover_text_at_pointer(format!("{}: {v:.4}", img.caption));
         }
         if !img.caption.is_empty() {
             ui.small(&img.caption);
         }
-    });
+        clicked
+    })
+    .inner
 }
 
 fn colour_bar(ui: &mut egui::Ui, scale: &ColorScale, limits: (f64, f64), height: f32) {

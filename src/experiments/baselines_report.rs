@@ -150,5 +150,6 @@ pub fn baselines_report(session: &str, r: &BaselinesResult, train_seconds: f64) 
         predict_seconds_per_sample: None,
         created: now_unix(),
         figures,
+        details: Vec::new(),
     }
 }

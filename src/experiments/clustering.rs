@@ -116,6 +116,10 @@ pub struct ClusteringRun {
     pub nmi: f64,
     /// Microseconds per observation of the learning phase (predict + novelty + train).
     pub learn_step_us: f64,
+    /// The cluster of every grasp (session order) after re-assignment; kept for the first
+    /// order only, so a view can show the clustering at each threshold.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub assignment: Option<Vec<usize>>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -155,6 +159,11 @@ pub struct ClusteringResult {
     /// The SOM set-up of the baseline (grid 2 × ⌈k/2⌉ for k units).
     pub som_setup: SomParams,
     pub wall_seconds: f64,
+    /// The true class of every grasp (session order) and the class names.
+    #[serde(default)]
+    pub labels: Vec<usize>,
+    #[serde(default)]
+    pub class_names: Vec<String>,
 }
 
 enum Learner {
@@ -218,6 +227,7 @@ fn one_run(
         ari: sc.ari,
         nmi: sc.nmi,
         learn_step_us,
+        assignment: (rep == 0).then_some(pred),
     })
 }
 
@@ -317,7 +327,7 @@ pub fn run_clustering(
 ) -> Result<ClusteringResult, ExperimentError> {
     params.validate()?;
     let start = Instant::now();
-    let (labels, _) = session_labels(session, &params.label_set)?;
+    let (labels, class_names) = session_labels(session, &params.label_set)?;
     let feats = feature_sequences(
         session,
         &SequenceParams {
@@ -378,5 +388,7 @@ pub fn run_clustering(
         som,
         som_setup: som_setup(10, params.seed),
         wall_seconds: start.elapsed().as_secs_f64(),
+        labels,
+        class_names,
     })
 }

@@ -6,9 +6,9 @@
 
 use std::collections::BTreeMap;
 
-use super::clustering::{ClusteringResult, EffectivePoint, UnsupervisedLearner};
+use super::clustering::{ClusteringResult, ClusteringRun, EffectivePoint, UnsupervisedLearner};
 use super::recognition::{MeanSd, RecognitionResult, SupervisedLearner};
-use super::report::{AnalysisKind, AnalysisResult, now_unix};
+use super::report::{AnalysisKind, AnalysisResult, FigureDetails, now_unix};
 use crate::features::sequence::FeatureSet;
 use crate::figures::{
     Axis, AxisTitle, BarGroup, ColorScale, ErrorDisplay, ErrorRange, Figure, FigureKind, Heatmap,
@@ -207,6 +207,7 @@ pub fn recognition_report(session: &str, r: &RecognitionResult) -> AnalysisResul
         predict_seconds_per_sample: Some(s.predict_step_us * 1e-6),
         created: now_unix(),
         figures,
+        details: Vec::new(),
     }
 }
 
@@ -360,5 +361,90 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
         predict_seconds_per_sample: None,
         created: now_unix(),
         figures,
+        details: clustering_details(r),
     }
+}
+
+/// The clustering of the first order at every threshold, selected by the threshold marker
+/// on Fig. 11: true classes against clusters, counted in grasps.
+fn clustering_details(r: &ClusteringResult) -> Vec<FigureDetails> {
+    let items: Vec<(f64, Figure)> = r
+        .runs
+        .iter()
+        .filter_map(|run| {
+            let a = run.assignment.as_ref()?;
+            (a.len() == r.labels.len() && !a.is_empty())
+                .then(|| (run.threshold, contingency(r, run, a)))
+        })
+        .collect();
+    if items.is_empty() {
+        return Vec::new();
+    }
+    vec![FigureDetails {
+        figure: "scores-vs-threshold".into(),
+        selector: "novelty threshold".into(),
+        items,
+    }]
+}
+
+fn contingency(r: &ClusteringResult, run: &ClusteringRun, assignment: &[usize]) -> Figure {
+    let classes = r
+        .class_names
+        .len()
+        .max(r.labels.iter().max().map_or(0, |m| m + 1));
+    let mut clusters: Vec<usize> = assignment.to_vec();
+    clusters.sort_unstable();
+    clusters.dedup();
+    let mut counts = vec![vec![0.0_f64; clusters.len()]; classes];
+    for (&l, a) in r.labels.iter().zip(assignment) {
+        if let Ok(c) = clusters.binary_search(a) {
+            counts[l][c] += 1.0;
+        }
+    }
+    // Order the clusters by their majority class, so a good clustering reads as a diagonal.
+    let majority = |c: usize| {
+        (0..classes)
+            .max_by(|&x, &y| counts[x][c].total_cmp(&counts[y][c]).then(y.cmp(&x)))
+            .unwrap_or(0)
+    };
+    let mut order: Vec<usize> = (0..clusters.len()).collect();
+    order.sort_by_key(|&c| (majority(c), clusters[c]));
+    let values: Vec<Vec<f64>> = counts
+        .iter()
+        .map(|row| order.iter().map(|&c| row[c]).collect())
+        .collect();
+    let rows = (0..classes)
+        .map(|l| {
+            r.class_names
+                .get(l)
+                .cloned()
+                .unwrap_or_else(|| format!("class {}", l + 1))
+        })
+        .collect();
+    Figure::new(
+        format!("Clustering at novelty threshold {}", run.threshold),
+        FigureKind::Heatmap(Heatmap {
+            x: AxisTitle {
+                title: "cluster (by creation)".into(),
+                unit: String::new(),
+            },
+            y: AxisTitle {
+                title: "true class".into(),
+                unit: String::new(),
+            },
+            columns: order
+                .iter()
+                .map(|&c| (clusters[c] + 1).to_string())
+                .collect(),
+            rows,
+            values,
+            colors: ColorScale::viridis("grasps", ""),
+            annotate: true,
+            marked: Vec::new(),
+        }),
+    )
+    .subtitle(format!(
+        "first order: {} clusters created, {} effective; purity {:.3}, ARI {:.3}, NMI {:.3}",
+        run.clusters, run.effective, run.purity, run.ari, run.nmi
+    ))
 }

@@ -55,11 +55,42 @@ pub struct AnalysisResult {
     /// Seconds since the Unix epoch when it was computed.
     pub created: u64,
     pub figures: Vec<(String, Figure)>,
+    /// Figures a view shows on demand when the user selects part of a figure.
+    #[serde(default)]
+    pub details: Vec<FigureDetails>,
+}
+
+/// Detail figures selected by interacting with one of a result's figures: a click on an
+/// image of an image grid (key = the image's index), or the marker dragged along a
+/// chart's x axis (key = the x value; the nearest key is shown).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FigureDetails {
+    /// Name of the figure (in `AnalysisResult::figures`) whose interaction selects.
+    pub figure: String,
+    /// What is selected, in words, e.g. "basis" or "novelty threshold".
+    pub selector: String,
+    pub items: Vec<(f64, Figure)>,
+}
+
+impl FigureDetails {
+    /// Index of the item whose key is nearest to `key`.
+    pub fn nearest(&self, key: f64) -> Option<usize> {
+        (0..self.items.len()).min_by(|&a, &b| {
+            (self.items[a].0 - key)
+                .abs()
+                .total_cmp(&(self.items[b].0 - key).abs())
+        })
+    }
 }
 
 impl AnalysisResult {
     pub fn score(&self, name: &str) -> Option<f64> {
         self.scores.iter().find(|(n, _)| n == name).map(|(_, v)| *v)
+    }
+
+    /// The detail figures selected through figure `name`, if it has any.
+    pub fn details_of(&self, name: &str) -> Option<&FigureDetails> {
+        self.details.iter().find(|d| d.figure == name)
     }
 }
 
@@ -203,6 +234,19 @@ impl Project {
     }
 }
 
+/// (training time, headline score) of a result the speed-against-accuracy chart can place.
+fn charted(r: &AnalysisResult) -> Option<(f64, f64, &str)> {
+    let (name, score) = r.headline.as_ref()?;
+    (r.train_seconds > 0.0 && score.is_finite()).then_some((r.train_seconds, *score, name))
+}
+
+/// Indices into `results` of the speed-against-accuracy chart's points, in series order.
+pub fn speed_accuracy_sources(results: &[AnalysisResult]) -> Vec<usize> {
+    (0..results.len())
+        .filter(|&i| charted(&results[i]).is_some())
+        .collect()
+}
+
 /// Speed against accuracy: every result with a headline score, training time on a log axis,
 /// the Pareto front drawn, each point labelled with its method and session.
 pub fn speed_accuracy(results: &[AnalysisResult]) -> Option<Figure> {
@@ -210,9 +254,8 @@ pub fn speed_accuracy(results: &[AnalysisResult]) -> Option<Figure> {
     let rows: Vec<(f64, f64, String)> = results
         .iter()
         .filter_map(|r| {
-            let (name, score) = r.headline.as_ref()?;
-            (r.train_seconds > 0.0 && score.is_finite())
-                .then(|| (r.train_seconds, *score, format!("{} ({name})", r.label)))
+            let (t, score, name) = charted(r)?;
+            Some((t, score, format!("{} ({name})", r.label)))
         })
         .collect();
     if rows.is_empty() {
@@ -261,6 +304,7 @@ mod tests {
                     vec![Series::new("DS", vec![1.0, 2.0], vec![0.5, f64::NAN])],
                 ),
             )],
+            details: Vec::new(),
         }
     }
 
@@ -297,5 +341,53 @@ mod tests {
         let set = figure_set(&back.results);
         assert_eq!(set.entries[0].name, "01-ds-all-features-accuracy");
         let _ = std::fs::remove_dir_all(dir);
+    }
+
+    #[test]
+    fn details_pick_the_nearest_key_and_older_projects_load_without_them() {
+        let fig = |t: &str| {
+            Figure::chart(
+                t,
+                Axis::new("x", ""),
+                Axis::new("y", ""),
+                vec![Series::new("s", vec![0.0], vec![0.0])],
+            )
+        };
+        let d = FigureDetails {
+            figure: "accuracy".into(),
+            selector: "novelty threshold".into(),
+            items: vec![(0.1, fig("a")), (0.2, fig("b")), (0.4, fig("c"))],
+        };
+        assert_eq!(d.nearest(-5.0), Some(0));
+        assert_eq!(d.nearest(0.16), Some(1));
+        assert_eq!(d.nearest(0.31), Some(2));
+        let mut r = result();
+        r.details.push(d);
+        assert!(r.details_of("accuracy").is_some());
+        assert!(r.details_of("other").is_none());
+        let mut json = serde_json::to_value(result()).unwrap();
+        json.as_object_mut().unwrap().remove("details");
+        let back: AnalysisResult = serde_json::from_value(json).unwrap();
+        assert!(back.details.is_empty());
+    }
+
+    #[test]
+    fn speed_accuracy_sources_follow_the_charted_points() {
+        let mut untimed = result();
+        untimed.train_seconds = 0.0;
+        let mut headless = result();
+        headless.headline = None;
+        let results = vec![untimed, result(), headless, result()];
+        assert_eq!(speed_accuracy_sources(&results), vec![1, 3]);
+        let f = speed_accuracy(&results).unwrap();
+        let crate::figures::FigureKind::Chart(c) = &f.kind else {
+            panic!("a chart");
+        };
+        let points = c
+            .series
+            .iter()
+            .find(|s| s.name == "trained models")
+            .unwrap();
+        assert_eq!(points.x.len(), 2);
     }
 }

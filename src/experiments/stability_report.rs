@@ -6,8 +6,8 @@
 
 use std::collections::BTreeMap;
 
-use super::report::{AnalysisKind, AnalysisResult, distinct_sorted, now_unix};
-use super::stability::{GridImage as PatchImage, StabilityReport};
+use super::report::{AnalysisKind, AnalysisResult, FigureDetails, distinct_sorted, now_unix};
+use super::stability::{BasisUsage, GridImage as PatchImage, StabilityReport};
 use crate::figures::{
     Axis, AxisTitle, BarGroup, ColorScale, ErrorDisplay, ErrorRange, Figure, FigureKind, GridImage,
     Heatmap, ImageGrid, Orientation, Series, SeriesStyle,
@@ -83,6 +83,38 @@ fn signed_bars(title: &str, y: &str, name: &str, values: &[f64]) -> Figure {
         b.sign_colors = true;
     }
     f
+}
+
+/// What one basis does for each label, shown when its image is clicked.
+fn basis_detail(u: &BasisUsage, b: usize, ok: &str, bad: &str) -> Figure {
+    let at = |v: &[f64]| v.get(b).copied().unwrap_or(f64::NAN);
+    Figure::bars(
+        format!("Basis {}: usage by label", b + 1),
+        AxisTitle {
+            title: "label".into(),
+            unit: String::new(),
+        },
+        Axis::new(format!("share using basis {}", b + 1), "").including(0.0, 1.0),
+        vec![ok.into(), bad.into()],
+        vec![
+            BarGroup::new(
+                "grasps",
+                vec![at(&u.grasp_usage_success), at(&u.grasp_usage_failure)],
+            ),
+            BarGroup::new(
+                "patches",
+                vec![at(&u.patch_usage_success), at(&u.patch_usage_failure)],
+            ),
+        ],
+    )
+    .subtitle(format!(
+        "usage differential {:+.3}; mean |coefficient| when used: {ok} {:.3}, {bad} {:.3} \
+         (differential {:+.3})",
+        at(&u.usage_differential),
+        at(&u.mean_abs_coef_success),
+        at(&u.mean_abs_coef_failure),
+        at(&u.coefficient_differential),
+    ))
 }
 
 /// Scores, timings and figures of a grasp-stability run.
@@ -349,6 +381,25 @@ pub fn stability_report(r: &StabilityReport) -> AnalysisResult {
         }
     }
 
+    // A click on a basis image (raw or filtered) shows that basis's usage.
+    let usage_items: Vec<(f64, Figure)> = r
+        .analyses
+        .basis_images
+        .iter()
+        .filter(|b| b.raw.is_some())
+        .enumerate()
+        .map(|(i, b)| (i as f64, basis_detail(u, b.basis, ok, bad)))
+        .collect();
+    let details = ["bases-raw", "bases-filtered"]
+        .into_iter()
+        .filter(|name| figures.iter().any(|(n, _)| n == name))
+        .map(|name| FigureDetails {
+            figure: name.into(),
+            selector: "basis".into(),
+            items: usage_items.clone(),
+        })
+        .collect();
+
     let train = p.dictionary_secs;
     let parameters = BTreeMap::from([
         ("num_bases".to_string(), cfg.num_bases.to_string()),
@@ -405,5 +456,6 @@ pub fn stability_report(r: &StabilityReport) -> AnalysisResult {
         predict_seconds_per_sample: None,
         created: now_unix(),
         figures,
+        details,
     }
 }
