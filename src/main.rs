@@ -8,6 +8,7 @@ fn main() -> std::process::ExitCode {
         Some(command) => cli::run(command),
         None => open_window(
             args.files,
+            args.view,
             args.measure_startup,
             args.measure_frames,
             started,
@@ -25,6 +26,7 @@ fn main() -> std::process::ExitCode {
 #[cfg(feature = "gui")]
 fn open_window(
     files: Vec<std::path::PathBuf>,
+    view: Option<cli::ViewArg>,
     measure_startup: bool,
     measure_frames: Option<f64>,
     started: std::time::Instant,
@@ -35,12 +37,13 @@ fn open_window(
         (None, true) => Some(Measure::Startup(started)),
         (None, false) => None,
     };
-    tactile_workbench::app::run(files, measure)
+    tactile_workbench::app::run(files, view, measure)
 }
 
 #[cfg(not(feature = "gui"))]
 fn open_window(
     _files: Vec<std::path::PathBuf>,
+    _view: Option<cli::ViewArg>,
     _measure_startup: bool,
     _measure_frames: Option<f64>,
     _started: std::time::Instant,

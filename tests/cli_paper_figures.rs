@@ -16,6 +16,7 @@ fn baselines_figures_are_written_with_an_index() {
         width: 640,
         height: 420,
         dpi: 96.0,
+        project: None,
     })
     .expect("paper-figures");
     let index = std::fs::read_to_string(out.join("index.md")).unwrap();
@@ -32,5 +33,42 @@ fn baselines_figures_are_written_with_an_index() {
     assert!(csv.lines().count() >= 4, "{csv}");
     let png = std::fs::read(out.join("01-baselines-k-10-scores.png")).unwrap();
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    let _ = std::fs::remove_dir_all(out);
+}
+
+#[test]
+fn stability_figures_and_project_regenerate_the_first_paper() {
+    let out = common::temp_dir("paper-figures-stability");
+    let project = out.join("project.json");
+    run(PaperFiguresArgs {
+        session: common::sample("grasp-stability.json"),
+        experiment: Experiment::Stability,
+        out_dir: out.clone(),
+        reps: 1,
+        seed: 0,
+        width: 640,
+        height: 420,
+        dpi: 96.0,
+        project: Some(project.clone()),
+    })
+    .expect("paper-figures");
+    let index = std::fs::read_to_string(out.join("index.md")).unwrap();
+    for title in [
+        "Weighted success rate against the number of bases",
+        "Basis images",
+        "Basis usage per label",
+        "Coefficient differential",
+        "A patch and its reconstruction",
+    ] {
+        assert!(index.contains(title), "index lacks {title}");
+    }
+    // The project re-opens with the figures and the per-basis details.
+    let p = tactile_workbench::experiments::report::Project::load(&project).unwrap();
+    let r = &p.results[0];
+    let bases = r.details_of("bases-raw").expect("basis details");
+    assert_eq!(
+        bases.items.len(),
+        r.parameters["num_bases"].parse::<usize>().unwrap()
+    );
     let _ = std::fs::remove_dir_all(out);
 }

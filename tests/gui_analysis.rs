@@ -225,3 +225,55 @@ fn stability_view_shows_the_first_papers_figures() {
     let usage = &h.state().analyses.results[0].details[0].items[2].1;
     assert_eq!(usage.title, "Basis 3: usage by label");
 }
+
+#[test]
+fn a_project_on_the_command_line_reopens_its_sessions_and_shows_its_results() {
+    use tactile_workbench::experiments::report::{AnalysisKind, AnalysisResult, Project};
+    use tactile_workbench::figures::{Axis, Figure, Series};
+    let session = tactile_workbench::session::open(&common::sample("grasp-stability.json"))
+        .unwrap()
+        .meta
+        .name;
+    let result = AnalysisResult {
+        kind: AnalysisKind::Stability,
+        label: "saved model".into(),
+        session,
+        parameters: Default::default(),
+        scores: vec![("weighted success rate (10-fold)".into(), 0.8125)],
+        headline: Some(("weighted success rate (10-fold)".into(), 0.8125)),
+        train_seconds: 2.0,
+        predict_seconds_per_sample: None,
+        created: 0,
+        figures: vec![(
+            "curve".into(),
+            Figure::chart(
+                "A saved curve",
+                Axis::new("x", ""),
+                Axis::new("y", ""),
+                vec![Series::new("s", vec![1.0, 2.0], vec![0.5, 0.7])],
+            ),
+        )],
+        details: Vec::new(),
+    };
+    let dir = common::temp_dir("gui-project");
+    let path = dir.join("saved.json");
+    Project::new(
+        vec![
+            "sample: object-recognition.json".into(),
+            "sample: grasp-stability.json".into(),
+        ],
+        vec![result],
+    )
+    .save(&path)
+    .unwrap();
+    let mut h = common::gui::workbench_opening(vec![path], 1200.0, 900.0);
+    h.state_mut().view = View::Stability;
+    for _ in 0..10 {
+        h.step();
+    }
+    h.run_ok();
+    assert_eq!(h.state().analyses.results.len(), 1);
+    h.get_by_label("A saved curve");
+    h.get_by_label("0.8125");
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -259,6 +259,9 @@ pub struct Analyses {
     pub open_request: Option<AnalysisKind>,
     /// The last recognition trace computed for the replay.
     pub trace: Option<ReplayTrace>,
+    /// A project that just opened: the sessions it names (for the app to reopen) and the
+    /// session of its first result.
+    pub opened_project: Option<(Vec<String>, Option<String>)>,
 }
 
 impl Analyses {
@@ -296,7 +299,9 @@ impl Analyses {
                         p.results.len(),
                         p.sessions.join(", ")
                     ));
+                    let first = p.results.first().map(|r| r.session.clone());
                     self.results.extend(p.results);
+                    self.opened_project = Some((p.sessions, first));
                 }
                 Some(Outcome::Cancelled) => self.messages.push(format!("{}: cancelled", rj.title)),
                 Some(Outcome::Failed(e)) => self.messages.push(format!("{} failed: {e}", rj.title)),
@@ -418,6 +423,15 @@ impl Analyses {
                 Ok(JobOutput::Project(project))
             },
         );
+    }
+
+    /// The result `kind`'s view shows (the chosen one, else the newest).
+    pub fn shown_result(&self, kind: AnalysisKind) -> Option<&AnalysisResult> {
+        self.shown
+            .get(&kind)
+            .and_then(|&i| self.results.get(i))
+            .filter(|r| r.kind == kind)
+            .or_else(|| self.results.iter().rev().find(|r| r.kind == kind))
     }
 
     fn results_ui(&mut self, ui: &mut egui::Ui, kind: AnalysisKind, session: &str) {

@@ -29,6 +29,16 @@ pub enum Source {
 }
 
 impl Source {
+    /// The source a `label` names (as a project file lists its sessions).
+    pub fn from_label(label: &str) -> Source {
+        match label.strip_prefix("sample: ") {
+            Some(name) if BUNDLED.iter().any(|(n, _)| *n == name) => {
+                Source::Bundled(name.to_string())
+            }
+            _ => Source::File(PathBuf::from(label)),
+        }
+    }
+
     pub fn label(&self) -> String {
         match self {
             Source::Bundled(name) => format!("sample: {name}"),

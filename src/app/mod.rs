@@ -35,6 +35,20 @@ pub enum View {
     SpeedAccuracy,
 }
 
+impl From<crate::cli::ViewArg> for View {
+    fn from(v: crate::cli::ViewArg) -> Self {
+        use crate::cli::ViewArg;
+        match v {
+            ViewArg::Replay => View::Replay,
+            ViewArg::Stability => View::Stability,
+            ViewArg::Recognition => View::Recognition,
+            ViewArg::Clustering => View::Clustering,
+            ViewArg::Baselines => View::Baselines,
+            ViewArg::SpeedAccuracy => View::SpeedAccuracy,
+        }
+    }
+}
+
 impl View {
     pub const ALL: [View; 6] = [
         View::Replay,
@@ -53,6 +67,17 @@ impl View {
             View::Clustering => "Clustering",
             View::Baselines => "Baselines",
             View::SpeedAccuracy => "Speed vs accuracy",
+        }
+    }
+
+    /// The analysis this view shows, if it shows one.
+    pub fn kind(self) -> Option<AnalysisKind> {
+        match self {
+            View::Stability => Some(AnalysisKind::Stability),
+            View::Recognition => Some(AnalysisKind::Recognition),
+            View::Clustering => Some(AnalysisKind::Clustering),
+            View::Baselines => Some(AnalysisKind::Baselines),
+            View::Replay | View::SpeedAccuracy => None,
         }
     }
 
@@ -104,6 +129,9 @@ pub struct WorkbenchApp {
     dialog: Option<(Dialog, Receiver<Vec<PathBuf>>)>,
     /// The selection to restore once the persisted sessions have loaded.
     restore: Option<(usize, usize)>,
+    /// After a project opens: once its sessions have loaded, show the open view's results,
+    /// or else those of this session.
+    focus_pending: Option<Option<String>>,
 }
 
 impl WorkbenchApp {
@@ -128,6 +156,7 @@ impl WorkbenchApp {
             requested: Vec::new(),
             dialog: None,
             restore: None,
+            focus_pending: None,
         };
         ctx.set_theme(if app.dark {
             egui::Theme::Dark
@@ -136,7 +165,7 @@ impl WorkbenchApp {
         });
         if !files.is_empty() {
             for f in files {
-                app.open(Source::File(f), ctx);
+                app.open_path(f, ctx);
             }
         } else if !p.sources.is_empty() {
             app.restore = p.selected;
@@ -152,6 +181,31 @@ impl WorkbenchApp {
     pub fn open_samples(&mut self, ctx: &egui::Context) {
         for (name, _) in loader::BUNDLED {
             self.open(Source::Bundled(name.to_string()), ctx);
+        }
+    }
+
+    /// Open a session file, or a project file (which reopens its sessions).
+    pub fn open_path(&mut self, path: PathBuf, ctx: &egui::Context) {
+        if crate::experiments::report::is_project(&path) {
+            self.analyses.open_project(ctx, path);
+        } else {
+            self.open(Source::File(path), ctx);
+        }
+    }
+
+    /// Make the session of the result `kind`'s view shows the active one.
+    fn focus_results(&mut self, kind: AnalysisKind) {
+        let name = self.analyses.shown_result(kind).map(|r| r.session.clone());
+        self.focus_session(name.as_deref());
+    }
+
+    fn focus_session(&mut self, name: Option<&str>) {
+        if let Some(i) = self
+            .sessions
+            .iter()
+            .position(|s| Some(s.session.meta.name.as_str()) == name)
+        {
+            self.browser.active = i;
         }
     }
 
@@ -269,6 +323,21 @@ impl WorkbenchApp {
         }
         if let Some(kind) = self.analyses.open_request.take() {
             self.view = View::of(kind);
+            self.focus_results(kind);
+        }
+        if let Some((sessions, first)) = self.analyses.opened_project.take() {
+            for label in sessions {
+                self.open(Source::from_label(&label), ctx);
+            }
+            self.focus_pending = Some(first);
+        }
+        if !self.is_loading()
+            && let Some(first) = self.focus_pending.take()
+        {
+            match self.view.kind() {
+                Some(kind) => self.focus_results(kind),
+                None => self.focus_session(first.as_deref()),
+            }
         }
         let dropped: Vec<PathBuf> = ctx.input(|i| {
             i.raw
@@ -278,7 +347,7 @@ impl WorkbenchApp {
                 .collect()
         });
         for p in dropped {
-            self.open(Source::File(p), ctx);
+            self.open_path(p, ctx);
         }
         if let Some((n, rate)) = self.replay_frames() {
             let (space, left, right, dt) = ctx.input(|i| {
@@ -571,7 +640,11 @@ impl eframe::App for EframeApp {
 
 /// Open the workbench window; with `measure`, measure the window itself, print the result
 /// and close.
-pub fn run(files: Vec<PathBuf>, measure: Option<Measure>) -> anyhow::Result<()> {
+pub fn run(
+    files: Vec<PathBuf>,
+    view: Option<crate::cli::ViewArg>,
+    measure: Option<Measure>,
+) -> anyhow::Result<()> {
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_title("Tactile Workbench")
@@ -588,8 +661,12 @@ pub fn run(files: Vec<PathBuf>, measure: Option<Measure>) -> anyhow::Result<()> 
                 .storage
                 .filter(|_| measure.is_none())
                 .and_then(|s| eframe::get_value::<Persisted>(s, STORAGE_KEY));
+            let mut app = WorkbenchApp::new(&cc.egui_ctx, persisted, files);
+            if let Some(v) = view {
+                app.view = View::from(v);
+            }
             Ok(Box::new(EframeApp {
-                app: WorkbenchApp::new(&cc.egui_ctx, persisted, files),
+                app,
                 measure,
                 first_frame: None,
                 frame_ms: Vec::new(),

@@ -33,6 +33,20 @@ pub struct Cli {
     /// print the UI time per frame over at most SECONDS, and quit (a frame-time benchmark).
     #[arg(long, value_name = "SECONDS")]
     pub measure_frames: Option<f64>,
+    /// The view to open in the workbench (default: the one of the last run).
+    #[arg(long, value_enum)]
+    pub view: Option<ViewArg>,
+}
+
+/// The workbench's views, as the command line names them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ViewArg {
+    Replay,
+    Stability,
+    Recognition,
+    Clustering,
+    Baselines,
+    SpeedAccuracy,
 }
 
 #[derive(Subcommand, Debug)]

@@ -12,7 +12,11 @@ use crate::experiments::baselines_report::baselines_report;
 use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_clustering};
 use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
 use crate::experiments::recognition_report::{clustering_report, recognition_report};
-use crate::experiments::report::{AnalysisResult, figure_set, speed_accuracy};
+use crate::experiments::report::{AnalysisResult, Project, figure_set, speed_accuracy};
+use crate::experiments::stability::{
+    self, DataOptions, GridSpec, PipelineSettings, StabilityData, StabilityOptions,
+};
+use crate::experiments::stability_report::stability_report;
 use crate::features::FeatureSet;
 use crate::figures::{FigureEntry, Format, RenderOptions, export_all};
 use crate::jobs::Progress;
@@ -25,6 +29,9 @@ pub enum Experiment {
     Clustering,
     /// k-means, SOM and RBF SVM on the Table I features.
     Baselines,
+    /// Grasp stability by sparse coding and a linear SVM over the 108-cell benchmark grid
+    /// (the first paper's Figs. 2 and 5–11); --reps does not apply.
+    Stability,
 }
 
 #[derive(Args, Debug)]
@@ -47,6 +54,9 @@ pub struct PaperFiguresArgs {
     pub height: u32,
     #[arg(long, default_value_t = 96.0)]
     pub dpi: f64,
+    /// Also save the results as a project, to inspect them in the workbench.
+    #[arg(long)]
+    pub project: Option<PathBuf>,
 }
 
 pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
@@ -112,6 +122,28 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
             let r = run_baselines(features.view(), &truth, &params, &progress)?;
             results.push(baselines_report(&name, &r, t0.elapsed().as_secs_f64()));
         }
+        Experiment::Stability => {
+            let data = StabilityData::from_session(&session, &DataOptions::default())?;
+            let mut settings = PipelineSettings {
+                cv_seed: a.seed,
+                ..Default::default()
+            };
+            settings.dictionary.seed = a.seed;
+            settings.svm.seed = a.seed;
+            let opts = StabilityOptions {
+                grid: Some(GridSpec::bench()),
+                settings,
+                ..Default::default()
+            };
+            let r = stability::run(&data, &opts, &progress)?;
+            let report = stability_report(&r);
+            eprintln!("{}: done in {:.1} s", report.label, r.secs);
+            results.push(report);
+        }
+    }
+    if let Some(path) = &a.project {
+        Project::new(vec![a.session.display().to_string()], results.clone()).save(path)?;
+        println!("wrote {}", path.display());
     }
     let mut set = figure_set(&results);
     if let Some(f) = speed_accuracy(&results) {
@@ -128,6 +160,7 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
         height: a.height,
         dpi: a.dpi,
     };
+    let t0 = std::time::Instant::now();
     let index = export_all(
         &set,
         &a.out_dir,
@@ -135,9 +168,10 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
         &opts,
     )?;
     println!(
-        "wrote {} figures to {}",
+        "wrote {} figures to {} in {:.2} s",
         index.entries.len(),
-        a.out_dir.display()
+        a.out_dir.display(),
+        t0.elapsed().as_secs_f64()
     );
     Ok(())
 }

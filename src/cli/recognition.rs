@@ -19,7 +19,8 @@ pub fn open_session(path: &Path) -> anyhow::Result<Session> {
 fn write_json<T: serde::Serialize>(value: &T, out: Option<&Path>) -> anyhow::Result<()> {
     if let Some(out) = out {
         let text = serde_json::to_string_pretty(value)?;
-        std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;
+        crate::fsutil::write_atomic(out, text.as_bytes())
+            .with_context(|| format!("writing {}", out.display()))?;
         println!("wrote {}", out.display());
     }
     Ok(())

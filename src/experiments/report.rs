@@ -188,6 +188,16 @@ pub enum ProjectError {
     Write { path: String, message: String },
 }
 
+/// Whether `path` starts like a project file (its first field names the project format).
+pub fn is_project(path: &Path) -> bool {
+    use std::io::Read;
+    let mut head = [0u8; 128];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| f.read(&mut head))
+        .unwrap_or(0);
+    String::from_utf8_lossy(&head[..n]).contains(PROJECT_TAG)
+}
+
 impl Project {
     pub fn new(sessions: Vec<String>, results: Vec<AnalysisResult>) -> Self {
         Project {

@@ -8,7 +8,17 @@ use tactile_workbench::app::WorkbenchApp;
 /// A harness of `width` × `height` at 60 frames per second, returned once both samples
 /// have loaded on their worker thread (bounded wait).
 pub fn workbench(width: f32, height: f32) -> Harness<'static, WorkbenchApp> {
-    let app = WorkbenchApp::new(&egui::Context::default(), None, Vec::new());
+    workbench_opening(Vec::new(), width, height)
+}
+
+/// A harness opened on `files` (sessions or projects) instead of the samples, returned once
+/// two sessions have loaded.
+pub fn workbench_opening(
+    files: Vec<std::path::PathBuf>,
+    width: f32,
+    height: f32,
+) -> Harness<'static, WorkbenchApp> {
+    let app = WorkbenchApp::new(&egui::Context::default(), None, files);
     let mut h = Harness::builder()
         .with_size(egui::Vec2::new(width, height))
         .with_step_dt(1.0 / 60.0)
