@@ -5,11 +5,15 @@ use ndarray::{Array2, array};
 use tactile_workbench::cluster::scores::{ClusterScores, mutual_info, scores};
 use tactile_workbench::gp::kernel::LENGTHSCALE_BOUNDS;
 use tactile_workbench::gp::{Likelihood, Sogp, SogpParams, Window};
+use tactile_workbench::jobs::Progress;
 use tactile_workbench::learners::evt::evt_novelty;
 use tactile_workbench::learners::{
     Ds, DsParams, Du, DuParams, Gs, GsParams, Gu, GuParams, SequenceClassifier,
 };
 use tactile_workbench::rng::Rng;
+use tactile_workbench::sparse::{
+    CodePenalty, DictionaryFit, DictionaryParams, FeatureSign, l1_optimality_violation,
+};
 use tactile_workbench::svm::kernel_svm::{KernelSvmParams, cross_validate};
 
 // ---------------------------------------------------------------- sparse online GP
@@ -377,4 +381,158 @@ fn svm_perfectly_separable_data() {
         assert_eq!(cv.accuracy, 1.0);
         assert!(cv.one_class_folds.is_empty());
     }
+}
+
+// ---- Sparse coding and dictionary learning at the extremes -----------------------------
+
+/// Patches spanned by a few random directions (so small penalties reconstruct them).
+fn patches(n: usize, dim: usize, seed: u64) -> Array2<f64> {
+    let mut rng = Rng::new(seed);
+    let dirs: Vec<Vec<f64>> = (0..3)
+        .map(|_| (0..dim).map(|_| rng.normal()).collect())
+        .collect();
+    Array2::from_shape_fn((n, dim), |(i, t)| {
+        (0..3)
+            .map(|j| dirs[j][t] * ((i * 7 + j * 3) % 5) as f64)
+            .sum()
+    })
+}
+
+fn dictionary_params(num_bases: usize, beta: f64, penalty: CodePenalty) -> DictionaryParams {
+    DictionaryParams {
+        num_bases,
+        beta,
+        penalty,
+        max_iter: 30,
+        ..Default::default()
+    }
+}
+
+/// Learn under both penalties and check every number the fit returns is finite, the norm
+/// bound holds, and the codes reconstruct no worse than the zero code.
+fn fit_checked(x: &Array2<f64>, num_bases: usize, beta: f64, what: &str) -> Vec<DictionaryFit> {
+    [CodePenalty::L1, CodePenalty::EpsilonL1 { epsilon: 0.01 }]
+        .into_iter()
+        .map(|penalty| {
+            let fit = dictionary_params(num_bases, beta, penalty)
+                .fit(x.view(), &Progress::new())
+                .unwrap_or_else(|e| panic!("{what}: {e}"));
+            let d = &fit.dictionary;
+            assert!(d.atoms.iter().all(|v| v.is_finite()), "{what}: atoms");
+            assert!(fit.codes.iter().all(|v| v.is_finite()), "{what}: codes");
+            assert!(fit.objective.is_finite() && fit.objective >= 0.0, "{what}");
+            assert!(fit.learning_objective.is_finite(), "{what}");
+            for row in d.atoms.rows() {
+                assert!(row.dot(&row) <= d.norm_bound * (1.0 + 1e-9), "{what}: norm");
+            }
+            let zero_code =
+                x.rows().into_iter().map(|r| 0.5 * r.dot(&r)).sum::<f64>() / x.nrows() as f64;
+            assert!(
+                fit.objective <= zero_code * (1.0 + 1e-9) + 1e-12,
+                "{what}: F {} above the zero code's {zero_code}",
+                fit.objective
+            );
+            fit
+        })
+        .collect()
+}
+
+#[test]
+fn dictionary_learning_on_all_zero_and_partly_zero_patches() {
+    let zeros = Array2::<f64>::zeros((20, 12));
+    for fit in fit_checked(&zeros, 5, 1.0, "all-zero patches") {
+        assert!(fit.codes.iter().all(|&v| v == 0.0));
+        assert_eq!(fit.objective, 0.0);
+    }
+    let mut mixed = patches(30, 12, 3);
+    for i in (0..30).step_by(3) {
+        mixed.row_mut(i).fill(0.0);
+    }
+    for fit in fit_checked(&mixed, 6, 0.1, "partly zero patches") {
+        for i in (0..30).step_by(3) {
+            assert!(
+                fit.codes.row(i).iter().all(|&v| v == 0.0),
+                "a zero patch's code"
+            );
+        }
+    }
+}
+
+#[test]
+fn dictionary_learning_on_duplicate_patches_and_more_bases_than_patches() {
+    let one = patches(1, 10, 5);
+    let dup = Array2::from_shape_fn((25, 10), |(_, t)| one[[0, t]]);
+    for fit in fit_checked(&dup, 4, 1e-3, "duplicate patches") {
+        // Identical patches get identical codes.
+        for i in 1..25 {
+            assert_eq!(fit.codes.row(i), fit.codes.row(0));
+        }
+    }
+    let few = patches(6, 8, 7);
+    for fit in fit_checked(&few, 50, 1e-3, "K = 50 > 6 patches") {
+        assert_eq!(fit.dictionary.num_bases(), 50);
+        let r = few.row(0).to_owned() - fit.dictionary.reconstruct(fit.codes.row(0));
+        assert!(
+            r.dot(&r) < 1e-2 * few.row(0).dot(&few.row(0)),
+            "reconstruction"
+        );
+    }
+}
+
+#[test]
+fn extreme_beta_and_gamma_stay_finite() {
+    let x = patches(40, 12, 9);
+    for beta in [1e-6, 1e6] {
+        let fits = fit_checked(&x, 8, beta, &format!("beta {beta}"));
+        if beta == 1e6 {
+            // A penalty far above every |D x| codes everything as zero.
+            assert!(fits[0].codes.iter().all(|&v| v == 0.0));
+        }
+        let d = &fits[0].dictionary;
+        for gamma in [0.0, 1e-6, 1e6] {
+            let codes = d.encode(x.view(), gamma).unwrap();
+            assert!(codes.iter().all(|v| v.is_finite()), "gamma {gamma}");
+            if gamma == 1e6 {
+                assert!(codes.iter().all(|&v| v == 0.0), "gamma {gamma}");
+            }
+        }
+    }
+    // Duplicate bases make the Gram matrix singular: feature-sign still solves exactly.
+    let mut fs = FeatureSign::new(3);
+    let g = [1.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+    for gamma in [1e-6, 1.0, 1e6] {
+        let mut a = [0.0; 3];
+        fs.solve(&g, &[2.0, 2.0, -1.0], gamma, &mut a);
+        assert!(a.iter().all(|v| v.is_finite()), "gamma {gamma}: {a:?}");
+        assert!(
+            l1_optimality_violation(&g, &[2.0, 2.0, -1.0], gamma, &a) < 1e-9 * gamma.max(1.0),
+            "gamma {gamma}: {a:?}"
+        );
+    }
+}
+
+#[test]
+fn normalisers_scale_values_near_the_float_limit() {
+    use tactile_workbench::cluster::grasp_features::{Normalisation, Normaliser};
+    let data = array![
+        [1e300, -1.7e308, 1.0],
+        [-1e300, 1.7e308, 1.0],
+        [3e300, 0.0, 1.0]
+    ];
+    for kind in [Normalisation::ZScore, Normalisation::MinMax] {
+        let n = Normaliser::fit(kind, data.view()).unwrap();
+        let out = n.transform(data.view()).unwrap();
+        assert!(out.iter().all(|v| v.is_finite()), "{kind:?}: {out}");
+        // The two huge columns are not mistaken for constants; the constant one maps to 0.
+        for c in 0..2 {
+            let col = out.column(c);
+            let spread =
+                col.fold(f64::MIN, |a, &b| a.max(b)) - col.fold(f64::MAX, |a, &b| a.min(b));
+            assert!(spread > 0.99, "{kind:?} column {c}: {col}");
+        }
+        assert!(out.column(2).iter().all(|&v| v == 0.0));
+    }
+    let n = Normaliser::fit(Normalisation::MinMax, data.view()).unwrap();
+    let out = n.transform(data.view()).unwrap();
+    assert!((out[[1, 1]] - 1.0).abs() < 1e-12 && out[[0, 1]].abs() < 1e-12);
 }

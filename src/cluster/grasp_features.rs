@@ -156,22 +156,31 @@ impl Normaliser {
         let mut offset = Vec::with_capacity(data.ncols());
         let mut scale = Vec::with_capacity(data.ncols());
         for col in data.columns() {
+            // Work on values divided by the largest magnitude, so squares and differences of
+            // values near f64::MAX do not overflow; `scale` is 1/spread in the original units.
+            // (Below 1e150 nothing overflows: plain arithmetic, bit for bit as always.)
+            let m = col.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let unit = if m > 1e150 { m } else { 1.0 };
             let (o, spread) = match kind {
                 Normalisation::ZScore => {
-                    let mean = col.sum() / n;
-                    let var = col.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n;
-                    (mean, var.sqrt())
+                    let mean = col.iter().map(|v| v / unit).sum::<f64>() / n;
+                    let var = col
+                        .iter()
+                        .map(|v| (v / unit - mean) * (v / unit - mean))
+                        .sum::<f64>()
+                        / n;
+                    (mean * unit, var.sqrt())
                 }
                 Normalisation::MinMax => {
                     let min = col.iter().copied().fold(f64::INFINITY, f64::min);
                     let max = col.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-                    (min, max - min)
+                    (min, max / unit - min / unit)
                 }
             };
             offset.push(o);
             // A spread at rounding level of the values counts as constant.
-            scale.push(if spread > 1e-12 * (1.0 + o.abs()) {
-                1.0 / spread
+            scale.push(if spread > 1e-12 * (1.0 / unit + (o / unit).abs()) {
+                1.0 / spread / unit
             } else {
                 0.0
             });
@@ -191,7 +200,11 @@ impl Normaliser {
             .into_iter()
             .zip(self.offset.iter().zip(&self.scale))
         {
-            col.mapv_inplace(|v| (v - o) * s);
+            col.mapv_inplace(|v| {
+                let d = (v - o) * s;
+                // v − o overflows only for values near f64::MAX of opposite signs.
+                if d.is_finite() { d } else { v * s - o * s }
+            });
         }
         Ok(out)
     }
