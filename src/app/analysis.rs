@@ -259,9 +259,9 @@ pub struct Analyses {
     pub open_request: Option<AnalysisKind>,
     /// The last recognition trace computed for the replay.
     pub trace: Option<ReplayTrace>,
-    /// A project that just opened: the sessions it names (for the app to reopen) and the
+    /// Projects that just opened: the sessions each names (for the app to reopen) and the
     /// session of its first result.
-    pub opened_project: Option<(Vec<String>, Option<String>)>,
+    pub opened_projects: Vec<(Vec<String>, Option<String>)>,
 }
 
 impl Analyses {
@@ -294,14 +294,15 @@ impl Analyses {
                 Some(Outcome::Done(JobOutput::Message(m))) => self.messages.push(m),
                 Some(Outcome::Done(JobOutput::Trace(t))) => self.trace = Some(*t),
                 Some(Outcome::Done(JobOutput::Project(p))) => {
+                    let n = p.results.len();
                     self.messages.push(format!(
-                        "opened a project with {} results (sessions: {})",
-                        p.results.len(),
+                        "opened a project with {n} result{} (sessions: {})",
+                        if n == 1 { "" } else { "s" },
                         p.sessions.join(", ")
                     ));
                     let first = p.results.first().map(|r| r.session.clone());
                     self.results.extend(p.results);
-                    self.opened_project = Some((p.sessions, first));
+                    self.opened_projects.push((p.sessions, first));
                 }
                 Some(Outcome::Cancelled) => self.messages.push(format!("{}: cancelled", rj.title)),
                 Some(Outcome::Failed(e)) => self.messages.push(format!("{} failed: {e}", rj.title)),

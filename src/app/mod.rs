@@ -325,11 +325,11 @@ impl WorkbenchApp {
             self.view = View::of(kind);
             self.focus_results(kind);
         }
-        if let Some((sessions, first)) = self.analyses.opened_project.take() {
+        for (sessions, first) in std::mem::take(&mut self.analyses.opened_projects) {
             for label in sessions {
                 self.open(Source::from_label(&label), ctx);
             }
-            self.focus_pending = Some(first);
+            self.focus_pending.get_or_insert(first);
         }
         if !self.is_loading()
             && let Some(first) = self.focus_pending.take()

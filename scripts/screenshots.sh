@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# Screenshots of every workbench view, in a real window under Xvfb, on results computed
+# from the bundled sample sessions (short runs: 2 repetitions).
+#
+#   scripts/screenshots.sh [OUT_DIR]      (default: docs/screenshots)
+#
+# The projects are kept in target/screenshot-projects and reused; delete it to recompute.
+# Needs Xvfb, xdotool and ImageMagick's `import`
+# (Debian/Ubuntu: apt-get install xvfb xdotool imagemagick).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=${1:-docs/screenshots}
+mkdir -p "$out"
+work=target/screenshot-projects
+mkdir -p "$work"
+trap 'kill $(jobs -p) 2>/dev/null || true' EXIT
+
+cargo build --release
+bin=target/release/tactile-workbench
+
+# Results to show: one project per experiment.
+[ -f "$work/stability.json" ] ||
+    $bin paper-figures sample-sessions/grasp-stability.json --experiment stability \
+        -o "$work/fig-stability" --project "$work/stability.json"
+for e in recognition clustering baselines; do
+    [ -f "$work/$e.json" ] ||
+        $bin paper-figures sample-sessions/object-recognition.json --experiment $e --reps 2 \
+            -o "$work/fig-$e" --project "$work/$e.json"
+done
+projects=("$work"/stability.json "$work"/recognition.json "$work"/clustering.json "$work"/baselines.json)
+
+export DISPLAY=:97
+Xvfb $DISPLAY -screen 0 1400x900x24 >/dev/null 2>&1 &
+sleep 1
+shot() { # VIEW NAME [xdotool actions...]
+    local view=$1 name=$2
+    shift 2
+    $bin --view "$view" "${projects[@]}" >/dev/null 2>&1 &
+    local pid=$!
+    sleep 6
+    local win
+    win=$(xdotool search --name "Tactile Workbench" | head -1)
+    xdotool windowfocus --sync "$win" 2>/dev/null || true
+    if [ $# -gt 0 ]; then
+        xdotool "$@"
+        sleep 2
+    fi
+    import -window root "$out/$name.png"
+    kill $pid
+    wait $pid 2>/dev/null || true
+}
+shot stability stability
+shot recognition recognition
+shot clustering clustering
+shot baselines baselines
+shot speed-accuracy speed-accuracy
+# Replay: select the first grasp in the browser.
+shot replay replay mousemove 120 160 click 1
+echo "screenshots in $out"
