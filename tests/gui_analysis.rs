@@ -64,6 +64,30 @@ fn baselines_run_in_the_background_and_show_their_figures() {
         "heading and figure title"
     );
     h.get_by_label_contains("baselines, k = 10 ·");
+
+    // File > Export all figures writes every figure and an index, and says how long it took.
+    let dir = common::temp_dir("gui-export-all");
+    h.state_mut().analyses.export.dir = dir.clone();
+    h.get_by_label("File").click();
+    h.run_ok();
+    h.get_by_label("Export all figures").click();
+    h.step();
+    wait_for_jobs(&mut h, Duration::from_secs(60));
+    let message = h
+        .state()
+        .analyses
+        .messages
+        .last()
+        .cloned()
+        .unwrap_or_default();
+    assert!(
+        message.starts_with("exported ") && message.ends_with(" s"),
+        "{message}"
+    );
+    let index = std::fs::read_to_string(dir.join("index.md")).unwrap();
+    assert!(index.contains("NMI against effective clusters"), "{index}");
+    assert!(index.contains("Speed against accuracy"), "{index}");
+    let _ = std::fs::remove_dir_all(dir);
 }
 
 #[test]

@@ -381,6 +381,7 @@ impl Analyses {
         let opts = self.export.options();
         self.spawn(ctx, None, "Export all figures".into(), move |p| {
             p.set(0.0, format!("writing {} figures", set_all.entries.len()));
+            let t0 = std::time::Instant::now();
             let index = figures::export_all(
                 &set_all,
                 &dir,
@@ -389,9 +390,10 @@ impl Analyses {
             )
             .map_err(JobError::failed)?;
             Ok(JobOutput::Message(format!(
-                "exported {} figures to {}",
+                "exported {} figures to {} in {:.2} s",
                 index.entries.len(),
-                dir.display()
+                dir.display(),
+                t0.elapsed().as_secs_f64()
             )))
         });
     }
