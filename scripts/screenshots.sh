@@ -55,5 +55,5 @@ shot clustering clustering
 shot baselines baselines
 shot speed-accuracy speed-accuracy
 # Replay: select the first grasp in the browser.
-shot replay replay mousemove 120 160 click 1
+shot replay replay mousemove 120 190 click 1
 echo "screenshots in $out"
