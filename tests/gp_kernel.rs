@@ -1,4 +1,4 @@
-use tactile_workbench::gp::{KernelParams, RecursiveArd, Window};
+use tactile_workbench::gp::{KernelParams, LagMajor, RecursiveArd, Window};
 use tactile_workbench::rng::Rng;
 
 fn params(dim: usize, rng: &mut Rng) -> KernelParams {
@@ -146,14 +146,37 @@ fn fast_exp_matches_the_library_exp() {
 #[test]
 fn many_bvs_at_once_equal_one_at_a_time() {
     let mut rng = Rng::new(3);
-    let (dim, tau, n) = (5, 4, 7);
+    // dim 5 has a tail beyond the 4-wide chunks; 11 BVs fill one block and part of the next.
+    let (dim, tau, n) = (5, 4, 11);
     let k = RecursiveArd::new(dim, tau, params(dim, &mut rng)).unwrap();
-    let x: Vec<f64> = (0..dim * tau).map(|_| rng.normal()).collect();
-    let bvs: Vec<f64> = (0..n * dim * tau).map(|_| rng.normal()).collect();
-    let (mut d, mut out) = (vec![0.0; n], vec![0.0; n]);
-    k.unit_many(&x, &bvs, n, &mut d, &mut out);
-    for i in 0..n {
-        let one = k.unit_scaled(&x, &bvs[i * dim * tau..(i + 1) * dim * tau]);
-        assert_eq!(out[i], one);
+    // Padding lags (exact zeros) in the window and in some BVs take the stored-norm path.
+    let window = |rng: &mut Rng, pad: usize| -> Vec<f64> {
+        (0..dim * tau)
+            .map(|t| if t < pad * dim { 0.0 } else { rng.normal() })
+            .collect()
+    };
+    let bvs: Vec<Vec<f64>> = (0..n).map(|i| window(&mut rng, i % 3)).collect();
+    let mut basis = LagMajor::new(dim, tau, 16);
+    for (i, b) in bvs.iter().enumerate() {
+        basis.set(i, b);
+    }
+    // A swap and back exercises the block layout.
+    basis.swap(2, 9);
+    basis.swap(9, 2);
+    let s = basis.stride();
+    for pad in [0, 1, 3] {
+        let x = window(&mut rng, pad);
+        let (mut lag_k, mut out) = (vec![0.0; tau * s], vec![0.0; s]);
+        k.unit_many(&x, &basis, n, &mut lag_k, &mut out);
+        let mut grad = vec![0.0; (dim + 1) * s];
+        k.unit_grad_many(&x, &basis, n, &lag_k, &mut grad);
+        for (i, b) in bvs.iter().enumerate() {
+            assert_eq!(out[i], k.unit_scaled(&x, b), "pad {pad}, BV {i}");
+            let mut g = vec![0.0; dim + 1];
+            assert_eq!(k.unit_scaled_grad(&x, b, &mut g), out[i]);
+            for (p, gp) in g.iter().enumerate() {
+                assert_eq!(grad[p * s + i], *gp, "pad {pad}, BV {i}, parameter {p}");
+            }
+        }
     }
 }

@@ -215,6 +215,21 @@ pub struct BenchArgs {
     /// Repetitions of the protocol timing.
     #[arg(long, default_value_t = 50)]
     pub reps: usize,
+    /// BV budgets of the per-step scaling (at the default tau).
+    #[arg(long, value_delimiter = ',', default_value = "10,25,50,100")]
+    pub budgets: Vec<usize>,
+    /// Kernel lags of the per-step scaling (at the default budget).
+    #[arg(long, value_delimiter = ',', default_value = "5,15,30")]
+    pub taus: Vec<usize>,
+    /// Learners to time: ds, gs or both.
+    #[arg(long, value_delimiter = ',', default_value = "ds,gs")]
+    pub learners: Vec<String>,
+    /// Timed sequences per setting (20 steps each; more gives steadier figures).
+    #[arg(long, default_value_t = 60)]
+    pub sequences: usize,
+    /// Skip the per-step timings (time only the protocol of SESSION).
+    #[arg(long)]
+    pub no_steps: bool,
     /// Write the measurements here as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -242,26 +257,36 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
     use crate::experiments::recognition::{StepBenchParams, SupervisedLearner, bench_steps};
     let mut steps = Vec::new();
     println!("per observation, one thread (34 inputs, 10 classes, adaptation on unless noted):");
-    let base = StepBenchParams::default();
-    let mut configs = vec![base.clone()];
-    for capacity in [25, 100] {
+    let learners = args
+        .learners
+        .iter()
+        .map(|l| l.parse::<SupervisedLearner>())
+        .collect::<Result<Vec<_>, _>>()?;
+    let base = StepBenchParams {
+        sequences: args.sequences,
+        ..StepBenchParams::default()
+    };
+    let mut configs = Vec::new();
+    if !args.no_steps {
+        for &capacity in &args.budgets {
+            configs.push(StepBenchParams {
+                capacity,
+                ..base.clone()
+            });
+        }
+        for &tau in args.taus.iter().filter(|&&t| t != base.tau) {
+            configs.push(StepBenchParams {
+                tau,
+                ..base.clone()
+            });
+        }
         configs.push(StepBenchParams {
-            capacity,
+            adaptation: false,
             ..base.clone()
         });
     }
-    for tau in [5, 30] {
-        configs.push(StepBenchParams {
-            tau,
-            ..base.clone()
-        });
-    }
-    configs.push(StepBenchParams {
-        adaptation: false,
-        ..base.clone()
-    });
     for p in configs {
-        for learner in [SupervisedLearner::Ds, SupervisedLearner::Gs] {
+        for &learner in &learners {
             let b = bench_steps(learner, &p)?;
             let cpu = |v: Option<f64>| v.map_or("?".to_string(), |v| format!("{v:.0}"));
             println!(
@@ -283,7 +308,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
     let mut protocol = Vec::new();
     if let Some(path) = &args.session {
         let session = open_session(path)?;
-        for learner in [SupervisedLearner::Ds, SupervisedLearner::Gs] {
+        for &learner in &learners {
             let p = RecognitionParams {
                 learner,
                 reps: args.reps,

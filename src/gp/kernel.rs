@@ -184,6 +184,129 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
+/// BVs processed together by the many-BV kernels (one AVX-512 register, two AVX2 ones).
+pub const LANES: usize = 8;
+
+/// Scaled BV windows in a lag-major layout of blocks of [`LANES`] BVs: entry (lag, k) of
+/// BV i at `((lag·blocks + i / LANES)·dim + k)·LANES + i % LANES`, so that the kernels run
+/// over the BVs of a block in vector lanes (no horizontal sums) while reading one
+/// contiguous stretch per block and lag; plus each BV lag's squared norm, its distance to
+/// a padding lag.
+#[derive(Clone, Debug)]
+pub struct LagMajor {
+    dim: usize,
+    tau: usize,
+    stride: usize,
+    data: Vec<f64>,
+    norms: Vec<f64>,
+}
+
+impl LagMajor {
+    /// Room for `slots` BVs.
+    pub fn new(dim: usize, tau: usize, slots: usize) -> LagMajor {
+        let stride = slots.max(1).div_ceil(LANES) * LANES;
+        LagMajor {
+            dim,
+            tau,
+            stride,
+            data: vec![0.0; tau * dim * stride],
+            norms: vec![0.0; tau * stride],
+        }
+    }
+
+    /// Length of the per-BV buffers the kernels take.
+    pub fn stride(&self) -> usize {
+        self.stride
+    }
+
+    /// Store a scaled window (oldest lag first) as BV `i`.
+    /// Position of entry (lag, k) of BV i.
+    #[inline(always)]
+    fn index(&self, lag: usize, k: usize, i: usize) -> usize {
+        ((lag * (self.stride / LANES) + i / LANES) * self.dim + k) * LANES + i % LANES
+    }
+
+    pub fn set(&mut self, i: usize, window: &[f64]) {
+        let s = self.stride;
+        for (lag, l) in window.chunks_exact(self.dim).take(self.tau).enumerate() {
+            for (k, v) in l.iter().enumerate() {
+                let at = self.index(lag, k, i);
+                self.data[at] = *v;
+            }
+        }
+        let zero = [0.0; 4];
+        for (lag, l) in window.chunks_exact(self.dim).take(self.tau).enumerate() {
+            // sq_dist against zeros: the association the kernels use, so bit-identical.
+            let mut acc = [0.0f64; 4];
+            let cl = l.chunks_exact(4);
+            let rest = cl.remainder();
+            for c in cl {
+                for q in 0..4 {
+                    let e = zero[q] - c[q];
+                    acc[q] += e * e;
+                }
+            }
+            let mut tail = 0.0;
+            for v in rest {
+                tail += (0.0 - v) * (0.0 - v);
+            }
+            self.norms[lag * s + i] = (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail;
+        }
+    }
+
+    pub fn swap(&mut self, i: usize, j: usize) {
+        let s = self.stride;
+        for lag in 0..self.tau {
+            for k in 0..self.dim {
+                let (a, b) = (self.index(lag, k, i), self.index(lag, k, j));
+                self.data.swap(a, b);
+            }
+        }
+        for r in 0..self.tau {
+            self.norms.swap(r * s + i, r * s + j);
+        }
+    }
+
+    /// Squared distances between `xl` (one lag) and lag `lag` of BVs 0..m (m a multiple of
+    /// [`LANES`]) into `d`, associated exactly as [`sq_dist`]: four partial sums over
+    /// k mod 4, a sequential tail, (a0 + a1) + (a2 + a3) + tail. A padding lag (all zero)
+    /// takes the stored norms.
+    #[inline(always)]
+    fn lag_sq_dist(&self, lag: usize, xl: &[f64], m: usize, d: &mut [f64]) {
+        let (dim, s) = (self.dim, self.stride);
+        if xl.iter().all(|v| *v == 0.0) {
+            d.copy_from_slice(&self.norms[lag * s..lag * s + m]);
+            return;
+        }
+        let full = dim / 4 * 4;
+        let lag_data = &self.data[lag * dim * s..(lag + 1) * dim * s];
+        for (blk, db) in lag_data
+            .chunks_exact(dim * LANES)
+            .zip(d.chunks_exact_mut(LANES))
+        {
+            let (head, rest) = blk.split_at(full * LANES);
+            let mut acc = [[0.0f64; LANES]; 4];
+            for (rows, x4) in head.chunks_exact(4 * LANES).zip(xl.chunks_exact(4)) {
+                for ((a, row), xk) in acc.iter_mut().zip(rows.chunks_exact(LANES)).zip(x4) {
+                    for (a, r) in a.iter_mut().zip(row) {
+                        let e = xk - r;
+                        *a += e * e;
+                    }
+                }
+            }
+            let mut tail = [0.0f64; LANES];
+            for (row, xk) in rest.chunks_exact(LANES).zip(&xl[full..]) {
+                for (t, r) in tail.iter_mut().zip(row) {
+                    *t += (xk - r) * (xk - r);
+                }
+            }
+            for (l, out) in db.iter_mut().enumerate() {
+                *out = (acc[0][l] + acc[1][l]) + (acc[2][l] + acc[3][l]) + tail[l];
+            }
+        }
+    }
+}
+
 /// The recursive ARD kernel for inputs of `dim` dimensions over `tau` lags.
 #[derive(Clone, Debug)]
 pub struct RecursiveArd {
@@ -260,47 +383,187 @@ impl RecursiveArd {
         k
     }
 
-    /// Unit K_tau between the scaled window `x` and each of the first `n` scaled windows
-    /// stored back to back in `bvs`, into `out`. Lags run in the outer loop so that the
-    /// recursion of all BVs advances together (the exps vectorise); `d` is scratch (≥ n).
-    pub fn unit_many(&self, x: &[f64], bvs: &[f64], n: usize, d: &mut [f64], out: &mut [f64]) {
+    /// Unit K_tau between the scaled window `x` and BVs 0..n of `basis`, into `out`.
+    /// `lag_k` (tau rows of `basis.stride()`) receives K_t after every lag, for
+    /// [`RecursiveArd::unit_grad_many`]; `out` is at least `basis.stride()` long. Lanes n..
+    /// up to the next multiple of [`LANES`] hold values of stale slots, to be ignored. Lags
+    /// run in the outer loop so that the recursion of all BVs advances together. Every value
+    /// is bit-identical to [`RecursiveArd::unit_scaled`] of the pair.
+    pub fn unit_many(
+        &self,
+        x: &[f64],
+        basis: &LagMajor,
+        n: usize,
+        lag_k: &mut [f64],
+        out: &mut [f64],
+    ) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            unsafe { self.unit_many_avx2(x, bvs, n, d, out) };
-            return;
+        {
+            if std::arch::is_x86_feature_detected!("avx512f") {
+                // SAFETY: the CPU has AVX-512F, checked just above.
+                unsafe { self.unit_many_avx512(x, basis, n, lag_k, out) };
+                return;
+            }
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU has AVX2, checked just above.
+                unsafe { self.unit_many_avx2(x, basis, n, lag_k, out) };
+                return;
+            }
         }
-        self.unit_many_portable(x, bvs, n, d, out);
+        self.unit_many_portable(x, basis, n, lag_k, out);
     }
 
-    /// The same code compiled for AVX2 (four f64 lanes instead of SSE2's two). Rust never
-    /// reorders or fuses floating-point operations, so the results are bit-identical.
+    /// The same code compiled for wider vectors. Rust never reorders or fuses
+    /// floating-point operations, so the results are bit-identical on every path.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    unsafe fn unit_many_avx512(
+        &self,
+        x: &[f64],
+        basis: &LagMajor,
+        n: usize,
+        lag_k: &mut [f64],
+        out: &mut [f64],
+    ) {
+        self.unit_many_portable(x, basis, n, lag_k, out);
+    }
+
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn unit_many_avx2(
         &self,
         x: &[f64],
-        bvs: &[f64],
+        basis: &LagMajor,
         n: usize,
-        d: &mut [f64],
+        lag_k: &mut [f64],
         out: &mut [f64],
     ) {
-        self.unit_many_portable(x, bvs, n, d, out);
+        self.unit_many_portable(x, basis, n, lag_k, out);
     }
 
     #[inline(always)]
-    fn unit_many_portable(&self, x: &[f64], bvs: &[f64], n: usize, d: &mut [f64], out: &mut [f64]) {
-        let (w, dim) = (self.window_len(), self.dim);
+    fn unit_many_portable(
+        &self,
+        x: &[f64],
+        basis: &LagMajor,
+        n: usize,
+        lag_k: &mut [f64],
+        out: &mut [f64],
+    ) {
+        let (dim, s, m) = (self.dim, basis.stride, n.div_ceil(LANES) * LANES);
         let inv_rho = 1.0 / self.params.sigma_rho;
-        out[..n].fill(1.0);
+        out[..m].fill(1.0);
+        for lag in 0..self.tau {
+            let row = &mut lag_k[lag * s..lag * s + m];
+            basis.lag_sq_dist(lag, &x[lag * dim..(lag + 1) * dim], m, row);
+            for (k, r) in out[..m].iter_mut().zip(row.iter_mut()) {
+                *k = exp_nonpos(-0.5 * *r + (*k - 1.0) * inv_rho);
+                *r = *k;
+            }
+        }
+    }
+
+    /// The derivatives of [`RecursiveArd::unit_scaled_grad`] between `x` and BVs 0..n, from
+    /// the K_t that [`RecursiveArd::unit_many`] left in `lag_k` for the same `x`, in one
+    /// pass over the BVs' data: `grad` holds dim + 1 rows of `basis.stride()` values, row
+    /// j < dim ∂K/∂ln l_j and row dim ∂K/∂sigma_rho, one column per BV (all lengthscales
+    /// at once). Bit-identical to the pairwise form.
+    pub fn unit_grad_many(
+        &self,
+        x: &[f64],
+        basis: &LagMajor,
+        n: usize,
+        lag_k: &[f64],
+        grad: &mut [f64],
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx512f") {
+                // SAFETY: the CPU has AVX-512F, checked just above.
+                unsafe { self.unit_grad_many_avx512(x, basis, n, lag_k, grad) };
+                return;
+            }
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU has AVX2, checked just above.
+                unsafe { self.unit_grad_many_avx2(x, basis, n, lag_k, grad) };
+                return;
+            }
+        }
+        self.unit_grad_many_portable(x, basis, n, lag_k, grad);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    unsafe fn unit_grad_many_avx512(
+        &self,
+        x: &[f64],
+        basis: &LagMajor,
+        n: usize,
+        lag_k: &[f64],
+        grad: &mut [f64],
+    ) {
+        self.unit_grad_many_portable(x, basis, n, lag_k, grad);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn unit_grad_many_avx2(
+        &self,
+        x: &[f64],
+        basis: &LagMajor,
+        n: usize,
+        lag_k: &[f64],
+        grad: &mut [f64],
+    ) {
+        self.unit_grad_many_portable(x, basis, n, lag_k, grad);
+    }
+
+    #[inline(always)]
+    fn unit_grad_many_portable(
+        &self,
+        x: &[f64],
+        basis: &LagMajor,
+        n: usize,
+        lag_k: &[f64],
+        grad: &mut [f64],
+    ) {
+        let (dim, s, m) = (self.dim, basis.stride, n.div_ceil(LANES) * LANES);
+        let inv_rho = 1.0 / self.params.sigma_rho;
+        let ones = [1.0; LANES];
+        for p in 0..=dim {
+            grad[p * s..p * s + m].fill(0.0);
+        }
         for lag in 0..self.tau {
             let xl = &x[lag * dim..(lag + 1) * dim];
-            for (i, di) in d[..n].iter_mut().enumerate() {
-                let o = i * w + lag * dim;
-                *di = sq_dist(xl, &bvs[o..o + dim]);
+            let kt = &lag_k[lag * s..lag * s + m];
+            let lag_data = &basis.data[lag * dim * s..(lag + 1) * dim * s];
+            for (c, blk) in lag_data
+                .chunks_exact(dim * LANES)
+                .take(m / LANES)
+                .enumerate()
+            {
+                let kb = &kt[c * LANES..(c + 1) * LANES];
+                for (j, (row, xj)) in blk.chunks_exact(LANES).zip(xl).enumerate() {
+                    let g = &mut grad[j * s + c * LANES..j * s + (c + 1) * LANES];
+                    for ((g, b), k) in g.iter_mut().zip(row).zip(kb) {
+                        *g = k * (*g * inv_rho + (xj - b) * (xj - b));
+                    }
+                }
             }
-            for (k, di) in out[..n].iter_mut().zip(&d[..n]) {
-                *k = exp_nonpos(-0.5 * di + (*k - 1.0) * inv_rho);
+            let g = &mut grad[dim * s..dim * s + m];
+            for (c, (g, k)) in g
+                .chunks_exact_mut(LANES)
+                .zip(kt.chunks_exact(LANES))
+                .enumerate()
+            {
+                // K_0 = 1 before the oldest lag.
+                let kp = match lag {
+                    0 => &ones[..],
+                    _ => &lag_k[(lag - 1) * s + c * LANES..(lag - 1) * s + (c + 1) * LANES],
+                };
+                for ((g, k), kp) in g.iter_mut().zip(k).zip(kp) {
+                    *g = k * (*g * inv_rho + (1.0 - kp) * inv_rho * inv_rho);
+                }
             }
         }
     }

@@ -7,7 +7,7 @@ pub mod normal;
 pub mod sngd;
 pub mod sogp;
 
-pub use kernel::{KernelParams, RecursiveArd, Window};
+pub use kernel::{KernelParams, LagMajor, RecursiveArd, Window};
 pub use sngd::{Sngd, SngdParams};
 pub use sogp::{Likelihood, Sogp, SogpParams};
 

@@ -25,7 +25,7 @@ use ndarray::Array2;
 use serde::{Deserialize, Serialize};
 
 use super::GpError;
-use super::kernel::{KernelParams, RecursiveArd, dot};
+use super::kernel::{KernelParams, LagMajor, RecursiveArd, dot};
 use super::normal::{log_norm_cdf, pdf_over_cdf};
 use super::sngd::{Sngd, SngdParams};
 use crate::linalg::Cholesky;
@@ -113,13 +113,19 @@ impl SogpParams {
     }
 }
 
-/// Buffers for the hyperparameter gradient: per BV pair the unit-kernel derivatives
-/// [∂/∂ln l_1 … ∂/∂ln l_D, ∂/∂sigma_rho] followed by the unit kernel value itself.
+/// Buffers for the hyperparameter gradient: per BV pair (`kb`, pair-major) the unit-kernel
+/// derivatives [∂/∂ln l_1 … ∂/∂ln l_D, ∂/∂sigma_rho] followed by the unit kernel value
+/// itself; the same for the observed window against each BV (`kx`, one row of `lanes`
+/// values per entry, as the many-BV kernel writes them).
 #[derive(Clone, Debug)]
 struct GradBuffers {
     pk: usize,
+    lanes: usize,
     kb: Vec<f64>,
     kx: Vec<f64>,
+    /// Scratch of fill_gram_derivatives: rows as in `kx`, and K_t per lag.
+    tmp: Vec<f64>,
+    lag_k: Vec<f64>,
     w: Vec<f64>,
     kw: Vec<f64>,
     kv: Vec<f64>,
@@ -129,12 +135,15 @@ struct GradBuffers {
 }
 
 impl GradBuffers {
-    fn new(dim: usize, stride: usize) -> GradBuffers {
+    fn new(dim: usize, tau: usize, stride: usize, lanes: usize) -> GradBuffers {
         let pk = dim + 2;
         GradBuffers {
             pk,
+            lanes,
             kb: vec![0.0; stride * stride * pk],
-            kx: vec![0.0; stride * pk],
+            kx: vec![0.0; lanes * pk],
+            tmp: vec![0.0; lanes * pk],
+            lag_k: vec![0.0; tau * lanes],
             w: vec![0.0; stride],
             kw: vec![0.0; pk],
             kv: vec![0.0; pk],
@@ -164,6 +173,8 @@ pub struct Sogp {
     wlen: usize,
     bv_raw: Vec<f64>,
     bv_scaled: Vec<f64>,
+    /// The scaled BVs again, lag-major for the many-BV kernels.
+    basis: LagMajor,
     bv_y: Vec<f64>,
     alpha: Vec<f64>,
     c: Vec<f64>,
@@ -173,11 +184,15 @@ pub struct Sogp {
     k: Vec<f64>,
     ck: Vec<f64>,
     ehat: Vec<f64>,
-    /// Per-BV squared lag distances (kernel scratch).
-    dist: Vec<f64>,
+    /// K_t after every lag for each BV at the observed window (tau rows of lanes), kept
+    /// for the gradient of the same observation.
+    lag_k: Vec<f64>,
     mean: Vec<f64>,
     qv: Vec<f64>,
     y_tmp: Vec<f64>,
+    /// Scratch: the column of Q and C of a BV being deleted.
+    col_q: Vec<f64>,
+    col_c: Vec<f64>,
     observed: Option<u64>,
     version: u64,
     seen: usize,
@@ -200,6 +215,8 @@ impl Sogp {
         let kernel = RecursiveArd::new(dim, params.tau, params.kernel_params(dim))?;
         let wlen = kernel.window_len();
         let stride = params.capacity + 1;
+        let basis = LagMajor::new(dim, params.tau, stride);
+        let lanes = basis.stride();
         Ok(Sogp {
             kernel,
             likelihood: params.likelihood,
@@ -211,19 +228,22 @@ impl Sogp {
             wlen,
             bv_raw: vec![0.0; stride * wlen],
             bv_scaled: vec![0.0; stride * wlen],
+            basis,
             bv_y: vec![0.0; stride * n_out],
             alpha: vec![0.0; stride * n_out],
             c: vec![0.0; stride * stride],
             q: vec![0.0; stride * stride],
             x_raw: vec![0.0; wlen],
             x_scaled: vec![0.0; wlen],
-            k: vec![0.0; stride],
+            k: vec![0.0; lanes],
             ck: vec![0.0; stride],
             ehat: vec![0.0; stride],
-            dist: vec![0.0; stride],
+            lag_k: vec![0.0; params.tau * lanes],
             mean: vec![0.0; n_out],
             qv: vec![0.0; n_out],
             y_tmp: vec![0.0; n_out],
+            col_q: vec![0.0; stride],
+            col_c: vec![0.0; stride],
             observed: None,
             version: 0,
             seen: 0,
@@ -365,13 +385,8 @@ impl Sogp {
         self.kernel.scale_into(&self.x_raw, &mut self.x_scaled);
         let sf2 = self.kernel.sigma_f2();
         let (n, s) = (self.n, self.stride);
-        self.kernel.unit_many(
-            &self.x_scaled,
-            &self.bv_scaled,
-            n,
-            &mut self.dist,
-            &mut self.k,
-        );
+        self.kernel
+            .unit_many(&self.x_scaled, &self.basis, n, &mut self.lag_k, &mut self.k);
         for k in &mut self.k[..n] {
             *k *= sf2;
         }
@@ -515,20 +530,22 @@ impl Sogp {
             }
             for i in 0..=n {
                 let si = if i < n { self.ck[i] } else { 1.0 };
-                for j in 0..=n {
-                    let sj = if j < n { self.ck[j] } else { 1.0 };
-                    self.c[i * s + j] += r * si * sj;
+                let row = &mut self.c[i * s..i * s + n + 1];
+                for (c, sj) in row.iter_mut().zip(&self.ck[..n]) {
+                    *c += r * si * sj;
                 }
+                row[n] += r * si;
             }
             let w = self.wlen;
             self.bv_raw[n * w..(n + 1) * w].copy_from_slice(&self.x_raw);
             self.bv_scaled[n * w..(n + 1) * w].copy_from_slice(&self.x_scaled);
+            self.basis.set(n, &self.x_scaled);
             self.bv_y[n * no..(n + 1) * no].copy_from_slice(&self.y_tmp);
             if let Some(a) = self.adapt.as_mut() {
-                let pk = a.buf.pk;
+                let (pk, lanes) = (a.buf.pk, a.buf.lanes);
                 for j in 0..n {
                     for p in 0..pk {
-                        let v = a.buf.kx[j * pk + p];
+                        let v = a.buf.kx[p * lanes + j];
                         a.buf.kb[(n * s + j) * pk + p] = v;
                         a.buf.kb[(j * s + n) * pk + p] = v;
                     }
@@ -596,12 +613,19 @@ impl Sogp {
             }
             self.alpha[l * no + d] = 0.0;
         }
+        // Column l copied out so that the rank-one updates run over contiguous rows.
         for j in 0..l {
-            let (qj, cj) = (self.q[j * s + l], self.c[j * s + l]);
-            for m in 0..l {
-                let (qm, cm) = (self.q[m * s + l], self.c[m * s + l]);
-                self.c[j * s + m] += qj * qm / qs - (qj + cj) * (qm + cm) / den;
-                self.q[j * s + m] -= qj * qm / qs;
+            self.col_q[j] = self.q[j * s + l];
+            self.col_c[j] = self.c[j * s + l];
+        }
+        let (cq, cc) = (&self.col_q[..l], &self.col_c[..l]);
+        for j in 0..l {
+            let (qj, cj) = (cq[j], cc[j]);
+            let crow = &mut self.c[j * s..j * s + l];
+            let qrow = &mut self.q[j * s..j * s + l];
+            for (((c, q), qm), cm) in crow.iter_mut().zip(qrow.iter_mut()).zip(cq).zip(cc) {
+                *c += qj * qm / qs - (qj + cj) * (qm + cm) / den;
+                *q -= qj * qm / qs;
             }
         }
         self.n -= 1;
@@ -625,6 +649,7 @@ impl Sogp {
             self.bv_raw.swap(i * w + t, j * w + t);
             self.bv_scaled.swap(i * w + t, j * w + t);
         }
+        self.basis.swap(i, j);
         for d in 0..no {
             self.bv_y.swap(i * no + d, j * no + d);
             self.alpha.swap(i * no + d, j * no + d);
@@ -657,21 +682,29 @@ impl Sogp {
             let dim = self.kernel.dim();
             let (lo, hi) = KernelParams::theta_bounds(dim);
             let sngd = Sngd::new(params.theta(), lo, hi, p.clone());
-            let mut buf = GradBuffers::new(dim, self.stride);
+            let mut buf =
+                GradBuffers::new(dim, self.kernel.tau(), self.stride, self.basis.stride());
             self.fill_gram_derivatives(&mut buf);
             self.adapt = Some(Box::new(Adaptation { sngd, buf }));
         }
     }
 
+    /// The Gram matrix's unit-kernel derivatives and values, one BV against all earlier
+    /// ones at a time (K is symmetric).
     fn fill_gram_derivatives(&self, buf: &mut GradBuffers) {
-        let (s, pk) = (self.stride, buf.pk);
-        let mut g = vec![0.0; pk];
+        let (s, pk, lanes) = (self.stride, buf.pk, buf.lanes);
         for i in 0..self.n {
+            let (g, kv) = buf.tmp.split_at_mut((pk - 1) * lanes);
+            self.kernel
+                .unit_many(self.bv(i), &self.basis, i + 1, &mut buf.lag_k, kv);
+            self.kernel
+                .unit_grad_many(self.bv(i), &self.basis, i + 1, &buf.lag_k, g);
             for j in 0..=i {
-                let kv = self.kernel.unit_scaled_grad(self.bv(i), self.bv(j), &mut g);
-                g[pk - 1] = kv;
-                buf.kb[(i * s + j) * pk..(i * s + j + 1) * pk].copy_from_slice(&g);
-                buf.kb[(j * s + i) * pk..(j * s + i + 1) * pk].copy_from_slice(&g);
+                for p in 0..pk {
+                    let v = buf.tmp[p * lanes + j];
+                    buf.kb[(i * s + j) * pk + p] = v;
+                    buf.kb[(j * s + i) * pk + p] = v;
+                }
             }
         }
     }
@@ -682,42 +715,36 @@ impl Sogp {
         let (n, s, no, pk) = (self.n, self.stride, self.n_out, buf.pk);
         let sf2 = self.kernel.sigma_f2();
         let sn2 = self.kernel.sigma_n2();
+        let lanes = buf.lanes;
+        // K and K_t per lag are those of the observation (refresh); only the
+        // derivatives are new.
+        let (g, kv) = buf.kx.split_at_mut((pk - 1) * lanes);
+        kv[..lanes].copy_from_slice(&self.lag_k[(self.kernel.tau() - 1) * lanes..]);
+        self.kernel
+            .unit_grad_many(&self.x_scaled, &self.basis, n, &self.lag_k, g);
         for i in 0..n {
-            let row = &mut buf.kx[i * pk..(i + 1) * pk];
-            let kv = self
-                .kernel
-                .unit_scaled_grad(&self.x_scaled, self.bv(i), row);
-            row[pk - 1] = kv;
             buf.w[i] = (0..no).map(|d| self.qv[d] * self.alpha[i * no + d]).sum();
         }
         let v = &self.ck[..n];
         let w = &buf.w[..n];
         // Per unit-kernel entry p: dk·w, dk·v, vᵀdK w, vᵀdK v.
-        buf.kw.fill(0.0);
-        buf.kv.fill(0.0);
-        buf.cw.fill(0.0);
-        buf.cv.fill(0.0);
-        for i in 0..n {
-            let row = &buf.kx[i * pk..(i + 1) * pk];
-            for ((kw, kv), r) in buf.kw.iter_mut().zip(buf.kv.iter_mut()).zip(row) {
-                *kw += r * w[i];
-                *kv += r * v[i];
-            }
-        }
-        for i in 0..n {
-            for j in 0..=i {
-                let (cw, cv) = if i == j {
-                    (v[i] * w[i], v[i] * v[i])
-                } else {
-                    (v[i] * w[j] + v[j] * w[i], 2.0 * v[i] * v[j])
-                };
-                let t = &buf.kb[(i * s + j) * pk..(i * s + j + 1) * pk];
-                for ((a, b), tp) in buf.cw.iter_mut().zip(buf.cv.iter_mut()).zip(t) {
-                    *a += cw * tp;
-                    *b += cv * tp;
+        // Sums over BVs in BV order, four entries at a time (independent chains).
+        for p0 in (0..pk).step_by(4) {
+            let rows = p0..(p0 + 4).min(pk);
+            let (mut kw, mut kv) = ([0.0; 4], [0.0; 4]);
+            for i in 0..n {
+                for (q, p) in rows.clone().enumerate() {
+                    let r = buf.kx[p * lanes + i];
+                    kw[q] += r * w[i];
+                    kv[q] += r * v[i];
                 }
             }
+            for (q, p) in rows.enumerate() {
+                buf.kw[p] = kw[q];
+                buf.kv[p] = kv[q];
+            }
         }
+        gram_quad_forms(&buf.kb, s, pk, v, w, &mut buf.cw, &mut buf.cv);
         // Kernel parameters: dk = sf²·d(unit k), dk* = 0 since K(x, x) = 1 at any theta.
         for p in 0..pk - 1 {
             buf.grad[p] =
@@ -797,7 +824,12 @@ impl Sogp {
     pub fn log_predictive_gradient(&mut self, window: &[f64], y: &[f64]) -> (f64, Vec<f64>) {
         self.observe(window);
         self.y_tmp.copy_from_slice(&y[..self.n_out]);
-        let mut buf = GradBuffers::new(self.kernel.dim(), self.stride);
+        let mut buf = GradBuffers::new(
+            self.kernel.dim(),
+            self.kernel.tau(),
+            self.stride,
+            self.basis.stride(),
+        );
         self.fill_gram_derivatives(&mut buf);
         match self.likelihood_terms() {
             Some((_, ds, logp)) => {
@@ -807,6 +839,117 @@ impl Sogp {
             None => (f64::NEG_INFINITY, vec![0.0; buf.grad.len()]),
         }
     }
+}
+
+/// vᵀdK w and vᵀdK v for every unit-kernel entry p of the pair-major Gram derivatives `kb`
+/// (stride `s`, `pk` entries per pair), over the lower triangle (K is symmetric). Entries
+/// go in register blocks of 8, 4, 2 and 1, each summed over the pairs in the same order.
+fn gram_quad_forms(
+    kb: &[f64],
+    s: usize,
+    pk: usize,
+    v: &[f64],
+    w: &[f64],
+    cw: &mut [f64],
+    cv: &mut [f64],
+) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has AVX-512F, checked just above.
+            unsafe { gram_quad_forms_avx512(kb, s, pk, v, w, cw, cv) };
+            return;
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            unsafe { gram_quad_forms_avx2(kb, s, pk, v, w, cw, cv) };
+            return;
+        }
+    }
+    gram_quad_forms_portable(kb, s, pk, v, w, cw, cv);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn gram_quad_forms_avx512(
+    kb: &[f64],
+    s: usize,
+    pk: usize,
+    v: &[f64],
+    w: &[f64],
+    cw: &mut [f64],
+    cv: &mut [f64],
+) {
+    gram_quad_forms_portable(kb, s, pk, v, w, cw, cv);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn gram_quad_forms_avx2(
+    kb: &[f64],
+    s: usize,
+    pk: usize,
+    v: &[f64],
+    w: &[f64],
+    cw: &mut [f64],
+    cv: &mut [f64],
+) {
+    gram_quad_forms_portable(kb, s, pk, v, w, cw, cv);
+}
+
+#[inline(always)]
+fn gram_quad_forms_portable(
+    kb: &[f64],
+    s: usize,
+    pk: usize,
+    v: &[f64],
+    w: &[f64],
+    cw: &mut [f64],
+    cv: &mut [f64],
+) {
+    let mut p0 = 0;
+    while p0 < pk {
+        p0 += match pk - p0 {
+            r if r >= 8 => quad_block::<8>(kb, s, pk, p0, v, w, cw, cv),
+            r if r >= 4 => quad_block::<4>(kb, s, pk, p0, v, w, cw, cv),
+            r if r >= 2 => quad_block::<2>(kb, s, pk, p0, v, w, cw, cv),
+            _ => quad_block::<1>(kb, s, pk, p0, v, w, cw, cv),
+        };
+    }
+}
+
+/// Entries p0..p0 + B of [`gram_quad_forms`], accumulated in registers; returns B.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn quad_block<const B: usize>(
+    kb: &[f64],
+    s: usize,
+    pk: usize,
+    p0: usize,
+    v: &[f64],
+    w: &[f64],
+    cw: &mut [f64],
+    cv: &mut [f64],
+) -> usize {
+    let (mut a, mut b) = ([0.0f64; B], [0.0f64; B]);
+    for i in 0..v.len() {
+        for j in 0..=i {
+            let (cwij, cvij) = if i == j {
+                (v[i] * w[i], v[i] * v[i])
+            } else {
+                (v[i] * w[j] + v[j] * w[i], 2.0 * v[i] * v[j])
+            };
+            let o = (i * s + j) * pk + p0;
+            let t = &kb[o..o + B];
+            for q in 0..B {
+                a[q] += cwij * t[q];
+                b[q] += cvij * t[q];
+            }
+        }
+    }
+    cw[p0..p0 + B].copy_from_slice(&a);
+    cv[p0..p0 + B].copy_from_slice(&b);
+    B
 }
 
 #[cfg(test)]
