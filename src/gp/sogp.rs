@@ -190,6 +190,10 @@ pub struct Sogp {
     mean: Vec<f64>,
     qv: Vec<f64>,
     y_tmp: Vec<f64>,
+    /// Scratch of the rebuild: the unit Gram of the BVs under new hyperparameters, and the
+    /// old slots of the BVs kept so far.
+    gram_new: Vec<f64>,
+    retained: Vec<usize>,
     /// Scratch: the column of Q and C of a BV being deleted.
     col_q: Vec<f64>,
     col_c: Vec<f64>,
@@ -242,6 +246,8 @@ impl Sogp {
             mean: vec![0.0; n_out],
             qv: vec![0.0; n_out],
             y_tmp: vec![0.0; n_out],
+            gram_new: vec![0.0; stride * stride],
+            retained: Vec::with_capacity(stride),
             col_q: vec![0.0; stride],
             col_c: vec![0.0; stride],
             observed: None,
@@ -384,12 +390,18 @@ impl Sogp {
     fn refresh(&mut self) {
         self.kernel.scale_into(&self.x_raw, &mut self.x_scaled);
         let sf2 = self.kernel.sigma_f2();
-        let (n, s) = (self.n, self.stride);
+        let n = self.n;
         self.kernel
             .unit_many(&self.x_scaled, &self.basis, n, &mut self.lag_k, &mut self.k);
         for k in &mut self.k[..n] {
             *k *= sf2;
         }
+        self.refresh_posterior();
+    }
+
+    /// C·k and the mean from the kernel vector in `k`.
+    fn refresh_posterior(&mut self) {
+        let (n, s) = (self.n, self.stride);
         for i in 0..n {
             self.ck[i] = dot(&self.c[i * s..i * s + n], &self.k[..n]);
         }
@@ -788,31 +800,87 @@ impl Sogp {
 
     /// Replace the hyperparameters and rebuild the posterior by re-running the online
     /// updates over the stored BVs and targets (BVs that are no longer novel are absorbed).
+    ///
+    /// The unit Gram matrix of the BVs under the new kernel is computed once up front (with
+    /// its derivatives when adapting, which the gradient needs anyway); the re-run reads its
+    /// kernel vectors from it instead of evaluating the kernel again.
     pub fn set_kernel_params(&mut self, params: KernelParams) {
         let Ok(kernel) = RecursiveArd::new(self.kernel.dim(), self.kernel.tau(), params) else {
             return;
         };
         self.kernel = kernel;
-        let ad = self.adapt.take();
+        let mut ad = self.adapt.take();
         let m = self.n;
-        let (w, no) = (self.wlen, self.n_out);
+        let (w, no, s) = (self.wlen, self.n_out, self.stride);
+        for i in 0..m {
+            let (raw, scaled) = (
+                &self.bv_raw[i * w..(i + 1) * w],
+                &mut self.bv_scaled[i * w..(i + 1) * w],
+            );
+            self.kernel.scale_into(raw, scaled);
+            self.basis.set(i, scaled);
+        }
+        // Unit Gram (lower triangle, old slot order) under the new kernel.
+        match ad.as_mut() {
+            Some(ad) => {
+                self.fill_gram_derivatives(&mut ad.buf);
+                let pk = ad.buf.pk;
+                for i in 0..m {
+                    for j in 0..=i {
+                        self.gram_new[i * s + j] = ad.buf.kb[(i * s + j) * pk + pk - 1];
+                    }
+                }
+            }
+            None => {
+                for i in 0..m {
+                    let row = &mut self.gram_new[i * s..(i + 1) * s];
+                    let x = &self.bv_scaled[i * w..(i + 1) * w];
+                    self.kernel
+                        .unit_many(x, &self.basis, i + 1, &mut self.lag_k, &mut self.k);
+                    row[..=i].copy_from_slice(&self.k[..=i]);
+                }
+            }
+        }
         let saved_x = self.x_raw.clone();
+        let saved_xs = self.x_scaled.clone();
         let saved_y = self.y_tmp.clone();
+        let sf2 = self.kernel.sigma_f2();
         self.n = 0;
         self.alpha.fill(0.0);
+        self.retained.clear();
         for i in 0..m {
             // Slots below i are rewritten only after slot i was read.
             self.x_raw.copy_from_slice(&self.bv_raw[i * w..(i + 1) * w]);
+            self.x_scaled
+                .copy_from_slice(&self.bv_scaled[i * w..(i + 1) * w]);
             self.y_tmp.copy_from_slice(&self.bv_y[i * no..(i + 1) * no]);
-            self.refresh();
+            for (k, &r) in self.k.iter_mut().zip(&self.retained) {
+                *k = self.gram_new[i * s + r] * sf2;
+            }
+            self.refresh_posterior();
             if let Some((r, _, _)) = self.likelihood_terms() {
+                let before = self.n;
                 self.posterior_update(r);
+                if self.n > before {
+                    self.retained.push(i);
+                }
             }
         }
         self.x_raw = saved_x;
+        self.x_scaled = saved_xs;
         self.y_tmp = saved_y;
         if let Some(mut ad) = ad {
-            self.fill_gram_derivatives(&mut ad.buf);
+            if self.retained.len() < m {
+                // Absorbed BVs leave the Gram derivatives: keep the retained pairs, in
+                // order (every source lies at or after its destination).
+                let pk = ad.buf.pk;
+                for (a, &ra) in self.retained.iter().enumerate() {
+                    for (b, &rb) in self.retained.iter().enumerate() {
+                        let from = (ra * s + rb) * pk;
+                        ad.buf.kb.copy_within(from..from + pk, (a * s + b) * pk);
+                    }
+                }
+            }
             self.adapt = Some(ad);
         }
         self.version += 1;
