@@ -125,6 +125,39 @@ impl Sngd {
         self.updates
     }
 
+    /// h_next = (H − ε (Hg)(Hg)ᵀ/denom)/(1 − ε), in wide vectors where available (the
+    /// same operations in the same order, so bit-identical).
+    fn sherman_morrison(&mut self, eps: f64, denom: f64) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has AVX-512F, checked just above.
+            unsafe { self.sherman_morrison_avx512(eps, denom) };
+            return;
+        }
+        self.sherman_morrison_portable(eps, denom);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    unsafe fn sherman_morrison_avx512(&mut self, eps: f64, denom: f64) {
+        self.sherman_morrison_portable(eps, denom);
+    }
+
+    #[inline(always)]
+    fn sherman_morrison_portable(&mut self, eps: f64, denom: f64) {
+        let p = self.theta.len();
+        for ((hn, h), hgi) in self
+            .h_next
+            .chunks_exact_mut(p)
+            .zip(self.h.chunks_exact(p))
+            .zip(&self.hg)
+        {
+            for ((o, hij), hgj) in hn.iter_mut().zip(h).zip(&self.hg) {
+                *o = (hij - eps * hgi * hgj / denom) / (1.0 - eps);
+            }
+        }
+    }
+
     /// Add one gradient sample of the log-likelihood (to be increased). Returns true when
     /// the window completed and `theta` changed.
     pub fn push(&mut self, g: &mut [f64]) -> bool {
@@ -151,14 +184,8 @@ impl Sngd {
         let denom = (1.0 - eps) + eps * ghg;
         let mut ok = denom > 0.0 && denom.is_finite();
         if ok {
-            for i in 0..p {
-                for j in 0..p {
-                    let v =
-                        (self.h[i * p + j] - eps * self.hg[i] * self.hg[j] / denom) / (1.0 - eps);
-                    ok &= v.is_finite();
-                    self.h_next[i * p + j] = v;
-                }
-            }
+            self.sherman_morrison(eps, denom);
+            ok = self.h_next.iter().all(|v| v.is_finite());
         }
         if ok {
             std::mem::swap(&mut self.h, &mut self.h_next);

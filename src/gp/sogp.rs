@@ -510,6 +510,24 @@ impl Sogp {
     }
 
     fn posterior_update(&mut self, r: f64) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has AVX-512F, checked just above.
+            unsafe { self.posterior_update_avx512(r) };
+            return;
+        }
+        self.posterior_update_portable(r);
+    }
+
+    /// The O(n²) updates compiled for wide vectors (bit-identical: no reordering).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    unsafe fn posterior_update_avx512(&mut self, r: f64) {
+        self.posterior_update_portable(r);
+    }
+
+    #[inline(always)]
+    fn posterior_update_portable(&mut self, r: f64) {
         let (n, s, no) = (self.n, self.stride, self.n_out);
         for i in 0..n {
             self.ehat[i] = dot(&self.q[i * s..i * s + n], &self.k[..n]);
@@ -612,6 +630,23 @@ impl Sogp {
         if i >= self.n {
             return;
         }
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has AVX-512F, checked just above.
+            unsafe { self.delete_avx512(i) };
+            return;
+        }
+        self.delete_portable(i);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    unsafe fn delete_avx512(&mut self, i: usize) {
+        self.delete_portable(i);
+    }
+
+    #[inline(always)]
+    fn delete_portable(&mut self, i: usize) {
         let last = self.n - 1;
         self.swap_bv(i, last);
         let (s, no, l) = (self.stride, self.n_out, last);
