@@ -113,7 +113,15 @@ impl SogpParams {
     }
 }
 
-/// Buffers for the hyperparameter gradient: per BV pair (`kb`, pair-major) the unit-kernel
+/// Position of the pair (i, j) in a packed lower triangle (K and its derivatives are
+/// symmetric: storing one triangle halves the memory the gradient streams through).
+#[inline(always)]
+fn tri(i: usize, j: usize) -> usize {
+    let (a, b) = if i >= j { (i, j) } else { (j, i) };
+    a * (a + 1) / 2 + b
+}
+
+/// Buffers for the hyperparameter gradient: per BV pair (`kb`, packed lower triangle) the unit-kernel
 /// derivatives [∂/∂ln l_1 … ∂/∂ln l_D, ∂/∂sigma_rho] followed by the unit kernel value
 /// itself; the same for the observed window against each BV (`kx`, one row of `lanes`
 /// values per entry, as the many-BV kernel writes them).
@@ -140,7 +148,7 @@ impl GradBuffers {
         GradBuffers {
             pk,
             lanes,
-            kb: vec![0.0; stride * stride * pk],
+            kb: vec![0.0; tri(stride, 0) * pk],
             kx: vec![0.0; lanes * pk],
             tmp: vec![0.0; lanes * pk],
             lag_k: vec![0.0; tau * lanes],
@@ -575,12 +583,10 @@ impl Sogp {
                 let (pk, lanes) = (a.buf.pk, a.buf.lanes);
                 for j in 0..n {
                     for p in 0..pk {
-                        let v = a.buf.kx[p * lanes + j];
-                        a.buf.kb[(n * s + j) * pk + p] = v;
-                        a.buf.kb[(j * s + n) * pk + p] = v;
+                        a.buf.kb[tri(n, j) * pk + p] = a.buf.kx[p * lanes + j];
                     }
                 }
-                let diag = &mut a.buf.kb[(n * s + n) * pk..(n * s + n + 1) * pk];
+                let diag = &mut a.buf.kb[tri(n, n) * pk..(tri(n, n) + 1) * pk];
                 diag.fill(0.0);
                 diag[pk - 1] = 1.0;
             }
@@ -702,17 +708,16 @@ impl Sogp {
             self.alpha.swap(i * no + d, j * no + d);
         }
         if let Some(a) = self.adapt.as_mut() {
+            // Rows and columns i and j trade places; the pair (i, j) itself stays.
             let pk = a.buf.pk;
             let kb = &mut a.buf.kb;
-            for r in 0..s {
+            for r in (0..s).filter(|&r| r != i && r != j) {
                 for p in 0..pk {
-                    kb.swap((i * s + r) * pk + p, (j * s + r) * pk + p);
+                    kb.swap(tri(i, r) * pk + p, tri(j, r) * pk + p);
                 }
             }
-            for r in 0..s {
-                for p in 0..pk {
-                    kb.swap((r * s + i) * pk + p, (r * s + j) * pk + p);
-                }
+            for p in 0..pk {
+                kb.swap(tri(i, i) * pk + p, tri(j, j) * pk + p);
             }
         }
     }
@@ -739,7 +744,7 @@ impl Sogp {
     /// The Gram matrix's unit-kernel derivatives and values, one BV against all earlier
     /// ones at a time (K is symmetric).
     fn fill_gram_derivatives(&self, buf: &mut GradBuffers) {
-        let (s, pk, lanes) = (self.stride, buf.pk, buf.lanes);
+        let (pk, lanes) = (buf.pk, buf.lanes);
         for i in 0..self.n {
             let (g, kv) = buf.tmp.split_at_mut((pk - 1) * lanes);
             self.kernel
@@ -749,8 +754,7 @@ impl Sogp {
             for j in 0..=i {
                 for p in 0..pk {
                     let v = buf.tmp[p * lanes + j];
-                    buf.kb[(i * s + j) * pk + p] = v;
-                    buf.kb[(j * s + i) * pk + p] = v;
+                    buf.kb[tri(i, j) * pk + p] = v;
                 }
             }
         }
@@ -759,7 +763,7 @@ impl Sogp {
     /// Gradient of ln p(y | x) w.r.t. theta = [ln l, sigma_rho, ln sigma_f, ln sigma_n]
     /// into `buf.grad`, from the observation, `qv` (= ∂ln p/∂m) and the Gram derivatives.
     fn gradient(&self, buf: &mut GradBuffers, dlogp_ds: f64) {
-        let (n, s, no, pk) = (self.n, self.stride, self.n_out, buf.pk);
+        let (n, no, pk) = (self.n, self.n_out, buf.pk);
         let sf2 = self.kernel.sigma_f2();
         let sn2 = self.kernel.sigma_n2();
         let lanes = buf.lanes;
@@ -791,7 +795,7 @@ impl Sogp {
                 buf.kv[p] = kv[q];
             }
         }
-        gram_quad_forms(&buf.kb, s, pk, v, w, &mut buf.cw, &mut buf.cv);
+        gram_quad_forms(&buf.kb, pk, v, w, &mut buf.cw, &mut buf.cv);
         // Kernel parameters: dk = sf²·d(unit k), dk* = 0 since K(x, x) = 1 at any theta.
         for p in 0..pk - 1 {
             buf.grad[p] =
@@ -862,7 +866,7 @@ impl Sogp {
                 let pk = ad.buf.pk;
                 for i in 0..m {
                     for j in 0..=i {
-                        self.gram_new[i * s + j] = ad.buf.kb[(i * s + j) * pk + pk - 1];
+                        self.gram_new[i * s + j] = ad.buf.kb[tri(i, j) * pk + pk - 1];
                     }
                 }
             }
@@ -910,9 +914,9 @@ impl Sogp {
                 // order (every source lies at or after its destination).
                 let pk = ad.buf.pk;
                 for (a, &ra) in self.retained.iter().enumerate() {
-                    for (b, &rb) in self.retained.iter().enumerate() {
-                        let from = (ra * s + rb) * pk;
-                        ad.buf.kb.copy_within(from..from + pk, (a * s + b) * pk);
+                    for (b, &rb) in self.retained[..=a].iter().enumerate() {
+                        let from = tri(ra, rb) * pk;
+                        ad.buf.kb.copy_within(from..from + pk, tri(a, b) * pk);
                     }
                 }
             }
@@ -944,66 +948,55 @@ impl Sogp {
     }
 }
 
-/// vᵀdK w and vᵀdK v for every unit-kernel entry p of the pair-major Gram derivatives `kb`
-/// (stride `s`, `pk` entries per pair), over the lower triangle (K is symmetric). Entries
+/// vᵀdK w and vᵀdK v for every unit-kernel entry p of the Gram derivatives `kb` (packed
+/// lower triangle, `pk` entries per pair). Entries
 /// go in register blocks of 8, 4, 2 and 1, each summed over the pairs in the same order.
-fn gram_quad_forms(
-    kb: &[f64],
-    s: usize,
-    pk: usize,
-    v: &[f64],
-    w: &[f64],
-    cw: &mut [f64],
-    cv: &mut [f64],
-) {
+fn gram_quad_forms(kb: &[f64], pk: usize, v: &[f64], w: &[f64], cw: &mut [f64], cv: &mut [f64]) {
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU has AVX-512F, checked just above.
-            unsafe { gram_quad_forms_avx512(kb, s, pk, v, w, cw, cv) };
+            unsafe { gram_quad_forms_avx512(kb, pk, v, w, cw, cv) };
             return;
         }
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2, checked just above.
-            unsafe { gram_quad_forms_avx2(kb, s, pk, v, w, cw, cv) };
+            unsafe { gram_quad_forms_avx2(kb, pk, v, w, cw, cv) };
             return;
         }
     }
-    gram_quad_forms_portable(kb, s, pk, v, w, cw, cv);
+    gram_quad_forms_portable(kb, pk, v, w, cw, cv);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 unsafe fn gram_quad_forms_avx512(
     kb: &[f64],
-    s: usize,
     pk: usize,
     v: &[f64],
     w: &[f64],
     cw: &mut [f64],
     cv: &mut [f64],
 ) {
-    gram_quad_forms_portable(kb, s, pk, v, w, cw, cv);
+    gram_quad_forms_portable(kb, pk, v, w, cw, cv);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn gram_quad_forms_avx2(
     kb: &[f64],
-    s: usize,
     pk: usize,
     v: &[f64],
     w: &[f64],
     cw: &mut [f64],
     cv: &mut [f64],
 ) {
-    gram_quad_forms_portable(kb, s, pk, v, w, cw, cv);
+    gram_quad_forms_portable(kb, pk, v, w, cw, cv);
 }
 
 #[inline(always)]
 fn gram_quad_forms_portable(
     kb: &[f64],
-    s: usize,
     pk: usize,
     v: &[f64],
     w: &[f64],
@@ -1013,10 +1006,10 @@ fn gram_quad_forms_portable(
     let mut p0 = 0;
     while p0 < pk {
         p0 += match pk - p0 {
-            r if r >= 8 => quad_block::<8>(kb, s, pk, p0, v, w, cw, cv),
-            r if r >= 4 => quad_block::<4>(kb, s, pk, p0, v, w, cw, cv),
-            r if r >= 2 => quad_block::<2>(kb, s, pk, p0, v, w, cw, cv),
-            _ => quad_block::<1>(kb, s, pk, p0, v, w, cw, cv),
+            r if r >= 8 => quad_block::<8>(kb, pk, p0, v, w, cw, cv),
+            r if r >= 4 => quad_block::<4>(kb, pk, p0, v, w, cw, cv),
+            r if r >= 2 => quad_block::<2>(kb, pk, p0, v, w, cw, cv),
+            _ => quad_block::<1>(kb, pk, p0, v, w, cw, cv),
         };
     }
 }
@@ -1026,7 +1019,6 @@ fn gram_quad_forms_portable(
 #[allow(clippy::too_many_arguments)]
 fn quad_block<const B: usize>(
     kb: &[f64],
-    s: usize,
     pk: usize,
     p0: usize,
     v: &[f64],
@@ -1042,7 +1034,7 @@ fn quad_block<const B: usize>(
             } else {
                 (v[i] * w[j] + v[j] * w[i], 2.0 * v[i] * v[j])
             };
-            let o = (i * s + j) * pk + p0;
+            let o = tri(i, j) * pk + p0;
             let t = &kb[o..o + B];
             for q in 0..B {
                 a[q] += cwij * t[q];
