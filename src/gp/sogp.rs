@@ -472,6 +472,12 @@ impl Sogp {
                 Some((r_new, _, _)) => r = r_new,
                 None => return,
             }
+            // The observation's kernel derivatives were taken under the old
+            // hyperparameters and BVs; a full update stores them as the new BV's row.
+            if let Some(mut ad) = self.adapt.take() {
+                self.observation_derivatives(&mut ad.buf);
+                self.adapt = Some(ad);
+            }
         }
         self.posterior_update(r);
         self.seen += 1;
@@ -760,6 +766,17 @@ impl Sogp {
         }
     }
 
+    /// The unit-kernel derivatives and values of the observed window against every BV into
+    /// `buf.kx`. K and K_t per lag are those of the observation (refresh); only the
+    /// derivatives are new.
+    fn observation_derivatives(&self, buf: &mut GradBuffers) {
+        let lanes = buf.lanes;
+        let (g, kv) = buf.kx.split_at_mut((buf.pk - 1) * lanes);
+        kv[..lanes].copy_from_slice(&self.lag_k[(self.kernel.tau() - 1) * lanes..]);
+        self.kernel
+            .unit_grad_many(&self.x_scaled, &self.basis, self.n, &self.lag_k, g);
+    }
+
     /// Gradient of ln p(y | x) w.r.t. theta = [ln l, sigma_rho, ln sigma_f, ln sigma_n]
     /// into `buf.grad`, from the observation, `qv` (= ∂ln p/∂m) and the Gram derivatives.
     fn gradient(&self, buf: &mut GradBuffers, dlogp_ds: f64) {
@@ -767,12 +784,7 @@ impl Sogp {
         let sf2 = self.kernel.sigma_f2();
         let sn2 = self.kernel.sigma_n2();
         let lanes = buf.lanes;
-        // K and K_t per lag are those of the observation (refresh); only the
-        // derivatives are new.
-        let (g, kv) = buf.kx.split_at_mut((pk - 1) * lanes);
-        kv[..lanes].copy_from_slice(&self.lag_k[(self.kernel.tau() - 1) * lanes..]);
-        self.kernel
-            .unit_grad_many(&self.x_scaled, &self.basis, n, &self.lag_k, g);
+        self.observation_derivatives(buf);
         for i in 0..n {
             buf.w[i] = (0..no).map(|d| self.qv[d] * self.alpha[i * no + d]).sum();
         }
@@ -1050,6 +1062,83 @@ fn quad_block<const B: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The training path keeps the Gram derivatives incrementally (new rows from the
+    /// observation's derivatives, swaps on deletion, compaction on rebuild) and reuses the
+    /// observation's per-lag kernel values; after every update, through deletions and
+    /// hyperparameter rebuilds, both must equal a fresh computation, and so must the
+    /// gradient (which tests/gp_sogp.rs checks against finite differences).
+    #[test]
+    fn cached_gradient_terms_equal_a_fresh_computation() {
+        for likelihood in [Likelihood::Probit, Likelihood::Regression] {
+            let p = SogpParams {
+                capacity: 6,
+                tau: 3,
+                likelihood,
+                adaptation: Some(SngdParams {
+                    window: 4,
+                    start_after: 8,
+                    stop_count: 1000,
+                    ..SngdParams::default()
+                }),
+                ..SogpParams::default()
+            };
+            let (dim, tau) = (2, 3);
+            let mut gp = Sogp::new(dim, 1, &p).unwrap();
+            let mut checked = 0;
+            for t in 0..400 {
+                let f = t as f64;
+                let mut x = [0.0; 6];
+                // Every fifth window starts with a padding lag.
+                for (i, v) in x
+                    .iter_mut()
+                    .enumerate()
+                    .skip(if t % 5 == 0 { dim } else { 0 })
+                {
+                    *v = (0.37 * f + 1.3 * i as f64).sin();
+                }
+                let y = if (0.11 * f).sin() > 0.0 { 1.0 } else { -1.0 };
+                if let Some(ad) = gp.adapt.as_ref() {
+                    // The gradient the next update will take, from the cached terms.
+                    let mut g = gp.clone();
+                    g.observe(&x);
+                    g.y_tmp[0] = y;
+                    let (_, ds, _) = g.likelihood_terms().unwrap();
+                    let mut buf = ad.buf.clone();
+                    g.gradient(&mut buf, ds);
+                    let (_, fresh) = g.log_predictive_gradient(&x, &[y]);
+                    for (a, b) in buf.grad.iter().zip(&fresh) {
+                        assert!(
+                            (a - b).abs() <= 1e-12 * (1.0 + b.abs()),
+                            "step {t}: {a} vs {b}"
+                        );
+                    }
+                }
+                gp.observe(&x);
+                gp.update(&[y]);
+                if let Some(ad) = gp.adapt.as_ref() {
+                    let mut fresh = GradBuffers::new(dim, tau, gp.stride, gp.basis.stride());
+                    gp.fill_gram_derivatives(&mut fresh);
+                    let pk = fresh.pk;
+                    for i in 0..gp.n {
+                        for j in 0..=i {
+                            for q in 0..pk {
+                                let at = tri(i, j) * pk + q;
+                                assert_eq!(
+                                    ad.buf.kb[at], fresh.kb[at],
+                                    "step {t}, pair ({i}, {j})"
+                                );
+                            }
+                        }
+                    }
+                    checked += 1;
+                }
+            }
+            assert!(gp.seen() > 2 * p.capacity && gp.n_basis() == p.capacity);
+            assert!(gp.hyper_updates() >= 20, "{}", gp.hyper_updates());
+            assert!(checked > 300);
+        }
+    }
 
     #[test]
     fn a_drifted_inverse_is_detected_and_rebuilt() {
