@@ -148,7 +148,9 @@ impl GradBuffers {
         GradBuffers {
             pk,
             lanes,
-            kb: vec![0.0; tri(stride, 0) * pk],
+            // Padded so that the quadratic forms may read a whole register block past the
+            // last pair.
+            kb: vec![0.0; tri(stride, 0) * pk + QUAD_PAD],
             kx: vec![0.0; lanes * pk],
             tmp: vec![0.0; lanes * pk],
             lag_k: vec![0.0; tau * lanes],
@@ -1015,6 +1017,17 @@ fn gram_quad_forms_portable(
     cw: &mut [f64],
     cv: &mut [f64],
 ) {
+    // One pass over the pairs with every entry in registers (lanes past pk read the next
+    // pair and are dropped); wider entry counts go in several passes.
+    match pk.div_ceil(8) {
+        1 => return quad_single::<8>(kb, pk, v, w, cw, cv),
+        2 => return quad_single::<16>(kb, pk, v, w, cw, cv),
+        3 => return quad_single::<24>(kb, pk, v, w, cw, cv),
+        4 => return quad_single::<32>(kb, pk, v, w, cw, cv),
+        5 => return quad_single::<40>(kb, pk, v, w, cw, cv),
+        6 => return quad_single::<48>(kb, pk, v, w, cw, cv),
+        _ => {}
+    }
     let mut p0 = 0;
     while p0 < pk {
         p0 += match pk - p0 {
@@ -1024,6 +1037,39 @@ fn gram_quad_forms_portable(
             _ => quad_block::<1>(kb, pk, p0, v, w, cw, cv),
         };
     }
+}
+
+/// Largest register block of [`quad_single`]: the read past the last pair stays inside.
+const QUAD_PAD: usize = 48;
+
+/// All entries of [`gram_quad_forms`] in one pass (pk ≤ B ≤ pk + QUAD_PAD).
+#[inline(always)]
+fn quad_single<const B: usize>(
+    kb: &[f64],
+    pk: usize,
+    v: &[f64],
+    w: &[f64],
+    cw: &mut [f64],
+    cv: &mut [f64],
+) {
+    let (mut a, mut b) = ([0.0f64; B], [0.0f64; B]);
+    for i in 0..v.len() {
+        for j in 0..=i {
+            let (cwij, cvij) = if i == j {
+                (v[i] * w[i], v[i] * v[i])
+            } else {
+                (v[i] * w[j] + v[j] * w[i], 2.0 * v[i] * v[j])
+            };
+            let o = tri(i, j) * pk;
+            let t = &kb[o..o + B];
+            for q in 0..B {
+                a[q] += cwij * t[q];
+                b[q] += cvij * t[q];
+            }
+        }
+    }
+    cw[..pk].copy_from_slice(&a[..pk]);
+    cv[..pk].copy_from_slice(&b[..pk]);
 }
 
 /// Entries p0..p0 + B of [`gram_quad_forms`], accumulated in registers; returns B.
