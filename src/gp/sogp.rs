@@ -411,6 +411,24 @@ impl Sogp {
 
     /// C·k and the mean from the kernel vector in `k`.
     fn refresh_posterior(&mut self) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has AVX-512F, checked just above.
+            unsafe { self.refresh_posterior_avx512() };
+            return;
+        }
+        self.refresh_posterior_portable();
+    }
+
+    /// Compiled for wide vectors (bit-identical: no reordering).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    unsafe fn refresh_posterior_avx512(&mut self) {
+        self.refresh_posterior_portable();
+    }
+
+    #[inline(always)]
+    fn refresh_posterior_portable(&mut self) {
         let (n, s) = (self.n, self.stride);
         for i in 0..n {
             self.ck[i] = dot(&self.c[i * s..i * s + n], &self.k[..n]);
