@@ -121,10 +121,10 @@ fn tri(i: usize, j: usize) -> usize {
     a * (a + 1) / 2 + b
 }
 
-/// Buffers for the hyperparameter gradient: per BV pair (`kb`, packed lower triangle) the unit-kernel
-/// derivatives [∂/∂ln l_1 … ∂/∂ln l_D, ∂/∂sigma_rho] followed by the unit kernel value
-/// itself; the same for the observed window against each BV (`kx`, one row of `lanes`
-/// values per entry, as the many-BV kernel writes them).
+/// Buffers for the hyperparameter gradient: per BV pair (`kb`, packed lower triangle) the
+/// unit-kernel derivatives [∂/∂ln l_1 … ∂/∂ln l_D, ∂/∂sigma_rho] followed by the unit
+/// kernel value itself; the same for the observed window against each BV (`kx`, one row
+/// of `lanes` values per entry, as the many-BV kernel writes them).
 #[derive(Clone, Debug)]
 struct GradBuffers {
     pk: usize,
