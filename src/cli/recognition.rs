@@ -129,7 +129,8 @@ pub struct ClusteringArgs {
     /// du (discriminative) or gu (generative).
     #[arg(long, default_value = "du")]
     pub learner: String,
-    /// Novelty thresholds, comma separated (default 0.1, 0.15, …, 0.95).
+    /// Novelty thresholds, comma separated (default 0.1, 0.15, …, 0.95; for GU also 0.05 …
+    /// 0.25 in steps of 0.01).
     #[arg(long, value_delimiter = ',')]
     pub thresholds: Vec<f64>,
     /// Random orders per threshold (the paper: 50).
@@ -143,9 +144,16 @@ pub struct ClusteringArgs {
     /// Switch hyperparameter adaptation off.
     #[arg(long)]
     pub no_adapt: bool,
-    /// GU: combine per-step novelties by their mean or their max.
+    /// GU: combine per-step novelties by their mean or their max, or score the whole grasp
+    /// as one Gaussian (joint).
     #[arg(long, default_value = "mean")]
     pub gu_aggregate: String,
+    /// GU: the extreme-value m counts the winning expert's grasps (+1) or its training steps.
+    #[arg(long, default_value = "grasps")]
+    pub gu_draws: String,
+    /// GU: initial noise sigma_n of the experts (the paper: 0.1).
+    #[arg(long)]
+    pub gu_sigma_n: Option<f64>,
     /// Largest k of the k-means / SOM baselines (0: skip them).
     #[arg(long, default_value_t = 20)]
     pub baseline_max_k: usize,
@@ -166,19 +174,28 @@ fn print_point(name: &str, p: &Option<crate::experiments::clustering::EffectiveP
 
 pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
     use crate::experiments::clustering::{ClusteringParams, run_clustering};
+    let learner = args.learner.parse()?;
     let mut params = ClusteringParams {
-        learner: args.learner.parse()?,
         features: args.features.parse::<FeatureSet>()?,
         reps: args.reps,
         seed: args.seed,
         baseline_max_k: args.baseline_max_k,
-        ..ClusteringParams::default()
+        ..ClusteringParams::for_learner(learner)
     };
     params.gu_aggregate = match args.gu_aggregate.as_str() {
         "max" => crate::learners::GuAggregate::Max,
         "mean" => crate::learners::GuAggregate::Mean,
-        other => anyhow::bail!("--gu-aggregate: `{other}` is not max or mean"),
+        "joint" => crate::learners::GuAggregate::Joint,
+        other => anyhow::bail!("--gu-aggregate: `{other}` is not mean, max or joint"),
     };
+    params.gu_draws = match args.gu_draws.as_str() {
+        "grasps" => crate::learners::EvtDraws::Grasps,
+        "steps" => crate::learners::EvtDraws::Steps,
+        other => anyhow::bail!("--gu-draws: `{other}` is not grasps or steps"),
+    };
+    if let Some(sn) = args.gu_sigma_n {
+        params.gs.gp.sigma_n = sn;
+    }
     if !args.thresholds.is_empty() {
         params.thresholds = args.thresholds.clone();
     }

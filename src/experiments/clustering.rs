@@ -24,7 +24,7 @@ use crate::cluster::grasp_features::{Normalisation, Normaliser, session_features
 use crate::cluster::{Schedule, SequentialKMeansParams, SomParams, scores};
 use crate::features::{FeatureSet, SequenceParams, feature_sequences};
 use crate::jobs::Progress;
-use crate::learners::{DsParams, Du, DuParams, Gs, GsParams, Gu, GuAggregate, GuParams};
+use crate::learners::{DsParams, Du, DuParams, EvtDraws, Gs, GsParams, Gu, GuAggregate, GuParams};
 use crate::rng::Rng;
 use crate::session::Session;
 
@@ -63,6 +63,8 @@ pub struct ClusteringParams {
     pub gs: GsParams,
     /// GU's combination of per-step novelties.
     pub gu_aggregate: GuAggregate,
+    /// What GU's m (the draws of its extreme-value statistics) counts.
+    pub gu_draws: EvtDraws,
     /// Run sequential k-means and the SOM for 2 … `baseline_max_k` clusters (0: skip).
     pub baseline_max_k: usize,
 }
@@ -72,19 +74,48 @@ impl Default for ClusteringParams {
         ClusteringParams {
             learner: UnsupervisedLearner::Du,
             features: FeatureSet::All,
-            thresholds: (2..=19).map(|i| i as f64 * 0.05).collect(),
+            thresholds: paper_thresholds(),
             reps: 50,
             seed: 0,
             label_set: "object".into(),
             ds: DsParams::default(),
             gs: GsParams::default(),
             gu_aggregate: GuAggregate::Mean,
+            gu_draws: EvtDraws::Grasps,
             baseline_max_k: 20,
         }
     }
 }
 
+/// The paper's sweep, 0.1, 0.15, … 0.95.
+pub fn paper_thresholds() -> Vec<f64> {
+    (2..=19).map(|i| i as f64 * 0.05).collect()
+}
+
+/// The thresholds swept by default for `learner`: the paper's grid, and for GU also steps of
+/// 0.01 over 0.05 … 0.25, where its cluster count changes (from about 40 clusters to 4; at
+/// 0.3 it already keeps 2–3), so that runs near 10 effective clusters are not left to
+/// chance.
+pub fn default_thresholds(learner: UnsupervisedLearner) -> Vec<f64> {
+    let mut t = paper_thresholds();
+    if learner == UnsupervisedLearner::Gu {
+        t.push(0.05);
+        t.extend((6..25).filter(|i| i % 5 != 0).map(|i| i as f64 * 0.01));
+        t.sort_by(f64::total_cmp);
+    }
+    t
+}
+
 impl ClusteringParams {
+    /// The defaults with `learner` and its threshold grid.
+    pub fn for_learner(learner: UnsupervisedLearner) -> ClusteringParams {
+        ClusteringParams {
+            learner,
+            thresholds: default_thresholds(learner),
+            ..ClusteringParams::default()
+        }
+    }
+
     pub fn validate(&self) -> Result<(), ExperimentError> {
         if self.reps == 0 {
             return Err(ExperimentError::param("reps", "must be at least 1"));
@@ -194,6 +225,7 @@ fn one_run(
                 gs: params.gs.clone(),
                 threshold,
                 aggregate: params.gu_aggregate,
+                draws: params.gu_draws,
             },
         )?),
     };

@@ -266,7 +266,8 @@ const MIN_VARIANCE: f64 = f64::MIN_POSITIVE;
 
 /// GU's novelty ν_G = 1 − G_e(N(o | μ, Σ)) = exp(−(f/c_m)^α_m) of one observation, for
 /// Σ = diag(`variance`), `residual` = o − μ and the extreme-value statistics of `m` draws
-/// (the number of training points the model has seen, as the reference code uses).
+/// (the reference code passes the training points its model has seen; GU's choice is in
+/// `gu.rs`).
 ///
 /// Values: in [0, 1] and never NaN.
 /// - m < 2: 1 (with fewer than two draws there is no extreme-value distribution: a model
