@@ -93,10 +93,9 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
         Experiment::Clustering => {
             for learner in [UnsupervisedLearner::Du, UnsupervisedLearner::Gu] {
                 let params = ClusteringParams {
-                    learner,
                     reps: a.reps,
                     seed: a.seed,
-                    ..Default::default()
+                    ..ClusteringParams::for_learner(learner)
                 };
                 let r = run_clustering(&session, &params, &progress)?;
                 let report = clustering_report(&name, &r);
