@@ -6,6 +6,7 @@ pub mod clustering;
 pub mod recognition;
 pub mod recognition_report;
 pub mod report;
+pub mod robustness;
 pub mod stability;
 pub mod stability_report;
 
