@@ -368,8 +368,10 @@ pub fn perturb(session: &Session, p: &PerturbParams) -> Result<Session, PerturbE
                             continue;
                         };
                         let t = &sensor.transform;
+                        // raw_of(gain · p) = raw + (gain − 1) · p / slope, written so that a
+                        // gain of 1 returns every reading exactly.
                         for (i, v) in values.iter_mut().enumerate() {
-                            *v = sat(r, raw_of(t, i, s * t.apply(i, *v)));
+                            *v = sat(r, *v + (s - 1.0) * t.apply(i, *v) / slope(t));
                         }
                     }
                 }
