@@ -475,3 +475,25 @@ fn recognition_clean_score_is_the_protocols_and_dead_fingers_break_it() {
     // Every finger dead: the tactile features are constant, at best one class right.
     assert!(dead.score.mean <= 0.2, "{dead:?}");
 }
+
+#[test]
+fn recognition_baselines_score_the_sample_and_lose_to_noise() {
+    let Some(s) = sample("object-recognition.json") else {
+        return;
+    };
+    let mut p = RobustnessParams::defaults(Family::Recognition);
+    p.methods = vec![Method::KMeans, Method::RbfSvm];
+    p.reps = 1;
+    p.sweeps = vec![Sweep {
+        perturbation: Perturbation::Noise,
+        strengths: vec![1e5],
+    }];
+    let r = run_robustness(&s, &p, &Progress::new()).unwrap();
+    // The sample's objects separate well on the Table I features.
+    let km = r.clean_score(Method::KMeans).unwrap();
+    let svm = r.clean_score(Method::RbfSvm).unwrap();
+    assert!(km > 0.5 && km <= 1.0, "k-means NMI {km}");
+    assert!(svm > 0.8 && svm <= 1.0, "RBF SVM accuracy {svm}");
+    let noisy = r.curve(Method::RbfSvm, Perturbation::Noise).unwrap();
+    assert!(noisy.points[0].score.mean < svm - 0.1, "{noisy:?}");
+}

@@ -19,7 +19,7 @@ pub struct RobustnessArgs {
     #[arg(long)]
     pub family: String,
     /// Methods, comma-separated (default: every method of the family): sparse-svm,
-    /// raw-svm, ds, gs.
+    /// raw-svm (stability); ds, gs, du, gu, kmeans, som, rbf-svm (recognition).
     #[arg(long, value_delimiter = ',')]
     pub methods: Vec<String>,
     /// Perturbations, comma-separated (default: every one that applies): noise,
@@ -53,6 +53,11 @@ pub struct RobustnessArgs {
     pub gamma: Option<f64>,
     #[arg(long, default_value_t = 10)]
     pub folds: usize,
+    /// Recognition: DU's and GU's novelty thresholds (defaults 0.2 and 0.02).
+    #[arg(long)]
+    pub du_threshold: Option<f64>,
+    #[arg(long)]
+    pub gu_threshold: Option<f64>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -122,6 +127,9 @@ pub fn params_of(a: &RobustnessArgs) -> anyhow::Result<RobustnessParams> {
     c.beta = a.beta.unwrap_or(c.beta);
     c.gamma = a.gamma.unwrap_or(c.gamma);
     p.stability.folds = a.folds;
+    let rc = &mut p.recognition;
+    rc.du_threshold = a.du_threshold.unwrap_or(rc.du_threshold);
+    rc.gu_threshold = a.gu_threshold.unwrap_or(rc.gu_threshold);
     p.stability.settings.svm.seed = a.seed;
     p.stability.settings.cv_seed = a.seed;
     p.validate()?;
@@ -149,14 +157,13 @@ pub fn run(a: RobustnessArgs) -> anyhow::Result<()> {
 pub fn table(r: &RobustnessResult) -> String {
     let methods: Vec<Method> = r.clean.iter().map(|c| c.method).collect();
     let mut out = format!(
-        "{} on {}: {} reps, break = mean {} < {} × clean ({:.1} s wall, {} threads)\n",
+        "{} on {}: {} reps, break = mean score < {} × clean ({:.1} s wall, {} threads)\n",
         match r.params.family {
             Family::Stability => "grasp stability",
             Family::Recognition => "object recognition",
         },
         r.session,
         r.params.reps,
-        r.score_name,
         r.params.fraction,
         r.wall_seconds,
         r.threads
@@ -165,6 +172,11 @@ pub fn table(r: &RobustnessResult) -> String {
     out.push_str(&format!("{:<28}", "perturbation (unit)"));
     for m in &methods {
         out.push_str(&format!("{:>w$}", m.title()));
+    }
+    out.push('\n');
+    out.push_str(&format!("{:<28}", "score"));
+    for m in &methods {
+        out.push_str(&format!("{:>w$}", m.score_name()));
     }
     out.push('\n');
     out.push_str(&format!("{:<28}", "clean score"));

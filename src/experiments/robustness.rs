@@ -31,19 +31,25 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::ExperimentError;
+use super::clustering::{ClusteringParams, UnsupervisedLearner, one_run, som_setup};
 use super::recognition::{MeanSd, SupervisedLearner, new_learner, protocol_order, session_labels};
 use super::stability::{
     Config, DataOptions, PipelineSettings, StabilityData, StabilityError, grasp_features,
 };
+use crate::cluster::ClusterError;
+use crate::cluster::grasp_features::{Normalisation, Normaliser, session_features};
+use crate::cluster::kmeans::SequentialKMeansParams;
+use crate::cluster::scores::scores;
 use crate::features::{
     FeatureSequences, FeatureSet, KeyFramePatches, PatchScaling, SequenceParams, feature_sequences,
 };
 use crate::jobs::Progress;
-use crate::learners::{DsParams, GsParams};
+use crate::learners::{DsParams, GsParams, GuAggregate};
 use crate::perturb::{PerturbError, PerturbParams, PerturbationKind, Stuck, perturb};
 use crate::rng::Rng;
 use crate::session::Session;
 use crate::sparse::{Dictionary, DictionaryParams};
+use crate::svm::kernel_svm::{KernelSvmParams, stratified_folds};
 use crate::svm::{Confusion, LinearSvmParams, gather, stratified_k_fold};
 
 impl From<PerturbError> for ExperimentError {
@@ -92,14 +98,22 @@ impl Family {
     pub fn methods(self) -> Vec<Method> {
         match self {
             Family::Stability => vec![Method::SparseSvm, Method::RawSvm],
-            Family::Recognition => vec![Method::Ds, Method::Gs],
+            // DU and GU run on request: at thresholds that give a useful partition they
+            // grow tens of clusters, and every cluster is a GP to score each step against.
+            Family::Recognition => vec![
+                Method::Ds,
+                Method::Gs,
+                Method::KMeans,
+                Method::Som,
+                Method::RbfSvm,
+            ],
         }
     }
 
     pub fn score_name(self) -> &'static str {
         match self {
             Family::Stability => "weighted success rate",
-            Family::Recognition => "accuracy (final 20%)",
+            Family::Recognition => "accuracy (final 20%) or NMI",
         }
     }
 }
@@ -113,10 +127,28 @@ pub enum Method {
     RawSvm,
     Ds,
     Gs,
+    /// Online clustering at a fixed novelty threshold (second paper).
+    Du,
+    Gu,
+    /// Sequential k-means and the SOM on the per-grasp Table I features.
+    KMeans,
+    Som,
+    /// The offline RBF SVM on the Table I features (stratified k-fold).
+    RbfSvm,
 }
 
 impl Method {
-    pub const ALL: [Method; 4] = [Method::SparseSvm, Method::RawSvm, Method::Ds, Method::Gs];
+    pub const ALL: [Method; 9] = [
+        Method::SparseSvm,
+        Method::RawSvm,
+        Method::Ds,
+        Method::Gs,
+        Method::Du,
+        Method::Gu,
+        Method::KMeans,
+        Method::Som,
+        Method::RbfSvm,
+    ];
 
     pub fn key(self) -> &'static str {
         match self {
@@ -124,6 +156,11 @@ impl Method {
             Method::RawSvm => "raw-svm",
             Method::Ds => "ds",
             Method::Gs => "gs",
+            Method::Du => "du",
+            Method::Gu => "gu",
+            Method::KMeans => "kmeans",
+            Method::Som => "som",
+            Method::RbfSvm => "rbf-svm",
         }
     }
 
@@ -133,13 +170,33 @@ impl Method {
             Method::RawSvm => "raw linear SVM",
             Method::Ds => "DS",
             Method::Gs => "GS",
+            Method::Du => "DU",
+            Method::Gu => "GU",
+            Method::KMeans => "k-means",
+            Method::Som => "SOM",
+            Method::RbfSvm => "RBF SVM",
         }
     }
 
     pub fn family(self) -> Family {
         match self {
             Method::SparseSvm | Method::RawSvm => Family::Stability,
-            Method::Ds | Method::Gs => Family::Recognition,
+            _ => Family::Recognition,
+        }
+    }
+
+    /// k-means, the SOM and the RBF SVM work on per-grasp features, not sequences.
+    fn uses_table(self) -> bool {
+        matches!(self, Method::KMeans | Method::Som | Method::RbfSvm)
+    }
+
+    /// The score this method is measured by.
+    pub fn score_name(self) -> &'static str {
+        match self {
+            Method::SparseSvm | Method::RawSvm => "weighted success rate",
+            Method::Ds | Method::Gs => "accuracy (final 20%)",
+            Method::Du | Method::Gu | Method::KMeans | Method::Som => "NMI",
+            Method::RbfSvm => "accuracy (k-fold)",
         }
     }
 }
@@ -380,7 +437,8 @@ impl Default for StabilitySetup {
     }
 }
 
-/// The recognition protocol's settings (as [`super::recognition::RecognitionParams`]).
+/// The recognition family's settings: DS/GS as [`super::recognition::RecognitionParams`],
+/// DU/GU as [`super::clustering::ClusteringParams`] at one threshold, and the baselines.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RecognitionSetup {
     pub features: FeatureSet,
@@ -388,6 +446,17 @@ pub struct RecognitionSetup {
     pub label_set: String,
     pub ds: DsParams,
     pub gs: GsParams,
+    /// DU's and GU's novelty thresholds (defaults chosen on the sample iCub session, where
+    /// they give the most informative partition of a 0.05–0.95 sweep: DU 0.2, 42
+    /// effective clusters, NMI 0.39; GU 0.02, 6 effective clusters, NMI 0.79).
+    pub du_threshold: f64,
+    pub gu_threshold: f64,
+    pub gu_aggregate: GuAggregate,
+    /// Clusters / SOM units of k-means and the SOM (None: the number of classes).
+    pub clusters: Option<usize>,
+    /// The RBF SVM (the baselines' default C = 10, gamma = 0.01 on z-scored features).
+    pub svm: KernelSvmParams,
+    pub svm_folds: usize,
 }
 
 impl Default for RecognitionSetup {
@@ -398,6 +467,12 @@ impl Default for RecognitionSetup {
             label_set: "object".into(),
             ds: DsParams::default(),
             gs: GsParams::default(),
+            du_threshold: 0.2,
+            gu_threshold: 0.02,
+            gu_aggregate: GuAggregate::Mean,
+            clusters: None,
+            svm: KernelSvmParams::default(),
+            svm_folds: 5,
         }
     }
 }
@@ -515,6 +590,26 @@ impl RobustnessParams {
         }
         rc.ds.validate()?;
         rc.gs.validate()?;
+        for (name, t) in [
+            ("du_threshold", rc.du_threshold),
+            ("gu_threshold", rc.gu_threshold),
+        ] {
+            if !(0.0..=1.0).contains(&t) {
+                return Err(ExperimentError::param(
+                    name,
+                    format!("must lie in [0, 1], got {t}"),
+                ));
+            }
+        }
+        if rc.clusters == Some(0) {
+            return Err(ExperimentError::param("clusters", "must be at least 1"));
+        }
+        if rc.svm_folds < 2 {
+            return Err(ExperimentError::param("svm_folds", "must be at least 2"));
+        }
+        rc.svm
+            .validate()
+            .map_err(|e| ExperimentError::param("svm", e.to_string()))?;
         Ok(())
     }
 }
@@ -629,6 +724,8 @@ struct RecognitionPrep {
     clean: FeatureSequences,
     labels: Vec<usize>,
     n_classes: usize,
+    /// The clean per-grasp Table I features and their z-scoring (when a baseline runs).
+    table: Option<(Array2<f64>, Normaliser)>,
 }
 
 /// A task: the clean protocol (`sweep` None) or one strength of one sweep, one repetition.
@@ -643,6 +740,12 @@ struct Task {
 /// other random choices of the same repetition independent of them.
 const PERTURB_STREAM: u64 = 1 << 40;
 const PROTOCOL_STREAM: u64 = 2 << 40;
+const CLUSTER_STREAM: u64 = 3 << 40;
+const SVM_STREAM: u64 = 4 << 40;
+
+fn cluster_err(e: ClusterError) -> ExperimentError {
+    ExperimentError::Data(e.to_string())
+}
 
 /// Run every sweep. Cancellable between tasks; `progress` gets the share of tasks done.
 pub fn run_robustness(
@@ -838,10 +941,19 @@ fn prepare(
                     seed: params.seed,
                 },
             )?;
+            let table = if params.methods.iter().any(|m| m.uses_table()) {
+                let raw = session_features(session).map_err(cluster_err)?;
+                let norm =
+                    Normaliser::fit(Normalisation::ZScore, raw.view()).map_err(cluster_err)?;
+                Some((norm.transform(raw.view()).map_err(cluster_err)?, norm))
+            } else {
+                None
+            };
             Ok(Prepared::Recognition(Box::new(RecognitionPrep {
                 clean,
                 labels,
                 n_classes: classes.len(),
+                table,
             })))
         }
     }
@@ -1158,8 +1270,10 @@ fn recognition_task(
     rep: usize,
 ) -> Result<Vec<f64>, ExperimentError> {
     let rc = &params.recognition;
-    let feats = match (pert, perturbed) {
-        (Some((p, _)), Some(ps)) => {
+    let scope = pert.map(|(p, _)| p.scope());
+    let sequences = params.methods.iter().any(|m| !m.uses_table());
+    let feats = match perturbed {
+        Some(ps) if sequences => {
             let f = feature_sequences(
                 ps,
                 &SequenceParams {
@@ -1168,7 +1282,7 @@ fn recognition_task(
                     seed: params.seed,
                 },
             )?;
-            Some(if p.scope() == Scope::All {
+            Some(if scope == Some(Scope::All) {
                 f
             } else {
                 renormalise(&f, &prep.clean)
@@ -1176,12 +1290,29 @@ fn recognition_task(
         }
         _ => None,
     };
-    let scope = pert.map(|(p, _)| p.scope());
     let train_seqs = match (&feats, scope) {
         (Some(f), Some(Scope::All)) => f,
         _ => &prep.clean,
     };
     let test_seqs = feats.as_ref().unwrap_or(&prep.clean);
+    // Table I features: (training rows, test rows), z-scored as the clean session unless
+    // the perturbation is there all along.
+    let table = match (&prep.table, perturbed) {
+        (Some((clean, norm)), Some(ps)) => {
+            let raw = session_features(ps).map_err(cluster_err)?;
+            if scope == Some(Scope::All) {
+                let own = Normaliser::fit(Normalisation::ZScore, raw.view())
+                    .and_then(|n| n.transform(raw.view()))
+                    .map_err(cluster_err)?;
+                Some((own.clone(), own))
+            } else {
+                let t = norm.transform(raw.view()).map_err(cluster_err)?;
+                Some((clean.clone(), t))
+            }
+        }
+        (Some((clean, _)), None) => Some((clean.clone(), clean.clone())),
+        _ => None,
+    };
     // The same order as `run_recognition`'s repetition `rep` (without noise).
     let mut rng = Rng::stream(params.seed, rep as u64);
     let (teach, order) = protocol_order(&prep.labels, prep.n_classes, &mut rng);
@@ -1193,50 +1324,192 @@ fn recognition_task(
         &prep.labels,
         prep.n_classes,
         &order[..n_train],
+        true,
         &mut aux,
     );
+    // The unsupervised methods learn from every grasp; a training perturbation leaves
+    // them the same subset of grasps as it leaves the supervised ones to learn from.
+    let all: Vec<usize> = (0..prep.labels.len()).collect();
+    let kept_all = training_kept(pert, &prep.labels, prep.n_classes, &all, false, &mut aux);
+    let subset: Vec<usize> = all.iter().copied().filter(|&g| kept_all[g]).collect();
+    let sub_labels: Vec<usize> = subset.iter().map(|&g| prep.labels[g]).collect();
+    let k = rc.clusters.unwrap_or(prep.n_classes);
+    let cluster_seed = Rng::stream(params.seed, CLUSTER_STREAM + rep as u64).next_u64();
     let mut out = Vec::with_capacity(params.methods.len());
     for &method in &params.methods {
-        let kind = match method {
-            Method::Ds => SupervisedLearner::Ds,
-            _ => SupervisedLearner::Gs,
+        let score = match method {
+            Method::Ds | Method::Gs => {
+                let kind = if method == Method::Ds {
+                    SupervisedLearner::Ds
+                } else {
+                    SupervisedLearner::Gs
+                };
+                supervised_score(
+                    kind, rc, prep, train_seqs, test_seqs, &teach, &order, n_train, &keep,
+                )?
+            }
+            Method::Du | Method::Gu => {
+                let threshold = if method == Method::Du {
+                    rc.du_threshold
+                } else {
+                    rc.gu_threshold
+                };
+                let cp = ClusteringParams {
+                    learner: if method == Method::Du {
+                        UnsupervisedLearner::Du
+                    } else {
+                        UnsupervisedLearner::Gu
+                    },
+                    features: rc.features,
+                    thresholds: vec![threshold],
+                    reps: 1,
+                    seed: params.seed,
+                    label_set: rc.label_set.clone(),
+                    ds: rc.ds.clone(),
+                    gs: rc.gs.clone(),
+                    gu_aggregate: rc.gu_aggregate,
+                    baseline_max_k: 0,
+                };
+                let seqs: Vec<Array2<f64>> = subset
+                    .iter()
+                    .map(|&g| test_seqs.sequences[g].clone())
+                    .collect();
+                one_run(&cp, &seqs, &sub_labels, test_seqs.dim(), threshold, rep)?.nmi
+            }
+            Method::KMeans | Method::Som => {
+                let Some((_, test)) = &table else {
+                    return Err(ExperimentError::Data("no Table I features".into()));
+                };
+                let data = gather(test.view(), &subset);
+                let pred = if method == Method::KMeans {
+                    SequentialKMeansParams {
+                        k,
+                        passes: 1,
+                        seed: cluster_seed,
+                    }
+                    .fit(data.view())
+                    .and_then(|m| m.assign(data.view()))
+                } else {
+                    som_setup(k, cluster_seed)
+                        .fit(data.view())
+                        .and_then(|m| m.assign(data.view()))
+                }
+                .map_err(cluster_err)?;
+                scores(&sub_labels, &pred).nmi
+            }
+            Method::RbfSvm => {
+                let Some((train_x, test_x)) = &table else {
+                    return Err(ExperimentError::Data("no Table I features".into()));
+                };
+                rbf_accuracy(params, prep, train_x, test_x, pert, rep)?
+            }
+            Method::SparseSvm | Method::RawSvm => {
+                return Err(ExperimentError::param(
+                    "methods",
+                    format!("{} is a grasp-stability method", method.key()),
+                ));
+            }
         };
-        let mut learner = new_learner(kind, prep.clean.dim(), prep.n_classes, &rc.ds, &rc.gs)?;
-        for &g in &teach {
-            learner.train_sequence(train_seqs.sequences[g].view(), prep.labels[g]);
-        }
-        let mut hits = 0usize;
-        for (i, &g) in order.iter().enumerate() {
-            let is_test = i >= n_train;
-            if !is_test && !keep[i] {
-                continue;
-            }
-            let seqs = if is_test { test_seqs } else { train_seqs };
-            let seq = seqs.sequences[g].view();
-            let dist = learner.predict_sequence(seq);
-            if is_test {
-                hits += usize::from(learner.decide(dist.view()) == prep.labels[g]);
-            } else {
-                learner.train_sequence(seq, prep.labels[g]);
-            }
-        }
-        out.push(if n_test > 0 {
-            hits as f64 / n_test as f64
-        } else {
-            0.0
-        });
+        out.push(score);
     }
     Ok(out)
 }
 
+/// DS or GS through the supervised protocol: teach one grasp per class, then predict and
+/// learn the training part (the grasps `keep` leaves), then predict the test part.
+#[allow(clippy::too_many_arguments)]
+fn supervised_score(
+    kind: SupervisedLearner,
+    rc: &RecognitionSetup,
+    prep: &RecognitionPrep,
+    train_seqs: &FeatureSequences,
+    test_seqs: &FeatureSequences,
+    teach: &[usize],
+    order: &[usize],
+    n_train: usize,
+    keep: &[bool],
+) -> Result<f64, ExperimentError> {
+    let mut learner = new_learner(kind, prep.clean.dim(), prep.n_classes, &rc.ds, &rc.gs)?;
+    for &g in teach {
+        learner.train_sequence(train_seqs.sequences[g].view(), prep.labels[g]);
+    }
+    let mut hits = 0usize;
+    for (i, &g) in order.iter().enumerate() {
+        let is_test = i >= n_train;
+        if !is_test && !keep[i] {
+            continue;
+        }
+        let seqs = if is_test { test_seqs } else { train_seqs };
+        let seq = seqs.sequences[g].view();
+        let dist = learner.predict_sequence(seq);
+        if is_test {
+            hits += usize::from(learner.decide(dist.view()) == prep.labels[g]);
+        } else {
+            learner.train_sequence(seq, prep.labels[g]);
+        }
+    }
+    let n_test = order.len() - n_train;
+    Ok(if n_test > 0 {
+        hits as f64 / n_test as f64
+    } else {
+        0.0
+    })
+}
+
+/// Stratified k-fold accuracy of the RBF SVM: trained on `train_x` rows of the training
+/// folds (thinned by a training perturbation), tested on `test_x` rows of the test fold.
+fn rbf_accuracy(
+    params: &RobustnessParams,
+    prep: &RecognitionPrep,
+    train_x: &Array2<f64>,
+    test_x: &Array2<f64>,
+    pert: Option<(Perturbation, f64)>,
+    rep: usize,
+) -> Result<f64, ExperimentError> {
+    let rc = &params.recognition;
+    let labels = &prep.labels;
+    let fold_seed = Rng::stream(params.seed, rep as u64).next_u64();
+    let fold_of = stratified_folds(labels, rc.svm_folds, fold_seed);
+    let mut aux = Rng::stream(params.seed, SVM_STREAM + rep as u64);
+    let svm_err = |e: crate::svm::kernel_svm::KernelSvmError| ExperimentError::Data(e.to_string());
+    let mut correct = 0usize;
+    for f in 0..rc.svm_folds {
+        let train: Vec<usize> = (0..labels.len()).filter(|&i| fold_of[i] != f).collect();
+        let test: Vec<usize> = (0..labels.len()).filter(|&i| fold_of[i] == f).collect();
+        let kept = training_kept(pert, labels, prep.n_classes, &train, false, &mut aux);
+        let train: Vec<usize> = train
+            .iter()
+            .zip(&kept)
+            .filter(|(_, k)| **k)
+            .map(|(&i, _)| i)
+            .collect();
+        let y: Vec<usize> = train.iter().map(|&i| labels[i]).collect();
+        let model = rc
+            .svm
+            .fit(gather(train_x.view(), &train).view(), &y)
+            .map_err(svm_err)?;
+        let pred = model
+            .predict(gather(test_x.view(), &test).view())
+            .map_err(svm_err)?;
+        correct += test
+            .iter()
+            .zip(&pred)
+            .filter(|(i, p)| labels[**i] == **p)
+            .count();
+    }
+    Ok(correct as f64 / labels.len().max(1) as f64)
+}
+
 /// Which grasps of the training part are learned from: all, or those left by class
 /// imbalance (half the classes, drawn at random, keep `share` of their training grasps)
-/// or few examples (the first n − 1 of each class after its taught grasp).
+/// or few examples (the first n of each class; n − 1 when one grasp per class was
+/// `taught` before the training part).
 fn training_kept(
     pert: Option<(Perturbation, f64)>,
     labels: &[usize],
     n_classes: usize,
     train_part: &[usize],
+    taught: bool,
     rng: &mut Rng,
 ) -> Vec<bool> {
     let mut seen = vec![0usize; n_classes];
@@ -1244,7 +1517,9 @@ fn training_kept(
         .map(|c| train_part.iter().filter(|&&g| labels[g] == c).count())
         .collect();
     let limit: Vec<usize> = match pert {
-        Some((Perturbation::FewExamples, n)) => vec![(n as usize).saturating_sub(1); n_classes],
+        Some((Perturbation::FewExamples, n)) => {
+            vec![(n as usize).saturating_sub(usize::from(taught)); n_classes]
+        }
         Some((Perturbation::Imbalance, share)) => {
             let mut classes: Vec<usize> = (0..n_classes).collect();
             rng.shuffle(&mut classes);
@@ -1300,6 +1575,7 @@ mod tests {
             &labels,
             3,
             &part,
+            true,
             &mut Rng::new(0),
         );
         assert_eq!(keep.iter().filter(|k| **k).count(), 6);

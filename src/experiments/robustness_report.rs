@@ -65,11 +65,16 @@ fn sweep_figure(r: &RobustnessResult, sweep: &Sweep) -> Option<Figure> {
     if series.is_empty() {
         return None;
     }
+    let measures: Vec<String> = r
+        .clean
+        .iter()
+        .map(|c| format!("{} {}", c.method.title(), c.method.score_name()))
+        .collect();
     let mut subtitle = format!(
-        "{}; {} reps, band ± 1 sd; labels: absolute {}",
+        "{}; {} reps, band ± 1 sd; labels: absolute score ({})",
         scope_text(p.scope()),
         r.params.reps,
-        r.score_name
+        measures.join(", ")
     );
     if !skipped.is_empty() {
         subtitle.push_str(&format!("; not applicable: {}", skipped.join("; ")));
@@ -133,7 +138,7 @@ pub fn robustness_report(session: &str, r: &RobustnessResult) -> AnalysisResult 
     let mut scores = Vec::new();
     for c in &r.clean {
         scores.push((
-            format!("{}: clean {}", c.method.title(), r.score_name),
+            format!("{}: clean {}", c.method.title(), c.method.score_name()),
             c.score.mean,
         ));
     }
