@@ -355,6 +355,19 @@ fn bad_strengths_are_refused_by_name() {
         "strength"
     );
     assert!("nosie".parse::<Perturbation>().is_err());
+    // More dead sensors than the session has: refused before any work.
+    let mut p = RobustnessParams::defaults(Family::Stability);
+    p.sweeps = vec![Sweep {
+        perturbation: Perturbation::DeadSensor,
+        strengths: vec![1.0, 3.0],
+    }];
+    match run_robustness(&s, &p, &Progress::new()) {
+        Err(ExperimentError::InvalidParameter { name, reason }) => {
+            assert_eq!(name, "strengths");
+            assert!(reason.contains("dead-sensor"), "{reason}");
+        }
+        other => panic!("{other:?}"),
+    }
 }
 
 #[test]

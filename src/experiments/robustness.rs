@@ -638,7 +638,8 @@ pub struct Curve {
     /// The strength at which the mean score falls below `fraction` × clean, interpolated
     /// linearly; None = it holds through the sweep.
     pub break_point: Option<f64>,
-    /// Seconds of work spent on this curve (summed over tasks, all threads).
+    /// Seconds of work spent on this curve: the time of its tasks summed over threads, a
+    /// task's time shared equally by the methods it ran.
     pub task_seconds: f64,
 }
 
@@ -754,15 +755,6 @@ pub fn run_robustness(
     progress: &Progress,
 ) -> Result<RobustnessResult, ExperimentError> {
     params.validate()?;
-    let start = Instant::now();
-    progress.set(0.0, "robustness: preparing");
-    let prepared = prepare(session, params, progress)?;
-    let setup_seconds = start.elapsed().as_secs_f64();
-    let not_applicable: Vec<Option<String>> = params
-        .sweeps
-        .iter()
-        .map(|sw| applicability(session, params.family, sw.perturbation))
-        .collect();
     if let Some(sw) = params
         .sweeps
         .iter()
@@ -780,6 +772,15 @@ pub fn run_robustness(
             ),
         ));
     }
+    let start = Instant::now();
+    progress.set(0.0, "robustness: preparing");
+    let prepared = prepare(session, params, progress)?;
+    let setup_seconds = start.elapsed().as_secs_f64();
+    let not_applicable: Vec<Option<String>> = params
+        .sweeps
+        .iter()
+        .map(|sw| applicability(session, params.family, sw.perturbation))
+        .collect();
     let mut tasks: Vec<Task> = (0..params.reps)
         .map(|rep| Task {
             sweep: None,
