@@ -211,7 +211,11 @@ pub fn table(r: &RobustnessResult) -> String {
         }
         out.push('\n');
     }
-    for c in r.curves.iter().filter(|c| c.method == methods[0]) {
+    for c in r
+        .curves
+        .iter()
+        .filter(|c| methods.first() == Some(&c.method))
+    {
         if let Some(why) = &c.not_applicable {
             out.push_str(&format!("n/a {}: {why}\n", c.perturbation.key()));
         }
