@@ -14,6 +14,7 @@ pub mod gp;
 pub mod jobs;
 pub mod learners;
 pub mod linalg;
+pub mod perturb;
 pub mod rng;
 pub mod session;
 pub mod sparse;

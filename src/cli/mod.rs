@@ -5,6 +5,7 @@ pub mod baselines;
 mod figures;
 pub mod paper_figures;
 pub mod recognition;
+pub mod robustness;
 pub mod session;
 pub mod simulate;
 pub mod stability;
@@ -76,6 +77,9 @@ pub enum Command {
     Stability(stability::StabilityArgs),
     /// Time the grasp-stability pipeline on BTS3 palm-down (dictionary, coding, CV, grid).
     BenchStability(stability::BenchStabilityArgs),
+    /// Where the methods fail: sweep one perturbation at a time (noise, dead taxels, drift,
+    /// gain, truncation, ...) and print each method's break point.
+    Robustness(robustness::RobustnessArgs),
 }
 
 /// Run a subcommand.
@@ -93,5 +97,6 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::BenchRecognition(a) => recognition::bench(a),
         Command::Stability(a) => stability::run(a),
         Command::BenchStability(a) => stability::run_bench(a),
+        Command::Robustness(a) => robustness::run(a),
     }
 }

@@ -13,6 +13,8 @@ use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_
 use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
 use crate::experiments::recognition_report::{clustering_report, recognition_report};
 use crate::experiments::report::{AnalysisResult, Project, figure_set, speed_accuracy};
+use crate::experiments::robustness::{Family, RobustnessParams, run_robustness};
+use crate::experiments::robustness_report::robustness_report;
 use crate::experiments::stability::{
     self, DataOptions, GridSpec, PipelineSettings, StabilityData, StabilityOptions,
 };
@@ -32,6 +34,11 @@ pub enum Experiment {
     /// Grasp stability by sparse coding and a linear SVM over the 108-cell benchmark grid
     /// (the first paper's Figs. 2 and 5–11); --reps does not apply.
     Stability,
+    /// Where sparse coding + SVM and the raw SVM fail: every perturbation at its default
+    /// strengths (`--reps` per strength; 5–10 is plenty).
+    RobustnessStability,
+    /// Where DS and GS fail: every perturbation at its default strengths.
+    RobustnessRecognition,
 }
 
 #[derive(Args, Debug)]
@@ -138,6 +145,21 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
             let report = stability_report(&r);
             eprintln!("{}: done in {:.1} s", report.label, r.secs);
             results.push(report);
+        }
+        Experiment::RobustnessStability | Experiment::RobustnessRecognition => {
+            let family = if a.experiment == Experiment::RobustnessStability {
+                Family::Stability
+            } else {
+                Family::Recognition
+            };
+            let params = RobustnessParams {
+                reps: a.reps,
+                seed: a.seed,
+                ..RobustnessParams::defaults(family)
+            };
+            let r = run_robustness(&session, &params, &progress)?;
+            eprint!("{}", super::robustness::table(&r));
+            results.push(robustness_report(&name, &r));
         }
     }
     if let Some(path) = &a.project {

@@ -202,7 +202,7 @@ enum Learner {
     Gu(Gu),
 }
 
-fn one_run(
+pub fn one_run(
     params: &ClusteringParams,
     seqs: &[ndarray::Array2<f64>],
     labels: &[usize],

@@ -6,6 +6,8 @@ pub mod clustering;
 pub mod recognition;
 pub mod recognition_report;
 pub mod report;
+pub mod robustness;
+pub mod robustness_report;
 pub mod stability;
 pub mod stability_report;
 

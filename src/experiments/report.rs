@@ -23,6 +23,8 @@ pub enum AnalysisKind {
     Clustering,
     /// Offline baselines (k-means, SOM, RBF SVM on the Table I features).
     Baselines,
+    /// Where the methods fail: score against perturbation strength, with break points.
+    Robustness,
 }
 
 impl AnalysisKind {
@@ -32,6 +34,7 @@ impl AnalysisKind {
             AnalysisKind::Recognition => "Object recognition",
             AnalysisKind::Clustering => "Clustering",
             AnalysisKind::Baselines => "Baselines",
+            AnalysisKind::Robustness => "Robustness",
         }
     }
 }
