@@ -301,3 +301,40 @@ fn a_project_on_the_command_line_reopens_its_sessions_and_shows_its_results() {
     h.get_by_label("0.8125");
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn robustness_view_sweeps_a_perturbation_and_charts_it() {
+    use tactile_workbench::experiments::robustness::{Method, Perturbation};
+    let mut h = harness();
+    h.get_by_label("Simulated grasp stability").click();
+    h.run_ok();
+    h.get_by_label("Where methods fail").click();
+    h.run_ok();
+    // Only what the grasp-stability session supports is offered.
+    h.get_by_label("sparse coding + SVM");
+    assert!(h.query_by_label("DS").is_none());
+    h.get_by_label("new-objects");
+    {
+        let form = &mut h.state_mut().analyses.robustness;
+        form.methods = vec![Method::RawSvm];
+        form.perturbations = vec![Perturbation::Noise, Perturbation::Truncation];
+        form.reps = 1;
+    }
+    h.get_by_label("Run").click();
+    h.step();
+    h.step();
+    assert!(h.state().analyses.busy());
+    wait_for_jobs(&mut h, Duration::from_secs(300));
+    let r = h.state().analyses.results.last().expect("a result");
+    assert!(
+        r.label.starts_with("Robustness"),
+        "messages: {:?}",
+        h.state().analyses.messages
+    );
+    let clean = r
+        .score("raw linear SVM: clean weighted success rate")
+        .unwrap();
+    h.get_by_label(&format!("{clean:.4}"));
+    h.get_by_label("Robustness to noise");
+    h.get_by_label("Robustness to truncation");
+}

@@ -228,7 +228,7 @@ impl ClusteringForm {
     }
 }
 
-fn experiment_error(e: ExperimentError) -> JobError {
+pub(super) fn experiment_error(e: ExperimentError) -> JobError {
     match e {
         ExperimentError::Cancelled => JobError::Cancelled,
         other => JobError::failed(other),
@@ -236,7 +236,7 @@ fn experiment_error(e: ExperimentError) -> JobError {
 }
 
 /// An object-recognition session: encoders, sequences and `object` labels.
-fn recognition_ready(s: &LoadedSession) -> bool {
+pub(super) fn recognition_ready(s: &LoadedSession) -> bool {
     s.session.label_set("object").is_some() && !s.session.encoders.is_empty()
 }
 
@@ -253,6 +253,7 @@ pub struct Analyses {
     pub recognition: RecognitionForm,
     pub clustering: ClusteringForm,
     pub stability: StabilityForm,
+    pub robustness: super::robustness::RobustnessForm,
     /// Messages of finished jobs (errors and exports), newest last.
     pub messages: Vec<String>,
     /// A view the user asked to open from the speed-against-accuracy chart.
@@ -437,7 +438,7 @@ impl Analyses {
             .or_else(|| self.results.iter().rev().find(|r| r.kind == kind))
     }
 
-    fn results_ui(&mut self, ui: &mut egui::Ui, kind: AnalysisKind, session: &str) {
+    pub(super) fn results_ui(&mut self, ui: &mut egui::Ui, kind: AnalysisKind, session: &str) {
         let mine: Vec<usize> = (0..self.results.len())
             .filter(|&i| self.results[i].kind == kind && self.results[i].session == session)
             .collect();

@@ -7,6 +7,7 @@ pub mod figure_view;
 pub mod heatmap;
 pub mod loader;
 pub mod replay;
+pub mod robustness;
 
 use std::path::PathBuf;
 use std::sync::mpsc::{Receiver, channel};
@@ -33,6 +34,7 @@ pub enum View {
     Clustering,
     Baselines,
     SpeedAccuracy,
+    Robustness,
 }
 
 impl From<crate::cli::ViewArg> for View {
@@ -45,18 +47,20 @@ impl From<crate::cli::ViewArg> for View {
             ViewArg::Clustering => View::Clustering,
             ViewArg::Baselines => View::Baselines,
             ViewArg::SpeedAccuracy => View::SpeedAccuracy,
+            ViewArg::Robustness => View::Robustness,
         }
     }
 }
 
 impl View {
-    pub const ALL: [View; 6] = [
+    pub const ALL: [View; 7] = [
         View::Replay,
         View::Stability,
         View::Recognition,
         View::Clustering,
         View::Baselines,
         View::SpeedAccuracy,
+        View::Robustness,
     ];
 
     pub fn title(self) -> &'static str {
@@ -67,6 +71,7 @@ impl View {
             View::Clustering => "Clustering",
             View::Baselines => "Baselines",
             View::SpeedAccuracy => "Speed vs accuracy",
+            View::Robustness => "Where methods fail",
         }
     }
 
@@ -77,6 +82,7 @@ impl View {
             View::Recognition => Some(AnalysisKind::Recognition),
             View::Clustering => Some(AnalysisKind::Clustering),
             View::Baselines => Some(AnalysisKind::Baselines),
+            View::Robustness => Some(AnalysisKind::Robustness),
             View::Replay | View::SpeedAccuracy => None,
         }
     }
@@ -87,6 +93,7 @@ impl View {
             AnalysisKind::Recognition => View::Recognition,
             AnalysisKind::Clustering => View::Clustering,
             AnalysisKind::Stability => View::Stability,
+            AnalysisKind::Robustness => View::Robustness,
         }
     }
 }
@@ -497,21 +504,24 @@ impl WorkbenchApp {
         let active = self.browser.active;
         let ctx = ui.ctx().clone();
         egui::CentralPanel::default_margins().show(ui, |ui| match self.view {
-            View::Stability | View::Baselines | View::Recognition | View::Clustering => {
-                match self.sessions.get(active) {
-                    Some(s) => {
-                        egui::ScrollArea::vertical().show(ui, |ui| match self.view {
-                            View::Recognition => self.analyses.recognition_ui(ui, s, &ctx),
-                            View::Clustering => self.analyses.clustering_ui(ui, s, &ctx),
-                            View::Stability => self.analyses.stability_ui(ui, s, &ctx),
-                            _ => self.analyses.baselines_ui(ui, s, &ctx),
-                        });
-                    }
-                    None => {
-                        ui.label("Open a session first.");
-                    }
+            View::Stability
+            | View::Baselines
+            | View::Recognition
+            | View::Clustering
+            | View::Robustness => match self.sessions.get(active) {
+                Some(s) => {
+                    egui::ScrollArea::vertical().show(ui, |ui| match self.view {
+                        View::Recognition => self.analyses.recognition_ui(ui, s, &ctx),
+                        View::Clustering => self.analyses.clustering_ui(ui, s, &ctx),
+                        View::Stability => self.analyses.stability_ui(ui, s, &ctx),
+                        View::Robustness => self.analyses.robustness_ui(ui, s, &ctx),
+                        _ => self.analyses.baselines_ui(ui, s, &ctx),
+                    });
                 }
-            }
+                None => {
+                    ui.label("Open a session first.");
+                }
+            },
             View::SpeedAccuracy => {
                 egui::ScrollArea::vertical().show(ui, |ui| self.analyses.speed_accuracy_ui(ui));
             }

@@ -48,6 +48,7 @@ pub enum ViewArg {
     Clustering,
     Baselines,
     SpeedAccuracy,
+    Robustness,
 }
 
 #[derive(Subcommand, Debug)]

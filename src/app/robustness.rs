@@ -1,0 +1,188 @@
+//! "Where methods fail": sweep one perturbation at a time on the open session and chart each
+//! method's score against its strength, with the break points marked (issue 6). The family
+//! follows the session: grasp stability for a session with a two-class outcome, object
+//! recognition for one with objects and encoders.
+
+use egui::RichText;
+
+use super::analysis::{Analyses, JobOutput, experiment_error, recognition_ready};
+use super::loader::LoadedSession;
+use crate::experiments::report::AnalysisKind;
+use crate::experiments::robustness::{
+    Family, Method, Perturbation, RobustnessParams, Sweep, run_robustness,
+};
+use crate::experiments::robustness_report::robustness_report;
+
+/// The form: which methods and perturbations, with few repetitions by default so the view
+/// answers in minutes; the CLI runs the full sweeps.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct RobustnessForm {
+    pub methods: Vec<Method>,
+    pub perturbations: Vec<Perturbation>,
+    pub reps: usize,
+    /// The break point is where the score falls below this share of the clean score.
+    pub fraction: f64,
+    pub seed: u64,
+}
+
+impl Default for RobustnessForm {
+    fn default() -> Self {
+        RobustnessForm {
+            // DU and GU on request: each of their clusters is a GP to score every step against.
+            methods: vec![
+                Method::SparseSvm,
+                Method::RawSvm,
+                Method::Ds,
+                Method::Gs,
+                Method::KMeans,
+                Method::Som,
+                Method::RbfSvm,
+            ],
+            perturbations: vec![
+                Perturbation::Noise,
+                Perturbation::DeadTaxels,
+                Perturbation::Gain,
+            ],
+            reps: 2,
+            fraction: 0.9,
+            seed: 0,
+        }
+    }
+}
+
+impl RobustnessForm {
+    /// The experiment's parameters for `family`: the chosen methods and perturbations of that
+    /// family, each perturbation at its default strengths.
+    pub fn params(&self, family: Family) -> RobustnessParams {
+        RobustnessParams {
+            methods: methods_of(family)
+                .filter(|m| self.methods.contains(m))
+                .collect(),
+            sweeps: self
+                .perturbations
+                .iter()
+                .filter(|p| applies(**p, family))
+                .map(|&p| Sweep {
+                    perturbation: p,
+                    strengths: p.default_strengths(family),
+                })
+                .collect(),
+            reps: self.reps,
+            fraction: self.fraction,
+            seed: self.seed,
+            ..RobustnessParams::defaults(family)
+        }
+    }
+}
+
+/// Every method of `family`, in the experiment's order.
+fn methods_of(family: Family) -> impl Iterator<Item = Method> {
+    Method::ALL
+        .into_iter()
+        .filter(move |m| m.family() == family)
+}
+
+/// Never-seen objects are a perturbation of the grasp-stability protocol only: in object
+/// recognition each object is its own class.
+fn applies(p: Perturbation, family: Family) -> bool {
+    family == Family::Stability || p != Perturbation::NewObjects
+}
+
+/// The family a session supports, if any.
+fn family_of(s: &LoadedSession) -> Option<Family> {
+    if recognition_ready(s) {
+        Some(Family::Recognition)
+    } else if s
+        .session
+        .label_sets
+        .iter()
+        .any(|l| l.classes.len() == 2 && l.name == "outcome")
+    {
+        Some(Family::Stability)
+    } else {
+        None
+    }
+}
+
+impl Analyses {
+    pub fn robustness_ui(&mut self, ui: &mut egui::Ui, s: &LoadedSession, ctx: &egui::Context) {
+        ui.heading("Where methods fail: score against perturbation strength");
+        let family = family_of(s);
+        let running = self.is_running(AnalysisKind::Robustness);
+        let form = &mut self.robustness;
+        ui.horizontal_wrapped(|ui| {
+            ui.label("Methods:");
+            for m in family.into_iter().flat_map(methods_of) {
+                let mut on = form.methods.contains(&m);
+                if ui.checkbox(&mut on, m.title()).changed() {
+                    form.methods.retain(|x| *x != m);
+                    if on {
+                        form.methods.push(m);
+                    }
+                }
+            }
+        });
+        ui.horizontal_wrapped(|ui| {
+            ui.label("Perturbations:");
+            for p in Perturbation::ALL {
+                if family.is_some_and(|f| !applies(p, f)) {
+                    continue;
+                }
+                let mut on = form.perturbations.contains(&p);
+                if ui.checkbox(&mut on, p.key()).changed() {
+                    form.perturbations.retain(|x| *x != p);
+                    if on {
+                        form.perturbations.push(p);
+                    }
+                }
+            }
+        });
+        ui.horizontal(|ui| {
+            ui.add(
+                egui::DragValue::new(&mut form.reps)
+                    .range(1..=50)
+                    .prefix("repetitions "),
+            );
+            ui.add(
+                egui::DragValue::new(&mut form.fraction)
+                    .range(0.05..=1.0)
+                    .speed(0.01)
+                    .prefix("break below ")
+                    .suffix(" × clean score"),
+            );
+            ui.add(egui::DragValue::new(&mut form.seed).prefix("seed "));
+        });
+        let Some(family) = family else {
+            ui.label(
+                "This session has neither a two-class outcome (grasp stability) nor objects \
+                 with encoders (object recognition).",
+            );
+            return;
+        };
+        let params = self.robustness.params(family);
+        let problem = params.validate().err();
+        if let Some(e) = &problem {
+            ui.label(RichText::new(e.to_string()).color(ui.visuals().warn_fg_color));
+        }
+        if ui
+            .add_enabled(!running && problem.is_none(), egui::Button::new("Run"))
+            .clicked()
+        {
+            let session = s.session.clone();
+            self.spawn(
+                ctx,
+                Some(AnalysisKind::Robustness),
+                format!("Robustness sweep on {}", session.meta.name),
+                move |p| {
+                    let r = run_robustness(&session, &params, p).map_err(experiment_error)?;
+                    Ok(JobOutput::Result(Box::new(robustness_report(
+                        &session.meta.name,
+                        &r,
+                    ))))
+                },
+            );
+        }
+        ui.separator();
+        self.results_ui(ui, AnalysisKind::Robustness, &s.session.meta.name);
+    }
+}
