@@ -1370,6 +1370,7 @@ fn recognition_task(
                     gs: rc.gs.clone(),
                     gu_aggregate: rc.gu_aggregate,
                     baseline_max_k: 0,
+                    // The rest as the clustering experiment's defaults.
                     ..ClusteringParams::default()
                 };
                 let seqs: Vec<Array2<f64>> = subset
