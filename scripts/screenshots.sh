@@ -27,7 +27,11 @@ for e in recognition clustering baselines; do
         $bin paper-figures sample-sessions/object-recognition.json --experiment $e --reps 2 \
             -o "$work/fig-$e" --project "$work/$e.json"
 done
-projects=("$work"/stability.json "$work"/recognition.json "$work"/clustering.json "$work"/baselines.json)
+[ -f "$work/robustness.json" ] ||
+    $bin paper-figures sample-sessions/grasp-stability.json --experiment robustness-stability \
+        --reps 2 -o "$work/fig-robustness" --project "$work/robustness.json"
+projects=("$work"/stability.json "$work"/recognition.json "$work"/clustering.json \
+    "$work"/baselines.json "$work"/robustness.json)
 
 export DISPLAY=:97
 Xvfb $DISPLAY -screen 0 1400x900x24 >/dev/null 2>&1 &
@@ -54,6 +58,7 @@ shot recognition recognition
 shot clustering clustering
 shot baselines baselines
 shot speed-accuracy speed-accuracy
+shot robustness robustness
 # Replay: select the first grasp in the browser.
 shot replay replay mousemove 120 190 click 1
 echo "screenshots in $out"

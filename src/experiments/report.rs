@@ -223,18 +223,27 @@ impl Project {
     }
 
     pub fn load(path: &Path) -> Result<Project, ProjectError> {
+        let text = std::fs::read_to_string(path).map_err(|e| ProjectError::Read {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        Project::parse(&text, path)
+    }
+
+    /// Read a project from the text of the file `path`. Every figure must be drawable, so a
+    /// damaged file is an error here and never a broken view later.
+    pub fn parse(text: &str, path: &Path) -> Result<Project, ProjectError> {
         let p = path.display().to_string();
         let read = |message: String| ProjectError::Read {
             path: p.clone(),
             message,
         };
-        let text = std::fs::read_to_string(path).map_err(|e| read(e.to_string()))?;
         #[derive(Deserialize)]
         struct Header {
             format: Option<String>,
             version: Option<u64>,
         }
-        let h: Header = serde_json::from_str(&text).map_err(|e| read(e.to_string()))?;
+        let h: Header = serde_json::from_str(text).map_err(|e| read(e.to_string()))?;
         if h.format.as_deref() != Some(PROJECT_TAG) {
             return Err(read("not a tactile-workbench project file".into()));
         }
@@ -243,7 +252,18 @@ impl Project {
             Some(found) => return Err(ProjectError::Version { path: p, found }),
             None => return Err(read("`version`: missing".into())),
         }
-        serde_json::from_str(&text).map_err(|e| read(e.to_string()))
+        let project: Project = serde_json::from_str(text).map_err(|e| read(e.to_string()))?;
+        for (i, r) in project.results.iter().enumerate() {
+            let details = r
+                .details
+                .iter()
+                .flat_map(|d| d.items.iter().map(|(_, f)| f));
+            for f in r.figures.iter().map(|(_, f)| f).chain(details) {
+                f.validate()
+                    .map_err(|e| read(format!("`results[{i}]` ({}): {e}", r.label)))?;
+            }
+        }
+        Ok(project)
     }
 }
 
@@ -354,6 +374,26 @@ mod tests {
         let set = figure_set(&back.results);
         assert_eq!(set.entries[0].name, "01-ds-all-features-accuracy");
         let _ = std::fs::remove_dir_all(dir);
+    }
+
+    #[test]
+    fn a_project_with_an_undrawable_figure_is_an_error_naming_it() {
+        let path = Path::new("broken.json");
+        let mut r = result();
+        if let crate::figures::FigureKind::Chart(c) = &mut r.figures[0].1.kind {
+            c.series[0].y.pop();
+        }
+        let text = serde_json::to_string(&Project::new(Vec::new(), vec![r])).unwrap();
+        let e = Project::parse(&text, path).unwrap_err().to_string();
+        assert!(
+            e.starts_with("broken.json: `results[0]` (DS, all features)"),
+            "{e}"
+        );
+        assert!(e.contains("x values"), "{e}");
+        let e = Project::parse("{\"format\": 3", path)
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("broken.json: "), "{e}");
     }
 
     #[test]
