@@ -147,6 +147,13 @@ fn recognition_and_clustering_views_show_the_papers_figures() {
         .unwrap();
     h.get_by_label(&format!("{acc:.4}"));
 
+    // The speed chart puts either training or prediction time on its axis.
+    h.state_mut().view = View::SpeedAccuracy;
+    h.run_ok();
+    h.get_by_label("prediction time per step or sample").click();
+    h.run_ok();
+    h.get_by_label("Prediction speed against accuracy");
+
     h.state_mut().view = View::Clustering;
     h.run_ok();
     h.state_mut().analyses.clustering.reps = 1;

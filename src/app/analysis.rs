@@ -17,7 +17,7 @@ use crate::experiments::recognition::{
     GraspTrace, RecognitionParams, SupervisedLearner, grasp_trace, run_recognition,
 };
 use crate::experiments::recognition_report::{clustering_report, recognition_report};
-use crate::experiments::report::{self, AnalysisKind, AnalysisResult, date_text};
+use crate::experiments::report::{self, AnalysisKind, AnalysisResult, TimeAxis, date_text};
 use crate::experiments::stability::{
     Config, DataOptions, GridSpec, StabilityData, StabilityError, StabilityOptions,
 };
@@ -256,6 +256,8 @@ pub struct Analyses {
     pub robustness: super::robustness::RobustnessForm,
     /// Messages of finished jobs (errors and exports), newest last.
     pub messages: Vec<String>,
+    /// The time on the speed-against-accuracy chart's x axis.
+    pub time_axis: TimeAxis,
     /// A view the user asked to open from the speed-against-accuracy chart.
     pub open_request: Option<AnalysisKind>,
     /// The last recognition trace computed for the replay.
@@ -369,9 +371,9 @@ impl Analyses {
     pub fn export_all(&mut self, ctx: &egui::Context) {
         let set = report::figure_set(&self.results);
         let mut set_all = set;
-        if let Some(f) = report::speed_accuracy(&self.results) {
+        for (name, f) in report::speed_accuracy_figures(&self.results) {
             set_all.entries.push(figures::FigureEntry {
-                name: "speed-against-accuracy".into(),
+                name,
                 figure: f,
                 parameters: Default::default(),
                 session: "all".into(),
@@ -919,19 +921,33 @@ impl Analyses {
 
     pub fn speed_accuracy_ui(&mut self, ui: &mut egui::Ui) {
         ui.heading("Speed against accuracy");
-        match report::speed_accuracy(&self.results) {
+        ui.horizontal(|ui| {
+            ui.label("Time axis:");
+            ui.selectable_value(&mut self.time_axis, TimeAxis::Training, "training time");
+            ui.selectable_value(
+                &mut self.time_axis,
+                TimeAxis::Prediction,
+                "prediction time per step or sample",
+            );
+        });
+        let axis = self.time_axis;
+        match report::speed_accuracy(&self.results, axis) {
             Some(fig) => {
                 self.export.ui(ui);
+                let file = match axis {
+                    TimeAxis::Training => "speed-against-accuracy",
+                    TimeAxis::Prediction => "prediction-speed-against-accuracy",
+                };
                 if ui
-                    .button("Export speed-against-accuracy (SVG, PNG, CSV)")
+                    .button(format!("Export {file} (SVG, PNG, CSV)"))
                     .clicked()
                 {
-                    let m = self.export.write(&fig, "speed-against-accuracy");
+                    let m = self.export.write(&fig, file);
                     self.messages.push(m);
                 }
                 let act = figure_view::show(ui, "speed-accuracy", &fig, 420.0, Selection::None);
                 // Clicking a model's point opens its view, like its button below.
-                let sources = report::speed_accuracy_sources(&self.results);
+                let sources = report::speed_accuracy_sources(&self.results, axis);
                 if let Some((series, k)) = act.clicked_point
                     && let figures::FigureKind::Chart(c) = &fig.kind
                     && c.series
@@ -954,6 +970,9 @@ impl Analyses {
                         }
                     }
                 });
+            }
+            None if axis == TimeAxis::Prediction && !self.results.is_empty() => {
+                ui.label("None of the results times its predictions (the OIESGP learners do).");
             }
             None => {
                 ui.label("Train a model in any analysis view: every result appears here.");

@@ -12,7 +12,7 @@ use crate::experiments::baselines_report::baselines_report;
 use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_clustering};
 use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
 use crate::experiments::recognition_report::{clustering_report, recognition_report};
-use crate::experiments::report::{AnalysisResult, Project, figure_set, speed_accuracy};
+use crate::experiments::report::{AnalysisResult, Project, figure_set, speed_accuracy_figures};
 use crate::experiments::robustness::{Family, RobustnessParams, run_robustness};
 use crate::experiments::robustness_report::robustness_report;
 use crate::experiments::stability::{
@@ -167,9 +167,9 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
         println!("wrote {}", path.display());
     }
     let mut set = figure_set(&results);
-    if let Some(f) = speed_accuracy(&results) {
+    for (figure_name, f) in speed_accuracy_figures(&results) {
         set.entries.push(FigureEntry {
-            name: "speed-against-accuracy".into(),
+            name: figure_name,
             figure: f,
             parameters: Default::default(),
             session: name.clone(),

@@ -267,27 +267,47 @@ impl Project {
     }
 }
 
-/// (training time, headline score) of a result the speed-against-accuracy chart can place.
-fn charted(r: &AnalysisResult) -> Option<(f64, f64, &str)> {
+/// The time the speed-against-accuracy chart puts on its x axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum TimeAxis {
+    /// The whole fit.
+    #[default]
+    Training,
+    /// One prediction (a time step for the online learners).
+    Prediction,
+}
+
+impl TimeAxis {
+    fn seconds(self, r: &AnalysisResult) -> Option<f64> {
+        match self {
+            TimeAxis::Training => Some(r.train_seconds),
+            TimeAxis::Prediction => r.predict_seconds_per_sample,
+        }
+    }
+}
+
+/// (time, headline score, score name) of a result the chart can place.
+fn charted(r: &AnalysisResult, axis: TimeAxis) -> Option<(f64, f64, &str)> {
     let (name, score) = r.headline.as_ref()?;
-    (r.train_seconds > 0.0 && score.is_finite()).then_some((r.train_seconds, *score, name))
+    let t = axis.seconds(r)?;
+    (t > 0.0 && t.is_finite() && score.is_finite()).then_some((t, *score, name))
 }
 
 /// Indices into `results` of the speed-against-accuracy chart's points, in series order.
-pub fn speed_accuracy_sources(results: &[AnalysisResult]) -> Vec<usize> {
+pub fn speed_accuracy_sources(results: &[AnalysisResult], axis: TimeAxis) -> Vec<usize> {
     (0..results.len())
-        .filter(|&i| charted(&results[i]).is_some())
+        .filter(|&i| charted(&results[i], axis).is_some())
         .collect()
 }
 
-/// Speed against accuracy: every result with a headline score, training time on a log axis,
-/// the Pareto front drawn, each point labelled with its method and session.
-pub fn speed_accuracy(results: &[AnalysisResult]) -> Option<Figure> {
+/// Speed against accuracy: every result with a headline score and a time on `axis` (log
+/// scale), the Pareto front drawn, each point labelled with its method and session.
+pub fn speed_accuracy(results: &[AnalysisResult], axis: TimeAxis) -> Option<Figure> {
     use crate::figures::{Axis, Series};
     let rows: Vec<(f64, f64, String)> = results
         .iter()
         .filter_map(|r| {
-            let (t, score, name) = charted(r)?;
+            let (t, score, name) = charted(r, axis)?;
             Some((t, score, format!("{} ({name})", r.label)))
         })
         .collect();
@@ -300,16 +320,39 @@ pub fn speed_accuracy(results: &[AnalysisResult]) -> Option<Figure> {
         rows.iter().map(|r| r.1).collect(),
     )
     .labels(rows.iter().map(|r| r.2.clone()).collect());
+    let (title, x, subtitle) = match axis {
+        TimeAxis::Training => (
+            "Speed against accuracy",
+            Axis::new("training time", "s"),
+            "each model's headline score (accuracy, weighted success rate or NMI)",
+        ),
+        TimeAxis::Prediction => (
+            "Prediction speed against accuracy",
+            Axis::new("prediction time per step or sample", "s"),
+            "models that time their predictions; each model's headline score",
+        ),
+    };
     Some(
         Figure::pareto(
-            "Speed against accuracy",
-            Axis::new("training time", "s").log(),
+            title,
+            x.log(),
             Axis::new("score", ""),
             points,
             "Pareto front",
         )
-        .subtitle("each model's headline score (accuracy, weighted success rate or NMI)"),
+        .subtitle(subtitle),
     )
+}
+
+/// The speed-against-accuracy charts that have points, with their figure names.
+pub fn speed_accuracy_figures(results: &[AnalysisResult]) -> Vec<(String, Figure)> {
+    [
+        (TimeAxis::Training, "speed-against-accuracy"),
+        (TimeAxis::Prediction, "prediction-speed-against-accuracy"),
+    ]
+    .into_iter()
+    .filter_map(|(axis, name)| Some((name.to_string(), speed_accuracy(results, axis)?)))
+    .collect()
 }
 
 #[cfg(test)]
@@ -431,8 +474,24 @@ mod tests {
         let mut headless = result();
         headless.headline = None;
         let results = vec![untimed, result(), headless, result()];
-        assert_eq!(speed_accuracy_sources(&results), vec![1, 3]);
-        let f = speed_accuracy(&results).unwrap();
+        assert_eq!(
+            speed_accuracy_sources(&results, TimeAxis::Training),
+            vec![1, 3]
+        );
+        let mut untimed_prediction = result();
+        untimed_prediction.predict_seconds_per_sample = None;
+        let mixed = vec![untimed_prediction, result()];
+        assert_eq!(
+            speed_accuracy_sources(&mixed, TimeAxis::Prediction),
+            vec![1]
+        );
+        assert_eq!(
+            speed_accuracy_sources(&mixed, TimeAxis::Training),
+            vec![0, 1]
+        );
+        assert_eq!(speed_accuracy_figures(&mixed).len(), 2);
+        assert_eq!(speed_accuracy_figures(&results[..1]).len(), 0);
+        let f = speed_accuracy(&results, TimeAxis::Training).unwrap();
         let crate::figures::FigureKind::Chart(c) = &f.kind else {
             panic!("a chart");
         };
