@@ -490,7 +490,7 @@ mod tests {
             vec![0, 1]
         );
         assert_eq!(speed_accuracy_figures(&mixed).len(), 2);
-        assert_eq!(speed_accuracy_figures(&results[..1]).len(), 0);
+        assert_eq!(speed_accuracy_figures(&results[2..3]).len(), 0);
         let f = speed_accuracy(&results, TimeAxis::Training).unwrap();
         let crate::figures::FigureKind::Chart(c) = &f.kind else {
             panic!("a chart");
