@@ -16,7 +16,9 @@ use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_
 use crate::experiments::recognition::{
     GraspTrace, RecognitionParams, SupervisedLearner, grasp_trace, run_recognition,
 };
-use crate::experiments::recognition_report::{clustering_report, recognition_report};
+use crate::experiments::recognition_report::{
+    accuracy_comparison, clustering_report, comparison_figures, recognition_report,
+};
 use crate::experiments::report::{self, AnalysisKind, AnalysisResult, TimeAxis, date_text};
 use crate::experiments::stability::{
     Config, DataOptions, GridSpec, StabilityData, StabilityError, StabilityOptions,
@@ -371,7 +373,10 @@ impl Analyses {
     pub fn export_all(&mut self, ctx: &egui::Context) {
         let set = report::figure_set(&self.results);
         let mut set_all = set;
-        for (name, f) in report::speed_accuracy_figures(&self.results) {
+        let extra = report::speed_accuracy_figures(&self.results)
+            .into_iter()
+            .chain(comparison_figures(&self.results));
+        for (name, f) in extra {
             set_all.entries.push(figures::FigureEntry {
                 name,
                 figure: f,
@@ -801,6 +806,15 @@ impl Analyses {
             );
         }
         ui.separator();
+        // Fig. 6 across every model trained on this session (and the offline SVM).
+        if let Some(fig) = accuracy_comparison(&self.results, &s.session.meta.name) {
+            if ui.button("Export the comparison (SVG, PNG, CSV)").clicked() {
+                let m = self.export.write(&fig, "accuracy-compared");
+                self.messages.push(m);
+            }
+            figure_view::show(ui, "accuracy-compared", &fig, 300.0, Selection::None);
+            ui.separator();
+        }
         self.results_ui(ui, AnalysisKind::Recognition, &s.session.meta.name);
     }
 

@@ -11,7 +11,9 @@ use crate::cluster::grasp_features::session_features;
 use crate::experiments::baselines_report::baselines_report;
 use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_clustering};
 use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
-use crate::experiments::recognition_report::{clustering_report, recognition_report};
+use crate::experiments::recognition_report::{
+    clustering_report, comparison_figures, recognition_report,
+};
 use crate::experiments::report::{AnalysisResult, Project, figure_set, speed_accuracy_figures};
 use crate::experiments::robustness::{Family, RobustnessParams, run_robustness};
 use crate::experiments::robustness_report::robustness_report;
@@ -167,7 +169,10 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
         println!("wrote {}", path.display());
     }
     let mut set = figure_set(&results);
-    for (figure_name, f) in speed_accuracy_figures(&results) {
+    let extra = speed_accuracy_figures(&results)
+        .into_iter()
+        .chain(comparison_figures(&results));
+    for (figure_name, f) in extra {
         set.entries.push(FigureEntry {
             name: figure_name,
             figure: f,

@@ -448,3 +448,146 @@ fn contingency(r: &ClusteringResult, run: &ClusteringRun, assignment: &[usize]) 
         run.clusters, run.effective, run.purity, run.ari, run.nmi
     ))
 }
+
+/// Fig. 6 across models: the accuracy-as-trials-progress curve of every recognition result
+/// on `session` in one chart, with the offline RBF SVM's cross-validated accuracy (from a
+/// baselines result on the same session) as a reference line. None with fewer than two
+/// curves and no baseline: the result's own chart already shows one curve.
+pub fn accuracy_comparison(results: &[AnalysisResult], session: &str) -> Option<Figure> {
+    let mine = || results.iter().filter(|r| r.session == session);
+    let mut axes = None;
+    let mut test_from = None;
+    let mut series = Vec::new();
+    for r in mine().filter(|r| r.kind == AnalysisKind::Recognition) {
+        let Some((_, f)) = r.figures.iter().find(|(n, _)| n == "accuracy-by-trials") else {
+            continue;
+        };
+        let FigureKind::Chart(c) = &f.kind else {
+            continue;
+        };
+        let Some(s) = c.series.first() else {
+            continue;
+        };
+        // Curves are comparable only over the same cut of the order into sets of trials.
+        let (x, _) = axes.get_or_insert_with(|| (c.x.clone(), c.y.clone()));
+        if x.title != c.x.title {
+            continue;
+        }
+        let vertical = c
+            .ref_lines
+            .iter()
+            .find(|l| l.orientation == Orientation::Vertical);
+        test_from = test_from.or(vertical.map(|l| l.value));
+        let mut s = s.clone();
+        s.name = r.label.clone();
+        s.error = None;
+        s.color = None;
+        series.push(s);
+    }
+    let svm = mine()
+        .filter(|r| r.kind == AnalysisKind::Baselines)
+        .find_map(|r| r.score("SVM accuracy"));
+    let (x, y) = axes?;
+    if series.len() < 2 && svm.is_none() {
+        return None;
+    }
+    let mut f = Figure::chart("Accuracy as trials progress, compared", x, y, series).subtitle(
+        format!("every recognition result on {session}; mean over orders"),
+    );
+    if let Some(t) = test_from {
+        f = f.ref_line(Orientation::Vertical, t, "test only from here");
+    }
+    if let Some(a) = svm {
+        f = f.ref_line(
+            Orientation::Horizontal,
+            a,
+            format!("offline RBF SVM (cross-validated) {a:.3}"),
+        );
+    }
+    Some(f)
+}
+
+/// The cross-model comparisons of every session among `results`, named for export.
+pub fn comparison_figures(results: &[AnalysisResult]) -> Vec<(String, Figure)> {
+    let mut sessions: Vec<&str> = results.iter().map(|r| r.session.as_str()).collect();
+    sessions.sort_unstable();
+    sessions.dedup();
+    sessions
+        .into_iter()
+        .filter_map(|s| {
+            let slug: String = s
+                .chars()
+                .map(|c| {
+                    if c.is_alphanumeric() {
+                        c.to_ascii_lowercase()
+                    } else {
+                        '-'
+                    }
+                })
+                .collect();
+            Some((
+                format!("accuracy-compared-{slug}"),
+                accuracy_comparison(results, s)?,
+            ))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn result(kind: AnalysisKind, label: &str, session: &str) -> AnalysisResult {
+        let curve = Figure::chart(
+            "Accuracy as trials progress",
+            Axis::new("set of trials (order cut into 10 parts)", ""),
+            Axis::new("accuracy", ""),
+            vec![with_band(
+                "DS",
+                vec![1.0, 2.0],
+                &[
+                    &MeanSd { mean: 0.5, sd: 0.1 },
+                    &MeanSd { mean: 0.9, sd: 0.0 },
+                ],
+            )],
+        )
+        .ref_line(Orientation::Vertical, 8.5, "test only from here");
+        AnalysisResult {
+            kind,
+            label: label.into(),
+            session: session.into(),
+            parameters: BTreeMap::new(),
+            scores: vec![("SVM accuracy".into(), 0.97)],
+            headline: None,
+            train_seconds: 1.0,
+            predict_seconds_per_sample: None,
+            created: 0,
+            figures: vec![("accuracy-by-trials".into(), curve)],
+            details: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn the_comparison_overlays_a_sessions_models_and_the_offline_svm() {
+        let ds = result(AnalysisKind::Recognition, "DS, all features", "a");
+        let gs = result(AnalysisKind::Recognition, "GS, all features", "a");
+        let other = result(AnalysisKind::Recognition, "GS, all features", "b");
+        let svm = result(AnalysisKind::Baselines, "baselines", "a");
+        assert!(accuracy_comparison(&[ds.clone(), other.clone()], "a").is_none());
+        let f = accuracy_comparison(&[ds.clone(), gs, other.clone(), svm], "a").unwrap();
+        let FigureKind::Chart(c) = &f.kind else {
+            panic!("a chart");
+        };
+        let names: Vec<&str> = c.series.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names, ["DS, all features", "GS, all features"]);
+        assert!(c.series.iter().all(|s| s.error.is_none()));
+        assert_eq!(c.ref_lines.len(), 2);
+        assert_eq!(c.ref_lines[1].value, 0.97);
+        assert!(f.validate().is_ok());
+        let named = comparison_figures(&[ds, other]);
+        assert!(
+            named.is_empty(),
+            "one curve per session is not a comparison"
+        );
+    }
+}
