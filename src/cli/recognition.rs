@@ -154,6 +154,15 @@ pub struct ClusteringArgs {
     /// GU: initial noise sigma_n of the experts (the paper: 0.1).
     #[arg(long)]
     pub gu_sigma_n: Option<f64>,
+    /// GU: the noise in the novelty's Σ: the experts' shared sigma_n² (shared) or one
+    /// variance per output dimension estimated from the expert's training residuals
+    /// (per-dimension), also in the GS likelihood that picks the winner
+    /// (per-dimension-filter).
+    #[arg(long, default_value = "shared")]
+    pub gu_noise: String,
+    /// GU: the floor of the per-dimension noise variance.
+    #[arg(long)]
+    pub gu_noise_floor: Option<f64>,
     /// Largest k of the k-means / SOM baselines (0: skip them).
     #[arg(long, default_value_t = 20)]
     pub baseline_max_k: usize,
@@ -193,6 +202,17 @@ pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
         "steps" => crate::learners::EvtDraws::Steps,
         other => anyhow::bail!("--gu-draws: `{other}` is not grasps or steps"),
     };
+    params.gu_noise = match args.gu_noise.as_str() {
+        "shared" => crate::learners::GuNoise::Shared,
+        "per-dimension" => crate::learners::GuNoise::PerDimension,
+        "per-dimension-filter" => crate::learners::GuNoise::PerDimensionFilter,
+        other => anyhow::bail!(
+            "--gu-noise: `{other}` is not shared, per-dimension or per-dimension-filter"
+        ),
+    };
+    if let Some(f) = args.gu_noise_floor {
+        params.gu_noise_floor = f;
+    }
     if let Some(sn) = args.gu_sigma_n {
         params.gs.gp.sigma_n = sn;
     }

@@ -24,7 +24,9 @@ use crate::cluster::grasp_features::{Normalisation, Normaliser, session_features
 use crate::cluster::{Schedule, SequentialKMeansParams, SomParams, scores};
 use crate::features::{FeatureSet, SequenceParams, feature_sequences};
 use crate::jobs::Progress;
-use crate::learners::{DsParams, Du, DuParams, EvtDraws, Gs, GsParams, Gu, GuAggregate, GuParams};
+use crate::learners::{
+    DsParams, Du, DuParams, EvtDraws, Gs, GsParams, Gu, GuAggregate, GuNoise, GuParams,
+};
 use crate::rng::Rng;
 use crate::session::Session;
 
@@ -65,6 +67,10 @@ pub struct ClusteringParams {
     pub gu_aggregate: GuAggregate,
     /// What GU's m (the draws of its extreme-value statistics) counts.
     pub gu_draws: EvtDraws,
+    /// The noise in GU's Σ: the experts' shared sigma_n² or a per-dimension estimate.
+    pub gu_noise: GuNoise,
+    /// The floor of GU's per-dimension noise variance.
+    pub gu_noise_floor: f64,
     /// Run sequential k-means and the SOM for 2 … `baseline_max_k` clusters (0: skip).
     pub baseline_max_k: usize,
 }
@@ -82,6 +88,8 @@ impl Default for ClusteringParams {
             gs: GsParams::default(),
             gu_aggregate: GuAggregate::Mean,
             gu_draws: EvtDraws::Grasps,
+            gu_noise: GuNoise::Shared,
+            gu_noise_floor: GuParams::default().noise_floor,
             baseline_max_k: 20,
         }
     }
@@ -226,6 +234,8 @@ pub fn one_run(
                 threshold,
                 aggregate: params.gu_aggregate,
                 draws: params.gu_draws,
+                noise: params.gu_noise,
+                noise_floor: params.gu_noise_floor,
             },
         )?),
     };

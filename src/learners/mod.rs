@@ -11,7 +11,7 @@ use ndarray::{Array2, ArrayView2};
 pub use ds::{Ds, DsParams};
 pub use du::{Assignment, Du, DuParams, du_novelty};
 pub use gs::{Gs, GsParams};
-pub use gu::{EvtDraws, Gu, GuAggregate, GuParams};
+pub use gu::{EvtDraws, Gu, GuAggregate, GuNoise, GuParams};
 
 use crate::gp::{GpError, Sogp};
 
