@@ -28,6 +28,25 @@ fn wait_for_jobs(h: &mut Harness<'static, WorkbenchApp>, limit: Duration) {
     h.run_ok();
 }
 
+/// Press Run, see the job running in the background, and wait for it (bounded).
+fn run_job(h: &mut Harness<'static, WorkbenchApp>) {
+    h.get_by_label("Run").click();
+    h.step();
+    h.step();
+    assert!(h.state().analyses.busy());
+    wait_for_jobs(h, Duration::from_secs(300));
+}
+
+/// The app holds `n` results; otherwise the jobs' messages say why.
+fn assert_result_count(h: &Harness<'static, WorkbenchApp>, n: usize) {
+    assert_eq!(
+        h.state().analyses.results.len(),
+        n,
+        "messages: {:?}",
+        h.state().analyses.messages
+    );
+}
+
 #[test]
 fn baselines_run_in_the_background_and_show_their_figures() {
     let mut h = harness();
@@ -43,12 +62,7 @@ fn baselines_run_in_the_background_and_show_their_figures() {
     h.get_by_label("Cancel");
     wait_for_jobs(&mut h, Duration::from_secs(120));
     assert!(!h.state().analyses.busy());
-    assert_eq!(
-        h.state().analyses.results.len(),
-        1,
-        "messages: {:?}",
-        h.state().analyses.messages
-    );
+    assert_result_count(&h, 1);
     h.get_by_label("Clustering scores at k = 10");
     h.get_by_label("NMI against effective clusters");
     h.get_by_label("k-means NMI");
@@ -124,17 +138,8 @@ fn recognition_and_clustering_views_show_the_papers_figures() {
     h.state_mut().view = View::Recognition;
     h.run_ok();
     h.state_mut().analyses.recognition.reps = 1;
-    h.get_by_label("Run").click();
-    h.step();
-    h.step();
-    assert!(h.state().analyses.busy());
-    wait_for_jobs(&mut h, Duration::from_secs(300));
-    assert_eq!(
-        h.state().analyses.results.len(),
-        1,
-        "messages: {:?}",
-        h.state().analyses.messages
-    );
+    run_job(&mut h);
+    assert_result_count(&h, 1);
     for title in [
         "Accuracy as trials progress",
         "Confusion matrix",
@@ -166,12 +171,7 @@ fn recognition_and_clustering_views_show_the_papers_figures() {
     h.step();
     h.step();
     wait_for_jobs(&mut h, Duration::from_secs(300));
-    assert_eq!(
-        h.state().analyses.results.len(),
-        2,
-        "messages: {:?}",
-        h.state().analyses.messages
-    );
+    assert_result_count(&h, 2);
     h.get_by_label("Purity, ARI and NMI against the novelty threshold");
     h.get_by_label("Clusters against the novelty threshold");
     h.get_by_label("NMI against effective clusters");
@@ -221,17 +221,8 @@ fn stability_view_shows_the_first_papers_figures() {
     h.state_mut().view = View::Stability;
     h.run_ok();
     h.state_mut().analyses.stability.num_bases = 8;
-    h.get_by_label("Run").click();
-    h.step();
-    h.step();
-    assert!(h.state().analyses.busy());
-    wait_for_jobs(&mut h, Duration::from_secs(300));
-    assert_eq!(
-        h.state().analyses.results.len(),
-        1,
-        "messages: {:?}",
-        h.state().analyses.messages
-    );
+    run_job(&mut h);
+    assert_result_count(&h, 1);
     for title in [
         "Basis images",
         "Basis usage per label",
@@ -327,11 +318,7 @@ fn robustness_view_sweeps_a_perturbation_and_charts_it() {
         form.perturbations = vec![Perturbation::Noise, Perturbation::Truncation];
         form.reps = 1;
     }
-    h.get_by_label("Run").click();
-    h.step();
-    h.step();
-    assert!(h.state().analyses.busy());
-    wait_for_jobs(&mut h, Duration::from_secs(300));
+    run_job(&mut h);
     let r = h.state().analyses.results.last().expect("a result");
     assert!(
         r.label.starts_with("Robustness"),
