@@ -163,6 +163,10 @@ pub struct ClusteringArgs {
     /// GU: the floor of the per-dimension noise variance.
     #[arg(long)]
     pub gu_noise_floor: Option<f64>,
+    /// GU: clusters trained on fewer grasps (counting the one that created them) take no
+    /// part in the final re-assignment (default 3; 1 keeps every cluster).
+    #[arg(long)]
+    pub gu_min_grasps: Option<usize>,
     /// Largest k of the k-means / SOM baselines (0: skip them).
     #[arg(long, default_value_t = 20)]
     pub baseline_max_k: usize,
@@ -210,6 +214,9 @@ pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
             "--gu-noise: `{other}` is not shared, per-dimension or per-dimension-filter"
         ),
     };
+    if let Some(k) = args.gu_min_grasps {
+        params.gu_min_grasps = k;
+    }
     if let Some(f) = args.gu_noise_floor {
         params.gu_noise_floor = f;
     }

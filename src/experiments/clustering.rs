@@ -71,6 +71,9 @@ pub struct ClusteringParams {
     pub gu_noise: GuNoise,
     /// The floor of GU's per-dimension noise variance.
     pub gu_noise_floor: f64,
+    /// GU: clusters trained on fewer grasps are left out of the re-assignment.
+    #[serde(default = "every_gu_cluster")]
+    pub gu_min_grasps: usize,
     /// Run sequential k-means and the SOM for 2 … `baseline_max_k` clusters (0: skip).
     pub baseline_max_k: usize,
 }
@@ -90,9 +93,15 @@ impl Default for ClusteringParams {
             gu_draws: EvtDraws::Grasps,
             gu_noise: GuNoise::Shared,
             gu_noise_floor: GuParams::default().noise_floor,
+            gu_min_grasps: GuParams::default().min_grasps,
             baseline_max_k: 20,
         }
     }
+}
+
+/// A project saved before GU's `min_grasps` existed re-assigned to every cluster.
+fn every_gu_cluster() -> usize {
+    1
 }
 
 /// The paper's sweep, 0.1, 0.15, … 0.95.
@@ -236,6 +245,7 @@ pub fn one_run(
                 draws: params.gu_draws,
                 noise: params.gu_noise,
                 noise_floor: params.gu_noise_floor,
+                min_grasps: params.gu_min_grasps,
             },
         )?),
     };
