@@ -213,6 +213,35 @@ fn recognition_and_clustering_views_show_the_papers_figures() {
     );
 }
 
+/// Choosing GU offers its own threshold range and the grasps that keep a cluster, and the
+/// result says which it used.
+#[test]
+fn choosing_gu_offers_its_thresholds_and_cluster_confirmation() {
+    let mut h = harness();
+    h.state_mut().view = View::Clustering;
+    h.run_ok();
+    assert_eq!(h.state().analyses.clustering.thresholds, [0.1, 0.95, 0.05]);
+    assert!(h.query_by_label("grasps to keep a cluster:").is_none());
+    h.get_by_role_and_label(egui::accesskit::Role::ComboBox, "Learner")
+        .click();
+    h.run_ok();
+    h.get_by_label("GU (generative, EVT novelty)").click();
+    h.run_ok();
+    assert_eq!(h.state().analyses.clustering.thresholds, [0.02, 0.25, 0.01]);
+    h.get_by_label("grasps to keep a cluster:");
+    h.state_mut().analyses.clustering.reps = 1;
+    h.state_mut().analyses.clustering.thresholds = [0.02, 0.04, 0.02];
+    h.state_mut().analyses.clustering.gu_min_grasps = 2;
+    h.run_ok();
+    run_job(&mut h);
+    assert_result_count(&h, 1);
+    let label = &h.state().analyses.results[0].label;
+    assert!(
+        label.contains("GU") && label.contains("kept from 2 grasps"),
+        "{label}"
+    );
+}
+
 #[test]
 fn stability_view_shows_the_first_papers_figures() {
     let mut h = harness();

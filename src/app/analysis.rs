@@ -204,6 +204,13 @@ pub struct ClusteringForm {
     pub seed: u64,
     /// Novelty thresholds swept: from, to, step (the paper: 0.1 to 0.95).
     pub thresholds: [f64; 3],
+    /// GU: clusters trained on fewer grasps take no part in the re-assignment.
+    #[serde(default = "gu_min_grasps")]
+    pub gu_min_grasps: usize,
+}
+
+fn gu_min_grasps() -> usize {
+    crate::learners::GuParams::default().min_grasps
 }
 
 impl Default for ClusteringForm {
@@ -212,12 +219,23 @@ impl Default for ClusteringForm {
             learner: UnsupervisedLearner::Du,
             reps: 2,
             seed: 0,
-            thresholds: [0.1, 0.95, 0.05],
+            thresholds: ClusteringForm::suggested_thresholds(UnsupervisedLearner::Du),
+            gu_min_grasps: gu_min_grasps(),
         }
     }
 }
 
 impl ClusteringForm {
+    /// The sweep offered for `learner`: the paper's 0.1 to 0.95 for DU; for GU 0.02 to 0.25
+    /// in steps of 0.01, where its cluster count changes (above 0.3 it keeps 1–3 clusters
+    /// on the iCub data).
+    pub fn suggested_thresholds(learner: UnsupervisedLearner) -> [f64; 3] {
+        match learner {
+            UnsupervisedLearner::Du => [0.1, 0.95, 0.05],
+            UnsupervisedLearner::Gu => [0.02, 0.25, 0.01],
+        }
+    }
+
     pub fn threshold_list(&self) -> Vec<f64> {
         let [from, to, step] = self.thresholds;
         if step.is_nan() || step <= 0.0 || to < from {
@@ -823,6 +841,7 @@ impl Analyses {
         let running = self.is_running(AnalysisKind::Clustering);
         let f = &mut self.clustering;
         ui.horizontal(|ui| {
+            let before = f.learner;
             egui::ComboBox::from_label("Learner")
                 .selected_text(format!("{:?}", f.learner).to_uppercase())
                 .show_ui(ui, |ui| {
@@ -837,6 +856,20 @@ impl Analyses {
                         "GU (generative, EVT novelty)",
                     );
                 });
+            if f.learner != before {
+                f.thresholds = ClusteringForm::suggested_thresholds(f.learner);
+            }
+            if f.learner == UnsupervisedLearner::Gu {
+                ui.add(
+                    egui::DragValue::new(&mut f.gu_min_grasps)
+                        .range(1..=20)
+                        .prefix("grasps to keep a cluster: "),
+                )
+                .on_hover_text(
+                    "A cluster takes part in the final re-assignment once its expert has \
+                     been trained on this many grasps (1 keeps every cluster created)",
+                );
+            }
             ui.add(
                 egui::DragValue::new(&mut f.reps)
                     .range(1..=50)
@@ -880,6 +913,7 @@ impl Analyses {
                         reps: f.reps,
                         seed: f.seed,
                         thresholds: f.threshold_list(),
+                        gu_min_grasps: f.gu_min_grasps,
                         ..Default::default()
                     };
                     let r = run_clustering(&session, &params, p).map_err(experiment_error)?;

@@ -224,7 +224,10 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
         UnsupervisedLearner::Du => "DU",
         UnsupervisedLearner::Gu => "GU",
     };
-    let label = format!("{learner}, {}", features_text(p.features));
+    let mut label = format!("{learner}, {}", features_text(p.features));
+    if p.learner == UnsupervisedLearner::Gu {
+        label += &format!(", clusters kept from {} grasps", p.gu_min_grasps);
+    }
     let th: Vec<f64> = r.sweep.iter().map(|s| s.threshold).collect();
     let reps = p.reps;
     let mut figures = vec![
