@@ -353,6 +353,12 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
             th.last().unwrap_or(&0.0)
         ),
     )]);
+    if p.learner == UnsupervisedLearner::Gu {
+        parameters.insert(
+            "grasps to keep a cluster".into(),
+            p.gu_min_grasps.to_string(),
+        );
+    }
     AnalysisResult {
         kind: AnalysisKind::Clustering,
         label,
