@@ -58,6 +58,9 @@ pub struct RobustnessArgs {
     pub du_threshold: Option<f64>,
     #[arg(long)]
     pub gu_threshold: Option<f64>,
+    /// Recognition: GU keeps a cluster once it has this many grasps (default 3; 1 keeps all).
+    #[arg(long)]
+    pub gu_min_grasps: Option<usize>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -130,6 +133,7 @@ pub fn params_of(a: &RobustnessArgs) -> anyhow::Result<RobustnessParams> {
     let rc = &mut p.recognition;
     rc.du_threshold = a.du_threshold.unwrap_or(rc.du_threshold);
     rc.gu_threshold = a.gu_threshold.unwrap_or(rc.gu_threshold);
+    rc.gu_min_grasps = a.gu_min_grasps.unwrap_or(rc.gu_min_grasps);
     p.stability.settings.svm.seed = a.seed;
     p.stability.settings.cv_seed = a.seed;
     p.validate()?;

@@ -226,7 +226,10 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
     };
     let mut label = format!("{learner}, {}", features_text(p.features));
     if p.learner == UnsupervisedLearner::Gu {
-        label += &format!(", clusters kept from {} grasps", p.gu_min_grasps);
+        label += &match p.gu_min_grasps {
+            1 => ", every cluster kept".to_string(),
+            n => format!(", clusters kept from {n} grasps"),
+        };
     }
     let th: Vec<f64> = r.sweep.iter().map(|s| s.threshold).collect();
     let reps = p.reps;

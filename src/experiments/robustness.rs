@@ -31,7 +31,9 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::ExperimentError;
-use super::clustering::{ClusteringParams, UnsupervisedLearner, one_run, som_setup};
+use super::clustering::{
+    ClusteringParams, UnsupervisedLearner, every_gu_cluster, one_run, som_setup,
+};
 use super::recognition::{MeanSd, SupervisedLearner, new_learner, protocol_order, session_labels};
 use super::stability::{
     Config, DataOptions, PipelineSettings, StabilityData, StabilityError, grasp_features,
@@ -44,7 +46,7 @@ use crate::features::{
     FeatureSequences, FeatureSet, KeyFramePatches, PatchScaling, SequenceParams, feature_sequences,
 };
 use crate::jobs::Progress;
-use crate::learners::{DsParams, GsParams, GuAggregate};
+use crate::learners::{DsParams, GsParams, GuAggregate, GuParams};
 use crate::perturb::{PerturbError, PerturbParams, PerturbationKind, Stuck, perturb};
 use crate::rng::Rng;
 use crate::session::Session;
@@ -453,6 +455,10 @@ pub struct RecognitionSetup {
     pub du_threshold: f64,
     pub gu_threshold: f64,
     pub gu_aggregate: GuAggregate,
+    /// GU's clusters take part in the re-assignment once trained on this many grasps
+    /// (`GuParams::min_grasps`); files saved before it existed kept every cluster.
+    #[serde(default = "every_gu_cluster")]
+    pub gu_min_grasps: usize,
     /// Clusters / SOM units of k-means and the SOM (None: the number of classes).
     pub clusters: Option<usize>,
     /// The RBF SVM (the baselines' default C = 10, gamma = 0.01 on z-scored features).
@@ -471,6 +477,7 @@ impl Default for RecognitionSetup {
             du_threshold: 0.2,
             gu_threshold: 0.02,
             gu_aggregate: GuAggregate::Mean,
+            gu_min_grasps: GuParams::default().min_grasps,
             clusters: None,
             svm: KernelSvmParams::default(),
             svm_folds: 5,
@@ -601,6 +608,12 @@ impl RobustnessParams {
                     format!("must lie in [0, 1], got {t}"),
                 ));
             }
+        }
+        if rc.gu_min_grasps == 0 {
+            return Err(ExperimentError::param(
+                "gu_min_grasps",
+                "must be at least 1",
+            ));
         }
         if rc.clusters == Some(0) {
             return Err(ExperimentError::param("clusters", "must be at least 1"));
@@ -1370,6 +1383,7 @@ fn recognition_task(
                     ds: rc.ds.clone(),
                     gs: rc.gs.clone(),
                     gu_aggregate: rc.gu_aggregate,
+                    gu_min_grasps: rc.gu_min_grasps,
                     baseline_max_k: 0,
                     // The rest as the clustering experiment's defaults.
                     ..ClusteringParams::default()

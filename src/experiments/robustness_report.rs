@@ -126,6 +126,12 @@ pub fn robustness_report(session: &str, r: &RobustnessResult) -> AnalysisResult 
             let rc = &r.params.recognition;
             parameters.insert("features".to_string(), rc.features.name().to_string());
             parameters.insert("test fraction".to_string(), rc.test_fraction.to_string());
+            parameters.insert("DU threshold".to_string(), rc.du_threshold.to_string());
+            parameters.insert("GU threshold".to_string(), rc.gu_threshold.to_string());
+            parameters.insert(
+                "GU grasps to keep a cluster".to_string(),
+                rc.gu_min_grasps.to_string(),
+            );
         }
     }
     for sw in &r.params.sweeps {

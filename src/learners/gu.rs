@@ -17,13 +17,13 @@
 //!   residuals persist), so a grasp is one draw. The reference code's m = training points
 //!   seen ([`EvtDraws::Steps`]) is kept as an option: with m about 20 times larger, c_m lies
 //!   further out and, on the iCub data, gave NMI 0.805 against 0.849 at 10 effective
-//!   clusters (50 orders).
+//!   clusters (50 orders, every created cluster kept).
 //! - the noise in Σ is the expert's sigma_n², shared by the D outputs ([`GuNoise::Shared`]).
 //!   Eq. 30 indexes the variance by output dimension, and sigma_n² = 0.01 exceeds the
 //!   residual variance of most iCub features (about 0.004), so [`GuNoise::PerDimension`]
 //!   (and [`GuNoise::PerDimensionFilter`], also in the GS filter) estimates one noise
 //!   variance per dimension from the expert's training residuals. It sharpens the novelty
-//!   (NMI up to 0.93 with 16–17 clusters) but not the merges that decide the score at 10
+//!   (NMI up to 0.93 with 16–17 clusters, every created cluster kept) but not the merges that decide the score at 10
 //!   effective clusters, so it stays an option (docs/oiesgp-clustering.md).
 //! - a cluster counts once its expert has been trained on [`GuParams::min_grasps`] grasps
 //!   (default 3: the one that created it and two more); younger clusters take no part in
@@ -374,23 +374,38 @@ impl Gu {
             let p = self.gs.predict_sequence(seq);
             return argmax_of_last(p.view());
         }
+        // Per-step log-likelihoods (steps × experts), then their sums over the steps that
+        // carry evidence: as in the GS filter, a step where every expert gives −∞ (inputs of
+        // 1e200) is skipped rather than making every total −∞.
         let mut variance = vec![0.0; seq.ncols()];
-        let totals: Vec<f64> = experts
+        let mut steps: Vec<Vec<f64>> = Vec::new();
+        for (j, &c) in experts.iter().enumerate() {
+            let (means, vars) = self.gs.expert_predictions(c, seq);
+            let noise = match self.noise {
+                GuNoise::PerDimensionFilter => self.noise_variances(c),
+                _ => None,
+            };
+            steps.resize(vars.len(), vec![f64::NEG_INFINITY; experts.len()]);
+            for (t, ((o, mu), v)) in seq
+                .rows()
+                .into_iter()
+                .zip(means.rows())
+                .zip(&vars)
+                .enumerate()
+            {
+                Self::fill_variance(&mut variance, *v, noise.as_ref());
+                steps[t][j] = log_likelihood_diag(o, mu, &variance);
+            }
+        }
+        let mut totals = vec![0.0; experts.len()];
+        for step in steps
             .iter()
-            .map(|&c| {
-                let (means, vars) = self.gs.expert_predictions(c, seq);
-                let noise = match self.noise {
-                    GuNoise::PerDimensionFilter => self.noise_variances(c),
-                    _ => None,
-                };
-                let mut total = 0.0;
-                for ((o, mu), v) in seq.rows().into_iter().zip(means.rows()).zip(&vars) {
-                    Self::fill_variance(&mut variance, *v, noise.as_ref());
-                    total += log_likelihood_diag(o, mu, &variance);
-                }
-                total
-            })
-            .collect();
+            .filter(|s| s.iter().any(|ll| *ll > f64::NEG_INFINITY))
+        {
+            for (total, ll) in totals.iter_mut().zip(step) {
+                *total += ll;
+            }
+        }
         experts[argmax(totals.into_iter())]
     }
 }
@@ -498,6 +513,39 @@ mod tests {
             if i != 5 {
                 assert_eq!(a, b, "grasp {i}");
             }
+        }
+    }
+
+    /// With the shared noise and an unconfirmed cluster, the re-assignment sums the
+    /// confirmed experts' log-likelihoods; a step no expert can explain (1e200) carries no
+    /// evidence there, as in the GS filter, and leaves the grasp where it was.
+    #[test]
+    fn a_step_no_confirmed_expert_explains_is_skipped_in_the_reassignment() {
+        let mut rng = Rng::new(3);
+        let p = GuParams {
+            threshold: 0.5,
+            ..GuParams::default()
+        };
+        let mut gu = Gu::new(2, &p).unwrap();
+        let mut grasps: Vec<Array2<f64>> = (0..8)
+            .map(|i| grasp(0.3 * (i % 2) as f64, &mut rng))
+            .collect();
+        grasps.insert(5, grasp(0.6, &mut rng));
+        for g in &grasps {
+            gu.learn(g.view()).unwrap();
+        }
+        let confirmed = gu.grasps.iter().filter(|g| **g >= 3).count();
+        assert!(
+            confirmed >= 2 && gu.n_clusters() > confirmed,
+            "{:?}",
+            gu.grasps
+        );
+        for g in [&grasps[1], &grasps[6]] {
+            let mut odd = g.clone();
+            odd.row_mut(4).fill(1e200);
+            let cluster = gu.assign(g.view());
+            assert!(gu.grasps[cluster] >= 3);
+            assert_eq!(gu.assign(odd.view()), cluster);
         }
     }
 
