@@ -113,13 +113,7 @@ impl Analyses {
         ui.horizontal_wrapped(|ui| {
             ui.label("Methods:");
             for m in family.into_iter().flat_map(methods_of) {
-                let mut on = form.methods.contains(&m);
-                if ui.checkbox(&mut on, m.title()).changed() {
-                    form.methods.retain(|x| *x != m);
-                    if on {
-                        form.methods.push(m);
-                    }
-                }
+                member_checkbox(ui, &mut form.methods, m, m.title());
             }
         });
         ui.horizontal_wrapped(|ui| {
@@ -128,13 +122,7 @@ impl Analyses {
                 if family.is_some_and(|f| !applies(p, f)) {
                     continue;
                 }
-                let mut on = form.perturbations.contains(&p);
-                if ui.checkbox(&mut on, p.key()).changed() {
-                    form.perturbations.retain(|x| *x != p);
-                    if on {
-                        form.perturbations.push(p);
-                    }
-                }
+                member_checkbox(ui, &mut form.perturbations, p, p.key());
             }
         });
         ui.horizontal(|ui| {
@@ -184,5 +172,17 @@ impl Analyses {
         }
         ui.separator();
         self.results_ui(ui, AnalysisKind::Robustness, &s.session.meta.name);
+    }
+}
+
+/// A checkbox for whether `item` is in `list`; ticking it appends the item, unticking
+/// removes it.
+fn member_checkbox<T: PartialEq + Copy>(ui: &mut egui::Ui, list: &mut Vec<T>, item: T, text: &str) {
+    let mut on = list.contains(&item);
+    if ui.checkbox(&mut on, text).changed() {
+        list.retain(|x| *x != item);
+        if on {
+            list.push(item);
+        }
     }
 }

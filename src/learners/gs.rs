@@ -97,6 +97,37 @@ impl Gs {
         }
         (means, vars)
     }
+
+    /// For each of `experts`, ln p(o_1 … o_T | expert) summed over the steps of `seq`, with
+    /// `ll(j, o_t, mean, predictive variance)` the log-likelihood of a step under
+    /// `experts[j]`. As in the filter of [`SequenceClassifier::predict_sequence`], a step
+    /// where every expert gives −∞ carries no evidence and is skipped. From a uniform prior
+    /// the argmax of these sums is the argmax of the final posterior over `experts`.
+    pub fn summed_log_likelihoods(
+        &mut self,
+        seq: ArrayView2<f64>,
+        experts: &[usize],
+        mut ll: impl FnMut(usize, &[f64], &[f64], f64) -> f64,
+    ) -> Vec<f64> {
+        let seq = seq.as_standard_layout();
+        let mut totals = vec![0.0; experts.len()];
+        let mut step = vec![0.0; experts.len()];
+        self.window.reset();
+        for o in super::steps(&seq, self.dim).chunks_exact(self.dim) {
+            for (j, &c) in experts.iter().enumerate() {
+                let m = &mut self.models[c];
+                m.observe(self.window.as_slice());
+                step[j] = ll(j, o, m.mean(), m.predictive_variance());
+            }
+            if step.iter().any(|l| *l > f64::NEG_INFINITY) {
+                for (total, l) in totals.iter_mut().zip(&step) {
+                    *total += l;
+                }
+            }
+            self.window.push(o);
+        }
+        totals
+    }
 }
 
 impl SequenceClassifier for Gs {

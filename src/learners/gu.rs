@@ -34,7 +34,7 @@
 //!   of known objects; left out, they return to their object's cluster, and NMI at 10
 //!   effective clusters rises from 0.849 to 0.902 (50 orders).
 
-use ndarray::{ArrayView1, ArrayView2};
+use ndarray::ArrayView2;
 use serde::{Deserialize, Serialize};
 
 use super::du::Assignment;
@@ -133,7 +133,7 @@ impl GuParams {
 
 /// ln N(o | μ, diag(variance)): the GS likelihood (eq. 30) with one variance per output
 /// dimension (all positive: the per-dimension noise is floored).
-fn log_likelihood_diag(o: ArrayView1<f64>, mean: ArrayView1<f64>, variance: &[f64]) -> f64 {
+fn log_likelihood_diag(o: &[f64], mean: &[f64], variance: &[f64]) -> f64 {
     o.iter()
         .zip(mean)
         .zip(variance)
@@ -360,9 +360,8 @@ impl Gu {
     }
 
     /// The GS decision, argmax of the final posterior, among the experts trained on at least
-    /// `min_grasps` grasps (all of them if none is). From a uniform prior that is the argmax
-    /// of the summed log-likelihoods; under [`GuNoise::PerDimensionFilter`] they use the
-    /// per-dimension Σ.
+    /// `min_grasps` grasps (all of them if none is); under [`GuNoise::PerDimensionFilter`]
+    /// the likelihoods use the per-dimension Σ.
     fn winner_among(&mut self, seq: ArrayView2<f64>, min_grasps: usize) -> usize {
         let mut experts: Vec<usize> = (0..self.gs.n_classes())
             .filter(|&c| self.grasps.get(c).is_some_and(|g| *g >= min_grasps))
@@ -374,38 +373,20 @@ impl Gu {
             let p = self.gs.predict_sequence(seq);
             return argmax_of_last(p.view());
         }
-        // Per-step log-likelihoods (steps × experts), then their sums over the steps that
-        // carry evidence: as in the GS filter, a step where every expert gives −∞ (inputs of
-        // 1e200) is skipped rather than making every total −∞.
-        let mut variance = vec![0.0; seq.ncols()];
-        let mut steps: Vec<Vec<f64>> = Vec::new();
-        for (j, &c) in experts.iter().enumerate() {
-            let (means, vars) = self.gs.expert_predictions(c, seq);
-            let noise = match self.noise {
+        let noise: Vec<Option<(Vec<f64>, f64)>> = experts
+            .iter()
+            .map(|&c| match self.noise {
                 GuNoise::PerDimensionFilter => self.noise_variances(c),
                 _ => None,
-            };
-            steps.resize(vars.len(), vec![f64::NEG_INFINITY; experts.len()]);
-            for (t, ((o, mu), v)) in seq
-                .rows()
-                .into_iter()
-                .zip(means.rows())
-                .zip(&vars)
-                .enumerate()
-            {
-                Self::fill_variance(&mut variance, *v, noise.as_ref());
-                steps[t][j] = log_likelihood_diag(o, mu, &variance);
-            }
-        }
-        let mut totals = vec![0.0; experts.len()];
-        for step in steps
-            .iter()
-            .filter(|s| s.iter().any(|ll| *ll > f64::NEG_INFINITY))
-        {
-            for (total, ll) in totals.iter_mut().zip(step) {
-                *total += ll;
-            }
-        }
+            })
+            .collect();
+        let mut variance = vec![0.0; seq.ncols()];
+        let totals = self
+            .gs
+            .summed_log_likelihoods(seq, &experts, |j, o, mu, v| {
+                Self::fill_variance(&mut variance, v, noise[j].as_ref());
+                log_likelihood_diag(o, mu, &variance)
+            });
         experts[argmax(totals.into_iter())]
     }
 }
@@ -478,26 +459,33 @@ mod tests {
         }
     }
 
+    /// GU learned on 4 grasps of each of two objects 0.3 apart, with a one-off grasp 0.6 away
+    /// as the sixth; returns it and the 9 grasps in the order learned.
+    fn two_objects_and_a_one_off(p: &GuParams, seed: u64) -> (Gu, Vec<Array2<f64>>) {
+        let mut rng = Rng::new(seed);
+        let mut gu = Gu::new(2, p).unwrap();
+        let mut grasps: Vec<Array2<f64>> = (0..8)
+            .map(|i| grasp(0.3 * (i % 2) as f64, &mut rng))
+            .collect();
+        grasps.insert(5, grasp(0.6, &mut rng));
+        for g in &grasps {
+            gu.learn(g.view()).unwrap();
+        }
+        (gu, grasps)
+    }
+
     /// A one-off grasp opens a cluster that no later grasp confirms: with min_grasps 3 it
     /// takes no part in the re-assignment, which gives that grasp to a learned object.
     #[test]
     fn an_unconfirmed_cluster_is_left_out_of_the_reassignment() {
         let reassign = |min_grasps: usize| {
-            let mut rng = Rng::new(11);
             let p = GuParams {
                 threshold: 0.5,
                 noise: GuNoise::PerDimensionFilter,
                 min_grasps,
                 ..GuParams::default()
             };
-            let mut gu = Gu::new(2, &p).unwrap();
-            let mut grasps: Vec<Array2<f64>> = (0..8)
-                .map(|i| grasp(0.3 * (i % 2) as f64, &mut rng))
-                .collect();
-            grasps.insert(5, grasp(0.6, &mut rng));
-            for g in &grasps {
-                gu.learn(g.view()).unwrap();
-            }
+            let (mut gu, grasps) = two_objects_and_a_one_off(&p, 11);
             let clusters: Vec<usize> = grasps.iter().map(|g| gu.assign(g.view())).collect();
             (gu.n_clusters(), clusters)
         };
@@ -521,19 +509,11 @@ mod tests {
     /// evidence there, as in the GS filter, and leaves the grasp where it was.
     #[test]
     fn a_step_no_confirmed_expert_explains_is_skipped_in_the_reassignment() {
-        let mut rng = Rng::new(3);
         let p = GuParams {
             threshold: 0.5,
             ..GuParams::default()
         };
-        let mut gu = Gu::new(2, &p).unwrap();
-        let mut grasps: Vec<Array2<f64>> = (0..8)
-            .map(|i| grasp(0.3 * (i % 2) as f64, &mut rng))
-            .collect();
-        grasps.insert(5, grasp(0.6, &mut rng));
-        for g in &grasps {
-            gu.learn(g.view()).unwrap();
-        }
+        let (mut gu, grasps) = two_objects_and_a_one_off(&p, 3);
         let confirmed = gu.grasps.iter().filter(|g| **g >= 3).count();
         assert!(
             confirmed >= 2 && gu.n_clusters() > confirmed,
