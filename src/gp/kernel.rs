@@ -11,6 +11,7 @@
 //! default 1.01 is used as that divisor, see the notes, Sec. 2). Windows are zero padded at
 //! the start of a sequence, never truncated, so that the recursion always runs tau lags.
 
+use super::wide::dispatch_wide;
 use serde::{Deserialize, Serialize};
 
 use super::GpError;
@@ -397,48 +398,14 @@ impl RecursiveArd {
         lag_k: &mut [f64],
         out: &mut [f64],
     ) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx512f") {
-                // SAFETY: the CPU has AVX-512F, checked just above.
-                unsafe { self.unit_many_avx512(x, basis, n, lag_k, out) };
-                return;
-            }
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU has AVX2, checked just above.
-                unsafe { self.unit_many_avx2(x, basis, n, lag_k, out) };
-                return;
-            }
-        }
-        self.unit_many_portable(x, basis, n, lag_k, out);
-    }
-
-    /// The same code compiled for wider vectors. Rust never reorders or fuses
-    /// floating-point operations, so the results are bit-identical on every path.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    unsafe fn unit_many_avx512(
-        &self,
-        x: &[f64],
-        basis: &LagMajor,
-        n: usize,
-        lag_k: &mut [f64],
-        out: &mut [f64],
-    ) {
-        self.unit_many_portable(x, basis, n, lag_k, out);
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn unit_many_avx2(
-        &self,
-        x: &[f64],
-        basis: &LagMajor,
-        n: usize,
-        lag_k: &mut [f64],
-        out: &mut [f64],
-    ) {
-        self.unit_many_portable(x, basis, n, lag_k, out);
+        dispatch_wide!(["avx512f", "avx2"] RecursiveArd::unit_many_portable, (
+            this: &RecursiveArd = self,
+            x: &[f64] = x,
+            basis: &LagMajor = basis,
+            n: usize = n,
+            lag_k: &mut [f64] = lag_k,
+            out: &mut [f64] = out,
+        ))
     }
 
     #[inline(always)]
@@ -476,46 +443,14 @@ impl RecursiveArd {
         lag_k: &[f64],
         grad: &mut [f64],
     ) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx512f") {
-                // SAFETY: the CPU has AVX-512F, checked just above.
-                unsafe { self.unit_grad_many_avx512(x, basis, n, lag_k, grad) };
-                return;
-            }
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU has AVX2, checked just above.
-                unsafe { self.unit_grad_many_avx2(x, basis, n, lag_k, grad) };
-                return;
-            }
-        }
-        self.unit_grad_many_portable(x, basis, n, lag_k, grad);
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    unsafe fn unit_grad_many_avx512(
-        &self,
-        x: &[f64],
-        basis: &LagMajor,
-        n: usize,
-        lag_k: &[f64],
-        grad: &mut [f64],
-    ) {
-        self.unit_grad_many_portable(x, basis, n, lag_k, grad);
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn unit_grad_many_avx2(
-        &self,
-        x: &[f64],
-        basis: &LagMajor,
-        n: usize,
-        lag_k: &[f64],
-        grad: &mut [f64],
-    ) {
-        self.unit_grad_many_portable(x, basis, n, lag_k, grad);
+        dispatch_wide!(["avx512f", "avx2"] RecursiveArd::unit_grad_many_portable, (
+            this: &RecursiveArd = self,
+            x: &[f64] = x,
+            basis: &LagMajor = basis,
+            n: usize = n,
+            lag_k: &[f64] = lag_k,
+            grad: &mut [f64] = grad,
+        ))
     }
 
     #[inline(always)]
@@ -571,18 +506,12 @@ impl RecursiveArd {
     /// K_tau and its derivatives (recursive, eqs. 22–23 in the parameters of `theta`):
     /// `grad[j]` = ∂K/∂ln l_j for j < dim, `grad[dim]` = ∂K/∂sigma_rho.
     pub fn unit_scaled_grad(&self, a: &[f64], b: &[f64], grad: &mut [f64]) -> f64 {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { self.unit_scaled_grad_avx2(a, b, grad) };
-        }
-        self.unit_scaled_grad_portable(a, b, grad)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn unit_scaled_grad_avx2(&self, a: &[f64], b: &[f64], grad: &mut [f64]) -> f64 {
-        self.unit_scaled_grad_portable(a, b, grad)
+        dispatch_wide!(["avx2"] RecursiveArd::unit_scaled_grad_portable, (
+            this: &RecursiveArd = self,
+            a: &[f64] = a,
+            b: &[f64] = b,
+            grad: &mut [f64] = grad,
+        ) -> f64)
     }
 
     #[inline(always)]

@@ -6,6 +6,7 @@ pub mod kernel;
 pub mod normal;
 pub mod sngd;
 pub mod sogp;
+mod wide;
 
 pub use kernel::{KernelParams, LagMajor, RecursiveArd, Window};
 pub use sngd::{Sngd, SngdParams};

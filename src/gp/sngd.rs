@@ -12,6 +12,7 @@
 //! safeguards). Adaptation stops for good when ‖Δθ‖² < `stop_threshold` for `stop_count`
 //! consecutive updates (the paper's rule, with the squared norm as in its Sec. V-C).
 
+use super::wide::dispatch_wide;
 use serde::{Deserialize, Serialize};
 
 use super::GpError;
@@ -128,19 +129,11 @@ impl Sngd {
     /// h_next = (H − ε (Hg)(Hg)ᵀ/denom)/(1 − ε), in wide vectors where available (the
     /// same operations in the same order, so bit-identical).
     fn sherman_morrison(&mut self, eps: f64, denom: f64) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has AVX-512F, checked just above.
-            unsafe { self.sherman_morrison_avx512(eps, denom) };
-            return;
-        }
-        self.sherman_morrison_portable(eps, denom);
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    unsafe fn sherman_morrison_avx512(&mut self, eps: f64, denom: f64) {
-        self.sherman_morrison_portable(eps, denom);
+        dispatch_wide!(["avx512f"] Sngd::sherman_morrison_portable, (
+            this: &mut Sngd = self,
+            eps: f64 = eps,
+            denom: f64 = denom,
+        ))
     }
 
     #[inline(always)]

@@ -21,6 +21,7 @@
 //! - Every point is trained as it arrives (the code buffers points while optimising and
 //!   trains them later in random order).
 
+use super::wide::dispatch_wide;
 use ndarray::Array2;
 use serde::{Deserialize, Serialize};
 
@@ -411,20 +412,7 @@ impl Sogp {
 
     /// C·k and the mean from the kernel vector in `k`.
     fn refresh_posterior(&mut self) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has AVX-512F, checked just above.
-            unsafe { self.refresh_posterior_avx512() };
-            return;
-        }
-        self.refresh_posterior_portable();
-    }
-
-    /// Compiled for wide vectors (bit-identical: no reordering).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    unsafe fn refresh_posterior_avx512(&mut self) {
-        self.refresh_posterior_portable();
+        dispatch_wide!(["avx512f"] Sogp::refresh_posterior_portable, (this: &mut Sogp = self))
     }
 
     #[inline(always)]
@@ -544,20 +532,11 @@ impl Sogp {
     }
 
     fn posterior_update(&mut self, r: f64) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has AVX-512F, checked just above.
-            unsafe { self.posterior_update_avx512(r) };
-            return;
-        }
-        self.posterior_update_portable(r);
-    }
-
-    /// The O(n²) updates compiled for wide vectors (bit-identical: no reordering).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    unsafe fn posterior_update_avx512(&mut self, r: f64) {
-        self.posterior_update_portable(r);
+        // The O(n²) updates, in wide vectors where available.
+        dispatch_wide!(["avx512f"] Sogp::posterior_update_portable, (
+            this: &mut Sogp = self,
+            r: f64 = r,
+        ))
     }
 
     #[inline(always)]
@@ -662,19 +641,7 @@ impl Sogp {
         if i >= self.n {
             return;
         }
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has AVX-512F, checked just above.
-            unsafe { self.delete_avx512(i) };
-            return;
-        }
-        self.delete_portable(i);
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    unsafe fn delete_avx512(&mut self, i: usize) {
-        self.delete_portable(i);
+        dispatch_wide!(["avx512f"] Sogp::delete_portable, (this: &mut Sogp = self, i: usize = i))
     }
 
     #[inline(always)]
@@ -984,46 +951,14 @@ impl Sogp {
 /// lower triangle, `pk` entries per pair). Entries
 /// go in register blocks of 8, 4, 2 and 1, each summed over the pairs in the same order.
 fn gram_quad_forms(kb: &[f64], pk: usize, v: &[f64], w: &[f64], cw: &mut [f64], cv: &mut [f64]) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has AVX-512F, checked just above.
-            unsafe { gram_quad_forms_avx512(kb, pk, v, w, cw, cv) };
-            return;
-        }
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            unsafe { gram_quad_forms_avx2(kb, pk, v, w, cw, cv) };
-            return;
-        }
-    }
-    gram_quad_forms_portable(kb, pk, v, w, cw, cv);
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-unsafe fn gram_quad_forms_avx512(
-    kb: &[f64],
-    pk: usize,
-    v: &[f64],
-    w: &[f64],
-    cw: &mut [f64],
-    cv: &mut [f64],
-) {
-    gram_quad_forms_portable(kb, pk, v, w, cw, cv);
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn gram_quad_forms_avx2(
-    kb: &[f64],
-    pk: usize,
-    v: &[f64],
-    w: &[f64],
-    cw: &mut [f64],
-    cv: &mut [f64],
-) {
-    gram_quad_forms_portable(kb, pk, v, w, cw, cv);
+    dispatch_wide!(["avx512f", "avx2"] gram_quad_forms_portable, (
+        kb: &[f64] = kb,
+        pk: usize = pk,
+        v: &[f64] = v,
+        w: &[f64] = w,
+        cw: &mut [f64] = cw,
+        cv: &mut [f64] = cv,
+    ))
 }
 
 #[inline(always)]
