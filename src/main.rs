@@ -26,7 +26,7 @@ fn main() -> std::process::ExitCode {
 #[cfg(feature = "gui")]
 fn open_window(
     files: Vec<std::path::PathBuf>,
-    view: Option<cli::ViewArg>,
+    view: Option<cli::View>,
     measure_startup: bool,
     measure_frames: Option<f64>,
     started: std::time::Instant,
@@ -43,7 +43,7 @@ fn open_window(
 #[cfg(not(feature = "gui"))]
 fn open_window(
     _files: Vec<std::path::PathBuf>,
-    _view: Option<cli::ViewArg>,
+    _view: Option<cli::View>,
     _measure_startup: bool,
     _measure_frames: Option<f64>,
     _started: std::time::Instant,

@@ -24,33 +24,7 @@ use replay::Replay;
 const STORAGE_KEY: &str = "tactile-workbench";
 const MAX_RECENT: usize = 10;
 
-/// The views of the central area.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
-pub enum View {
-    #[default]
-    Replay,
-    Stability,
-    Recognition,
-    Clustering,
-    Baselines,
-    SpeedAccuracy,
-    Robustness,
-}
-
-impl From<crate::cli::ViewArg> for View {
-    fn from(v: crate::cli::ViewArg) -> Self {
-        use crate::cli::ViewArg;
-        match v {
-            ViewArg::Replay => View::Replay,
-            ViewArg::Stability => View::Stability,
-            ViewArg::Recognition => View::Recognition,
-            ViewArg::Clustering => View::Clustering,
-            ViewArg::Baselines => View::Baselines,
-            ViewArg::SpeedAccuracy => View::SpeedAccuracy,
-            ViewArg::Robustness => View::Robustness,
-        }
-    }
-}
+pub use crate::cli::View;
 
 impl View {
     pub const ALL: [View; 7] = [
@@ -652,7 +626,7 @@ impl eframe::App for EframeApp {
 /// and close.
 pub fn run(
     files: Vec<PathBuf>,
-    view: Option<crate::cli::ViewArg>,
+    view: Option<View>,
     measure: Option<Measure>,
 ) -> anyhow::Result<()> {
     let options = eframe::NativeOptions {
@@ -673,7 +647,7 @@ pub fn run(
                 .and_then(|s| eframe::get_value::<Persisted>(s, STORAGE_KEY));
             let mut app = WorkbenchApp::new(&cc.egui_ctx, persisted, files);
             if let Some(v) = view {
-                app.view = View::from(v);
+                app.view = v;
             }
             Ok(Box::new(EframeApp {
                 app,

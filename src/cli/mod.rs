@@ -36,12 +36,24 @@ pub struct Cli {
     pub measure_frames: Option<f64>,
     /// The view to open in the workbench (default: the one of the last run).
     #[arg(long, value_enum)]
-    pub view: Option<ViewArg>,
+    pub view: Option<View>,
 }
 
-/// The workbench's views, as the command line names them.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum ViewArg {
+/// The views of the workbench's central area; `--view` names them in kebab case. Defined
+/// here, not in `app`, so that the command line parses them without the `gui` feature.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Default,
+    clap::ValueEnum,
+    serde::Serialize,
+    serde::Deserialize,
+)]
+pub enum View {
+    #[default]
     Replay,
     Stability,
     Recognition,
