@@ -973,65 +973,40 @@ fn gram_quad_forms_portable(
     // One pass over the pairs with every entry in registers (lanes past pk read the next
     // pair and are dropped); wider entry counts go in several passes.
     match pk.div_ceil(8) {
-        1 => return quad_single::<8>(kb, pk, v, w, cw, cv),
-        2 => return quad_single::<16>(kb, pk, v, w, cw, cv),
-        3 => return quad_single::<24>(kb, pk, v, w, cw, cv),
-        4 => return quad_single::<32>(kb, pk, v, w, cw, cv),
-        5 => return quad_single::<40>(kb, pk, v, w, cw, cv),
-        6 => return quad_single::<48>(kb, pk, v, w, cw, cv),
-        _ => {}
-    }
-    let mut p0 = 0;
-    while p0 < pk {
-        p0 += match pk - p0 {
-            r if r >= 8 => quad_block::<8>(kb, pk, p0, v, w, cw, cv),
-            r if r >= 4 => quad_block::<4>(kb, pk, p0, v, w, cw, cv),
-            r if r >= 2 => quad_block::<2>(kb, pk, p0, v, w, cw, cv),
-            _ => quad_block::<1>(kb, pk, p0, v, w, cw, cv),
-        };
-    }
-}
-
-/// Largest register block of [`quad_single`]: the read past the last pair stays inside.
-const QUAD_PAD: usize = 48;
-
-/// All entries of [`gram_quad_forms`] in one pass (pk ≤ B ≤ pk + QUAD_PAD).
-#[inline(always)]
-fn quad_single<const B: usize>(
-    kb: &[f64],
-    pk: usize,
-    v: &[f64],
-    w: &[f64],
-    cw: &mut [f64],
-    cv: &mut [f64],
-) {
-    let (mut a, mut b) = ([0.0f64; B], [0.0f64; B]);
-    for i in 0..v.len() {
-        for j in 0..=i {
-            let (cwij, cvij) = if i == j {
-                (v[i] * w[i], v[i] * v[i])
-            } else {
-                (v[i] * w[j] + v[j] * w[i], 2.0 * v[i] * v[j])
-            };
-            let o = tri(i, j) * pk;
-            let t = &kb[o..o + B];
-            for q in 0..B {
-                a[q] += cwij * t[q];
-                b[q] += cvij * t[q];
+        1 => _ = quad_block::<8>(kb, pk, 0, pk, v, w, cw, cv),
+        2 => _ = quad_block::<16>(kb, pk, 0, pk, v, w, cw, cv),
+        3 => _ = quad_block::<24>(kb, pk, 0, pk, v, w, cw, cv),
+        4 => _ = quad_block::<32>(kb, pk, 0, pk, v, w, cw, cv),
+        5 => _ = quad_block::<40>(kb, pk, 0, pk, v, w, cw, cv),
+        6 => _ = quad_block::<48>(kb, pk, 0, pk, v, w, cw, cv),
+        _ => {
+            let mut p0 = 0;
+            while p0 < pk {
+                p0 += match pk - p0 {
+                    r if r >= 8 => quad_block::<8>(kb, pk, p0, 8, v, w, cw, cv),
+                    r if r >= 4 => quad_block::<4>(kb, pk, p0, 4, v, w, cw, cv),
+                    r if r >= 2 => quad_block::<2>(kb, pk, p0, 2, v, w, cw, cv),
+                    _ => quad_block::<1>(kb, pk, p0, 1, v, w, cw, cv),
+                };
             }
         }
     }
-    cw[..pk].copy_from_slice(&a[..pk]);
-    cv[..pk].copy_from_slice(&b[..pk]);
 }
 
-/// Entries p0..p0 + B of [`gram_quad_forms`], accumulated in registers; returns B.
+/// Largest single-pass register block of [`quad_block`]: the read past the last pair stays
+/// inside.
+const QUAD_PAD: usize = 48;
+
+/// Entries p0..p0 + B of [`gram_quad_forms`], accumulated in registers, of which the
+/// first `keep` are stored (lanes past pk read the next pair and are dropped); returns
+/// `keep`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn quad_block<const B: usize>(
     kb: &[f64],
     pk: usize,
     p0: usize,
+    keep: usize,
     v: &[f64],
     w: &[f64],
     cw: &mut [f64],
@@ -1053,9 +1028,9 @@ fn quad_block<const B: usize>(
             }
         }
     }
-    cw[p0..p0 + B].copy_from_slice(&a);
-    cv[p0..p0 + B].copy_from_slice(&b);
-    B
+    cw[p0..p0 + keep].copy_from_slice(&a[..keep]);
+    cv[p0..p0 + keep].copy_from_slice(&b[..keep]);
+    keep
 }
 
 #[cfg(test)]
