@@ -36,6 +36,8 @@
 //! span of the raw readings of every sensor with the same unit over the session (BTS3:
 //! 87–3975, 95 % of the BioTac's 12-bit scale; the simulated kPa pads: 0–125.5).
 
+use std::collections::BTreeMap;
+
 use serde::{Deserialize, Serialize};
 
 use crate::rng::Rng;
@@ -241,28 +243,33 @@ fn stated_range(unit: &str) -> Option<RawRange> {
 
 /// The raw range of every sensor of `session` (see the module notes).
 pub fn raw_ranges(session: &Session) -> Result<Vec<RawRange>, PerturbError> {
+    // One pass over the readings: the span of each unit that states no range.
+    let mut spans: BTreeMap<&str, (f64, f64)> = BTreeMap::new();
+    for (s, sensor) in session.sensors.iter().enumerate() {
+        if stated_range(&sensor.unit).is_some() {
+            continue;
+        }
+        let (lo, hi) = spans
+            .entry(sensor.unit.as_str())
+            .or_insert((f64::INFINITY, f64::NEG_INFINITY));
+        for v in session
+            .grasps
+            .iter()
+            .flat_map(|g| &g.frames)
+            .filter_map(|f| f.taxels.get(s))
+            .flatten()
+        {
+            *lo = lo.min(*v);
+            *hi = hi.max(*v);
+        }
+    }
     let mut out = Vec::with_capacity(session.sensors.len());
     for sensor in &session.sensors {
         if let Some(r) = stated_range(&sensor.unit) {
             out.push(r);
             continue;
         }
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for (s, other) in session.sensors.iter().enumerate() {
-            if other.unit != sensor.unit {
-                continue;
-            }
-            for v in session
-                .grasps
-                .iter()
-                .flat_map(|g| &g.frames)
-                .filter_map(|f| f.taxels.get(s))
-                .flatten()
-            {
-                lo = lo.min(*v);
-                hi = hi.max(*v);
-            }
-        }
+        let (lo, hi) = spans[sensor.unit.as_str()];
         if !(lo.is_finite() && hi.is_finite() && hi > lo) {
             return Err(PerturbError::Data(format!(
                 "sensor `{}` has no spread of readings to take a raw range from",

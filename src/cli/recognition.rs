@@ -16,7 +16,8 @@ pub fn open_session(path: &Path) -> anyhow::Result<Session> {
     session::open(path).with_context(|| format!("opening {}", path.display()))
 }
 
-fn write_json<T: serde::Serialize>(value: &T, out: Option<&Path>) -> anyhow::Result<()> {
+/// Write `value` as pretty JSON to `out` (atomically), if given, and say so.
+pub(crate) fn write_json<T: serde::Serialize>(value: &T, out: Option<&Path>) -> anyhow::Result<()> {
     if let Some(out) = out {
         let text = serde_json::to_string_pretty(value)?;
         crate::fsutil::write_atomic(out, text.as_bytes())

@@ -148,13 +148,7 @@ pub fn run(a: RobustnessArgs) -> anyhow::Result<()> {
         .build()?;
     let r = pool.install(|| run_robustness(&session, &params, &Progress::new()))?;
     print!("{}", table(&r));
-    if let Some(out) = &a.json {
-        let text = serde_json::to_string_pretty(&r)?;
-        crate::fsutil::write_atomic(out, text.as_bytes())
-            .with_context(|| format!("writing {}", out.display()))?;
-        println!("wrote {}", out.display());
-    }
-    Ok(())
+    super::recognition::write_json(&r, a.json.as_deref())
 }
 
 /// The break points, one row per perturbation and a column per method.

@@ -1348,6 +1348,16 @@ fn recognition_task(
     let kept_all = training_kept(pert, &prep.labels, prep.n_classes, &all, false, &mut aux);
     let subset: Vec<usize> = all.iter().copied().filter(|&g| kept_all[g]).collect();
     let sub_labels: Vec<usize> = subset.iter().map(|&g| prep.labels[g]).collect();
+    // The subset's sequences, copied once for DU and GU.
+    let sub_seqs: Vec<Array2<f64>> =
+        if (params.methods.iter()).any(|m| matches!(m, Method::Du | Method::Gu)) {
+            subset
+                .iter()
+                .map(|&g| test_seqs.sequences[g].clone())
+                .collect()
+        } else {
+            Vec::new()
+        };
     let k = rc.clusters.unwrap_or(prep.n_classes);
     let cluster_seed = Rng::stream(params.seed, CLUSTER_STREAM + rep as u64).next_u64();
     let mut out = Vec::with_capacity(params.methods.len());
@@ -1388,11 +1398,7 @@ fn recognition_task(
                     // The rest as the clustering experiment's defaults.
                     ..ClusteringParams::default()
                 };
-                let seqs: Vec<Array2<f64>> = subset
-                    .iter()
-                    .map(|&g| test_seqs.sequences[g].clone())
-                    .collect();
-                one_run(&cp, &seqs, &sub_labels, test_seqs.dim(), threshold, rep)?.nmi
+                one_run(&cp, &sub_seqs, &sub_labels, test_seqs.dim(), threshold, rep)?.nmi
             }
             Method::KMeans | Method::Som => {
                 let Some((_, test)) = &table else {
