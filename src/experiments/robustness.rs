@@ -1037,12 +1037,13 @@ fn features_of_images(
     gamma: f64,
 ) -> Result<(Array2<f64>, Array2<f64>), ExperimentError> {
     let g = images.nrows();
+    // One grasp's image is its sensors' patches side by side: a view, not a copy.
     let patches = images
-        .clone()
+        .view()
         .into_shape_with_order((g * sensors, dim))
         .map_err(|e| ExperimentError::Data(e.to_string()))?;
     let codes = dictionary
-        .encode(patches.view(), gamma)
+        .encode(patches, gamma)
         .map_err(StabilityError::from)?;
     Ok((grasp_features(codes, sensors), images))
 }
