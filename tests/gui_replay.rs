@@ -18,11 +18,13 @@ fn opens_the_samples_selects_a_grasp_and_steps_the_replay() {
     h.get_by_label("Simulated grasp stability");
     h.get_by_label("Simulated object recognition");
     h.get_by_label("540 of 540 grasps");
-    h.get_by_label("Select a grasp in the browser to replay it.");
+    // A first start shows a grasp, not an empty replay.
+    assert_eq!(h.state().selection.focus, Some((0, 0)));
+    h.get_by_label_contains("Frame 1 / ");
 
     h.get_by_label_contains("object_01 #2 ·").click();
     h.run_ok();
-    assert_eq!(h.state().selected, Some((0, 1)));
+    assert_eq!(h.state().selection.focus, Some((0, 1)));
     h.get_by_label_contains("Frame 1 / 16");
 
     h.get_by_label("Step forward").click();
@@ -68,7 +70,7 @@ fn filters_and_replays_an_object_recognition_grasp() {
     h.get_by_label("200 of 200 grasps");
     h.get_by_label_contains("sponge #3 ·").click();
     h.run_ok();
-    assert_eq!(h.state().selected, Some((1, 2)));
+    assert_eq!(h.state().selection.focus, Some((1, 2)));
     // Every sensor is drawn, with its taxel count, and the traces are titled.
     for finger in ["thumb", "index", "middle", "ring", "little"] {
         h.get_by_label(&format!("{finger} (12 taxels)"));
@@ -90,7 +92,7 @@ fn filters_and_replays_an_object_recognition_grasp() {
     assert!(
         h.state().analyses.trace.is_some(),
         "messages: {:?}",
-        h.state().analyses.messages
+        h.state().analyses.notes.texts()
     );
     h.get_by_label_contains("Class distribution at step 1 (true: sponge");
     h.key_press(egui::Key::ArrowRight);

@@ -1,9 +1,10 @@
 //! The session browser: open sessions, their grasps with object, label and length,
-//! filtered by label and object.
+//! filtered by label, object and the selection; the selected grasps are marked.
 
-use egui::{ComboBox, ScrollArea};
+use egui::{ComboBox, RichText, ScrollArea};
 
 use super::loader::LoadedSession;
+use super::selection::Selection;
 
 /// Browser state: which session is active and the filters on its grasps.
 #[derive(Default, Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -13,24 +14,32 @@ pub struct Browser {
     pub label: Option<usize>,
     /// Object name to keep (None: all).
     pub object: Option<String>,
+    /// Keep only the selected grasps.
+    #[serde(default)]
+    pub only_selection: bool,
 }
 
 /// What the user did in the browser this frame.
 pub enum BrowserAction {
     None,
+    /// Focus this grasp of the active session.
     Select(usize),
+    /// Focus and replay it (double-click).
+    Replay(usize),
     Close(usize),
 }
 
 impl Browser {
-    /// Grasps of `s` that pass the filters.
-    pub fn visible(&self, s: &LoadedSession) -> Vec<usize> {
+    /// Grasps of `s` (session `index`) that pass the filters.
+    pub fn visible(&self, s: &LoadedSession, index: usize, selection: &Selection) -> Vec<usize> {
         let session = &s.session;
+        let only = self.only_selection && selection.session == Some(index);
         (0..session.grasps.len())
             .filter(|&g| {
                 let grasp = &session.grasps[g];
                 self.label.is_none_or(|l| grasp.labels.first() == Some(&l))
                     && self.object.as_ref().is_none_or(|o| &grasp.object == o)
+                    && (!only || selection.grasps.contains(&g))
             })
             .collect()
     }
@@ -39,7 +48,7 @@ impl Browser {
         &mut self,
         ui: &mut egui::Ui,
         sessions: &[LoadedSession],
-        selected: Option<(usize, usize)>,
+        selection: &Selection,
     ) -> BrowserAction {
         let mut action = BrowserAction::None;
         ui.heading("Sessions");
@@ -97,12 +106,23 @@ impl Browser {
                     ui.selectable_value(&mut self.object, Some(o), label);
                 }
             });
-        let visible = self.visible(s);
-        ui.label(format!(
-            "{} of {} grasps",
-            visible.len(),
-            session.grasps.len()
-        ));
+        let selected_here = selection.session == Some(self.active) && !selection.grasps.is_empty();
+        if selected_here {
+            ui.checkbox(
+                &mut self.only_selection,
+                format!("Only the {} selected", selection.grasps.len()),
+            )
+            .on_hover_text(selection.origin.clone());
+        }
+        let visible = self.visible(s, self.active, selection);
+        ui.horizontal(|ui| {
+            ui.label(format!(
+                "{} of {} grasps",
+                visible.len(),
+                session.grasps.len()
+            ));
+            ui.small("(double-click or Enter replays)");
+        });
         ui.separator();
         let row_height = ui.text_style_height(&egui::TextStyle::Body) + 4.0;
         ScrollArea::vertical().auto_shrink(false).show_rows(
@@ -129,8 +149,16 @@ impl Browser {
                         grasp.object,
                         grasp.frames.len()
                     );
-                    let is_selected = selected == Some((self.active, g));
-                    if ui.selectable_label(is_selected, text).clicked() {
+                    let focused = selection.focus == Some((self.active, g));
+                    let text = if selection.contains(self.active, g) {
+                        RichText::new(format!("» {text}")).strong()
+                    } else {
+                        RichText::new(text)
+                    };
+                    let row = ui.selectable_label(focused, text);
+                    if row.double_clicked() {
+                        action = BrowserAction::Replay(g);
+                    } else if row.clicked() {
                         action = BrowserAction::Select(g);
                     }
                 }

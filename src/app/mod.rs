@@ -1,14 +1,19 @@
-//! The egui workbench. One file per view; the app owns the open sessions and the selection,
-//! views read them and draw. Nothing here blocks: files load on worker threads.
+//! The egui workbench. One room per view (`views/`), each a form and tiles; the app owns
+//! the open sessions, the results, the selection and the command queue; rooms read them
+//! and push commands, applied between frames. Nothing here blocks: files load and analyses
+//! run on worker threads.
 
-pub mod analysis;
 pub mod browser;
 pub mod figure_view;
 pub mod heatmap;
 pub mod loader;
+pub mod notify;
 pub mod replay;
-pub mod robustness;
+pub mod results;
+pub mod selection;
+pub mod views;
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::mpsc::{Receiver, channel};
 use std::time::Instant;
@@ -16,10 +21,12 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use crate::experiments::report::AnalysisKind;
-use analysis::Analyses;
 use browser::{Browser, BrowserAction};
 use loader::{LoadedSession, Loader, Source};
 use replay::Replay;
+use results::Analyses;
+use selection::{Command, Selection};
+use views::{Cx, Layout, Pane, Rooms};
 
 const STORAGE_KEY: &str = "tactile-workbench";
 const MAX_RECENT: usize = 10;
@@ -82,28 +89,59 @@ enum Dialog {
 }
 
 /// What persists between runs.
-#[derive(Clone, Debug, Serialize, Deserialize, Default)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Persisted {
     pub sources: Vec<Source>,
     pub view: View,
     pub dark: bool,
     pub recent: Vec<PathBuf>,
     pub browser: Browser,
+    /// The focused grasp: (session, grasp).
     pub selected: Option<(usize, usize)>,
     pub replay: Replay,
+    /// Each view's tiles, by view title.
+    #[serde(default)]
+    pub layouts: BTreeMap<String, Layout>,
+    #[serde(default = "yes")]
+    pub form_open: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+impl Default for Persisted {
+    fn default() -> Self {
+        Persisted {
+            sources: Vec::new(),
+            view: View::default(),
+            dark: true,
+            recent: Vec::new(),
+            browser: Browser::default(),
+            selected: None,
+            replay: Replay::default(),
+            layouts: BTreeMap::new(),
+            form_open: true,
+        }
+    }
 }
 
 pub struct WorkbenchApp {
     pub sessions: Vec<LoadedSession>,
-    /// (session, grasp) being replayed.
-    pub selected: Option<(usize, usize)>,
+    /// The selected grasps and the focused one (the one the replay shows).
+    pub selection: Selection,
+    /// Changes asked for while drawing, applied between frames.
+    pub commands: Vec<Command>,
     pub browser: Browser,
     pub replay: Replay,
     pub view: View,
     pub dark: bool,
     pub recent: Vec<PathBuf>,
-    pub errors: Vec<String>,
     pub analyses: Analyses,
+    pub rooms: Rooms,
+    pub layouts: BTreeMap<String, Layout>,
+    /// The form side panel is open.
+    pub form_open: bool,
     loader: Loader,
     /// Sources in the order they were asked for, so sessions list in a stable order.
     requested: Vec<Source>,
@@ -119,20 +157,20 @@ impl WorkbenchApp {
     /// A workbench opening `files`, or else the sessions of the last run, or else the
     /// bundled sample sessions.
     pub fn new(ctx: &egui::Context, persisted: Option<Persisted>, files: Vec<PathBuf>) -> Self {
-        let p = persisted.unwrap_or_else(|| Persisted {
-            dark: true,
-            ..Default::default()
-        });
+        let p = persisted.unwrap_or_default();
         let mut app = WorkbenchApp {
             sessions: Vec::new(),
-            selected: None,
+            selection: Selection::default(),
+            commands: Vec::new(),
             browser: p.browser.clone(),
             replay: p.replay.clone(),
             view: p.view,
             dark: p.dark,
             recent: p.recent.clone(),
-            errors: Vec::new(),
             analyses: Analyses::default(),
+            rooms: Rooms::default(),
+            layouts: p.layouts.clone(),
+            form_open: p.form_open,
             loader: Loader::default(),
             requested: Vec::new(),
             dialog: None,
@@ -216,33 +254,110 @@ impl WorkbenchApp {
             dark: self.dark,
             recent: self.recent.clone(),
             browser: self.browser.clone(),
-            selected: self.selected,
+            selected: self.selection.focus,
             replay: self.replay.clone(),
+            layouts: self.layouts.clone(),
+            form_open: self.form_open,
         }
     }
 
     fn close(&mut self, i: usize) {
         let source = self.sessions.remove(i).source;
         self.requested.retain(|s| s != &source);
-        self.selected = match self.selected {
-            Some((s, _)) if s == i => None,
-            Some((s, g)) if s > i => Some((s - 1, g)),
-            other => other,
-        };
+        self.selection.session_closed(i);
         self.browser.active = self
             .browser
             .active
             .min(self.sessions.len().saturating_sub(1));
     }
 
+    /// Focus (and replay) one grasp.
     pub fn select(&mut self, session: usize, grasp: usize) {
-        self.selected = Some((session, grasp));
+        if self.selection.focus != Some((session, grasp)) {
+            self.replay.reset();
+        }
+        self.selection.focus = Some((session, grasp));
+    }
+
+    /// Start `view`'s run, as its form stands, on the active session.
+    pub fn start(&mut self, ctx: &egui::Context, view: View) {
+        let room = self.rooms.get(view);
+        let mut cx = Cx {
+            ctx: ctx.clone(),
+            sessions: &self.sessions,
+            active: self.browser.active,
+            analyses: &mut self.analyses,
+            selection: &self.selection,
+            commands: &mut self.commands,
+            replay: &mut self.replay,
+        };
+        room.start(&mut cx);
+    }
+
+    /// Apply the commands the views pushed while drawing.
+    pub fn apply_commands(&mut self) {
+        for c in std::mem::take(&mut self.commands) {
+            match c {
+                Command::SelectGrasps {
+                    session,
+                    grasps,
+                    origin,
+                } => {
+                    if let Some(&first) = grasps.first() {
+                        self.select(session, first);
+                    }
+                    self.selection.session = Some(session);
+                    self.selection.grasps = grasps;
+                    self.selection.origin = origin;
+                    self.browser.active = session;
+                }
+                Command::Focus { session, grasp } => self.select(session, grasp),
+                Command::FocusBasis { result, basis } => {
+                    self.selection.basis = Some((result, basis))
+                }
+                Command::Strength {
+                    result,
+                    figure,
+                    strength,
+                } => self.selection.strength = Some((result, figure, strength)),
+                Command::ClearSelection => {
+                    self.selection.grasps.clear();
+                    self.selection.session = None;
+                    self.selection.origin.clear();
+                    self.browser.only_selection = false;
+                }
+                Command::OpenResult(i) => {
+                    if let Some(kind) = self.analyses.results.get(i).map(|r| r.kind) {
+                        self.analyses.shown.insert(kind, i);
+                        self.view = View::of(kind);
+                        self.focus_results(kind);
+                    }
+                }
+                Command::Open(v) => self.view = v,
+            }
+        }
+    }
+
+    /// Replay the focused grasp: play it, in the open view's replay tile if it has one,
+    /// else in the replay view.
+    fn replay_focused(&mut self) {
+        let Some((n, _)) = self.replay_frames() else {
+            return;
+        };
+        let key = views::layout_key(self.view);
+        match self.layouts.get_mut(&key) {
+            Some(l) if l.tree.tiles.find_pane(&Pane::Replay).is_some() => {
+                l.activate(&Pane::Replay);
+            }
+            _ => self.view = View::Replay,
+        }
         self.replay.reset();
+        self.replay.toggle(n);
     }
 
     /// Frames of the grasp being replayed.
     fn replay_frames(&self) -> Option<(usize, f64)> {
-        let (s, g) = self.selected?;
+        let (s, g) = self.selection.focus?;
         let ls = self.sessions.get(s)?;
         let grasp = ls.session.grasps.get(g)?;
         let rate = ls.session.meta.frame_rate_hz.unwrap_or(10.0);
@@ -270,7 +385,7 @@ impl WorkbenchApp {
                     if let Source::File(p) = &source {
                         self.recent.retain(|r| r != p);
                     }
-                    self.errors.push(e);
+                    self.analyses.notes.error(e);
                 }
             }
         }
@@ -281,7 +396,18 @@ impl WorkbenchApp {
                 .get(s)
                 .is_some_and(|x| g < x.session.grasps.len())
         {
-            self.selected = Some((s, g));
+            self.selection.focus = Some((s, g));
+        }
+        // A first start shows something: the first grasp of the first session.
+        if !self.is_loading()
+            && self.restore.is_none()
+            && self.selection.focus.is_none()
+            && self
+                .sessions
+                .first()
+                .is_some_and(|s| !s.session.grasps.is_empty())
+        {
+            self.selection.focus = Some((0, 0));
         }
         if let Some((kind, rx)) = &self.dialog
             && let Ok(paths) = rx.try_recv()
@@ -299,12 +425,13 @@ impl WorkbenchApp {
                 }
             }
         }
+        self.apply_commands();
         if self.analyses.poll() {
             ctx.request_repaint();
         }
-        if let Some(kind) = self.analyses.open_request.take() {
-            self.view = View::of(kind);
-            self.focus_results(kind);
+        let now = ctx.input(|i| i.time);
+        if self.analyses.notes.tick(now) {
+            ctx.request_repaint_after(std::time::Duration::from_millis(100));
         }
         for (sessions, first) in std::mem::take(&mut self.analyses.opened_projects) {
             for label in sessions {
@@ -340,6 +467,10 @@ impl WorkbenchApp {
                 )
             });
             let typing = ctx.text_edit_focused();
+            if !typing && ctx.input(|i| i.key_pressed(egui::Key::Enter)) {
+                self.replay_focused();
+            }
+            let (n, rate) = self.replay_frames().unwrap_or((n, rate));
             if !typing {
                 if space {
                     self.replay.toggle(n);
@@ -421,6 +552,11 @@ impl WorkbenchApp {
                     ui.selectable_value(&mut self.view, v, v.title());
                 }
                 ui.separator();
+                ui.checkbox(&mut self.form_open, "Form panel");
+                if ui.button("Notification log").clicked() {
+                    self.analyses.notes.log_open = true;
+                }
+                ui.separator();
                 if ui.checkbox(&mut self.dark, "Dark theme").changed() {
                     ui.ctx().set_theme(if self.dark {
                         egui::Theme::Dark
@@ -443,81 +579,69 @@ impl WorkbenchApp {
     /// Draw the whole workbench into `ui`.
     pub fn show(&mut self, ui: &mut egui::Ui) {
         egui::Panel::top("menu").show(ui, |ui| self.menu(ui));
-        if self.analyses.busy() || !self.analyses.messages.is_empty() {
+        if self.analyses.busy() {
             egui::Panel::bottom("jobs").show(ui, |ui| self.analyses.jobs_ui(ui));
-        }
-        if !self.errors.is_empty() {
-            egui::Panel::bottom("errors").show(ui, |ui| {
-                let mut dismiss = None;
-                for (i, e) in self.errors.iter().enumerate() {
-                    ui.horizontal(|ui| {
-                        ui.colored_label(ui.visuals().error_fg_color, e);
-                        if ui.small_button("Dismiss").clicked() {
-                            dismiss = Some(i);
-                        }
-                    });
-                }
-                if let Some(i) = dismiss {
-                    self.errors.remove(i);
-                }
-            });
         }
         egui::Panel::left("browser")
             .resizable(true)
-            .default_size(320.0)
+            .default_size(300.0)
             .show(ui, |ui| {
-                match self.browser.ui(ui, &self.sessions, self.selected) {
+                match self.browser.ui(ui, &self.sessions, &self.selection) {
                     BrowserAction::Select(g) => {
-                        let s = self.browser.active;
-                        self.select(s, g);
+                        let session = self.browser.active;
+                        self.commands.push(Command::Focus { session, grasp: g });
+                    }
+                    BrowserAction::Replay(g) => {
+                        self.select(self.browser.active, g);
+                        self.replay_focused();
                     }
                     BrowserAction::Close(i) => self.close(i),
                     BrowserAction::None => {}
                 }
             });
-        let active = self.browser.active;
         let ctx = ui.ctx().clone();
-        egui::CentralPanel::default_margins().show(ui, |ui| match self.view {
-            View::Stability
-            | View::Baselines
-            | View::Recognition
-            | View::Clustering
-            | View::Robustness => match self.sessions.get(active) {
-                Some(s) => {
-                    egui::ScrollArea::vertical().show(ui, |ui| match self.view {
-                        View::Recognition => self.analyses.recognition_ui(ui, s, &ctx),
-                        View::Clustering => self.analyses.clustering_ui(ui, s, &ctx),
-                        View::Stability => self.analyses.stability_ui(ui, s, &ctx),
-                        View::Robustness => self.analyses.robustness_ui(ui, s, &ctx),
-                        _ => self.analyses.baselines_ui(ui, s, &ctx),
+        let room = self.rooms.get(self.view);
+        let mut cx = Cx {
+            ctx: ctx.clone(),
+            sessions: &self.sessions,
+            active: self.browser.active,
+            analyses: &mut self.analyses,
+            selection: &self.selection,
+            commands: &mut self.commands,
+            replay: &mut self.replay,
+        };
+        if self.view != View::Replay && self.form_open {
+            egui::Panel::right("form")
+                .resizable(true)
+                .default_size(250.0)
+                .show(ui, |ui| {
+                    egui::ScrollArea::vertical().show(ui, |ui| {
+                        room.form_ui(ui, &mut cx);
+                        ui.separator();
+                        ui.collapsing("Export settings", |ui| cx.analyses.export.ui(ui));
                     });
-                }
-                None => {
-                    ui.label("Open a session first.");
-                }
-            },
-            View::SpeedAccuracy => {
-                egui::ScrollArea::vertical().show(ui, |ui| self.analyses.speed_accuracy_ui(ui));
+                });
+        }
+        egui::CentralPanel::default_margins().show(ui, |ui| {
+            if self.view != View::Replay {
+                ui.horizontal(|ui| {
+                    ui.strong(self.view.title());
+                    ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+                        let (text, hint) = if self.form_open {
+                            ("Hide form", "More room for the tiles")
+                        } else {
+                            ("Show form", "Parameters and Run")
+                        };
+                        if ui.small_button(text).on_hover_text(hint).clicked() {
+                            self.form_open = !self.form_open;
+                        }
+                    });
+                });
             }
-            View::Replay => match self.selected {
-                Some((s, g)) if s < self.sessions.len() => {
-                    let action = egui::ScrollArea::vertical()
-                        .show(ui, |ui| {
-                            self.replay
-                                .ui(ui, &self.sessions[s], g, self.analyses.trace.as_ref())
-                        })
-                        .inner;
-                    if let replay::ReplayAction::Trace(learner) = action {
-                        self.analyses
-                            .request_trace(&ctx, &self.sessions[s], g, learner);
-                    }
-                }
-                _ => {
-                    ui.heading("Replay");
-                    ui.label("Select a grasp in the browser to replay it.");
-                }
-            },
+            views::central_ui(ui, room, &mut self.layouts, &mut cx);
         });
+        let now = ctx.input(|i| i.time);
+        cx.analyses.notes.ui(&ctx, now);
     }
 }
 
@@ -554,10 +678,8 @@ impl EframeApp {
                 if let Some(i) = stability {
                     self.app.browser.active = i;
                     self.app.view = View::Stability;
-                    self.app.analyses.stability.grid = true;
-                    self.app
-                        .analyses
-                        .start_stability(&ctx, &self.app.sessions[i]);
+                    self.app.rooms.stability.form.grid = true;
+                    self.app.start(&ctx, View::Stability);
                     self.measuring_since = Some(Instant::now());
                 }
             }

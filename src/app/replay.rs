@@ -5,9 +5,9 @@
 use egui::{Color32, ComboBox, Vec2};
 use egui_plot::{Bar, BarChart, Legend, Line, Plot, PlotPoints, VLine};
 
-use super::analysis::ReplayTrace;
 use super::heatmap::{colour_bar, sensor_heatmap};
 use super::loader::LoadedSession;
+use super::results::ReplayTrace;
 use crate::experiments::recognition::{GraspTrace, SupervisedLearner};
 use crate::features::FingerStats;
 

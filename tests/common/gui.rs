@@ -40,7 +40,7 @@ pub fn workbench_opening(
         h.state().sessions.len(),
         2,
         "errors: {:?}",
-        h.state().errors
+        h.state().analyses.notes.texts()
     );
     h.run_ok();
     h

@@ -1,12 +1,15 @@
 //! "Where methods fail": sweep one perturbation at a time on the open session and chart each
-//! method's score against its strength, with the break points marked (issue 6). The family
-//! follows the session: grasp stability for a session with a two-class outcome, object
-//! recognition for one with objects and encoders.
+//! method's score against its strength, with the break points marked. The family follows the
+//! session: grasp stability for a session with a two-class outcome, object recognition for one
+//! with objects and encoders.
 
 use egui::RichText;
 
-use super::analysis::{Analyses, JobOutput, experiment_error, recognition_ready};
-use super::loader::LoadedSession;
+use super::tiles::Pane;
+use super::{Cx, Room, duration_text};
+use crate::app::View;
+use crate::app::loader::LoadedSession;
+use crate::app::results::{JobOutput, experiment_error, recognition_ready};
 use crate::experiments::report::AnalysisKind;
 use crate::experiments::robustness::{
     Family, Method, Perturbation, RobustnessParams, Sweep, run_robustness,
@@ -104,42 +107,81 @@ fn family_of(s: &LoadedSession) -> Option<Family> {
     }
 }
 
-impl Analyses {
-    pub fn robustness_ui(&mut self, ui: &mut egui::Ui, s: &LoadedSession, ctx: &egui::Context) {
-        ui.heading("Where methods fail: score against perturbation strength");
+/// Seconds per method, perturbation strength and repetition, per grasp, measured on the
+/// samples (release build, 2 cores) with the default methods.
+const SECONDS_PER_CELL_GRASP: f64 = 0.0006;
+
+impl RobustnessForm {
+    pub fn expected_seconds(&self, family: Family, grasps: usize) -> f64 {
+        let p = self.params(family);
+        let strengths: usize = p.sweeps.iter().map(|s| s.strengths.len() + 1).sum();
+        SECONDS_PER_CELL_GRASP * grasps as f64 * (p.methods.len() * strengths * p.reps) as f64
+    }
+}
+
+#[derive(Default)]
+pub struct RobustnessRoom {
+    pub form: RobustnessForm,
+}
+
+impl Room for RobustnessRoom {
+    fn view(&self) -> View {
+        View::Robustness
+    }
+
+    /// One perturbation per figure: the first three in cells of their own, the rest and the
+    /// numbers in tabs of the fourth.
+    fn default_groups(&self) -> Vec<Vec<Pane>> {
+        vec![vec![Pane::Scores]]
+    }
+
+    fn run_text(&self, s: &LoadedSession) -> Option<String> {
+        let family = family_of(s)?;
+        let p = self.form.params(family);
+        p.validate().ok()?;
+        Some(format!(
+            "Run: {} method{} under {} perturbation{}, {} repetition{} on {} grasps; {}.",
+            p.methods.len(),
+            if p.methods.len() == 1 { "" } else { "s" },
+            p.sweeps.len(),
+            if p.sweeps.len() == 1 { "" } else { "s" },
+            p.reps,
+            if p.reps == 1 { "" } else { "s" },
+            s.session.grasps.len(),
+            duration_text(self.form.expected_seconds(family, s.session.grasps.len()))
+        ))
+    }
+
+    fn form_ui(&mut self, ui: &mut egui::Ui, cx: &mut Cx) {
+        ui.heading("Where methods fail");
+        ui.label("Score against perturbation strength");
+        let Some(s) = cx.session() else { return };
         let family = family_of(s);
-        let running = self.is_running(AnalysisKind::Robustness);
-        let form = &mut self.robustness;
-        ui.horizontal_wrapped(|ui| {
-            ui.label("Methods:");
-            for m in family.into_iter().flat_map(methods_of) {
-                member_checkbox(ui, &mut form.methods, m, m.title());
+        let form = &mut self.form;
+        ui.label("Methods:");
+        for m in family.into_iter().flat_map(methods_of) {
+            member_checkbox(ui, &mut form.methods, m, m.title());
+        }
+        ui.label("Perturbations:");
+        for p in Perturbation::ALL {
+            if family.is_some_and(|f| !applies(p, f)) {
+                continue;
             }
-        });
-        ui.horizontal_wrapped(|ui| {
-            ui.label("Perturbations:");
-            for p in Perturbation::ALL {
-                if family.is_some_and(|f| !applies(p, f)) {
-                    continue;
-                }
-                member_checkbox(ui, &mut form.perturbations, p, p.key());
-            }
-        });
-        ui.horizontal(|ui| {
-            ui.add(
-                egui::DragValue::new(&mut form.reps)
-                    .range(1..=50)
-                    .prefix("repetitions "),
-            );
-            ui.add(
-                egui::DragValue::new(&mut form.fraction)
-                    .range(0.05..=1.0)
-                    .speed(0.01)
-                    .prefix("break below ")
-                    .suffix(" × clean score"),
-            );
-            ui.add(egui::DragValue::new(&mut form.seed).prefix("seed "));
-        });
+            member_checkbox(ui, &mut form.perturbations, p, p.key());
+        }
+        ui.add(
+            egui::DragValue::new(&mut form.reps)
+                .range(1..=50)
+                .prefix("repetitions "),
+        );
+        ui.add(
+            egui::DragValue::new(&mut form.fraction)
+                .range(0.05..=1.0)
+                .speed(0.01)
+                .prefix("break below ")
+                .suffix(" × clean score"),
+        );
+        ui.add(egui::DragValue::new(&mut form.seed).prefix("seed "));
         let Some(family) = family else {
             ui.label(
                 "This session has neither a two-class outcome (grasp stability) nor objects \
@@ -147,31 +189,37 @@ impl Analyses {
             );
             return;
         };
-        let params = self.robustness.params(family);
-        let problem = params.validate().err();
+        let problem = self.form.params(family).validate().err();
         if let Some(e) = &problem {
             ui.label(RichText::new(e.to_string()).color(ui.visuals().warn_fg_color));
         }
+        let running = cx.analyses.is_running(AnalysisKind::Robustness);
         if ui
             .add_enabled(!running && problem.is_none(), egui::Button::new("Run"))
             .clicked()
         {
-            let session = s.session.clone();
-            self.spawn(
-                ctx,
-                Some(AnalysisKind::Robustness),
-                format!("Robustness sweep on {}", session.meta.name),
-                move |p| {
-                    let r = run_robustness(&session, &params, p).map_err(experiment_error)?;
-                    Ok(JobOutput::Result(Box::new(robustness_report(
-                        &session.meta.name,
-                        &r,
-                    ))))
-                },
-            );
+            self.start(cx);
         }
-        ui.separator();
-        self.results_ui(ui, AnalysisKind::Robustness, &s.session.meta.name);
+    }
+
+    fn start(&mut self, cx: &mut Cx) {
+        let Some(s) = cx.session() else { return };
+        let Some(family) = family_of(s) else { return };
+        let params = self.form.params(family);
+        let session = s.session.clone();
+        let ctx = cx.ctx.clone();
+        cx.analyses.spawn(
+            &ctx,
+            Some(AnalysisKind::Robustness),
+            format!("Robustness sweep on {}", session.meta.name),
+            move |p| {
+                let r = run_robustness(&session, &params, p).map_err(experiment_error)?;
+                Ok(JobOutput::Result(Box::new(robustness_report(
+                    &session.meta.name,
+                    &r,
+                ))))
+            },
+        );
     }
 }
 

@@ -1,0 +1,370 @@
+//! The results every view reads: the analyses run as background jobs, the results they
+//! leave (per session), which one each view shows, export settings and notifications.
+
+use std::path::PathBuf;
+
+use egui::ProgressBar;
+
+use super::loader::LoadedSession;
+use super::notify::Notifications;
+use crate::experiments::ExperimentError;
+use crate::experiments::recognition::{
+    GraspTrace, RecognitionParams, SupervisedLearner, grasp_trace,
+};
+use crate::experiments::recognition_report::comparison_figures;
+use crate::experiments::report::{self, AnalysisKind, AnalysisResult, date_text};
+use crate::figures::{self, Format, RenderOptions};
+use crate::jobs::{Job, JobError, Outcome};
+
+/// A job and what it is for.
+pub struct RunningJob {
+    pub kind: Option<AnalysisKind>,
+    pub title: String,
+    pub job: Job<JobOutput>,
+}
+
+pub enum JobOutput {
+    Result(Box<AnalysisResult>),
+    Message(String),
+    Project(report::Project),
+    Trace(Box<ReplayTrace>),
+}
+
+/// The class distribution at every step of one grasp, for the replay view.
+pub struct ReplayTrace {
+    pub session: String,
+    pub grasp: usize,
+    pub learner: SupervisedLearner,
+    pub trace: GraspTrace,
+}
+
+/// Export settings shared by every view.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct ExportSettings {
+    pub dir: PathBuf,
+    pub width: u32,
+    pub height: u32,
+    pub dpi: f64,
+}
+
+impl Default for ExportSettings {
+    fn default() -> Self {
+        ExportSettings {
+            dir: PathBuf::from("figures-export"),
+            width: 960,
+            height: 640,
+            dpi: 96.0,
+        }
+    }
+}
+
+impl ExportSettings {
+    fn options(&self) -> RenderOptions {
+        RenderOptions {
+            width: self.width,
+            height: self.height,
+            dpi: self.dpi,
+        }
+    }
+
+    /// The folder, size and DPI form.
+    pub fn ui(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            let caption = ui.label("Export folder");
+            let mut dir = self.dir.display().to_string();
+            if ui
+                .text_edit_singleline(&mut dir)
+                .labelled_by(caption.id)
+                .changed()
+            {
+                self.dir = PathBuf::from(dir);
+            }
+            ui.add(
+                egui::DragValue::new(&mut self.width)
+                    .range(200..=6000)
+                    .prefix("width "),
+            );
+            ui.add(
+                egui::DragValue::new(&mut self.height)
+                    .range(150..=6000)
+                    .prefix("height "),
+            );
+            ui.add(
+                egui::DragValue::new(&mut self.dpi)
+                    .range(48.0..=600.0)
+                    .prefix("DPI "),
+            );
+        });
+    }
+
+    /// Write `figure` as SVG, PNG and CSV named `name`, and say so in `notes`.
+    pub fn write(&self, figure: &figures::Figure, name: &str, notes: &mut Notifications) {
+        let opts = self.options();
+        let mut written = Vec::new();
+        let result = std::fs::create_dir_all(&self.dir)
+            .map_err(|e| format!("{}: {e}", self.dir.display()))
+            .and_then(|_| {
+                for f in [Format::Svg, Format::Png, Format::Csv] {
+                    let path = self.dir.join(format!("{name}.{}", f.extension()));
+                    figures::write_figure(figure, &path, &opts).map_err(|e| e.to_string())?;
+                    written.push(path.display().to_string());
+                }
+                Ok(())
+            });
+        match result {
+            Ok(()) => notes.info(format!("exported {}", written.join(", "))),
+            Err(e) => notes.error(format!("export failed: {e}")),
+        }
+    }
+}
+
+pub(super) fn experiment_error(e: ExperimentError) -> JobError {
+    match e {
+        ExperimentError::Cancelled => JobError::Cancelled,
+        other => JobError::failed(other),
+    }
+}
+
+/// An object-recognition session: encoders, sequences and `object` labels.
+pub(super) fn recognition_ready(s: &LoadedSession) -> bool {
+    s.session.label_set("object").is_some() && !s.session.encoders.is_empty()
+}
+
+#[derive(Default)]
+pub struct Analyses {
+    pub results: Vec<AnalysisResult>,
+    pub jobs: Vec<RunningJob>,
+    /// The result shown in each analysis view (index into `results`).
+    pub shown: std::collections::HashMap<AnalysisKind, usize>,
+    /// The detail item selected through a figure: (result index, figure name) -> item.
+    pub selected: std::collections::HashMap<(usize, String), usize>,
+    pub export: ExportSettings,
+    /// What finished, failed or was exported (toasts and the log).
+    pub notes: Notifications,
+    /// The last recognition trace computed for the replay.
+    pub trace: Option<ReplayTrace>,
+    /// Projects that just opened: the sessions each names (for the app to reopen) and the
+    /// session of its first result.
+    pub opened_projects: Vec<(Vec<String>, Option<String>)>,
+}
+
+impl Analyses {
+    pub fn busy(&self) -> bool {
+        !self.jobs.is_empty()
+    }
+
+    /// A job of this analysis is running (one at a time per analysis).
+    pub fn is_running(&self, kind: AnalysisKind) -> bool {
+        self.jobs.iter().any(|j| j.kind == Some(kind))
+    }
+
+    /// Collect finished jobs. Returns true when something changed.
+    pub fn poll(&mut self) -> bool {
+        let mut changed = false;
+        let mut i = 0;
+        while i < self.jobs.len() {
+            if self.jobs[i].job.is_running() {
+                i += 1;
+                continue;
+            }
+            let mut rj = self.jobs.remove(i);
+            changed = true;
+            match rj.job.take() {
+                Some(Outcome::Done(JobOutput::Result(r))) => {
+                    let kind = r.kind;
+                    self.results.push(*r);
+                    self.shown.insert(kind, self.results.len() - 1);
+                }
+                Some(Outcome::Done(JobOutput::Message(m))) => self.notes.info(m),
+                Some(Outcome::Done(JobOutput::Trace(t))) => self.trace = Some(*t),
+                Some(Outcome::Done(JobOutput::Project(p))) => {
+                    let n = p.results.len();
+                    self.notes.info(format!(
+                        "opened a project with {n} result{} (sessions: {})",
+                        if n == 1 { "" } else { "s" },
+                        p.sessions.join(", ")
+                    ));
+                    let first = p.results.first().map(|r| r.session.clone());
+                    self.results.extend(p.results);
+                    self.opened_projects.push((p.sessions, first));
+                }
+                Some(Outcome::Cancelled) => self.notes.info(format!("{}: cancelled", rj.title)),
+                Some(Outcome::Failed(e)) => self.notes.error(format!("{} failed: {e}", rj.title)),
+                None => {}
+            }
+        }
+        changed
+    }
+
+    pub fn spawn(
+        &mut self,
+        ctx: &egui::Context,
+        kind: Option<AnalysisKind>,
+        title: String,
+        work: impl FnOnce(&crate::jobs::Progress) -> Result<JobOutput, JobError> + Send + 'static,
+    ) {
+        let c = ctx.clone();
+        let job = Job::spawn(title.clone(), move || c.request_repaint(), work);
+        self.jobs.push(RunningJob { kind, title, job });
+    }
+
+    /// The jobs strip: what runs, how far, time left, Cancel.
+    pub fn jobs_ui(&mut self, ui: &mut egui::Ui) {
+        for rj in &mut self.jobs {
+            ui.horizontal(|ui| {
+                ui.label(&rj.title);
+                let p = &rj.job.progress;
+                let eta = p
+                    .eta_secs()
+                    .map(|s| format!(", about {s:.0} s left"))
+                    .unwrap_or_default();
+                ui.add(
+                    ProgressBar::new(p.fraction() as f32)
+                        .desired_width(480.0)
+                        .show_percentage()
+                        .text(format!("{}{eta}", p.message())),
+                );
+                if ui.button("Cancel").clicked() {
+                    rj.job.cancel();
+                }
+            });
+        }
+    }
+
+    /// Export every figure of every result in the background.
+    pub fn export_all(&mut self, ctx: &egui::Context) {
+        let set = report::figure_set(&self.results);
+        let mut set_all = set;
+        let extra = report::speed_accuracy_figures(&self.results)
+            .into_iter()
+            .chain(comparison_figures(&self.results));
+        for (name, f) in extra {
+            set_all.entries.push(figures::FigureEntry {
+                name,
+                figure: f,
+                parameters: Default::default(),
+                session: "all".into(),
+                date: date_text(report::now_unix()),
+            });
+        }
+        let dir = self.export.dir.clone();
+        let opts = self.export.options();
+        self.spawn(ctx, None, "Export all figures".into(), move |p| {
+            p.set(0.0, format!("writing {} figures", set_all.entries.len()));
+            let t0 = std::time::Instant::now();
+            let index = figures::export_all(
+                &set_all,
+                &dir,
+                &[Format::Svg, Format::Png, Format::Csv],
+                &opts,
+            )
+            .map_err(JobError::failed)?;
+            Ok(JobOutput::Message(format!(
+                "exported {} figures to {} in {:.2} s",
+                index.entries.len(),
+                dir.display(),
+                t0.elapsed().as_secs_f64()
+            )))
+        });
+    }
+
+    /// Save the results and the sessions they came from as a project file (in the background).
+    pub fn save_project(&mut self, ctx: &egui::Context, path: PathBuf, sessions: Vec<String>) {
+        let project = report::Project::new(sessions, self.results.clone());
+        self.spawn(
+            ctx,
+            None,
+            format!("Save project {}", path.display()),
+            move |_| {
+                project.save(&path).map_err(JobError::failed)?;
+                Ok(JobOutput::Message(format!(
+                    "project saved to {}",
+                    path.display()
+                )))
+            },
+        );
+    }
+
+    /// Add the results of a saved project (read in the background).
+    pub fn open_project(&mut self, ctx: &egui::Context, path: PathBuf) {
+        self.spawn(
+            ctx,
+            None,
+            format!("Open project {}", path.display()),
+            move |_| {
+                let project = report::Project::load(&path).map_err(JobError::failed)?;
+                Ok(JobOutput::Project(project))
+            },
+        );
+    }
+
+    /// The result of `kind` shown for session `session`: the chosen one if it is of that
+    /// session, else the session's newest.
+    pub fn shown_index(&self, kind: AnalysisKind, session: &str) -> Option<usize> {
+        let of = |i: usize| {
+            self.results
+                .get(i)
+                .is_some_and(|r| r.kind == kind && r.session == session)
+        };
+        self.shown
+            .get(&kind)
+            .copied()
+            .filter(|&i| of(i))
+            .or_else(|| (0..self.results.len()).rev().find(|&i| of(i)))
+    }
+
+    /// The results of `kind` on session `session`.
+    pub fn of_session(&self, kind: AnalysisKind, session: &str) -> Vec<usize> {
+        (0..self.results.len())
+            .filter(|&i| self.results[i].kind == kind && self.results[i].session == session)
+            .collect()
+    }
+
+    /// The result `kind`'s view shows (the chosen one, else the newest).
+    pub fn shown_result(&self, kind: AnalysisKind) -> Option<&AnalysisResult> {
+        self.shown
+            .get(&kind)
+            .and_then(|&i| self.results.get(i))
+            .filter(|r| r.kind == kind)
+            .or_else(|| self.results.iter().rev().find(|r| r.kind == kind))
+    }
+
+    /// Teach a learner every other grasp, then record its class distribution at each step
+    /// of `grasp` (in the background).
+    pub fn request_trace(
+        &mut self,
+        ctx: &egui::Context,
+        s: &LoadedSession,
+        grasp: usize,
+        learner: SupervisedLearner,
+    ) {
+        if self
+            .jobs
+            .iter()
+            .any(|j| j.title.starts_with("Recognition trace"))
+        {
+            return;
+        }
+        let session = s.session.clone();
+        self.spawn(
+            ctx,
+            None,
+            format!("Recognition trace of grasp {}", grasp + 1),
+            move |p| {
+                p.set(0.1, "teaching the other grasps");
+                let params = RecognitionParams {
+                    learner,
+                    reps: 1,
+                    ..Default::default()
+                };
+                let trace = grasp_trace(&session, &params, grasp).map_err(experiment_error)?;
+                Ok(JobOutput::Trace(Box::new(ReplayTrace {
+                    session: session.meta.name.clone(),
+                    grasp,
+                    learner,
+                    trace,
+                })))
+            },
+        );
+    }
+}

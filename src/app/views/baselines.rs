@@ -1,0 +1,153 @@
+//! Baselines: sequential k-means, a SOM and an RBF SVM on the per-grasp Table I features.
+
+use super::tiles::Pane;
+use super::{Cx, Room, duration_text};
+use crate::app::View;
+use crate::app::loader::LoadedSession;
+use crate::app::results::{JobOutput, recognition_ready};
+use crate::cluster::baselines::{BaselinesParams, run_baselines};
+use crate::cluster::grasp_features::session_features;
+use crate::experiments::baselines_report::baselines_report;
+use crate::experiments::report::AnalysisKind;
+use crate::jobs::JobError;
+
+/// Baselines form: few orders by default so the view answers in seconds.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct BaselinesForm {
+    pub orders: usize,
+    pub k: usize,
+    pub seed: u64,
+    pub with_svm: bool,
+}
+
+impl Default for BaselinesForm {
+    fn default() -> Self {
+        BaselinesForm {
+            orders: 10,
+            k: 10,
+            seed: 0,
+            with_svm: true,
+        }
+    }
+}
+
+/// Seconds per order (k-means and SOM) and per repeat of the SVM's 5-fold grid, per grasp,
+/// measured on the recognition sample (release build, 2 cores).
+const SECONDS_PER_ORDER_GRASP: f64 = 0.00002;
+const SECONDS_PER_SVM_REPEAT_GRASP: f64 = 0.004;
+
+impl BaselinesForm {
+    pub fn expected_seconds(&self, grasps: usize) -> f64 {
+        let g = grasps as f64;
+        let svm = if self.with_svm { 2.0 } else { 0.0 };
+        SECONDS_PER_ORDER_GRASP * g * self.orders as f64 + SECONDS_PER_SVM_REPEAT_GRASP * g * svm
+    }
+}
+
+#[derive(Default)]
+pub struct BaselinesRoom {
+    pub form: BaselinesForm,
+}
+
+impl Room for BaselinesRoom {
+    fn view(&self) -> View {
+        View::Baselines
+    }
+
+    fn default_groups(&self) -> Vec<Vec<Pane>> {
+        let f = |n: &str| Pane::Figure(n.to_string());
+        vec![
+            vec![f("nmi-vs-clusters")],
+            vec![f("scores"), Pane::Scores],
+            vec![f("svm-grid")],
+        ]
+    }
+
+    fn run_text(&self, s: &LoadedSession) -> Option<String> {
+        if !recognition_ready(s) {
+            return None;
+        }
+        let f = &self.form;
+        Some(format!(
+            "Run: k-means and a SOM with k = {} over {} orders{} on {} grasps; {}.",
+            f.k,
+            f.orders,
+            if f.with_svm {
+                ", and an RBF SVM (5-fold, twice)"
+            } else {
+                ""
+            },
+            s.session.grasps.len(),
+            duration_text(f.expected_seconds(s.session.grasps.len()))
+        ))
+    }
+
+    fn form_ui(&mut self, ui: &mut egui::Ui, cx: &mut Cx) {
+        ui.heading("Baselines");
+        ui.label("Sequential k-means, SOM and RBF SVM on the Table I features");
+        let f = &mut self.form;
+        ui.add(
+            egui::DragValue::new(&mut f.orders)
+                .range(1..=200)
+                .prefix("orders "),
+        );
+        ui.add(egui::DragValue::new(&mut f.k).range(2..=40).prefix("k "));
+        ui.add(egui::DragValue::new(&mut f.seed).prefix("seed "));
+        ui.checkbox(&mut f.with_svm, "RBF SVM (5-fold)");
+        let Some(s) = cx.session() else { return };
+        let ok = recognition_ready(s);
+        if !ok {
+            ui.label("(needs an object-recognition session: encoders and `object` labels)");
+        }
+        let running = cx.analyses.is_running(AnalysisKind::Baselines);
+        if ui
+            .add_enabled(!running && ok, egui::Button::new("Run"))
+            .clicked()
+        {
+            self.start(cx);
+        }
+    }
+
+    fn start(&mut self, cx: &mut Cx) {
+        let Some(s) = cx.session() else { return };
+        let form = self.form.clone();
+        let session = s.session.clone();
+        let ctx = cx.ctx.clone();
+        cx.analyses.spawn(
+            &ctx,
+            Some(AnalysisKind::Baselines),
+            format!("Baselines on {}", session.meta.name),
+            move |p| {
+                let t0 = std::time::Instant::now();
+                let set = session
+                    .label_set("object")
+                    .ok_or_else(|| JobError::failed("no `object` labels"))?;
+                let truth = session.labels_of(set);
+                let features = session_features(&session).map_err(JobError::failed)?;
+                let (rows, cols) = crate::cluster::baselines::grid_for(form.k);
+                let mut params = BaselinesParams {
+                    orders: form.orders,
+                    seed: form.seed,
+                    k: form.k,
+                    ..Default::default()
+                };
+                params.som.rows = rows;
+                params.som.cols = cols;
+                // Two repeats of 5-fold keep the view responsive; the CLI runs the full 10.
+                params.cv_repeats = if form.with_svm { 2 } else { 0 };
+                let r =
+                    run_baselines(features.view(), &truth, &params, p).map_err(|e| match e {
+                        crate::cluster::baselines::BaselinesError::Cancelled(_) => {
+                            JobError::Cancelled
+                        }
+                        other => JobError::failed(other),
+                    })?;
+                Ok(JobOutput::Result(Box::new(baselines_report(
+                    &session.meta.name,
+                    &r,
+                    t0.elapsed().as_secs_f64(),
+                ))))
+            },
+        );
+    }
+}

@@ -1,0 +1,225 @@
+//! Clustering (second paper): DU or GU over a novelty-threshold sweep; scores and clusters
+//! against the threshold, NMI against effective clusters, and the true classes against the
+//! clusters at the threshold the marker selects, as tiles.
+
+use super::tiles::Pane;
+use super::{Cx, Room, duration_text};
+use crate::app::View;
+use crate::app::loader::LoadedSession;
+use crate::app::results::{JobOutput, experiment_error, recognition_ready};
+use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_clustering};
+use crate::experiments::recognition_report::clustering_report;
+use crate::experiments::report::AnalysisKind;
+
+/// Unsupervised clustering form.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct ClusteringForm {
+    pub learner: UnsupervisedLearner,
+    pub reps: usize,
+    pub seed: u64,
+    /// Novelty thresholds swept: from, to, step (the paper: 0.1 to 0.95).
+    pub thresholds: [f64; 3],
+    /// GU: clusters trained on fewer grasps take no part in the re-assignment.
+    #[serde(default = "gu_min_grasps")]
+    pub gu_min_grasps: usize,
+}
+
+fn gu_min_grasps() -> usize {
+    crate::learners::GuParams::default().min_grasps
+}
+
+impl Default for ClusteringForm {
+    fn default() -> Self {
+        ClusteringForm {
+            learner: UnsupervisedLearner::Du,
+            reps: 2,
+            seed: 0,
+            thresholds: ClusteringForm::suggested_thresholds(UnsupervisedLearner::Du),
+            gu_min_grasps: gu_min_grasps(),
+        }
+    }
+}
+
+impl ClusteringForm {
+    /// The sweep offered for `learner`: the paper's 0.1 to 0.95 for DU; for GU 0.02 to 0.25
+    /// in steps of 0.01, where its cluster count changes (above 0.3 it keeps 1–3 clusters
+    /// on the iCub data).
+    pub fn suggested_thresholds(learner: UnsupervisedLearner) -> [f64; 3] {
+        match learner {
+            UnsupervisedLearner::Du => [0.1, 0.95, 0.05],
+            UnsupervisedLearner::Gu => [0.02, 0.25, 0.01],
+        }
+    }
+
+    pub fn threshold_list(&self) -> Vec<f64> {
+        let [from, to, step] = self.thresholds;
+        if step.is_nan() || step <= 0.0 || to < from {
+            return vec![from];
+        }
+        let n = ((to - from) / step + 1e-9).floor() as usize;
+        (0..=n)
+            .map(|i| ((from + i as f64 * step) * 1e6).round() / 1e6)
+            .collect()
+    }
+}
+
+/// Seconds per observed step per threshold and order, measured on the recognition sample
+/// (release build, 2 cores) at the default sweeps: DU scores each step against every expert,
+/// so it costs more than GU's generative experts at their thresholds.
+fn seconds_per_step(learner: UnsupervisedLearner) -> f64 {
+    match learner {
+        UnsupervisedLearner::Du => 0.0004,
+        UnsupervisedLearner::Gu => 0.0002,
+    }
+}
+
+impl ClusteringForm {
+    pub fn expected_seconds(&self, s: &LoadedSession) -> f64 {
+        let steps: usize = s.session.grasps.iter().map(|g| g.frames.len()).sum();
+        seconds_per_step(self.learner)
+            * steps as f64
+            * self.reps as f64
+            * self.threshold_list().len() as f64
+    }
+}
+
+#[derive(Default)]
+pub struct ClusteringRoom {
+    pub form: ClusteringForm,
+}
+
+impl Room for ClusteringRoom {
+    fn view(&self) -> View {
+        View::Clustering
+    }
+
+    fn default_groups(&self) -> Vec<Vec<Pane>> {
+        let f = |n: &str| Pane::Figure(n.to_string());
+        vec![
+            vec![f("scores-vs-threshold"), f("nmi-vs-effective")],
+            vec![f("clusters-vs-threshold"), f("scores-at-10")],
+            vec![Pane::Detail("scores-vs-threshold".into()), Pane::Scores],
+            vec![Pane::Replay],
+        ]
+    }
+
+    fn run_text(&self, s: &LoadedSession) -> Option<String> {
+        if !recognition_ready(s) {
+            return None;
+        }
+        let f = &self.form;
+        let n = f.threshold_list().len();
+        Some(format!(
+            "Run: {} over {n} novelty threshold{} from {} to {}, {} order{} of {} grasps; {}.",
+            format!("{:?}", f.learner).to_uppercase(),
+            if n == 1 { "" } else { "s" },
+            f.thresholds[0],
+            f.thresholds[1],
+            f.reps,
+            if f.reps == 1 { "" } else { "s" },
+            s.session.grasps.len(),
+            duration_text(f.expected_seconds(s))
+        ))
+    }
+
+    fn form_ui(&mut self, ui: &mut egui::Ui, cx: &mut Cx) {
+        ui.heading("Clustering");
+        ui.label("Online OIESGP experts without labels (DU, GU)");
+        let f = &mut self.form;
+        let before = f.learner;
+        egui::ComboBox::from_label("Learner")
+            .selected_text(format!("{:?}", f.learner).to_uppercase())
+            .show_ui(ui, |ui| {
+                ui.selectable_value(
+                    &mut f.learner,
+                    UnsupervisedLearner::Du,
+                    "DU (discriminative)",
+                );
+                ui.selectable_value(
+                    &mut f.learner,
+                    UnsupervisedLearner::Gu,
+                    "GU (generative, EVT novelty)",
+                );
+            });
+        if f.learner != before {
+            f.thresholds = ClusteringForm::suggested_thresholds(f.learner);
+        }
+        if f.learner == UnsupervisedLearner::Gu {
+            ui.add(
+                egui::DragValue::new(&mut f.gu_min_grasps)
+                    .range(1..=20)
+                    .prefix("grasps to keep a cluster: "),
+            )
+            .on_hover_text(
+                "A cluster takes part in the final re-assignment once its expert has \
+                 been trained on this many grasps (1 keeps every cluster created)",
+            );
+        }
+        ui.add(
+            egui::DragValue::new(&mut f.reps)
+                .range(1..=50)
+                .prefix("repetitions "),
+        );
+        ui.add(egui::DragValue::new(&mut f.seed).prefix("seed "));
+        ui.label("thresholds");
+        ui.horizontal(|ui| {
+            ui.add(
+                egui::DragValue::new(&mut f.thresholds[0])
+                    .range(0.01..=0.99)
+                    .speed(0.01)
+                    .prefix("from "),
+            );
+            ui.add(
+                egui::DragValue::new(&mut f.thresholds[1])
+                    .range(0.01..=0.99)
+                    .speed(0.01)
+                    .prefix("to "),
+            );
+            ui.add(
+                egui::DragValue::new(&mut f.thresholds[2])
+                    .range(0.01..=0.5)
+                    .speed(0.01)
+                    .prefix("step "),
+            );
+        });
+        let Some(s) = cx.session() else { return };
+        let ok = recognition_ready(s);
+        if !ok {
+            ui.label("(needs an object-recognition session: encoders and `object` labels)");
+        }
+        let running = cx.analyses.is_running(AnalysisKind::Clustering);
+        if ui
+            .add_enabled(!running && ok, egui::Button::new("Run"))
+            .clicked()
+        {
+            self.start(cx);
+        }
+    }
+
+    fn start(&mut self, cx: &mut Cx) {
+        let Some(s) = cx.session() else { return };
+        let f = self.form.clone();
+        let session = s.session.clone();
+        let ctx = cx.ctx.clone();
+        cx.analyses.spawn(
+            &ctx,
+            Some(AnalysisKind::Clustering),
+            format!("Clustering on {}", session.meta.name),
+            move |p| {
+                let params = ClusteringParams {
+                    learner: f.learner,
+                    reps: f.reps,
+                    seed: f.seed,
+                    thresholds: f.threshold_list(),
+                    gu_min_grasps: f.gu_min_grasps,
+                    ..Default::default()
+                };
+                let r = run_clustering(&session, &params, p).map_err(experiment_error)?;
+                Ok(JobOutput::Result(Box::new(clustering_report(
+                    &session.meta.name,
+                    &r,
+                ))))
+            },
+        );
+    }
+}

@@ -1,0 +1,195 @@
+//! The views, one room each: a form in a collapsible side panel, and the shown result's
+//! figures laid out as tiles (`egui_tiles`) that the user can drag, split, tab, maximise and
+//! reset. Rooms read the shared selection and push commands; they never change another view.
+
+pub mod baselines;
+pub mod clustering;
+pub mod panes;
+pub mod recognition;
+pub mod replay;
+pub mod robustness;
+pub mod speed;
+pub mod stability;
+pub mod tiles;
+
+use super::View;
+use super::loader::LoadedSession;
+use super::replay::Replay;
+use super::results::Analyses;
+use super::selection::{Command, Selection};
+use crate::experiments::report::AnalysisKind;
+pub use tiles::{Layout, Pane};
+
+/// What a room may read and ask for while it draws.
+pub struct Cx<'a> {
+    pub ctx: egui::Context,
+    pub sessions: &'a [LoadedSession],
+    /// The session the browser has active.
+    pub active: usize,
+    pub analyses: &'a mut Analyses,
+    pub selection: &'a Selection,
+    pub commands: &'a mut Vec<Command>,
+    pub replay: &'a mut Replay,
+}
+
+impl Cx<'_> {
+    pub fn session(&self) -> Option<&LoadedSession> {
+        self.sessions.get(self.active)
+    }
+
+    /// The result of `kind` shown for the active session (index into the results).
+    pub fn shown(&self, kind: AnalysisKind) -> Option<usize> {
+        let name = &self.session()?.session.meta.name;
+        self.analyses.shown_index(kind, name)
+    }
+}
+
+/// One view of the workbench.
+pub trait Room {
+    fn view(&self) -> View;
+
+    /// The analysis whose results the room lays out as tiles, if any.
+    fn kind(&self) -> Option<AnalysisKind> {
+        self.view().kind()
+    }
+
+    /// The default layout: groups of tabs, one grid cell each.
+    fn default_groups(&self) -> Vec<Vec<Pane>>;
+
+    /// The form (parameters and Run) in the side panel; nothing for rooms without one.
+    fn form_ui(&mut self, _ui: &mut egui::Ui, _cx: &mut Cx) {}
+
+    /// What Run does with the form as it is, with the time it is expected to take on
+    /// `session`; None when the session cannot run it.
+    fn run_text(&self, _session: &LoadedSession) -> Option<String> {
+        None
+    }
+
+    /// Start the form's run on the active session (a background job).
+    fn start(&mut self, _cx: &mut Cx) {}
+
+    /// Draw a pane this room owns (not a result's figure). Returns false for panes it
+    /// does not know.
+    fn pane_ui(&mut self, _ui: &mut egui::Ui, _pane: &Pane, _cx: &mut Cx) -> bool {
+        false
+    }
+}
+
+/// Every room, each owning its form state.
+#[derive(Default)]
+pub struct Rooms {
+    pub replay: replay::ReplayRoom,
+    pub stability: stability::StabilityRoom,
+    pub recognition: recognition::RecognitionRoom,
+    pub clustering: clustering::ClusteringRoom,
+    pub baselines: baselines::BaselinesRoom,
+    pub speed: speed::SpeedRoom,
+    pub robustness: robustness::RobustnessRoom,
+}
+
+impl Rooms {
+    pub fn get(&mut self, view: View) -> &mut dyn Room {
+        match view {
+            View::Replay => &mut self.replay,
+            View::Stability => &mut self.stability,
+            View::Recognition => &mut self.recognition,
+            View::Clustering => &mut self.clustering,
+            View::Baselines => &mut self.baselines,
+            View::SpeedAccuracy => &mut self.speed,
+            View::Robustness => &mut self.robustness,
+        }
+    }
+}
+
+/// Show a number compactly (scores to 3 decimals, large values without decimals).
+pub fn number(v: f64) -> String {
+    if !v.is_finite() {
+        "n/a".into()
+    } else if v.abs() >= 1000.0 {
+        format!("{v:.0}")
+    } else if v.abs() >= 10.0 {
+        format!("{v:.1}")
+    } else {
+        format!("{v:.3}")
+    }
+}
+
+/// A duration in words for the expected time of a run.
+pub fn duration_text(seconds: f64) -> String {
+    if seconds < 1.0 {
+        "under a second".into()
+    } else if seconds < 90.0 {
+        format!("about {seconds:.0} s")
+    } else {
+        format!("about {:.0} min", seconds / 60.0)
+    }
+}
+
+/// The key a room's layout persists under.
+pub fn layout_key(view: View) -> String {
+    view.title().to_string()
+}
+
+/// A room's central area: for an analysis room, the card and the shown result's tiles, or
+/// the room's default run when the active session has no result yet (nothing runs until
+/// asked); for the other rooms, their tiles.
+pub fn central_ui(
+    ui: &mut egui::Ui,
+    room: &mut dyn Room,
+    layouts: &mut std::collections::BTreeMap<String, Layout>,
+    cx: &mut Cx,
+) {
+    let key = layout_key(room.view());
+    let Some(kind) = room.kind() else {
+        panes::selection_line(ui, cx);
+        let layout = layouts
+            .entry(key.clone())
+            .or_insert_with(|| Layout::build(&key, room.default_groups(), None, None));
+        tiles::show(ui, layout, room, cx);
+        return;
+    };
+    let Some(session) = cx.session() else {
+        ui.label("Open a session first (File > Open, or drop a file on the window).");
+        return;
+    };
+    let Some(i) = cx.shown(kind) else {
+        let name = session.session.meta.name.clone();
+        let text = room.run_text(session);
+        let running = cx.analyses.is_running(kind);
+        ui.add_space(24.0);
+        ui.vertical_centered(|ui| {
+            ui.heading(format!(
+                "No results yet for «{name}»: {}",
+                kind.title().to_lowercase()
+            ));
+            match &text {
+                Some(t) => {
+                    ui.label(t);
+                    ui.add_space(6.0);
+                    if ui
+                        .add_enabled(!running, egui::Button::new("Start this run"))
+                        .on_hover_text("Or change the parameters in the form on the right first")
+                        .clicked()
+                    {
+                        room.start(cx);
+                    }
+                }
+                None => {
+                    ui.label("This session cannot run this analysis (the form says why).");
+                }
+            }
+        });
+        return;
+    };
+    let mut reset = false;
+    panes::card(ui, cx, i, &mut reset);
+    ui.separator();
+    let result = &cx.analyses.results[i];
+    let layout = layouts
+        .entry(key.clone())
+        .or_insert_with(|| Layout::build(&key, room.default_groups(), Some(result), Some(i)));
+    if reset || (!layout.edited && layout.built_for != Some(i)) {
+        *layout = Layout::build(&key, room.default_groups(), Some(result), Some(i));
+    }
+    tiles::show(ui, layout, room, cx);
+}

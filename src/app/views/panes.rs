@@ -1,0 +1,346 @@
+//! The panes every room shares: a result's figure (drawn through the one figure model that
+//! export uses), a pinned figure of another result, the detail selected through a figure,
+//! the table of numbers and the replay; and the card above the tiles.
+
+use egui::RichText;
+use egui_tiles::TileId;
+
+use super::tiles::{Pane, TileRequest};
+use super::{Cx, Room, number};
+use crate::app::figure_view::{self, Selection as FigureSelection};
+use crate::app::replay::ReplayAction;
+use crate::app::selection::Command;
+use crate::experiments::report::{AnalysisResult, date_text};
+use crate::figures::{self, Figure};
+
+/// The file name a figure of result `r` exports under.
+pub fn file_name(r: &AnalysisResult, figure: &str) -> String {
+    format!("{}-{figure}", r.label.replace([' ', ',', '=', ':'], "_"))
+}
+
+pub fn pane_ui(
+    ui: &mut egui::Ui,
+    pane: &Pane,
+    tile: TileId,
+    room: &mut dyn Room,
+    cx: &mut Cx,
+    requests: &mut Vec<TileRequest>,
+) {
+    match pane {
+        Pane::Figure(name) => match room.kind().and_then(|k| cx.shown(k)) {
+            Some(i) => figure_pane(ui, cx, i, name, Some((tile, requests))),
+            None => {
+                ui.label("No result yet.");
+            }
+        },
+        Pane::Pinned {
+            figure,
+            created,
+            label,
+        } => {
+            let found = cx
+                .analyses
+                .results
+                .iter()
+                .position(|r| r.created == *created && &r.label == label);
+            match found {
+                Some(i) => {
+                    ui.small(format!(
+                        "pinned: {label} · {} ({})",
+                        cx.analyses.results[i].session,
+                        date_text(*created)
+                    ));
+                    figure_pane(ui, cx, i, figure, None);
+                }
+                None => {
+                    ui.label(format!(
+                        "The pinned result «{label}» is not open (open its project to see it)."
+                    ));
+                }
+            }
+        }
+        Pane::Detail(name) => match room.kind().and_then(|k| cx.shown(k)) {
+            Some(i) => detail_pane(ui, cx, i, name),
+            None => {
+                ui.label("No result yet.");
+            }
+        },
+        Pane::Scores => match room.kind().and_then(|k| cx.shown(k)) {
+            Some(i) => scores_pane(ui, &cx.analyses.results[i]),
+            None => {
+                ui.label("No result yet.");
+            }
+        },
+        Pane::Replay => replay_pane(ui, cx),
+        Pane::Comparison | Pane::SpeedChart | Pane::Models => {
+            ui.label("This pane belongs to another view.");
+        }
+    }
+}
+
+/// Figure `name` of result `i`, with its export and (for the shown result) compare buttons,
+/// and whatever it lets the user select.
+fn figure_pane(
+    ui: &mut egui::Ui,
+    cx: &mut Cx,
+    i: usize,
+    name: &str,
+    layout: Option<(TileId, &mut Vec<TileRequest>)>,
+) {
+    let r = &cx.analyses.results[i];
+    let Some((_, fig)) = r.figures.iter().find(|(n, _)| n == name) else {
+        ui.label(format!(
+            "«{}» has no figure «{name}» (Reset layout fits the tiles to it).",
+            r.label
+        ));
+        return;
+    };
+    let mut export = false;
+    let (tile, requests) = match layout {
+        Some((t, r)) => (Some(t), Some(r)),
+        None => (None, None),
+    };
+    let mut requests = requests;
+    ui.horizontal(|ui| {
+        export = ui
+            .small_button("Export")
+            .on_hover_text("SVG, PNG and CSV into the export folder")
+            .clicked();
+        if let (Some(tile), Some(requests)) = (tile, requests.as_deref_mut())
+            && ui
+                .small_button("Pin for comparison")
+                .on_hover_text(
+                    "Keep this figure of this result in a tab of its own, so another result's \
+                     can be put beside it",
+                )
+                .clicked()
+        {
+            requests.push(TileRequest::AddBeside(
+                Pane::Pinned {
+                    figure: name.to_string(),
+                    created: r.created,
+                    label: r.label.clone(),
+                },
+                tile,
+            ));
+        }
+    });
+    if export {
+        let file = file_name(r, name);
+        cx.analyses.export.write(fig, &file, &mut cx.analyses.notes);
+    }
+    let r = &cx.analyses.results[i];
+    let id = format!("{i}-{name}");
+    let height = (ui.available_height() - 40.0).max(120.0);
+    let Some(details) = r.details_of(name).filter(|d| !d.items.is_empty()) else {
+        egui::ScrollArea::vertical().id_salt(&id).show(ui, |ui| {
+            figure_view::show(ui, &id, fig, height, FigureSelection::None)
+        });
+        return;
+    };
+    let key = (i, name.to_string());
+    let chart = matches!(fig.kind, figures::FigureKind::Chart(_));
+    let mut sel = cx.analyses.selected.get(&key).copied();
+    if chart {
+        // A chart always carries its marker; a slider moves it too.
+        let mut k = sel.unwrap_or(0).min(details.items.len() - 1);
+        let keys: Vec<f64> = details.items.iter().map(|x| x.0).collect();
+        ui.add(
+            egui::Slider::new(&mut k, 0..=details.items.len() - 1)
+                .text(&details.selector)
+                .custom_formatter(move |v, _| format!("{}", keys[v as usize]))
+                .custom_parser(|_| None),
+        );
+        sel = Some(k);
+    }
+    let selection = match (chart, sel) {
+        (true, Some(k)) => FigureSelection::Marker(details.items[k].0),
+        _ => FigureSelection::Image(sel),
+    };
+    let act = egui::ScrollArea::vertical()
+        .id_salt(&id)
+        .show(ui, |ui| {
+            figure_view::show(ui, &id, fig, height - 24.0, selection)
+        })
+        .inner;
+    if let Some(x) = act.marker_x {
+        sel = details.nearest(x);
+    }
+    if act.clicked_image.is_some() {
+        sel = act.clicked_image;
+    }
+    if (act.clicked_image.is_some() || act.marker_x.is_some())
+        && let Some(requests) = requests
+    {
+        requests.push(TileRequest::Activate(Pane::Detail(name.to_string())));
+    }
+    if sel.is_none() {
+        ui.small(format!("Click a {} to see it in detail.", details.selector));
+    }
+    if let Some(k) = sel {
+        cx.analyses.selected.insert(key, k);
+    }
+}
+
+/// The detail figure selected through figure `name` of result `i`.
+fn detail_pane(ui: &mut egui::Ui, cx: &mut Cx, i: usize, name: &str) {
+    let r = &cx.analyses.results[i];
+    let Some(details) = r.details_of(name).filter(|d| !d.items.is_empty()) else {
+        ui.label("Nothing to select in this result.");
+        return;
+    };
+    let sel = cx.analyses.selected.get(&(i, name.to_string())).copied();
+    let Some((_, detail)) = sel.and_then(|k| details.items.get(k)) else {
+        ui.label(format!(
+            "Click a {} in «{}» to see it here.",
+            details.selector,
+            name.replace('-', " ")
+        ));
+        return;
+    };
+    if ui
+        .small_button("Export")
+        .on_hover_text("SVG, PNG and CSV into the export folder")
+        .clicked()
+    {
+        let file = format!(
+            "{}-{}",
+            file_name(r, name),
+            detail.title.replace([' ', ',', ':', '='], "_")
+        );
+        cx.analyses
+            .export
+            .write(detail, &file, &mut cx.analyses.notes);
+    }
+    let r = &cx.analyses.results[i];
+    let detail: &Figure =
+        &r.details_of(name).expect("checked above").items[sel.expect("checked above")].1;
+    let id = format!("{i}-{name}-detail");
+    let height = (ui.available_height() - 30.0).max(120.0);
+    egui::ScrollArea::vertical().id_salt(&id).show(ui, |ui| {
+        figure_view::show(ui, &id, detail, height, FigureSelection::None)
+    });
+}
+
+/// Every number of a result: scores, timing and parameters.
+pub fn scores_pane(ui: &mut egui::Ui, r: &AnalysisResult) {
+    egui::ScrollArea::vertical().show(ui, |ui| {
+        egui::Grid::new(("scores", r.created, &r.label))
+            .striped(true)
+            .show(ui, |ui| {
+                for (name, v) in &r.scores {
+                    ui.label(name);
+                    ui.label(RichText::new(format!("{v:.4}")).strong());
+                    ui.end_row();
+                }
+                ui.label("training time");
+                ui.label(format!("{:.2} s", r.train_seconds));
+                ui.end_row();
+                for (k, v) in &r.parameters {
+                    ui.label(k);
+                    ui.label(v);
+                    ui.end_row();
+                }
+            });
+    });
+}
+
+/// The focused grasp's replay, sized to the tile.
+pub fn replay_pane(ui: &mut egui::Ui, cx: &mut Cx) {
+    let Some((s, g)) = cx.selection.focus.filter(|(s, _)| *s < cx.sessions.len()) else {
+        ui.label("Select a grasp (in the browser, or by clicking a figure) to replay it here.");
+        return;
+    };
+    let action = cx
+        .replay
+        .ui(ui, &cx.sessions[s], g, cx.analyses.trace.as_ref());
+    if let ReplayAction::Trace(learner) = action {
+        let ctx = cx.ctx.clone();
+        cx.analyses.request_trace(&ctx, &cx.sessions[s], g, learner);
+    }
+}
+
+/// The card above a room's tiles: which result, its headline numbers (at most six), the
+/// selection, and the layout's reset.
+pub fn card(ui: &mut egui::Ui, cx: &mut Cx, i: usize, reset: &mut bool) {
+    let kind = cx.analyses.results[i].kind;
+    let session = cx.analyses.results[i].session.clone();
+    let mine = cx.analyses.of_session(kind, &session);
+    ui.horizontal_wrapped(|ui| {
+        let r = &cx.analyses.results[i];
+        let mut chosen = i;
+        egui::ComboBox::from_label("Result")
+            .selected_text(format!("{} ({})", r.label, date_text(r.created)))
+            .show_ui(ui, |ui| {
+                for &k in &mine {
+                    let x = &cx.analyses.results[k];
+                    ui.selectable_value(
+                        &mut chosen,
+                        k,
+                        format!("{} ({})", x.label, date_text(x.created)),
+                    );
+                }
+            });
+        if chosen != i {
+            cx.analyses.shown.insert(kind, chosen);
+        }
+        ui.separator();
+        let r = &cx.analyses.results[i];
+        for (name, v) in headline(r) {
+            ui.label(format!("{name}:"));
+            ui.label(RichText::new(number(v)).strong());
+        }
+        ui.separator();
+        if ui
+            .button("Reset layout")
+            .on_hover_text("Back to the default tiles for this result")
+            .clicked()
+        {
+            *reset = true;
+        }
+    });
+    selection_line(ui, cx);
+}
+
+/// The selection in one line, with Clear.
+pub fn selection_line(ui: &mut egui::Ui, cx: &mut Cx) {
+    let sel = cx.selection;
+    if sel.grasps.is_empty() {
+        return;
+    }
+    ui.horizontal_wrapped(|ui| {
+        ui.label(
+            RichText::new(format!(
+                "Selected: {} grasp{}",
+                sel.grasps.len(),
+                if sel.grasps.len() == 1 { "" } else { "s" }
+            ))
+            .strong(),
+        );
+        if !sel.origin.is_empty() {
+            ui.label(format!("({})", sel.origin));
+        }
+        if ui.small_button("Clear selection").clicked() {
+            cx.commands.push(Command::ClearSelection);
+        }
+    });
+}
+
+/// At most six numbers that sum a result up: its headline first, then its first scores,
+/// then the training time.
+pub fn headline(r: &AnalysisResult) -> Vec<(String, f64)> {
+    let mut out: Vec<(String, f64)> = Vec::new();
+    if let Some((n, v)) = &r.headline {
+        out.push((n.clone(), *v));
+    }
+    for (n, v) in &r.scores {
+        if out.len() >= 5 {
+            break;
+        }
+        if !out.iter().any(|(m, _)| m == n) {
+            out.push((n.clone(), *v));
+        }
+    }
+    out.push(("training time (s)".into(), r.train_seconds));
+    out
+}

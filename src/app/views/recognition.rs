@@ -1,0 +1,191 @@
+//! Object recognition (second paper): DS or GS OIESGP experts on all, tactile or encoder
+//! features; accuracy as trials progress, the confusion matrix, early classification and
+//! lengthscale relevance as tiles, with every model of the session compared on one chart.
+
+use super::tiles::Pane;
+use super::{Cx, Room, duration_text};
+use crate::app::View;
+use crate::app::figure_view::{self, Selection as FigureSelection};
+use crate::app::loader::LoadedSession;
+use crate::app::results::{JobOutput, experiment_error, recognition_ready};
+use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
+use crate::experiments::recognition_report::{
+    accuracy_comparison, features_text, recognition_report,
+};
+use crate::experiments::report::AnalysisKind;
+use crate::features::sequence::FeatureSet;
+
+/// Supervised recognition form: a few repetitions by default so the view answers quickly;
+/// the CLI runs the paper's 50.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct RecognitionForm {
+    pub learner: SupervisedLearner,
+    pub features: FeatureSet,
+    pub reps: usize,
+    pub noise_variance: f64,
+    pub seed: u64,
+}
+
+impl Default for RecognitionForm {
+    fn default() -> Self {
+        RecognitionForm {
+            learner: SupervisedLearner::Ds,
+            features: FeatureSet::All,
+            reps: 3,
+            noise_variance: 0.0,
+            seed: 0,
+        }
+    }
+}
+
+/// Seconds per repetition per observed step (every grasp's frames, trained and predicted),
+/// measured for DS with adaptation on the recognition sample, release build, 2 cores.
+const SECONDS_PER_STEP: f64 = 0.0003;
+
+impl RecognitionForm {
+    pub fn expected_seconds(&self, s: &LoadedSession) -> f64 {
+        let steps: usize = s.session.grasps.iter().map(|g| g.frames.len()).sum();
+        SECONDS_PER_STEP * steps as f64 * self.reps as f64
+    }
+}
+
+#[derive(Default)]
+pub struct RecognitionRoom {
+    pub form: RecognitionForm,
+}
+
+impl Room for RecognitionRoom {
+    fn view(&self) -> View {
+        View::Recognition
+    }
+
+    fn default_groups(&self) -> Vec<Vec<Pane>> {
+        let f = |n: &str| Pane::Figure(n.to_string());
+        vec![
+            vec![f("accuracy-by-trials"), Pane::Comparison],
+            vec![f("confusion"), Pane::Scores],
+            vec![f("early-classification"), f("lengthscales")],
+            vec![Pane::Replay],
+        ]
+    }
+
+    fn run_text(&self, s: &LoadedSession) -> Option<String> {
+        if !recognition_ready(s) {
+            return None;
+        }
+        let f = &self.form;
+        Some(format!(
+            "Run: {} on {}, {} repetition{} over {} grasps; {}.",
+            format!("{:?}", f.learner).to_uppercase(),
+            features_text(f.features),
+            f.reps,
+            if f.reps == 1 { "" } else { "s" },
+            s.session.grasps.len(),
+            duration_text(f.expected_seconds(s))
+        ))
+    }
+
+    fn form_ui(&mut self, ui: &mut egui::Ui, cx: &mut Cx) {
+        ui.heading("Object recognition");
+        ui.label("Online OIESGP experts (DS, GS)");
+        let f = &mut self.form;
+        egui::ComboBox::from_label("Learner")
+            .selected_text(format!("{:?}", f.learner).to_uppercase())
+            .show_ui(ui, |ui| {
+                ui.selectable_value(&mut f.learner, SupervisedLearner::Ds, "DS (discriminative)");
+                ui.selectable_value(&mut f.learner, SupervisedLearner::Gs, "GS (generative)");
+            });
+        egui::ComboBox::from_label("Features")
+            .selected_text(features_text(f.features))
+            .show_ui(ui, |ui| {
+                ui.selectable_value(&mut f.features, FeatureSet::All, "all features (34)");
+                ui.selectable_value(
+                    &mut f.features,
+                    FeatureSet::Tactile,
+                    "tactile features (25)",
+                );
+                ui.selectable_value(&mut f.features, FeatureSet::Encoder, "encoder features (9)");
+            });
+        ui.add(
+            egui::DragValue::new(&mut f.reps)
+                .range(1..=50)
+                .prefix("repetitions "),
+        );
+        egui::ComboBox::from_label("Taxel noise σ²")
+            .selected_text(format!("{}", f.noise_variance))
+            .show_ui(ui, |ui| {
+                for v in [0.0, 100.0, 1000.0] {
+                    ui.selectable_value(&mut f.noise_variance, v, format!("{v}"));
+                }
+            });
+        ui.add(egui::DragValue::new(&mut f.seed).prefix("seed "));
+        let Some(s) = cx.session() else { return };
+        let ok = recognition_ready(s);
+        if !ok {
+            ui.label("(needs an object-recognition session: encoders and `object` labels)");
+        }
+        let running = cx.analyses.is_running(AnalysisKind::Recognition);
+        if ui
+            .add_enabled(!running && ok, egui::Button::new("Run"))
+            .clicked()
+        {
+            self.start(cx);
+        }
+    }
+
+    fn start(&mut self, cx: &mut Cx) {
+        let Some(s) = cx.session() else { return };
+        let f = self.form.clone();
+        let session = s.session.clone();
+        let ctx = cx.ctx.clone();
+        cx.analyses.spawn(
+            &ctx,
+            Some(AnalysisKind::Recognition),
+            format!("Recognition on {}", session.meta.name),
+            move |p| {
+                let params = RecognitionParams {
+                    learner: f.learner,
+                    features: f.features,
+                    reps: f.reps,
+                    seed: f.seed,
+                    taxel_noise_variance: f.noise_variance,
+                    ..Default::default()
+                };
+                let r = run_recognition(&session, &params, p).map_err(experiment_error)?;
+                Ok(JobOutput::Result(Box::new(recognition_report(
+                    &session.meta.name,
+                    &r,
+                ))))
+            },
+        );
+    }
+
+    fn pane_ui(&mut self, ui: &mut egui::Ui, pane: &Pane, cx: &mut Cx) -> bool {
+        if *pane != Pane::Comparison {
+            return false;
+        }
+        let Some(s) = cx.session() else { return true };
+        // Fig. 6 across every model trained on this session (and the offline SVM).
+        match accuracy_comparison(&cx.analyses.results, &s.session.meta.name) {
+            Some(fig) => {
+                if ui
+                    .small_button("Export")
+                    .on_hover_text("SVG, PNG and CSV into the export folder")
+                    .clicked()
+                {
+                    cx.analyses
+                        .export
+                        .write(&fig, "accuracy-compared", &mut cx.analyses.notes);
+                }
+                let height = (ui.available_height() - 40.0).max(120.0);
+                figure_view::show(ui, "accuracy-compared", &fig, height, FigureSelection::None);
+            }
+            None => {
+                ui.label(
+                    "Train a model: every recognition model of this session is compared here.",
+                );
+            }
+        }
+        true
+    }
+}

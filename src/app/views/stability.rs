@@ -1,0 +1,203 @@
+//! Grasp stability (first paper): one dictionary size with β and γ, or a grid search with the
+//! parsimonious choice; basis images, score against bases, usage differentials and confusion
+//! maps as tiles.
+
+use super::tiles::Pane;
+use super::{Cx, Room, duration_text};
+use crate::app::View;
+use crate::app::loader::LoadedSession;
+use crate::app::results::JobOutput;
+use crate::experiments::report::AnalysisKind;
+use crate::experiments::stability::{
+    Config, DataOptions, GridSpec, StabilityData, StabilityError, StabilityOptions,
+};
+use crate::experiments::stability_report::stability_report;
+use crate::jobs::JobError;
+
+/// Grasp-stability form: one configuration, or a grid search with the parsimony rule.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct StabilityForm {
+    pub num_bases: usize,
+    pub beta: f64,
+    pub gamma: f64,
+    pub grid: bool,
+    /// Grid over num_bases: from, to, step.
+    pub bases: [usize; 3],
+}
+
+impl Default for StabilityForm {
+    fn default() -> Self {
+        StabilityForm {
+            num_bases: 29,
+            beta: 1.0,
+            gamma: 1.0,
+            grid: false,
+            bases: [5, 60, 5],
+        }
+    }
+}
+
+/// Seconds one configuration (dictionary, codes, both cross validations) takes per grasp
+/// at 29 bases, measured on the grasp-stability sample (540 grasps) with a release build on
+/// 2 cores; the dictionary's cost grows about linearly with the number of bases.
+const SECONDS_PER_GRASP_CONFIG: f64 = 0.0035;
+
+impl StabilityForm {
+    fn grid_spec(&self) -> Option<GridSpec> {
+        let [from, to, step] = self.bases;
+        self.grid.then(|| GridSpec {
+            num_bases: (from..=to.max(from)).step_by(step.max(1)).collect(),
+            beta: vec![0.5, 1.0, 2.0],
+            gamma: vec![0.5, 1.0, 2.0],
+        })
+    }
+
+    /// Expected seconds on a session of `grasps` grasps.
+    pub fn expected_seconds(&self, grasps: usize) -> f64 {
+        let per = |k: usize| SECONDS_PER_GRASP_CONFIG * grasps as f64 * (k as f64 / 29.0).max(0.2);
+        match self.grid_spec() {
+            Some(g) => g.num_bases.iter().map(|&k| per(k)).sum::<f64>() * 9.0,
+            None => per(self.num_bases),
+        }
+    }
+}
+
+/// The pipeline predicts a two-class outcome (success / failure).
+fn ready(s: &LoadedSession) -> bool {
+    s.session.label_sets.iter().any(|l| l.classes.len() == 2)
+}
+
+#[derive(Default)]
+pub struct StabilityRoom {
+    pub form: StabilityForm,
+}
+
+impl Room for StabilityRoom {
+    fn view(&self) -> View {
+        View::Stability
+    }
+
+    fn default_groups(&self) -> Vec<Vec<Pane>> {
+        let f = |n: &str| Pane::Figure(n.to_string());
+        vec![
+            vec![f("bases-raw"), f("bases-filtered"), f("reconstruction")],
+            vec![f("score-vs-bases"), f("beta-gamma"), Pane::Scores],
+            vec![
+                f("usage-differential"),
+                Pane::Detail("bases-raw".into()),
+                f("basis-usage"),
+                f("coefficient-differential"),
+            ],
+            vec![f("confusion-kfold"), f("confusion-objects"), Pane::Replay],
+        ]
+    }
+
+    fn run_text(&self, s: &LoadedSession) -> Option<String> {
+        if !ready(s) {
+            return None;
+        }
+        let f = &self.form;
+        let what = match f.grid_spec() {
+            Some(g) => format!(
+                "a grid search over {} dictionary sizes × β × γ ({} cells) with the parsimonious choice",
+                g.num_bases.len(),
+                g.num_bases.len() * 9
+            ),
+            None => format!(
+                "{} bases, β = {}, γ = {}, with 10-fold and leave-objects-out validation",
+                f.num_bases, f.beta, f.gamma
+            ),
+        };
+        Some(format!(
+            "Run: sparse coding + linear SVM on {} grasps, {what}; {}.",
+            s.session.grasps.len(),
+            duration_text(f.expected_seconds(s.session.grasps.len()))
+        ))
+    }
+
+    fn form_ui(&mut self, ui: &mut egui::Ui, cx: &mut Cx) {
+        ui.heading("Grasp stability");
+        ui.label("Sparse coding of tactile images and a linear SVM");
+        let f = &mut self.form;
+        ui.checkbox(&mut f.grid, "Grid search (β and γ over 0.5, 1, 2)");
+        if f.grid {
+            ui.add(
+                egui::DragValue::new(&mut f.bases[0])
+                    .range(1..=200)
+                    .prefix("bases from "),
+            );
+            ui.add(
+                egui::DragValue::new(&mut f.bases[1])
+                    .range(1..=200)
+                    .prefix("to "),
+            );
+            ui.add(
+                egui::DragValue::new(&mut f.bases[2])
+                    .range(1..=50)
+                    .prefix("step "),
+            );
+        } else {
+            ui.add(
+                egui::DragValue::new(&mut f.num_bases)
+                    .range(1..=200)
+                    .prefix("num_bases "),
+            );
+            ui.add(
+                egui::DragValue::new(&mut f.beta)
+                    .range(1e-4..=1e4)
+                    .speed(0.05)
+                    .prefix("β "),
+            );
+            ui.add(
+                egui::DragValue::new(&mut f.gamma)
+                    .range(1e-4..=1e4)
+                    .speed(0.05)
+                    .prefix("γ "),
+            );
+        }
+        ui.small("Pressures are z-scored per taxel over the session; β and γ use the 0.5·|x − Da|² + λ·|a|₁ convention.");
+        let Some(s) = cx.session() else { return };
+        let ok = ready(s);
+        if !ok {
+            ui.label("(needs a session with a two-class outcome label, e.g. success / failure)");
+        }
+        let running = cx.analyses.is_running(AnalysisKind::Stability);
+        if ui
+            .add_enabled(!running && ok, egui::Button::new("Run"))
+            .clicked()
+        {
+            self.start(cx);
+        }
+    }
+
+    fn start(&mut self, cx: &mut Cx) {
+        let Some(s) = cx.session() else { return };
+        let f = self.form.clone();
+        let session = s.session.clone();
+        let ctx = cx.ctx.clone();
+        cx.analyses.spawn(
+            &ctx,
+            Some(AnalysisKind::Stability),
+            format!("Grasp stability on {}", session.meta.name),
+            move |p| {
+                let data = StabilityData::from_session(&session, &DataOptions::default())
+                    .map_err(JobError::failed)?;
+                let opts = StabilityOptions {
+                    single: Config {
+                        num_bases: f.num_bases,
+                        beta: f.beta,
+                        gamma: f.gamma,
+                    },
+                    grid: f.grid_spec(),
+                    ..Default::default()
+                };
+                let r =
+                    crate::experiments::stability::run(&data, &opts, p).map_err(|e| match e {
+                        StabilityError::Cancelled => JobError::Cancelled,
+                        other => JobError::failed(other),
+                    })?;
+                Ok(JobOutput::Result(Box::new(stability_report(&r))))
+            },
+        );
+    }
+}

@@ -1,0 +1,325 @@
+//! A room's tiles: an `egui_tiles` tree of panes that persists per view, built from the
+//! room's default groups (a grid of tab groups), kept in step with the shown result's figures
+//! until the user edits it, with one tile maximised on request.
+
+use egui_tiles::{
+    Behavior, Container, EditAction, GridLayout, SimplificationOptions, Tile, TileId,
+};
+use serde::{Deserialize, Serialize};
+
+use super::{Cx, Room, panes};
+use crate::experiments::report::AnalysisResult;
+
+/// What a tile shows.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Pane {
+    /// A figure of the result the view shows, by name.
+    Figure(String),
+    /// A figure of one chosen result, kept beside the shown one for comparison.
+    Pinned {
+        figure: String,
+        /// The result's creation time and label (together they name it).
+        created: u64,
+        label: String,
+    },
+    /// The detail figure selected through figure `0` (a basis, a threshold).
+    Detail(String),
+    /// Every number of the shown result.
+    Scores,
+    /// The replay of the focused grasp.
+    Replay,
+    /// Recognition: accuracy as trials progress across every model of the session.
+    Comparison,
+    /// Speed against accuracy over every result.
+    SpeedChart,
+    /// The models on the speed chart, to open.
+    Models,
+}
+
+impl Pane {
+    /// The tab title: short words from the figure's name (the figure's own title is drawn
+    /// inside the tile).
+    pub fn title(&self, result: Option<&AnalysisResult>) -> String {
+        match self {
+            Pane::Figure(name) => words(name),
+            Pane::Pinned { figure, label, .. } => format!("{} · {label}", words(figure)),
+            Pane::Detail(name) => result
+                .and_then(|r| r.details_of(name))
+                .map(|d| format!("Selected {}", d.selector))
+                .unwrap_or_else(|| format!("{} detail", words(name))),
+            Pane::Scores => "All numbers".into(),
+            Pane::Replay => "Replay".into(),
+            Pane::Comparison => "Accuracy compared".into(),
+            Pane::SpeedChart => "Speed vs accuracy".into(),
+            Pane::Models => "Models".into(),
+        }
+    }
+}
+
+/// "score-vs-bases" → "Score vs bases", "nmi-vs-effective" → "NMI vs effective".
+fn words(name: &str) -> String {
+    let s = name
+        .split('-')
+        .map(|w| match w {
+            "nmi" | "svm" | "ari" => w.to_uppercase(),
+            "kfold" => "10-fold".into(),
+            _ => w.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join(" ");
+    let mut c = s.chars();
+    match c.next() {
+        Some(f) => f.to_uppercase().chain(c).collect(),
+        None => s,
+    }
+}
+
+/// One view's tiles, as they persist between runs.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Layout {
+    pub tree: egui_tiles::Tree<Pane>,
+    /// The user changed the layout: it is no longer rebuilt for each new result.
+    #[serde(default)]
+    pub edited: bool,
+    /// The tile shown alone, if one is maximised.
+    #[serde(default)]
+    pub maximised: Option<TileId>,
+    /// The result the default layout was built for (not persisted: results are not).
+    #[serde(skip)]
+    pub built_for: Option<usize>,
+}
+
+impl Layout {
+    /// A grid of tab groups; figures of `result` named nowhere in `groups` join the last group,
+    /// and figures `result` lacks are left out.
+    pub fn build(
+        id: &str,
+        groups: Vec<Vec<Pane>>,
+        result: Option<&AnalysisResult>,
+        result_index: Option<usize>,
+    ) -> Layout {
+        let has = |p: &Pane| match (p, result) {
+            (Pane::Figure(name) | Pane::Detail(name), Some(r)) => {
+                r.figures.iter().any(|(n, _)| n == name)
+                    && (matches!(p, Pane::Figure(_)) || r.details_of(name).is_some())
+            }
+            (Pane::Figure(_) | Pane::Detail(_), None) => false,
+            _ => true,
+        };
+        let mut groups: Vec<Vec<Pane>> = groups
+            .into_iter()
+            .map(|g| g.into_iter().filter(|p| has(p)).collect::<Vec<_>>())
+            .filter(|g| !g.is_empty())
+            .collect();
+        if let Some(r) = result {
+            let named = |name: &str| {
+                groups
+                    .iter()
+                    .flatten()
+                    .any(|p| matches!(p, Pane::Figure(n) if n == name))
+            };
+            let extra: Vec<Pane> = r
+                .figures
+                .iter()
+                .filter(|(n, _)| !named(n))
+                .map(|(n, _)| Pane::Figure(n.clone()))
+                .collect();
+            if groups.len() < 4 {
+                // Fill the grid first: each extra figure its own cell while there is room.
+                let mut extra = extra.into_iter();
+                while groups.len() < 4 {
+                    match extra.next() {
+                        Some(p) => groups.insert(groups.len().saturating_sub(1), vec![p]),
+                        None => break,
+                    }
+                }
+                if let Some(last) = groups.last_mut() {
+                    last.extend(extra);
+                }
+            } else if let Some(last) = groups.last_mut() {
+                last.extend(extra);
+            }
+        }
+        let mut tiles = egui_tiles::Tiles::default();
+        let cells: Vec<TileId> = groups
+            .into_iter()
+            .map(|g| {
+                let panes = g.into_iter().map(|p| tiles.insert_pane(p)).collect();
+                tiles.insert_tab_tile(panes)
+            })
+            .collect();
+        let root = if cells.len() == 1 {
+            cells[0]
+        } else {
+            let n = cells.len();
+            let mut grid = egui_tiles::Grid::new(cells);
+            grid.layout = GridLayout::Columns(if n <= 4 { 2 } else { 3 });
+            tiles.insert_new(Tile::Container(Container::Grid(grid)))
+        };
+        Layout {
+            tree: egui_tiles::Tree::new(egui::Id::unique(("tiles", id)), root, tiles),
+            edited: false,
+            maximised: None,
+            built_for: result_index,
+        }
+    }
+
+    /// Add a pane as a new tab of the group that holds `beside` (else of the first group),
+    /// and make it the active tab.
+    pub fn add_beside(&mut self, pane: Pane, beside: Option<TileId>) {
+        let new = self.tree.tiles.insert_pane(pane);
+        let parent = beside.and_then(|b| self.tree.tiles.parent_of(b));
+        let tabs = parent
+            .filter(|p| {
+                matches!(
+                    self.tree.tiles.get(*p),
+                    Some(Tile::Container(Container::Tabs(_)))
+                )
+            })
+            .or_else(|| {
+                self.tree.tiles.iter().find_map(|(id, t)| {
+                    matches!(t, Tile::Container(Container::Tabs(_))).then_some(*id)
+                })
+            });
+        match tabs {
+            Some(id) => {
+                if let Some(Tile::Container(Container::Tabs(t))) = self.tree.tiles.get_mut(id) {
+                    t.add_child(new);
+                    t.set_active(new);
+                }
+            }
+            None => {
+                let root = self.tree.root();
+                let children: Vec<TileId> = root.into_iter().chain([new]).collect();
+                let id = self.tree.tiles.insert_horizontal_tile(children);
+                self.tree.root = Some(id);
+            }
+        }
+        self.edited = true;
+    }
+
+    /// Make the tab holding `pane` the active one of its group.
+    pub fn activate(&mut self, pane: &Pane) {
+        if let Some(id) = self.tree.tiles.find_pane(pane) {
+            self.tree.make_active(|t, _| t == id);
+        }
+    }
+}
+
+/// What a pane asked of the layout this frame (applied after the tree is drawn).
+pub enum TileRequest {
+    Maximise(TileId),
+    /// Put this pane beside the tile.
+    AddBeside(Pane, TileId),
+    /// Bring this pane's tab to the front, if the layout has it.
+    Activate(Pane),
+}
+
+struct RoomTiles<'r, 'c, 'a> {
+    room: &'r mut dyn Room,
+    cx: &'c mut Cx<'a>,
+    requests: Vec<TileRequest>,
+    edited: bool,
+}
+
+impl Behavior<Pane> for RoomTiles<'_, '_, '_> {
+    fn tab_title_for_pane(&mut self, pane: &Pane) -> egui::WidgetText {
+        let shown = self.room.kind().and_then(|k| self.cx.shown(k));
+        pane.title(shown.map(|i| &self.cx.analyses.results[i]))
+            .into()
+    }
+
+    fn pane_ui(
+        &mut self,
+        ui: &mut egui::Ui,
+        tile_id: TileId,
+        pane: &mut Pane,
+    ) -> egui_tiles::UiResponse {
+        let frame = egui::Frame::new().inner_margin(6.0);
+        frame.show(ui, |ui| {
+            ui.set_min_size(ui.available_size());
+            if !self.room.pane_ui(ui, pane, self.cx) {
+                panes::pane_ui(ui, pane, tile_id, self.room, self.cx, &mut self.requests);
+            }
+        });
+        egui_tiles::UiResponse::None
+    }
+
+    fn top_bar_right_ui(
+        &mut self,
+        _tiles: &egui_tiles::Tiles<Pane>,
+        ui: &mut egui::Ui,
+        _tile_id: TileId,
+        tabs: &egui_tiles::Tabs,
+        _scroll_offset: &mut f32,
+    ) {
+        if let Some(active) = tabs.active
+            && ui
+                .small_button("Maximise")
+                .on_hover_text("Show this tile alone (Restore brings the layout back)")
+                .clicked()
+        {
+            self.requests.push(TileRequest::Maximise(active));
+        }
+    }
+
+    fn is_tab_closable(&self, _tiles: &egui_tiles::Tiles<Pane>, _tile_id: TileId) -> bool {
+        true
+    }
+
+    fn simplification_options(&self) -> SimplificationOptions {
+        SimplificationOptions {
+            all_panes_must_have_tabs: true,
+            ..Default::default()
+        }
+    }
+
+    fn gap_width(&self, _style: &egui::Style) -> f32 {
+        4.0
+    }
+
+    fn on_edit(&mut self, _action: EditAction) {
+        // Any edit, a tab chosen included, is the user's layout from now on.
+        self.edited = true;
+    }
+}
+
+/// Draw `layout` for `room` in the rest of `ui`.
+pub fn show(ui: &mut egui::Ui, layout: &mut Layout, room: &mut dyn Room, cx: &mut Cx) {
+    let mut behavior = RoomTiles {
+        room,
+        cx,
+        requests: Vec::new(),
+        edited: false,
+    };
+    match layout.maximised {
+        Some(id) if layout.tree.tiles.get_pane(&id).is_some() => {
+            ui.horizontal(|ui| {
+                if ui.button("Restore layout").clicked() {
+                    layout.maximised = None;
+                }
+                if let Some(p) = layout.tree.tiles.get_pane(&id) {
+                    let title = behavior.tab_title_for_pane(p);
+                    ui.strong(title.text());
+                }
+            });
+            if let Some(Tile::Pane(pane)) = layout.tree.tiles.get_mut(id) {
+                let _ = behavior.pane_ui(ui, id, pane);
+            }
+        }
+        _ => {
+            layout.maximised = None;
+            layout.tree.ui(&mut behavior, ui);
+        }
+    }
+    if behavior.edited {
+        layout.edited = true;
+    }
+    for r in behavior.requests {
+        match r {
+            TileRequest::Maximise(id) => layout.maximised = Some(id),
+            TileRequest::AddBeside(pane, id) => layout.add_beside(pane, Some(id)),
+            TileRequest::Activate(pane) => layout.activate(&pane),
+        }
+    }
+}
