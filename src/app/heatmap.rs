@@ -6,28 +6,24 @@ use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Stroke, StrokeKind, Vec2}
 use crate::figures::{ColorMap, Rgb};
 use crate::session::{Layout, Sensor};
 
-/// The figures' viridis, so the screen and exported figures agree.
-pub fn viridis(t: f64) -> Color32 {
-    rgb(ColorMap::Viridis.at(t))
-}
-
 pub fn rgb(c: Rgb) -> Color32 {
     Color32::from_rgb(c.0, c.1, c.2)
 }
 
 const BACKGROUND: Color32 = Color32::from_gray(45);
 
-/// Draw one sensor's pressures. Hovering a taxel shows its index and value.
+/// Draw one sensor's values in `map` over `range`. Hovering a taxel shows its index and value.
 pub fn sensor_heatmap(
     ui: &mut egui::Ui,
     sensor: &Sensor,
     pressures: &[f64],
     range: (f64, f64),
+    map: ColorMap,
     size: Vec2,
 ) -> egui::Response {
     let (rect, response) = ui.allocate_exact_size(size, Sense::hover());
     let painter = ui.painter_at(rect);
-    let norm = |v: f64| (v - range.0) / (range.1 - range.0);
+    let colour = |v: f64| rgb(map.color(v, range));
     // Taxel index under the pointer, with the shape drawn for it.
     let mut hovered: Option<usize> = None;
     let pointer = response.hover_pos();
@@ -52,7 +48,7 @@ pub fn sensor_heatmap(
             for (i, &p) in pressures.iter().enumerate() {
                 if let Some((r, c)) = sensor.layout.grid_cell(i) {
                     let cr = cell_rect(r, c);
-                    painter.rect_filled(cr, 2.0, viridis(norm(p)));
+                    painter.rect_filled(cr, 2.0, colour(p));
                     if pointer.is_some_and(|q| cr.contains(q)) {
                         hovered = Some(i);
                         painter.rect_stroke(
@@ -96,7 +92,7 @@ pub fn sensor_heatmap(
             let r = *radius as f32 * scale;
             for (i, (pos, &p)) in positions.iter().zip(pressures).enumerate() {
                 let c = to_screen(pos.x, pos.y);
-                painter.circle_filled(c, r, viridis(norm(p)));
+                painter.circle_filled(c, r, colour(p));
                 if pointer.is_some_and(|q| q.distance(c) <= r) {
                     hovered = Some(i);
                     painter.circle_stroke(c, r, Stroke::new(2.0, Color32::WHITE));
@@ -114,8 +110,16 @@ pub fn sensor_heatmap(
     }
 }
 
-/// A vertical colour bar with its range, and its title and unit on two lines above it.
-pub fn colour_bar(ui: &mut egui::Ui, range: (f64, f64), title: &str, unit: &str, height: f32) {
+/// A vertical colour bar of `map` with its range, and its title and unit on two lines
+/// above it.
+pub fn colour_bar(
+    ui: &mut egui::Ui,
+    range: (f64, f64),
+    map: ColorMap,
+    title: &str,
+    unit: &str,
+    height: f32,
+) {
     let width = 120.0;
     let (rect, _) = ui.allocate_exact_size(Vec2::new(width, height), Sense::hover());
     let painter = ui.painter_at(rect);
@@ -133,21 +137,21 @@ pub fn colour_bar(ui: &mut egui::Ui, range: (f64, f64), title: &str, unit: &str,
             ),
             Pos2::new(bar.max.x, bar.max.y - t0 * bar.height()),
         );
-        painter.rect_filled(seg, 0.0, viridis(t0 as f64 + 0.5 / steps as f64));
+        painter.rect_filled(seg, 0.0, rgb(map.at(t0 as f64 + 0.5 / steps as f64)));
     }
     let text = ui.visuals().text_color();
     let font = FontId::proportional(11.0);
     painter.text(
         Pos2::new(bar.max.x + 4.0, bar.min.y),
         Align2::LEFT_CENTER,
-        format!("{:.0}", range.1),
+        format!("{:.1}", range.1),
         font.clone(),
         text,
     );
     painter.text(
         Pos2::new(bar.max.x + 4.0, bar.max.y),
         Align2::LEFT_CENTER,
-        format!("{:.0}", range.0),
+        format!("{:.1}", range.0),
         font.clone(),
         text,
     );

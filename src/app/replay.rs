@@ -10,6 +10,63 @@ use super::loader::LoadedSession;
 use super::results::ReplayTrace;
 use crate::experiments::recognition::{GraspTrace, SupervisedLearner};
 use crate::features::FingerStats;
+use crate::figures::ColorMap;
+use crate::session::{Grasp, Session};
+
+/// Over what the heatmaps' colours are scaled.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum ColourRange {
+    /// The whole session: colours mean the same in every grasp.
+    #[default]
+    Session,
+    /// This grasp: its contact pattern shows even when its pressures stay low.
+    Grasp,
+    /// This frame alone.
+    Frame,
+}
+
+impl ColourRange {
+    pub const ALL: [ColourRange; 3] =
+        [ColourRange::Session, ColourRange::Grasp, ColourRange::Frame];
+
+    pub fn text(self) -> &'static str {
+        match self {
+            ColourRange::Session => "session",
+            ColourRange::Grasp => "grasp",
+            ColourRange::Frame => "frame",
+        }
+    }
+}
+
+/// Every sensor's values at `frame`: pressures, or their change since the grasp's first frame.
+fn frame_values(session: &Session, g: &Grasp, frame: usize, change: bool) -> Vec<Vec<f64>> {
+    (0..session.sensors.len())
+        .map(|k| {
+            let p = session.frame_pressures(&g.frames[frame], k);
+            if change {
+                let first = session.frame_pressures(&g.frames[0], k);
+                p.iter().zip(&first).map(|(a, b)| a - b).collect()
+            } else {
+                p
+            }
+        })
+        .collect()
+}
+
+fn span(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    if lo.is_finite() && hi > lo {
+        (lo, hi)
+    } else if lo.is_finite() {
+        (lo - 0.5, lo + 0.5)
+    } else {
+        (0.0, 1.0)
+    }
+}
 
 pub const SPEEDS: [f32; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
 
@@ -23,6 +80,12 @@ pub struct Replay {
     /// The learner whose class distribution is drawn beside the heatmaps.
     #[serde(default = "default_learner")]
     pub learner: SupervisedLearner,
+    /// Over what the colours are scaled.
+    #[serde(default)]
+    pub colours: ColourRange,
+    /// Show each frame's change since the grasp's first frame instead of its pressures.
+    #[serde(default)]
+    pub change: bool,
     #[serde(skip)]
     carry: f64,
 }
@@ -35,6 +98,8 @@ impl Default for Replay {
             speed: 1.0,
             stat: 0,
             learner: default_learner(),
+            colours: ColourRange::Session,
+            change: false,
             carry: 0.0,
         }
     }
@@ -180,8 +245,48 @@ impl Replay {
                 _ => "reading below rest".into(),
             })
             .unwrap_or_default();
-        let cell = Vec2::new(130.0, 170.0);
-        ui.horizontal_wrapped(|ui| {
+        ui.horizontal(|ui| {
+            ComboBox::from_label("Colour range")
+                .selected_text(self.colours.text())
+                .show_ui(ui, |ui| {
+                    for c in ColourRange::ALL {
+                        ui.selectable_value(&mut self.colours, c, c.text());
+                    }
+                });
+            ui.checkbox(&mut self.change, "Change since the first frame");
+        });
+        let values = frame_values(session, g, self.frame, self.change);
+        let range = match (self.colours, self.change) {
+            (ColourRange::Session, false) => s.pressure_range,
+            (ColourRange::Session, true) => {
+                let m = s.pressure_range.1 - s.pressure_range.0;
+                (-m, m)
+            }
+            (ColourRange::Grasp, _) => span((0..n).flat_map(|f| {
+                frame_values(session, g, f, self.change)
+                    .into_iter()
+                    .flatten()
+            })),
+            (ColourRange::Frame, _) => span(values.iter().flatten().copied()),
+        };
+        // A change is signed: diverging colours centred on no change.
+        let (map, range) = if self.change {
+            let m = range.0.abs().max(range.1.abs()).max(1e-9);
+            (ColorMap::Diverging, (-m, m))
+        } else {
+            (ColorMap::Viridis, range)
+        };
+        // The heatmaps grow with the tile: one column per sensor, beside a colour bar.
+        let sensors = session.sensors.len().max(1) as f32;
+        let width = ((ui.available_width() - 140.0) / sensors - 8.0).clamp(60.0, 420.0);
+        let height = (width * 1.3).min((ui.available_height() * 0.45).max(120.0));
+        let cell = Vec2::new(width, height);
+        let title = format!(
+            "{} ({} range)",
+            if self.change { "change" } else { "pressure" },
+            self.colours.text()
+        );
+        ui.horizontal(|ui| {
             for (k, sensor) in session.sensors.iter().enumerate() {
                 ui.vertical(|ui| {
                     ui.label(format!(
@@ -189,11 +294,10 @@ impl Replay {
                         sensor.name,
                         sensor.layout.taxel_count()
                     ));
-                    let p = session.frame_pressures(f, k);
-                    sensor_heatmap(ui, sensor, &p, s.pressure_range, cell);
+                    sensor_heatmap(ui, sensor, &values[k], range, map, cell);
                 });
             }
-            colour_bar(ui, s.pressure_range, "pressure", &unit, cell.y + 20.0);
+            colour_bar(ui, range, map, &title, &unit, cell.y + 20.0);
         });
         let trace = trace.filter(|t| {
             t.session == session.meta.name && t.grasp == grasp && t.learner == self.learner
