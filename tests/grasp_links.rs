@@ -339,7 +339,7 @@ fn contingency_cells_partition_the_grasps() {
     let params = ClusteringParams {
         learner: UnsupervisedLearner::Du,
         features: FeatureSet::Tactile,
-        thresholds: vec![0.3, 0.7],
+        thresholds: vec![0.4, 0.7],
         reps: 1,
         baseline_max_k: 0,
         ..ClusteringParams::default()

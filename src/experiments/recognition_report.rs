@@ -648,6 +648,65 @@ mod tests {
     }
 
     #[test]
+    fn contingency_links_follow_the_clusters_reordered_by_majority_class() {
+        use crate::experiments::clustering::ClusteringParams;
+        // Cluster 0 holds class 1, cluster 1 class 2, cluster 2 class 0: the columns show
+        // clusters 3, 1, 2.
+        let labels = vec![0, 1, 1, 2, 0, 2, 0];
+        let assignment = vec![2, 0, 0, 1, 2, 1, 0];
+        let run = ClusteringRun {
+            threshold: 0.5,
+            rep: 0,
+            clusters: 3,
+            effective: 3,
+            purity: 0.0,
+            ari: 0.0,
+            nmi: 0.0,
+            learn_step_us: 0.0,
+            assignment: Some(assignment.clone()),
+        };
+        let r = ClusteringResult {
+            params: ClusteringParams::default(),
+            runs: vec![run],
+            sweep: Vec::new(),
+            by_effective: Vec::new(),
+            kmeans: Vec::new(),
+            som: Vec::new(),
+            at_10: None,
+            kmeans_at_10: None,
+            som_at_10: None,
+            som_setup: Default::default(),
+            wall_seconds: 0.0,
+            labels: labels.clone(),
+            class_names: vec!["a".into(), "b".into(), "c".into()],
+        };
+        let (details, links) = clustering_details(&r);
+        let FigureKind::Heatmap(h) = &details[0].items[0].1.kind else {
+            panic!("a heatmap");
+        };
+        assert_eq!(h.columns, ["3", "1", "2"]);
+        let l = &links[0];
+        assert_eq!(
+            (l.figure.as_str(), l.detail),
+            ("scores-vs-threshold", Some(0))
+        );
+        let mut all: Vec<usize> = Vec::new();
+        for item in &l.items {
+            let [row, col] = item.at;
+            assert_eq!(item.grasps.len() as f64, h.values[row][col]);
+            for &g in &item.grasps {
+                assert_eq!(labels[g], row);
+                assert_eq!((assignment[g] + 1).to_string(), h.columns[col]);
+            }
+            all.extend(&item.grasps);
+        }
+        all.sort_unstable();
+        assert_eq!(all, (0..labels.len()).collect::<Vec<_>>());
+        assert_eq!(l.item([0, 1]).unwrap().text, "a in cluster 1: 1 grasp");
+        assert_eq!(l.item([0, 0]).unwrap().grasps, vec![0, 4]);
+    }
+
+    #[test]
     fn the_comparison_overlays_a_sessions_models_and_the_offline_svm() {
         let ds = result(AnalysisKind::Recognition, "DS, all features", "a");
         let gs = result(AnalysisKind::Recognition, "GS, all features", "a");
