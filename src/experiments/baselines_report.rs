@@ -151,5 +151,7 @@ pub fn baselines_report(session: &str, r: &BaselinesResult, train_seconds: f64) 
         created: now_unix(),
         figures,
         details: Vec::new(),
+        links: Vec::new(),
+        grasp_codes: Vec::new(),
     }
 }

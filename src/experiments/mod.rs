@@ -3,6 +3,7 @@
 
 pub mod baselines_report;
 pub mod clustering;
+pub mod links;
 pub mod recognition;
 pub mod recognition_report;
 pub mod report;

@@ -157,6 +157,9 @@ pub struct RepetitionResult {
     pub early: Vec<f64>,
     /// Counts [true class][predicted class] over every predicted grasp.
     pub confusion: Vec<Vec<usize>>,
+    /// Every predicted grasp, in the order predicted.
+    #[serde(default)]
+    pub predictions: Vec<Prediction>,
     /// Learned lengthscales [class][feature] at the end.
     pub lengthscales: Vec<Vec<f64>>,
     /// Seconds spent predicting / training and the steps each covered.
@@ -164,6 +167,15 @@ pub struct RepetitionResult {
     pub predict_steps: usize,
     pub train_seconds: f64,
     pub train_steps: usize,
+}
+
+/// One prediction of a repetition (classes index `RecognitionResult::classes`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Prediction {
+    /// Index into `Session::grasps`.
+    pub grasp: usize,
+    pub truth: usize,
+    pub predicted: usize,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -322,6 +334,7 @@ fn run_repetition(
     let n_train = order.len() - n_test;
     let mut hits = Vec::with_capacity(order.len());
     let mut confusion = vec![vec![0usize; n_classes]; n_classes];
+    let mut predictions = Vec::with_capacity(order.len());
     let mut early_hits = vec![Vec::new(); params.early_fractions.len()];
     for (i, &g) in order.iter().enumerate() {
         let seq = seqs[g].view();
@@ -332,6 +345,11 @@ fn run_repetition(
         let pred = learner.decide(dist.view());
         hits.push(pred == labels[g]);
         confusion[labels[g]][pred] += 1;
+        predictions.push(Prediction {
+            grasp: g,
+            truth: labels[g],
+            predicted: pred,
+        });
         if i < n_train {
             let t0 = Instant::now();
             learner.train_sequence(seq, labels[g]);
@@ -352,6 +370,7 @@ fn run_repetition(
         trial_sets: hits.chunks(set_len).map(accuracy).collect(),
         early: early_hits.iter().map(|h| accuracy(h)).collect(),
         confusion,
+        predictions,
         lengthscales: lengthscales(learner.as_ref())
             .rows()
             .into_iter()

@@ -7,6 +7,7 @@
 use std::collections::BTreeMap;
 
 use super::clustering::{ClusteringResult, ClusteringRun, EffectivePoint, UnsupervisedLearner};
+use super::links::{GraspLinks, grasps_text};
 use super::recognition::{MeanSd, RecognitionResult, SupervisedLearner};
 use super::report::{AnalysisKind, AnalysisResult, FigureDetails, now_unix};
 use crate::features::sequence::FeatureSet;
@@ -179,6 +180,28 @@ pub fn recognition_report(session: &str, r: &RecognitionResult) -> AnalysisResul
         ));
     }
 
+    // Confusion cell [true, predicted] → its grasps over every repetition, the grasps
+    // predicted so most often first.
+    let class = |c: usize| r.classes.get(c).map_or("?", String::as_str);
+    let confusion_links = GraspLinks::from_observations(
+        "confusion",
+        None,
+        r.repetitions
+            .iter()
+            .flat_map(|rep| &rep.predictions)
+            .filter(|x| x.truth < n && x.predicted < n)
+            .map(|x| ([x.truth, x.predicted], x.grasp)),
+        |[t, p], grasps, predictions| {
+            format!(
+                "true {}, predicted {}: {predictions} prediction{} of {}",
+                class(t),
+                class(p),
+                if predictions == 1 { "" } else { "s" },
+                grasps_text(grasps)
+            )
+        },
+    );
+
     let mean_train: f64 =
         r.repetitions.iter().map(|x| x.train_seconds).sum::<f64>() / reps.max(1) as f64;
     let mut parameters = common_parameters(learner, p.features, reps, p.seed);
@@ -208,6 +231,8 @@ pub fn recognition_report(session: &str, r: &RecognitionResult) -> AnalysisResul
         created: now_unix(),
         figures,
         details: Vec::new(),
+        links: vec![confusion_links],
+        grasp_codes: Vec::new(),
     }
 }
 
@@ -362,6 +387,7 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
             p.gu_min_grasps.to_string(),
         );
     }
+    let (details, links) = clustering_details(r);
     AnalysisResult {
         kind: AnalysisKind::Clustering,
         label,
@@ -373,33 +399,58 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
         predict_seconds_per_sample: None,
         created: now_unix(),
         figures,
-        details: clustering_details(r),
+        details,
+        links,
+        grasp_codes: Vec::new(),
     }
 }
 
 /// The clustering of the first order at every threshold, selected by the threshold marker
-/// on Fig. 11: true classes against clusters, counted in grasps.
-fn clustering_details(r: &ClusteringResult) -> Vec<FigureDetails> {
-    let items: Vec<(f64, Figure)> = r
+/// on Fig. 11: true classes against clusters, counted in grasps; with the grasps behind
+/// each cell.
+fn clustering_details(r: &ClusteringResult) -> (Vec<FigureDetails>, Vec<GraspLinks>) {
+    let figure = "scores-vs-threshold";
+    let (items, links): (Vec<(f64, Figure)>, Vec<GraspLinks>) = r
         .runs
         .iter()
         .filter_map(|run| {
             let a = run.assignment.as_ref()?;
-            (a.len() == r.labels.len() && !a.is_empty())
-                .then(|| (run.threshold, contingency(r, run, a)))
+            (a.len() == r.labels.len() && !a.is_empty()).then_some((run, a))
         })
-        .collect();
+        .enumerate()
+        .map(|(i, (run, a))| {
+            let (f, links) = contingency(r, run, a, figure, i);
+            ((run.threshold, f), links)
+        })
+        .unzip();
     if items.is_empty() {
-        return Vec::new();
+        return (Vec::new(), Vec::new());
     }
-    vec![FigureDetails {
-        figure: "scores-vs-threshold".into(),
+    let details = vec![FigureDetails {
+        figure: figure.into(),
         selector: "novelty threshold".into(),
         items,
-    }]
+    }];
+    (details, links)
 }
 
-fn contingency(r: &ClusteringResult, run: &ClusteringRun, assignment: &[usize]) -> Figure {
+fn contingency_row(r: &ClusteringResult, l: usize) -> String {
+    r.class_names
+        .get(l)
+        .cloned()
+        .unwrap_or_else(|| format!("class {}", l + 1))
+}
+
+/// The class × cluster contingency of one run's assignment (session order), and its links
+/// as item `detail` of figure `name`'s details: every grasp in its class's row and its
+/// cluster's column.
+fn contingency(
+    r: &ClusteringResult,
+    run: &ClusteringRun,
+    assignment: &[usize],
+    name: &str,
+    detail: usize,
+) -> (Figure, GraspLinks) {
     let classes = r
         .class_names
         .len()
@@ -425,15 +476,29 @@ fn contingency(r: &ClusteringResult, run: &ClusteringRun, assignment: &[usize]) 
         .iter()
         .map(|row| order.iter().map(|&c| row[c]).collect())
         .collect();
-    let rows = (0..classes)
-        .map(|l| {
-            r.class_names
-                .get(l)
-                .cloned()
-                .unwrap_or_else(|| format!("class {}", l + 1))
-        })
-        .collect();
-    Figure::new(
+    let mut column_of = vec![0; clusters.len()];
+    for (j, &c) in order.iter().enumerate() {
+        column_of[c] = j;
+    }
+    let cells = r
+        .labels
+        .iter()
+        .zip(assignment)
+        .enumerate()
+        .filter_map(|(g, (&l, a))| {
+            let c = clusters.binary_search(a).ok()?;
+            Some(([l, column_of[c]], g))
+        });
+    let links = GraspLinks::from_observations(name, Some(detail), cells, |[l, j], grasps, _| {
+        format!(
+            "{} in cluster {}: {}",
+            contingency_row(r, l),
+            clusters[order[j]] + 1,
+            grasps_text(grasps)
+        )
+    });
+    let rows = (0..classes).map(|l| contingency_row(r, l)).collect();
+    let figure = Figure::new(
         format!("Clustering at novelty threshold {}", run.threshold),
         FigureKind::Heatmap(Heatmap {
             x: AxisTitle {
@@ -458,7 +523,8 @@ fn contingency(r: &ClusteringResult, run: &ClusteringRun, assignment: &[usize]) 
     .subtitle(format!(
         "first order: {} clusters created, {} effective; purity {:.3}, ARI {:.3}, NMI {:.3}",
         run.clusters, run.effective, run.purity, run.ari, run.nmi
-    ))
+    ));
+    (figure, links)
 }
 
 /// Fig. 6 across models: the accuracy-as-trials-progress curve of every recognition result
@@ -576,7 +642,68 @@ mod tests {
             created: 0,
             figures: vec![("accuracy-by-trials".into(), curve)],
             details: Vec::new(),
+            links: Vec::new(),
+            grasp_codes: Vec::new(),
         }
+    }
+
+    #[test]
+    fn contingency_links_follow_the_clusters_reordered_by_majority_class() {
+        use crate::experiments::clustering::ClusteringParams;
+        // Cluster 0 holds class 1, cluster 1 class 2, cluster 2 class 0: the columns show
+        // clusters 3, 1, 2.
+        let labels = vec![0, 1, 1, 2, 0, 2, 0];
+        let assignment = vec![2, 0, 0, 1, 2, 1, 0];
+        let run = ClusteringRun {
+            threshold: 0.5,
+            rep: 0,
+            clusters: 3,
+            effective: 3,
+            purity: 0.0,
+            ari: 0.0,
+            nmi: 0.0,
+            learn_step_us: 0.0,
+            assignment: Some(assignment.clone()),
+        };
+        let r = ClusteringResult {
+            params: ClusteringParams::default(),
+            runs: vec![run],
+            sweep: Vec::new(),
+            by_effective: Vec::new(),
+            kmeans: Vec::new(),
+            som: Vec::new(),
+            at_10: None,
+            kmeans_at_10: None,
+            som_at_10: None,
+            som_setup: Default::default(),
+            wall_seconds: 0.0,
+            labels: labels.clone(),
+            class_names: vec!["a".into(), "b".into(), "c".into()],
+        };
+        let (details, links) = clustering_details(&r);
+        let FigureKind::Heatmap(h) = &details[0].items[0].1.kind else {
+            panic!("a heatmap");
+        };
+        assert_eq!(h.columns, ["3", "1", "2"]);
+        let l = &links[0];
+        assert_eq!(
+            (l.figure.as_str(), l.detail),
+            ("scores-vs-threshold", Some(0))
+        );
+        let mut all: Vec<usize> = Vec::new();
+        for item in &l.items {
+            let [row, col] = item.at;
+            assert_eq!(item.grasps.len() as f64, h.values[row][col]);
+            for &g in &item.grasps {
+                assert_eq!(labels[g], row);
+                assert_eq!((assignment[g] + 1).to_string(), h.columns[col]);
+            }
+            all.extend(&item.grasps);
+        }
+        all.sort_unstable();
+        assert_eq!(all, (0..labels.len()).collect::<Vec<_>>());
+        assert_eq!(l.item([0, 1]).unwrap().text, "a in cluster 1: 1 grasp");
+        assert_eq!(l.item([0, 0]).unwrap().grasps, vec![0, 4]);
     }
 
     #[test]

@@ -8,6 +8,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+pub use super::links::{GraspCode, GraspLinks, LinkedItem, PatchCode};
 use crate::figures::{Figure, FigureEntry, FigureSet};
 use crate::fsutil;
 
@@ -61,6 +62,13 @@ pub struct AnalysisResult {
     /// Figures a view shows on demand when the user selects part of a figure.
     #[serde(default)]
     pub details: Vec<FigureDetails>,
+    /// The grasps behind the parts of figures and detail figures (confusion cells, basis
+    /// images, contingency cells).
+    #[serde(default)]
+    pub links: Vec<GraspLinks>,
+    /// Grasp stability: the model's view of every grasp of the session.
+    #[serde(default)]
+    pub grasp_codes: Vec<GraspCode>,
 }
 
 /// Detail figures selected by interacting with one of a result's figures: a click on an
@@ -94,6 +102,44 @@ impl AnalysisResult {
     /// The detail figures selected through figure `name`, if it has any.
     pub fn details_of(&self, name: &str) -> Option<&FigureDetails> {
         self.details.iter().find(|d| d.figure == name)
+    }
+
+    /// The links of figure `name` (`detail`: of that item of its detail figures).
+    pub fn links_of(&self, name: &str, detail: Option<usize>) -> Option<&GraspLinks> {
+        self.links
+            .iter()
+            .find(|l| l.figure == name && l.detail == detail)
+    }
+
+    /// The grasp-stability model's view of session grasp `grasp`.
+    pub fn grasp_code(&self, grasp: usize) -> Option<&GraspCode> {
+        self.grasp_codes.iter().find(|c| c.grasp == grasp)
+    }
+
+    /// Whether every link names a figure (or detail item) of this result and a part it has.
+    fn check_links(&self) -> Result<(), String> {
+        for l in &self.links {
+            let figure = match l.detail {
+                None => self
+                    .figures
+                    .iter()
+                    .find(|(n, _)| *n == l.figure)
+                    .map(|(_, f)| f),
+                Some(i) => self
+                    .details_of(&l.figure)
+                    .and_then(|d| d.items.get(i))
+                    .map(|(_, f)| f),
+            };
+            let Some(figure) = figure else {
+                return Err(format!(
+                    "links name figure `{}`{} which the result does not have",
+                    l.figure,
+                    l.detail.map_or(String::new(), |i| format!(", detail {i}"))
+                ));
+            };
+            l.check_against(figure)?;
+        }
+        Ok(())
     }
 }
 
@@ -262,6 +308,8 @@ impl Project {
                 f.validate()
                     .map_err(|e| read(format!("`results[{i}]` ({}): {e}", r.label)))?;
             }
+            r.check_links()
+                .map_err(|e| read(format!("`results[{i}]` ({}): {e}", r.label)))?;
         }
         Ok(project)
     }
@@ -381,6 +429,8 @@ mod tests {
                 ),
             )],
             details: Vec::new(),
+            links: Vec::new(),
+            grasp_codes: Vec::new(),
         }
     }
 
@@ -465,6 +515,75 @@ mod tests {
         json.as_object_mut().unwrap().remove("details");
         let back: AnalysisResult = serde_json::from_value(json).unwrap();
         assert!(back.details.is_empty());
+    }
+
+    #[test]
+    fn links_must_name_a_part_of_a_figure_and_older_projects_load_without_them() {
+        use crate::figures::{AxisTitle, ColorScale, FigureKind, Heatmap};
+        let path = Path::new("linked.json");
+        let mut r = result();
+        let title = |t: &str| AxisTitle {
+            title: t.into(),
+            unit: String::new(),
+        };
+        r.figures.push((
+            "confusion".into(),
+            Figure::new(
+                "Confusion",
+                FigureKind::Heatmap(Heatmap {
+                    x: title("predicted"),
+                    y: title("true"),
+                    columns: vec!["a".into(), "b".into(), "c".into()],
+                    rows: vec!["a".into(), "b".into()],
+                    values: vec![vec![1.0, 0.0, 0.0], vec![0.0, 1.0, 0.0]],
+                    colors: ColorScale::viridis("share", ""),
+                    annotate: false,
+                    marked: Vec::new(),
+                }),
+            ),
+        ));
+        let link = |figure: &str, at: [usize; 2]| GraspLinks {
+            figure: figure.into(),
+            detail: None,
+            items: vec![LinkedItem {
+                at,
+                grasps: vec![3],
+                text: "true a, predicted c: 1 grasp".into(),
+            }],
+        };
+        let parse = |r: &AnalysisResult| {
+            let text = serde_json::to_string(&Project::new(Vec::new(), vec![r.clone()])).unwrap();
+            Project::parse(&text, path)
+        };
+        r.links = vec![link("confusion", [0, 2])];
+        let back = parse(&r).unwrap();
+        assert_eq!(back.results[0].links, r.links);
+        assert_eq!(
+            back.results[0]
+                .links_of("confusion", None)
+                .unwrap()
+                .item([0, 2])
+                .unwrap()
+                .grasps,
+            vec![3]
+        );
+        for (bad, why) in [
+            (link("confusion", [2, 0]), "no part [2, 0]"),
+            (link("confusion", [1, 3]), "no part [1, 3]"),
+            (link("accuracy", [0, 0]), "no part [0, 0]"),
+            (link("nothing", [0, 0]), "figure `nothing`"),
+        ] {
+            r.links = vec![bad];
+            let e = parse(&r).unwrap_err().to_string();
+            assert!(e.starts_with("linked.json: `results[0]`"), "{e}");
+            assert!(e.contains(why), "{e}");
+        }
+        let mut json = serde_json::to_value(result()).unwrap();
+        let fields = json.as_object_mut().unwrap();
+        fields.remove("links");
+        fields.remove("grasp_codes");
+        let back: AnalysisResult = serde_json::from_value(json).unwrap();
+        assert!(back.links.is_empty() && back.grasp_codes.is_empty());
     }
 
     #[test]

@@ -169,5 +169,7 @@ pub fn robustness_report(session: &str, r: &RobustnessResult) -> AnalysisResult 
         created: now_unix(),
         figures,
         details: Vec::new(),
+        links: Vec::new(),
+        grasp_codes: Vec::new(),
     }
 }

@@ -17,6 +17,7 @@ use ndarray::{Array2, ArrayView1, ArrayView2};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use super::links::{GraspCode, PatchCode};
 use crate::features::{KeyFramePatches, PatchError, PatchScaling, Standardizer};
 use crate::jobs::Progress;
 use crate::session::{Layout, Session};
@@ -103,6 +104,8 @@ pub struct StabilityData {
     pub failure_name: String,
     /// Layout of the first sensor (used to draw basis images).
     pub layout: Option<Layout>,
+    /// Index into `Session::grasps` of every grasp.
+    pub grasp_ids: Vec<usize>,
 }
 
 impl StabilityData {
@@ -192,6 +195,7 @@ impl StabilityData {
             success_name,
             failure_name: ls.classes[failure].clone(),
             layout: session.sensors.first().map(|s| s.layout.clone()),
+            grasp_ids: (0..session.grasps.len()).collect(),
         };
         data.check()?;
         Ok(data)
@@ -226,6 +230,7 @@ impl StabilityData {
             patches,
             labels: grasps.iter().map(|&g| self.labels[g]).collect(),
             objects: grasps.iter().map(|&g| self.objects[g]).collect(),
+            grasp_ids: grasps.iter().map(|&g| self.grasp_ids[g]).collect(),
             ..self.clone()
         };
         data.check()?;
@@ -1100,6 +1105,54 @@ pub fn analyse(
     })
 }
 
+/// Every grasp as a model sees it: each patch coded on `dict` with `gamma`, its
+/// reconstruction, and the prediction and decision value of the cross validation `cv` (run
+/// on these codes) from the fold that tested the grasp.
+pub fn grasp_codes(
+    data: &StabilityData,
+    dict: &Dictionary,
+    gamma: f64,
+    cv: &CvResult,
+) -> Result<Vec<GraspCode>, StabilityError> {
+    let n = data.grasp_count();
+    if cv.predictions.len() != n || cv.decisions.len() != n {
+        return Err(StabilityError::Data(format!(
+            "a cross validation of {} grasps for {n} grasps",
+            cv.predictions.len()
+        )));
+    }
+    let codes = dict.encode(data.x.view(), gamma)?;
+    let s = data.sensor_count();
+    let class = |failure: bool| {
+        if failure {
+            data.failure_name.clone()
+        } else {
+            data.success_name.clone()
+        }
+    };
+    Ok((0..n)
+        .map(|g| GraspCode {
+            grasp: data.grasp_ids[g],
+            truth: class(data.labels[g]),
+            predicted: class(cv.predictions[g]),
+            decision: cv.decisions[g],
+            patches: (0..s)
+                .map(|sensor| {
+                    let r = g * s + sensor;
+                    let rec = reconstruction_of(data, dict, g, sensor, data.x.row(r), codes.row(r));
+                    PatchCode {
+                        sensor,
+                        patch: rec.patch,
+                        terms: rec.terms,
+                        reconstruction: rec.reconstruction,
+                        relative_error: rec.relative_error,
+                    }
+                })
+                .collect(),
+        })
+        .collect())
+}
+
 // ---------------------------------------------------------------------------------------
 // The whole pipeline
 // ---------------------------------------------------------------------------------------
@@ -1164,6 +1217,16 @@ pub struct StabilityReport {
     pub analyses: Analyses,
     /// The recommended model trained on every grasp.
     pub model: StabilityModel,
+    /// Index into `Session::grasps` of every grasp, in the order of the cross validations'
+    /// predictions.
+    #[serde(default)]
+    pub grasp_ids: Vec<usize>,
+    /// true = failure, per grasp (in the order of `grasp_ids`).
+    #[serde(default)]
+    pub labels: Vec<bool>,
+    /// Every grasp as the recommended model sees it, with its k-fold prediction.
+    #[serde(default)]
+    pub grasp_codes: Vec<GraspCode>,
     pub secs: f64,
 }
 
@@ -1225,6 +1288,7 @@ pub fn run(
     }
     let baseline = baseline(data, s, opts.kfold, opts.objects)?;
     let analyses = analyse(data, pars_cfg, &pd)?;
+    let codes = grasp_codes(data, &pd, pars_cfg.gamma, &parsimonious.kfold)?;
     let model = StabilityModel::train(data, pars_cfg, pd, &s.svm)?;
     Ok(StabilityReport {
         session: data.session_name.clone(),
@@ -1253,6 +1317,9 @@ pub fn run(
         baseline,
         analyses,
         model,
+        grasp_ids: data.grasp_ids.clone(),
+        labels: data.labels.clone(),
+        grasp_codes: codes,
         secs: start.elapsed().as_secs_f64(),
     })
 }

@@ -6,6 +6,7 @@
 
 use std::collections::BTreeMap;
 
+use super::links::{GraspLinks, basis_links, grasps_text};
 use super::report::{AnalysisKind, AnalysisResult, FigureDetails, distinct_sorted, now_unix};
 use super::stability::{BasisUsage, GridImage as PatchImage, StabilityReport};
 use crate::figures::{
@@ -114,6 +115,40 @@ fn basis_detail(u: &BasisUsage, b: usize, ok: &str, bad: &str) -> Figure {
         at(&u.mean_abs_coef_success),
         at(&u.mean_abs_coef_failure),
         at(&u.coefficient_differential),
+    ))
+}
+
+/// Confusion cell [true class, predicted class] (0 = success, 1 = failure, as the map's
+/// rows and columns) → the session grasps in it. None for a report without its grasps.
+fn confusion_links(
+    figure: &str,
+    r: &StabilityReport,
+    cv: &CvResult,
+    ok: &str,
+    bad: &str,
+) -> Option<GraspLinks> {
+    let n = cv.predictions.len();
+    if r.grasp_ids.len() != n || r.labels.len() != n {
+        return None;
+    }
+    let class = |failure: usize| if failure == 1 { bad } else { ok };
+    Some(GraspLinks::from_observations(
+        figure,
+        None,
+        (0..n).map(|i| {
+            (
+                [r.labels[i] as usize, cv.predictions[i] as usize],
+                r.grasp_ids[i],
+            )
+        }),
+        |[t, p], grasps, _| {
+            format!(
+                "true {}, predicted {}: {}",
+                class(t),
+                class(p),
+                grasps_text(grasps)
+            )
+        },
     ))
 }
 
@@ -400,6 +435,37 @@ pub fn stability_report(r: &StabilityReport) -> AnalysisResult {
         })
         .collect();
 
+    let mut links: Vec<GraspLinks> = [
+        ("confusion-kfold", &p.kfold),
+        ("confusion-objects", &p.objects),
+    ]
+    .into_iter()
+    .filter_map(|(name, cv)| confusion_links(name, r, cv, ok, bad))
+    .collect();
+    // Image i of each basis grid shows the i-th basis that has such an image.
+    let raw_bases: Vec<usize> = r
+        .analyses
+        .basis_images
+        .iter()
+        .filter(|b| b.raw.is_some())
+        .map(|b| b.basis)
+        .collect();
+    let filtered_bases: Vec<usize> = r
+        .analyses
+        .basis_images
+        .iter()
+        .filter(|b| b.filtered.is_some())
+        .map(|b| b.basis)
+        .collect();
+    for (name, bases) in [
+        ("bases-raw", &raw_bases),
+        ("bases-filtered", &filtered_bases),
+    ] {
+        if figures.iter().any(|(n, _)| n == name) {
+            links.push(basis_links(name, bases, &r.grasp_codes));
+        }
+    }
+
     let train = p.dictionary_secs;
     let parameters = BTreeMap::from([
         ("num_bases".to_string(), cfg.num_bases.to_string()),
@@ -457,5 +523,7 @@ pub fn stability_report(r: &StabilityReport) -> AnalysisResult {
         created: now_unix(),
         figures,
         details,
+        links,
+        grasp_codes: r.grasp_codes.clone(),
     }
 }

@@ -201,6 +201,10 @@ pub struct CvResult {
     pub fold_wsr_se: f64,
     /// Predicted label of every sample (from the fold that tested it).
     pub predictions: Vec<bool>,
+    /// SVM decision value of every sample from the fold that tested it: positive = failure
+    /// (label true), so `predictions[i] == (decisions[i] > 0)`.
+    #[serde(default)]
+    pub decisions: Vec<f64>,
 }
 
 /// Train on each fold's complement, test on the fold (folds in parallel; the numbers do
@@ -226,7 +230,7 @@ pub fn cross_validate(
         super::linear::Solver::PrimalNewton => Some(params.fit(x, y)?),
         _ => None,
     };
-    type FoldOut = Result<(FoldScore, Vec<(usize, bool)>), SvmError>;
+    type FoldOut = Result<(FoldScore, Vec<(usize, bool, f64)>), SvmError>;
     let per_fold: Vec<FoldOut> = (0..folds.count)
         .into_par_iter()
         .map(|f| {
@@ -237,8 +241,10 @@ pub fn cross_validate(
             let mut p = params.clone();
             p.seed = Rng::stream(params.seed, f as u64).next_u64();
             let model = p.fit_from(xt.view(), &yt, warm.as_ref())?;
-            let preds: Vec<(usize, bool)> =
-                test.iter().map(|&i| (i, model.predict(x.row(i)))).collect();
+            let preds: Vec<(usize, bool, f64)> = test
+                .iter()
+                .map(|&i| (i, model.predict(x.row(i)), model.decision(x.row(i))))
+                .collect();
             let truth: Vec<bool> = test.iter().map(|&i| y[i]).collect();
             let pred: Vec<bool> = preds.iter().map(|p| p.1).collect();
             let confusion = Confusion::from_predictions(&truth, &pred);
@@ -256,12 +262,14 @@ pub fn cross_validate(
         .collect();
     let mut fold_scores = Vec::with_capacity(folds.count);
     let mut predictions = vec![false; n];
+    let mut decisions = vec![0.0; n];
     let mut confusion = Confusion::default();
     for r in per_fold {
         let (score, preds) = r?;
         confusion.add(&score.confusion);
-        for (i, p) in preds {
+        for (i, p, d) in preds {
             predictions[i] = p;
+            decisions[i] = d;
         }
         fold_scores.push(score);
     }
@@ -280,6 +288,7 @@ pub fn cross_validate(
         fold_wsr_mean,
         fold_wsr_se,
         predictions,
+        decisions,
     })
 }
 
