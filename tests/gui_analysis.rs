@@ -10,6 +10,7 @@ use std::time::{Duration, Instant};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use tactile_workbench::app::{View, WorkbenchApp};
+use tactile_workbench::figures::FigureKind;
 
 fn harness() -> Harness<'static, WorkbenchApp> {
     let mut h = common::gui::workbench(1400.0, 1000.0);
@@ -220,6 +221,57 @@ fn recognition_and_clustering_views_show_the_papers_figures() {
         h.query_by_label("Clustering at novelty threshold 0.2")
             .is_none()
     );
+
+    // A class × cluster cell of the contingency selects exactly the grasps of that class the
+    // first order put in that cluster.
+    let r = h.state().analyses.results[1].clone();
+    let item = r.details[0]
+        .items
+        .iter()
+        .position(|(t, _)| *t == 0.3)
+        .unwrap();
+    let (label, row, col) = {
+        let FigureKind::Heatmap(m) = &r.details[0].items[item].1.kind else {
+            panic!("a contingency heatmap");
+        };
+        let (row, col) = (0..m.rows.len())
+            .flat_map(|a| (0..m.columns.len()).map(move |b| (a, b)))
+            .find(|&(a, b)| m.values[a][b] > 0.0)
+            .expect("a non-empty cell");
+        (cell_label(m, row, col), row, col)
+    };
+    let expected = r
+        .links_of("scores-vs-threshold", Some(item))
+        .and_then(|l| l.item([row, col]))
+        .expect("the cell's grasps")
+        .grasps
+        .clone();
+    h.get_by_label(&label).click();
+    h.run_ok();
+    let sel = &h.state().selection;
+    assert_eq!(sel.grasps, expected);
+    let session = &h.state().sessions[sel.session.unwrap()].session;
+    let class = &r.details[0].items[item].1;
+    let FigureKind::Heatmap(m) = &class.kind else {
+        unreachable!()
+    };
+    let set = session.label_set("object").unwrap();
+    for &g in &sel.grasps {
+        let c = session.grasps[g].labels[set];
+        assert_eq!(
+            session.label_sets[set].classes[c], m.rows[row],
+            "grasp {g} is of the row's class"
+        );
+    }
+    h.get_by_label_contains(&format!("Selected: {} grasp", expected.len()));
+}
+
+/// The accessible name of a heatmap cell, as the figure view gives it.
+fn cell_label(m: &tactile_workbench::figures::Heatmap, row: usize, col: usize) -> String {
+    format!(
+        "{} {} × {} {}",
+        m.y.title, m.rows[row], m.x.title, m.columns[col]
+    )
 }
 
 /// Choosing GU offers its own threshold range and the grasps that keep a cluster, and the
@@ -277,7 +329,9 @@ fn stability_view_shows_the_first_papers_figures() {
         ("Coefficient differential", "Coefficient differential"),
         ("Reconstruction", "A patch and its reconstruction"),
     ] {
-        h.get_by_label(tab).click();
+        // The tab strip may scroll in a narrow tile: ask for the tab by name.
+        h.get_by_role_and_label(egui::accesskit::Role::Button, tab)
+            .click_accesskit();
         h.run_ok();
         assert!(h.query_all_by_label(title).count() >= 1, "{title}");
     }
@@ -298,6 +352,61 @@ fn stability_view_shows_the_first_papers_figures() {
     h.get_by_label("Basis 3: usage by label");
     let usage = &h.state().analyses.results[0].details[0].items[2].1;
     assert_eq!(usage.title, "Basis 3: usage by label");
+    // ... and selects the grasps whose codes use it, most first.
+    let r = h.state().analyses.results[0].clone();
+    let sel = h.state().selection.grasps.clone();
+    assert!(!sel.is_empty(), "some grasps use basis 3");
+    for &g in &sel {
+        let code = r.grasp_code(g).unwrap();
+        assert!(
+            code.patches
+                .iter()
+                .any(|p| p.terms.iter().any(|t| t.0 == 2)),
+            "grasp {g} uses basis 3"
+        );
+    }
+    let uses = r
+        .grasp_codes
+        .iter()
+        .filter(|c| c.patches.iter().any(|p| p.terms.iter().any(|t| t.0 == 2)))
+        .count();
+    assert_eq!(sel.len(), uses, "every grasp that uses it");
+
+    // A confusion cell selects exactly its grasps (by the result's predictions), focuses the
+    // first, and the focused grasp's tile shows its reconstruction and decision value.
+    let FigureKind::Heatmap(m) = &r
+        .figures
+        .iter()
+        .find(|(n, _)| n == "confusion-kfold")
+        .unwrap()
+        .1
+        .kind
+    else {
+        panic!("a confusion heatmap");
+    };
+    let (truth, predicted) = (m.rows[1].clone(), m.columns[0].clone());
+    let label = cell_label(m, 1, 0);
+    let expected: Vec<usize> = r
+        .grasp_codes
+        .iter()
+        .filter(|c| c.truth == truth && c.predicted == predicted)
+        .map(|c| c.grasp)
+        .collect();
+    assert!(
+        !expected.is_empty(),
+        "some {truth} grasps are predicted {predicted}"
+    );
+    h.get_by_label(&label).click();
+    h.run_ok();
+    let mut got = h.state().selection.grasps.clone();
+    got.sort_unstable();
+    assert_eq!(got, expected);
+    let (_, g) = h.state().selection.focus.unwrap();
+    assert!(expected.contains(&g));
+    let code = h.state().analyses.results[0].grasp_code(g).unwrap();
+    h.get_by_label(&format!("decision value {:+.3}", code.decision));
+    h.get_by_label(&format!("predicted: {predicted}"));
+    assert!(h.query_all_by_label_contains("reconstruction (").count() >= 1);
 }
 
 #[test]

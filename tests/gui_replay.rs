@@ -105,3 +105,43 @@ fn filters_and_replays_an_object_recognition_grasp() {
     h.get_by_label("20 of 200 grasps");
     assert!(h.query_by_label_contains("sponge #1 ·").is_none());
 }
+
+/// A tile layout the user changed comes back after a restart (through what eframe stores).
+#[test]
+fn a_changed_layout_comes_back_after_a_restart() {
+    use tactile_workbench::app::View;
+    let mut h = harness();
+    h.state_mut().view = View::SpeedAccuracy;
+    h.run_ok();
+    h.get_all_by_label("Maximise").next().unwrap().click();
+    h.run_ok();
+    h.get_by_label("Restore layout");
+    let saved = serde_json::to_string(&h.state().persisted()).unwrap();
+    let persisted = serde_json::from_str(&saved).unwrap();
+    let app = WorkbenchApp::new(&egui::Context::default(), Some(persisted), Vec::new());
+    let mut h2 = common::gui::harness_of(app, 1400.0, 900.0);
+    h2.run_ok();
+    assert_eq!(h2.state().view, View::SpeedAccuracy);
+    h2.get_by_label("Restore layout").click();
+    h2.run_ok();
+    assert_eq!(h2.get_all_by_label("Maximise").count(), 2);
+}
+
+/// A notification shows as a toast, fades after a few seconds, and stays in the log.
+#[test]
+fn a_toast_fades_and_the_log_keeps_it() {
+    let mut h = harness();
+    h.state_mut().analyses.notes.info("exported three figures");
+    h.run_ok();
+    h.get_by_label("exported three figures");
+    // 60 frames a second: seven seconds on, the toast is gone.
+    for _ in 0..420 {
+        h.step();
+    }
+    assert!(h.query_by_label("exported three figures").is_none());
+    h.get_by_label("View").click();
+    h.run_ok();
+    h.get_by_label("Notification log").click();
+    h.run_ok();
+    h.get_by_label("exported three figures");
+}

@@ -45,6 +45,8 @@ pub enum Selection {
     Image(Option<usize>),
     /// A chart carries a marker at this x value (data units) that the pointer drags.
     Marker(f64),
+    /// A heatmap's cells can be clicked; this one (if any) is outlined.
+    Cell(Option<[usize; 2]>),
 }
 
 /// What the user did to a figure this frame.
@@ -55,6 +57,8 @@ pub struct Interaction {
     pub marker_x: Option<f64>,
     /// A marker point of a chart was clicked: (series, point) indices.
     pub clicked_point: Option<(usize, usize)>,
+    /// A heatmap cell was clicked: [row, column].
+    pub clicked_cell: Option<[usize; 2]>,
 }
 
 /// Draw `figure` in the available width, `height` points tall.
@@ -257,7 +261,7 @@ pub fn show(
                 let avail = (ui.available_width() - 180.0 - label_w).max(100.0);
                 let cell = (avail / cols.max(1) as f32)
                     .min((height - 40.0) / rows.max(1) as f32)
-                    .clamp(4.0, 60.0);
+                    .clamp(2.0, 60.0);
                 let size = Vec2::new(label_w + cell * cols as f32, cell * rows as f32 + 40.0);
                 let (rect, response) = ui.allocate_exact_size(size, Sense::hover());
                 let painter = ui.painter_at(rect);
@@ -277,6 +281,32 @@ pub fn show(
                             Color32::from_gray(90)
                         };
                         painter.rect_filled(cr.shrink(0.5), 0.0, fill);
+                        if let Selection::Cell(chosen) = selection {
+                            // Each cell is a button of its own, so it can be found by name.
+                            let cell_response =
+                                ui.interact(cr, ui.scope_id().with((id, r, c)), Sense::click());
+                            let name = format!(
+                                "{} {} × {} {}",
+                                h.y.title,
+                                h.rows.get(r).map_or("", String::as_str),
+                                h.x.title,
+                                h.columns.get(c).map_or("", String::as_str)
+                            );
+                            cell_response.widget_info(|| {
+                                egui::WidgetInfo::labeled(egui::Role::Button, true, &name)
+                            });
+                            if cell_response.clicked() {
+                                interaction.clicked_cell = Some([r, c]);
+                            }
+                            if chosen == Some([r, c]) {
+                                painter.rect_stroke(
+                                    cr.shrink(1.0),
+                                    0.0,
+                                    Stroke::new(3.0, ui.visuals().selection.bg_fill),
+                                    egui::StrokeKind::Inside,
+                                );
+                            }
+                        }
                         if h.marked.contains(&[r, c]) {
                             painter.rect_stroke(
                                 cr.shrink(1.0),

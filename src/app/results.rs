@@ -138,6 +138,9 @@ pub struct Analyses {
     pub shown: std::collections::HashMap<AnalysisKind, usize>,
     /// The detail item selected through a figure: (result index, figure name) -> item.
     pub selected: std::collections::HashMap<(usize, String), usize>,
+    /// The heatmap cell last clicked in a figure: (result index, figure name, detail item)
+    /// -> [row, column].
+    pub cells: std::collections::HashMap<(usize, String, Option<usize>), [usize; 2]>,
     pub export: ExportSettings,
     /// What finished, failed or was exported (toasts and the log).
     pub notes: Notifications,

@@ -19,6 +19,11 @@ pub fn workbench_opening(
     height: f32,
 ) -> Harness<'static, WorkbenchApp> {
     let app = WorkbenchApp::new(&egui::Context::default(), None, files);
+    harness_of(app, width, height)
+}
+
+/// A harness on `app`, returned once two sessions have loaded.
+pub fn harness_of(app: WorkbenchApp, width: f32, height: f32) -> Harness<'static, WorkbenchApp> {
     let mut h = Harness::builder()
         .with_size(egui::Vec2::new(width, height))
         .with_step_dt(1.0 / 60.0)

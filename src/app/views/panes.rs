@@ -8,10 +8,11 @@ use egui_tiles::TileId;
 use super::tiles::{Pane, TileRequest};
 use super::{Cx, Room, number};
 use crate::app::figure_view::{self, Selection as FigureSelection};
+use crate::app::heatmap;
 use crate::app::replay::ReplayAction;
 use crate::app::selection::Command;
-use crate::experiments::report::{AnalysisResult, date_text};
-use crate::figures::{self, Figure};
+use crate::experiments::report::{AnalysisKind, AnalysisResult, date_text};
+use crate::figures::{self, ColorMap, Figure, FigureKind};
 
 /// The file name a figure of result `r` exports under.
 pub fn file_name(r: &AnalysisResult, figure: &str) -> String {
@@ -72,6 +73,12 @@ pub fn pane_ui(
             }
         },
         Pane::Replay => replay_pane(ui, cx),
+        Pane::Grasp => match room.kind().and_then(|k| cx.shown(k)) {
+            Some(i) => grasp_pane(ui, cx, i),
+            None => {
+                ui.label("No result yet.");
+            }
+        },
         Pane::Comparison | Pane::SpeedChart | Pane::Models => {
             ui.label("This pane belongs to another view.");
         }
@@ -132,10 +139,39 @@ fn figure_pane(
     let r = &cx.analyses.results[i];
     let id = format!("{i}-{name}");
     let height = (ui.available_height() - 40.0).max(120.0);
+    let linked_cells =
+        r.links_of(name, None).is_some() && matches!(fig.kind, FigureKind::Heatmap(_));
     let Some(details) = r.details_of(name).filter(|d| !d.items.is_empty()) else {
-        egui::ScrollArea::vertical().id_salt(&id).show(ui, |ui| {
-            figure_view::show(ui, &id, fig, height, FigureSelection::None)
-        });
+        let key = (i, name.to_string(), None);
+        let selection = if linked_cells {
+            FigureSelection::Cell(cx.analyses.cells.get(&key).copied())
+        } else if r.kind == AnalysisKind::Robustness && matches!(fig.kind, FigureKind::Chart(_)) {
+            match &cx.selection.strength {
+                Some((ri, f, x)) if *ri == i && f == name => FigureSelection::Marker(*x),
+                _ => FigureSelection::Marker(f64::NAN),
+            }
+        } else {
+            FigureSelection::None
+        };
+        let act = egui::ScrollArea::vertical()
+            .id_salt(&id)
+            .show(ui, |ui| figure_view::show(ui, &id, fig, height, selection))
+            .inner;
+        if let Some(at) = act.clicked_cell {
+            cx.analyses.cells.insert(key, at);
+            select_linked(cx, i, name, None, at);
+            if let Some(requests) = requests {
+                requests.push(TileRequest::Activate(Pane::Grasp));
+            }
+        }
+        if let Some(x) = act.marker_x {
+            strength_chosen(cx, i, name, x);
+        }
+        if let FigureSelection::Marker(x) = selection
+            && x.is_finite()
+        {
+            strength_values(ui, &cx.analyses.results[i], name, x);
+        }
         return;
     };
     let key = (i, name.to_string());
@@ -166,16 +202,21 @@ fn figure_pane(
     if let Some(x) = act.marker_x {
         sel = details.nearest(x);
     }
-    if act.clicked_image.is_some() {
-        sel = act.clicked_image;
+    if sel.is_none() {
+        ui.small(format!("Click a {} to see it in detail.", details.selector));
+    }
+    if let Some(k) = act.clicked_image {
+        sel = Some(k);
+        cx.commands.push(Command::FocusBasis {
+            result: i,
+            basis: k,
+        });
+        select_linked(cx, i, name, None, [k, 0]);
     }
     if (act.clicked_image.is_some() || act.marker_x.is_some())
         && let Some(requests) = requests
     {
         requests.push(TileRequest::Activate(Pane::Detail(name.to_string())));
-    }
-    if sel.is_none() {
-        ui.small(format!("Click a {} to see it in detail.", details.selector));
     }
     if let Some(k) = sel {
         cx.analyses.selected.insert(key, k);
@@ -212,13 +253,100 @@ fn detail_pane(ui: &mut egui::Ui, cx: &mut Cx, i: usize, name: &str) {
             .export
             .write(detail, &file, &mut cx.analyses.notes);
     }
+    let k = sel.expect("checked above");
     let r = &cx.analyses.results[i];
-    let detail: &Figure =
-        &r.details_of(name).expect("checked above").items[sel.expect("checked above")].1;
+    let detail: &Figure = &r.details_of(name).expect("checked above").items[k].1;
     let id = format!("{i}-{name}-detail");
     let height = (ui.available_height() - 30.0).max(120.0);
-    egui::ScrollArea::vertical().id_salt(&id).show(ui, |ui| {
-        figure_view::show(ui, &id, detail, height, FigureSelection::None)
+    let key = (i, name.to_string(), Some(k));
+    let selection = if r.links_of(name, Some(k)).is_some() {
+        FigureSelection::Cell(cx.analyses.cells.get(&key).copied())
+    } else {
+        FigureSelection::None
+    };
+    let act = egui::ScrollArea::vertical()
+        .id_salt(&id)
+        .show(ui, |ui| {
+            figure_view::show(ui, &id, detail, height, selection)
+        })
+        .inner;
+    if let Some(at) = act.clicked_cell {
+        cx.analyses.cells.insert(key, at);
+        select_linked(cx, i, name, Some(k), at);
+    }
+}
+
+/// Select the grasps behind part `at` of figure `name` (detail item `detail`) of result `i`.
+fn select_linked(cx: &mut Cx, i: usize, name: &str, detail: Option<usize>, at: [usize; 2]) {
+    let r = &cx.analyses.results[i];
+    let Some(session) = cx
+        .sessions
+        .iter()
+        .position(|s| s.session.meta.name == r.session)
+    else {
+        cx.analyses.notes.error(format!(
+            "the session «{}» of this result is not open",
+            r.session
+        ));
+        return;
+    };
+    let n = cx.sessions[session].session.grasps.len();
+    let (grasps, origin) = match r.links_of(name, detail).and_then(|l| l.item(at)) {
+        // Indices come from a file: keep only those the session has.
+        Some(item) => (
+            item.grasps.iter().copied().filter(|&g| g < n).collect(),
+            item.text.clone(),
+        ),
+        None => (Vec::new(), "no grasps".to_string()),
+    };
+    cx.commands.push(Command::SelectGrasps {
+        session,
+        grasps,
+        origin,
+    });
+}
+
+/// A click on a robustness chart chooses the strength nearest to `x` among its points.
+fn strength_chosen(cx: &mut Cx, i: usize, name: &str, x: f64) {
+    let r = &cx.analyses.results[i];
+    let Some((_, fig)) = r.figures.iter().find(|(n, _)| n == name) else {
+        return;
+    };
+    let FigureKind::Chart(c) = &fig.kind else {
+        return;
+    };
+    let nearest = c
+        .series
+        .iter()
+        .flat_map(|s| s.x.iter().copied())
+        .filter(|v| v.is_finite())
+        .min_by(|a, b| (a - x).abs().total_cmp(&(b - x).abs()));
+    if let Some(strength) = nearest {
+        cx.commands.push(Command::Strength {
+            result: i,
+            figure: name.to_string(),
+            strength,
+        });
+    }
+}
+
+/// Each method's score at the chosen strength, under its chart.
+fn strength_values(ui: &mut egui::Ui, r: &AnalysisResult, name: &str, x: f64) {
+    let Some((_, fig)) = r.figures.iter().find(|(n, _)| n == name) else {
+        return;
+    };
+    let FigureKind::Chart(c) = &fig.kind else {
+        return;
+    };
+    ui.horizontal_wrapped(|ui| {
+        ui.strong(format!("At {} {}:", c.x.title, number(x)));
+        for s in &c.series {
+            if let Some(k) = s.x.iter().position(|&v| v == x)
+                && let Some(y) = s.y.get(k)
+            {
+                ui.label(format!("{} {}", s.name, number(*y)));
+            }
+        }
     });
 }
 
@@ -242,6 +370,103 @@ pub fn scores_pane(ui: &mut egui::Ui, r: &AnalysisResult) {
                     ui.end_row();
                 }
             });
+    });
+}
+
+/// The focused grasp under stability result `i`: the SVM's decision against the truth, and
+/// per sensor its key-frame patch beside the reconstruction from the active bases.
+fn grasp_pane(ui: &mut egui::Ui, cx: &mut Cx, i: usize) {
+    let r = &cx.analyses.results[i];
+    let focus = cx.selection.focus.filter(|&(s, _)| {
+        cx.sessions
+            .get(s)
+            .is_some_and(|x| x.session.meta.name == r.session)
+    });
+    let Some((s, g)) = focus else {
+        ui.label(format!(
+            "Focus a grasp of «{}» (click a confusion cell or a basis, or a grasp in the browser).",
+            r.session
+        ));
+        return;
+    };
+    let session = &cx.sessions[s].session;
+    let Some(code) = r.grasp_code(g) else {
+        ui.label("This result has no code for the focused grasp.");
+        return;
+    };
+    let grasp = &session.grasps[g];
+    ui.horizontal_wrapped(|ui| {
+        ui.strong(format!(
+            "{}{}",
+            grasp.object,
+            grasp.trial.map(|t| format!(" #{t}")).unwrap_or_default()
+        ));
+        ui.label(format!("true: {}", code.truth));
+        let right = code.truth == code.predicted;
+        let text = RichText::new(format!("predicted: {}", code.predicted)).strong();
+        ui.label(if right {
+            text
+        } else {
+            text.color(ui.visuals().error_fg_color)
+        });
+        ui.label(format!("decision value {:+.3}", code.decision))
+            .on_hover_text("The SVM's decision from the 10-fold fold that tested this grasp: positive predicts failure");
+    });
+    let n_sensors = code.patches.len().max(1) as f32;
+    let width = ((ui.available_width() - 40.0) / (2.0 * n_sensors) - 8.0).clamp(50.0, 220.0);
+    let size = egui::vec2(width, width * 1.3);
+    egui::ScrollArea::vertical().show(ui, |ui| {
+        ui.horizontal(|ui| {
+            for p in &code.patches {
+                let Some(sensor) = session.sensors.get(p.sensor) else {
+                    continue;
+                };
+                let m = p
+                    .patch
+                    .iter()
+                    .chain(&p.reconstruction)
+                    .fold(1e-9_f64, |m, v| m.max(v.abs()));
+                let range = (-m, m);
+                ui.vertical(|ui| {
+                    ui.label(format!("{}: patch", sensor.name));
+                    heatmap::sensor_heatmap(ui, sensor, &p.patch, range, ColorMap::Diverging, size);
+                });
+                ui.vertical(|ui| {
+                    ui.label(format!(
+                        "reconstruction ({:.0} % error)",
+                        100.0 * p.relative_error
+                    ));
+                    heatmap::sensor_heatmap(
+                        ui,
+                        sensor,
+                        &p.reconstruction,
+                        range,
+                        ColorMap::Diverging,
+                        size,
+                    );
+                });
+            }
+        });
+        ui.label("Active bases and coefficients (z-scored units), largest first:");
+        for p in &code.patches {
+            let name = session
+                .sensors
+                .get(p.sensor)
+                .map_or("sensor", |x| x.name.as_str());
+            let terms: Vec<String> = p
+                .terms
+                .iter()
+                .map(|(b, c)| format!("basis {} {c:+.2}", b + 1))
+                .collect();
+            ui.label(format!(
+                "{name}: {}",
+                if terms.is_empty() {
+                    "none".to_string()
+                } else {
+                    terms.join(", ")
+                }
+            ));
+        }
     });
 }
 

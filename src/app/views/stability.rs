@@ -81,12 +81,17 @@ impl Room for StabilityRoom {
         let f = |n: &str| Pane::Figure(n.to_string());
         vec![
             vec![f("bases-raw"), f("bases-filtered"), f("reconstruction")],
-            vec![f("score-vs-bases"), f("beta-gamma"), Pane::Scores],
+            vec![
+                f("score-vs-bases"),
+                f("beta-gamma"),
+                f("coefficient-differential"),
+                Pane::Scores,
+            ],
             vec![
                 f("usage-differential"),
+                Pane::Grasp,
                 Pane::Detail("bases-raw".into()),
                 f("basis-usage"),
-                f("coefficient-differential"),
             ],
             vec![f("confusion-kfold"), f("confusion-objects"), Pane::Replay],
         ]

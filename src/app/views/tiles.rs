@@ -28,6 +28,9 @@ pub enum Pane {
     Scores,
     /// The replay of the focused grasp.
     Replay,
+    /// The focused grasp as the shown stability model sees it: its key-frame patches, their
+    /// reconstructions and the SVM's decision.
+    Grasp,
     /// Recognition: accuracy as trials progress across every model of the session.
     Comparison,
     /// Speed against accuracy over every result.
@@ -49,6 +52,7 @@ impl Pane {
                 .unwrap_or_else(|| format!("{} detail", words(name))),
             Pane::Scores => "All numbers".into(),
             Pane::Replay => "Replay".into(),
+            Pane::Grasp => "Focused grasp".into(),
             Pane::Comparison => "Accuracy compared".into(),
             Pane::SpeedChart => "Speed vs accuracy".into(),
             Pane::Models => "Models".into(),
@@ -104,6 +108,7 @@ impl Layout {
                     && (matches!(p, Pane::Figure(_)) || r.details_of(name).is_some())
             }
             (Pane::Figure(_) | Pane::Detail(_), None) => false,
+            (Pane::Grasp, _) => result.is_some_and(|r| !r.grasp_codes.is_empty()),
             _ => true,
         };
         let mut groups: Vec<Vec<Pane>> = groups
