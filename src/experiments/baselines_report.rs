@@ -151,5 +151,6 @@ pub fn baselines_report(session: &str, r: &BaselinesResult, train_seconds: f64) 
         created: now_unix(),
         figures,
         details: Vec::new(),
+        model_size: None,
     }
 }

@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 
 use super::clustering::{ClusteringResult, ClusteringRun, EffectivePoint, UnsupervisedLearner};
 use super::recognition::{MeanSd, RecognitionResult, SupervisedLearner};
-use super::report::{AnalysisKind, AnalysisResult, FigureDetails, now_unix};
+use super::report::{AnalysisKind, AnalysisResult, FigureDetails, ModelSize, now_unix};
 use crate::features::sequence::FeatureSet;
 use crate::figures::{
     Axis, AxisTitle, BarGroup, ColorScale, ErrorDisplay, ErrorRange, Figure, FigureKind, Heatmap,
@@ -208,6 +208,16 @@ pub fn recognition_report(session: &str, r: &RecognitionResult) -> AnalysisResul
         created: now_unix(),
         figures,
         details: Vec::new(),
+        model_size: Some(ModelSize {
+            knobs: {
+                let gp = match p.learner {
+                    SupervisedLearner::Ds => &p.ds.gp,
+                    SupervisedLearner::Gs => &p.gs.gp,
+                };
+                format!("capacity {}, tau {}", gp.capacity, gp.tau)
+            },
+            reason: p.size_reason,
+        }),
     }
 }
 
@@ -374,6 +384,7 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
         created: now_unix(),
         figures,
         details: clustering_details(r),
+        model_size: None,
     }
 }
 
@@ -576,6 +587,7 @@ mod tests {
             created: 0,
             figures: vec![("accuracy-by-trials".into(), curve)],
             details: Vec::new(),
+            model_size: None,
         }
     }
 

@@ -169,5 +169,6 @@ pub fn robustness_report(session: &str, r: &RobustnessResult) -> AnalysisResult 
         created: now_unix(),
         figures,
         details: Vec::new(),
+        model_size: None,
     }
 }
