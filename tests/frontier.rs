@@ -157,6 +157,52 @@ fn the_frontier_command_writes_json_and_rejects_unknown_methods() {
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(back.len(), 1);
     assert_eq!(back[0].points.len(), 2);
+    // `recognition --frontier` runs the recommended size and says so.
+    let rec = &back[0].points[back[0].recommended];
+    let out = Command::new(bin)
+        .args([
+            "recognition",
+            "--learner",
+            "ds",
+            "--reps",
+            "2",
+            "--frontier",
+        ])
+        .arg(&json)
+        .arg(common::sample("object-recognition.json"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let expected = format!(
+        "capacity {}, tau {} (recommended)",
+        rec.knob("capacity").unwrap(),
+        rec.knob("tau").unwrap()
+    );
+    assert!(stdout.contains(&expected), "{expected} in {stdout}");
+    let out = Command::new(bin)
+        .args([
+            "recognition",
+            "--learner",
+            "gs",
+            "--reps",
+            "2",
+            "--frontier",
+        ])
+        .arg(&json)
+        .arg(common::sample("object-recognition.json"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("holds no GS frontier on all features"),
+        "{err}"
+    );
     let out = Command::new(bin)
         .args(["frontier", "--method", "svm"])
         .arg(common::sample("object-recognition.json"))
