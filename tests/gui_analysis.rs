@@ -439,6 +439,7 @@ fn a_project_on_the_command_line_reopens_its_sessions_and_shows_its_results() {
         details: Vec::new(),
         links: Vec::new(),
         grasp_codes: Vec::new(),
+        model_size: None,
     };
     let dir = common::temp_dir("gui-project");
     let path = dir.join("saved.json");

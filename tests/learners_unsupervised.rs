@@ -127,3 +127,32 @@ fn thresholds_outside_the_unit_interval_are_errors() {
             .contains("threshold")
     );
 }
+
+#[test]
+fn training_from_the_predicted_q_changes_nothing() {
+    use tactile_workbench::learners::{Ds, DsParams, SequenceClassifier};
+    let (seqs, labels) = data(5);
+    let mut p = DsParams::default();
+    p.gp = small(p.gp);
+    let mut full = Ds::new(2, &p).unwrap();
+    for _ in 0..3 {
+        full.add_class().unwrap();
+    }
+    let mut fast = full.clone();
+    for (s, &c) in seqs.iter().zip(&labels) {
+        full.predict_q_and_p(s.view());
+        full.train_sequence(s.view(), c);
+        let (q, _) = fast.predict_q_and_p(s.view());
+        fast.train_sequence_predicted(s.view(), c, q.view());
+        assert_eq!(full.q(), fast.q());
+    }
+    let mut rng = Rng::new(9);
+    for c in 0..3 {
+        let probe = sequence(c, &mut rng);
+        assert_eq!(
+            full.predict_sequence(probe.view()),
+            fast.predict_sequence(probe.view()),
+            "the experts differ after training"
+        );
+    }
+}

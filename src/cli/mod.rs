@@ -3,6 +3,7 @@
 
 pub mod baselines;
 mod figures;
+pub mod frontier;
 pub mod paper_figures;
 pub mod recognition;
 pub mod robustness;
@@ -93,6 +94,10 @@ pub enum Command {
     /// Where the methods fail: sweep one perturbation at a time (noise, dead taxels, drift,
     /// gain, truncation, ...) and print each method's break point.
     Robustness(robustness::RobustnessArgs),
+    /// Speed against accuracy by model size: sweep a method's size knobs, score each size
+    /// over seeded repetitions, and recommend the cheapest within one standard error of
+    /// the best.
+    Frontier(frontier::FrontierArgs),
 }
 
 /// Run a subcommand.
@@ -111,5 +116,6 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Stability(a) => stability::run(a),
         Command::BenchStability(a) => stability::run_bench(a),
         Command::Robustness(a) => robustness::run(a),
+        Command::Frontier(a) => frontier::run(a),
     }
 }

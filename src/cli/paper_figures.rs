@@ -10,6 +10,8 @@ use crate::cluster::baselines::{BaselinesParams, grid_for, run_baselines};
 use crate::cluster::grasp_features::session_features;
 use crate::experiments::baselines_report::baselines_report;
 use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_clustering};
+use crate::experiments::frontier::{FrontierMethod, FrontierParams, run_frontier};
+use crate::experiments::frontier_report::frontier_figures;
 use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
 use crate::experiments::recognition_report::{
     clustering_report, comparison_figures, recognition_report,
@@ -41,6 +43,10 @@ pub enum Experiment {
     RobustnessStability,
     /// Where DS and GS fail: every perturbation at its default strengths.
     RobustnessRecognition,
+    /// Speed against accuracy by model size, with the recommended sizes: DS and GS on all
+    /// and encoder features for a session with an `object` label set, else sparse coding +
+    /// SVM (`--reps` per size; 10 is plenty).
+    Frontier,
 }
 
 #[derive(Args, Debug)]
@@ -73,6 +79,7 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
     let name = session.meta.name.clone();
     let progress = Progress::new();
     let mut results: Vec<AnalysisResult> = Vec::new();
+    let mut frontiers = Vec::new();
     match a.experiment {
         Experiment::Recognition => {
             let mut settings = Vec::new();
@@ -163,6 +170,30 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
             eprint!("{}", super::robustness::table(&r));
             results.push(robustness_report(&name, &r));
         }
+        Experiment::Frontier => {
+            let methods: &[(FrontierMethod, FeatureSet)] = if session.label_set("object").is_some()
+            {
+                &[
+                    (FrontierMethod::Ds, FeatureSet::All),
+                    (FrontierMethod::Ds, FeatureSet::Encoder),
+                    (FrontierMethod::Gs, FeatureSet::All),
+                    (FrontierMethod::Gs, FeatureSet::Encoder),
+                ]
+            } else {
+                &[(FrontierMethod::SparseSvm, FeatureSet::All)]
+            };
+            for &(method, features) in methods {
+                let params = FrontierParams {
+                    features,
+                    reps: a.reps,
+                    seed: a.seed,
+                    ..FrontierParams::for_method(method)
+                };
+                let f = run_frontier(&session, &params, &progress)?;
+                super::frontier::print_frontier(&f);
+                frontiers.push(f);
+            }
+        }
     }
     if let Some(path) = &a.project {
         Project::new(vec![a.session.display().to_string()], results.clone()).save(path)?;
@@ -171,7 +202,8 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
     let mut set = figure_set(&results);
     let extra = speed_accuracy_figures(&results)
         .into_iter()
-        .chain(comparison_figures(&results));
+        .chain(comparison_figures(&results))
+        .chain(frontier_figures(&frontiers));
     for (figure_name, f) in extra {
         set.entries.push(FigureEntry {
             name: figure_name,

@@ -6,7 +6,11 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use clap::Args;
 
-use crate::experiments::recognition::{RecognitionParams, RecognitionResult, run_recognition};
+use crate::experiments::frontier::{Frontier, FrontierMethod};
+use crate::experiments::recognition::{
+    RecognitionParams, RecognitionResult, SupervisedLearner, run_recognition,
+};
+use crate::experiments::report::SizeReason;
 use crate::features::FeatureSet;
 use crate::jobs::Progress;
 use crate::session::{self, Session};
@@ -48,12 +52,16 @@ pub struct RecognitionArgs {
     /// Switch hyperparameter adaptation off.
     #[arg(long)]
     pub no_adapt: bool,
-    /// BV budget of every expert.
-    #[arg(long, default_value_t = 50)]
-    pub capacity: usize,
-    /// Lags of the recursive kernel.
-    #[arg(long, default_value_t = 15)]
-    pub tau: usize,
+    /// BV budget of every expert (default: the paper's 50).
+    #[arg(long)]
+    pub capacity: Option<usize>,
+    /// Lags of the recursive kernel (default: the paper's 15).
+    #[arg(long)]
+    pub tau: Option<usize>,
+    /// Use the recommended capacity and tau of this learner and feature set from a
+    /// `frontier --json` file of the session.
+    #[arg(long, conflicts_with_all = ["capacity", "tau"])]
+    pub frontier: Option<PathBuf>,
     /// Write the full result here as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -69,15 +77,63 @@ impl RecognitionArgs {
             taxel_noise_variance: self.noise,
             ..RecognitionParams::default()
         };
+        let (capacity, tau, reason) = match &self.frontier {
+            Some(path) => {
+                let (c, t) = recommended_size(path, p.learner, p.features)?;
+                (c, t, SizeReason::Recommended)
+            }
+            None if self.capacity.is_some() || self.tau.is_some() => (
+                self.capacity.unwrap_or(p.gs.gp.capacity),
+                self.tau.unwrap_or(p.gs.gp.tau),
+                SizeReason::User,
+            ),
+            None => (p.gs.gp.capacity, p.gs.gp.tau, SizeReason::PaperDefault),
+        };
+        p.size_reason = reason;
         for gp in [&mut p.ds.gp, &mut p.gs.gp] {
-            gp.capacity = self.capacity;
-            gp.tau = self.tau;
+            gp.capacity = capacity;
+            gp.tau = tau;
             if self.no_adapt {
                 gp.adaptation = None;
             }
         }
         p.validate()?;
         Ok(p)
+    }
+}
+
+/// The recommended (capacity, tau) of `learner` on `features` in a frontier file.
+fn recommended_size(
+    path: &Path,
+    learner: SupervisedLearner,
+    features: FeatureSet,
+) -> anyhow::Result<(usize, usize)> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let frontiers: Vec<Frontier> = serde_json::from_str(&text)
+        .with_context(|| format!("{} is not a `frontier --json` file", path.display()))?;
+    let method = match learner {
+        SupervisedLearner::Ds => FrontierMethod::Ds,
+        SupervisedLearner::Gs => FrontierMethod::Gs,
+    };
+    let f = frontiers
+        .iter()
+        .find(|f| f.params.method == method && f.params.features == features)
+        .ok_or_else(|| {
+            anyhow::anyhow!(
+                "{} holds no {} frontier on {} features",
+                path.display(),
+                method.name(),
+                features.name()
+            )
+        })?;
+    let p = &f.points[f.recommended];
+    match (p.knob("capacity"), p.knob("tau")) {
+        (Some(c), Some(t)) => Ok((c as usize, t as usize)),
+        _ => anyhow::bail!(
+            "{}: the recommended point has no capacity and tau",
+            path.display()
+        ),
     }
 }
 
@@ -92,6 +148,16 @@ pub fn print_recognition(r: &RecognitionResult) {
         r.cpu_seconds
             .map(|c| format!("{c:.1}"))
             .unwrap_or("?".into())
+    );
+    let gp = match r.params.learner {
+        SupervisedLearner::Ds => &r.params.ds.gp,
+        SupervisedLearner::Gs => &r.params.gs.gp,
+    };
+    println!(
+        "  size       capacity {}, tau {} ({})",
+        gp.capacity,
+        gp.tau,
+        r.params.size_reason.text()
     );
     println!("  all        {:.3} ({:.3})", s.all.mean, s.all.sd);
     println!("  final 20%  {:.3} ({:.3})", s.final_20.mean, s.final_20.sd);
@@ -299,7 +365,7 @@ struct ProtocolTiming {
 }
 
 pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
-    use crate::experiments::recognition::{StepBenchParams, SupervisedLearner, bench_steps};
+    use crate::experiments::recognition::{StepBenchParams, bench_steps};
     let mut steps = Vec::new();
     println!("per observation, one thread (34 inputs, 10 classes, adaptation on unless noted):");
     let learners = args

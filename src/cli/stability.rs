@@ -73,6 +73,11 @@ pub struct StabilityArgs {
     /// Write the machine-readable results here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// With a grid: also score its selection by nested cross validation, under stratified
+    /// 10-fold and 10 folds by object (outer and inner folds alike); about ten grid
+    /// searches each.
+    #[arg(long, requires = "grid")]
+    pub nested: bool,
     /// Label set holding the grasp outcome.
     #[arg(long)]
     pub label_set: Option<String>,
@@ -238,6 +243,14 @@ pub fn options_from(a: &StabilityArgs, data: &StabilityData) -> anyhow::Result<S
         selection_cv: parse_cv(&a.cv)?,
         grid,
         single,
+        nested: if a.nested {
+            vec![
+                CvScheme::KFold { k: 10 },
+                CvScheme::LeaveObjectsOut { folds: Some(10) },
+            ]
+        } else {
+            Vec::new()
+        },
         ..StabilityOptions::default()
     })
 }
@@ -321,6 +334,31 @@ pub fn report(r: &StabilityReport) -> String {
         pct(r.baseline.objects.weighted_success_rate),
         pct(r.baseline.objects.failure_recall)
     ));
+    for n in &r.nested {
+        line(format!(
+            "{} ({:.1} s): WSR {} (per fold {} ± {:.2}), failure recall {}; raw linear SVM, same outer folds: WSR {}, failure recall {}",
+            n.description,
+            n.secs,
+            pct(n.weighted_success_rate),
+            pct(n.fold_wsr_mean),
+            100.0 * n.fold_wsr_se,
+            pct(n.failure_recall),
+            pct(n.raw_weighted_success_rate),
+            pct(n.raw_failure_recall)
+        ));
+        for f in &n.folds {
+            line(format!(
+                "    outer fold {:>2}: chose {} (inner WSR {}; inner best {} at {}); outer test WSR {}, raw {}",
+                f.fold,
+                f.chosen,
+                pct(f.chosen_inner_wsr),
+                f.best,
+                pct(f.best_inner_wsr),
+                f.weighted_success_rate.map_or("n/a".into(), pct),
+                f.raw_weighted_success_rate.map_or("n/a".into(), pct)
+            ));
+        }
+    }
     let a = &r.analyses;
     line(format!(
         "analyses of the recommended model: active bases per patch {:.2} ({} {:.2}, {} {:.2}); sparsity {} ({} {}, {} {})",

@@ -153,5 +153,6 @@ pub fn baselines_report(session: &str, r: &BaselinesResult, train_seconds: f64) 
         details: Vec::new(),
         links: Vec::new(),
         grasp_codes: Vec::new(),
+        model_size: None,
     }
 }

@@ -4,6 +4,8 @@
 pub mod baselines_report;
 pub mod clustering;
 pub mod links;
+pub mod frontier;
+pub mod frontier_report;
 pub mod recognition;
 pub mod recognition_report;
 pub mod report;
@@ -33,6 +35,18 @@ pub enum ExperimentError {
 impl From<Cancelled> for ExperimentError {
     fn from(_: Cancelled) -> Self {
         ExperimentError::Cancelled
+    }
+}
+
+impl From<crate::sparse::SparseError> for ExperimentError {
+    fn from(e: crate::sparse::SparseError) -> Self {
+        stability::StabilityError::from(e).into()
+    }
+}
+
+impl From<crate::svm::SvmError> for ExperimentError {
+    fn from(e: crate::svm::SvmError) -> Self {
+        stability::StabilityError::from(e).into()
     }
 }
 

@@ -20,6 +20,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::ExperimentError;
+use super::report::SizeReason;
 use crate::features::{FeatureSequences, FeatureSet, SequenceParams, feature_sequences};
 use crate::jobs::Progress;
 use crate::learners::{Ds, DsParams, Gs, GsParams, SequenceClassifier, lengthscales};
@@ -66,6 +67,9 @@ pub struct RecognitionParams {
     pub early_fractions: Vec<f64>,
     pub ds: DsParams,
     pub gs: GsParams,
+    /// Why the experts have their capacity and tau (older results: the paper's).
+    #[serde(default)]
+    pub size_reason: SizeReason,
 }
 
 impl Default for RecognitionParams {
@@ -82,6 +86,7 @@ impl Default for RecognitionParams {
             early_fractions: (1..=10).map(|i| i as f64 / 10.0).collect(),
             ds: DsParams::default(),
             gs: GsParams::default(),
+            size_reason: SizeReason::PaperDefault,
         }
     }
 }

@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use super::clustering::{ClusteringResult, ClusteringRun, EffectivePoint, UnsupervisedLearner};
 use super::links::{GraspLinks, grasps_text};
 use super::recognition::{MeanSd, RecognitionResult, SupervisedLearner};
-use super::report::{AnalysisKind, AnalysisResult, FigureDetails, now_unix};
+use super::report::{AnalysisKind, AnalysisResult, FigureDetails, ModelSize, now_unix};
 use crate::features::sequence::FeatureSet;
 use crate::figures::{
     Axis, AxisTitle, BarGroup, ColorScale, ErrorDisplay, ErrorRange, Figure, FigureKind, Heatmap,
@@ -233,6 +233,16 @@ pub fn recognition_report(session: &str, r: &RecognitionResult) -> AnalysisResul
         details: Vec::new(),
         links: vec![confusion_links],
         grasp_codes: Vec::new(),
+        model_size: Some(ModelSize {
+            knobs: {
+                let gp = match p.learner {
+                    SupervisedLearner::Ds => &p.ds.gp,
+                    SupervisedLearner::Gs => &p.gs.gp,
+                };
+                format!("capacity {}, tau {}", gp.capacity, gp.tau)
+            },
+            reason: p.size_reason,
+        }),
     }
 }
 
@@ -402,6 +412,7 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
         details,
         links,
         grasp_codes: Vec::new(),
+        model_size: None,
     }
 }
 
@@ -644,6 +655,7 @@ mod tests {
             details: Vec::new(),
             links: Vec::new(),
             grasp_codes: Vec::new(),
+            model_size: None,
         }
     }
 

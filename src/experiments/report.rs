@@ -69,6 +69,48 @@ pub struct AnalysisResult {
     /// Grasp stability: the model's view of every grasp of the session.
     #[serde(default)]
     pub grasp_codes: Vec<GraspCode>,
+    /// The model size used and why (None for results without a size, and in projects
+    /// saved before sizes were recorded).
+    #[serde(default)]
+    pub model_size: Option<ModelSize>,
+}
+
+/// Why a model has its size.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SizeReason {
+    /// The cheapest size within one standard error of the best on the session (a frontier
+    /// or the grid search's one-standard-error rule).
+    Recommended,
+    /// The paper's size.
+    #[default]
+    PaperDefault,
+    /// Set by the user.
+    User,
+}
+
+impl SizeReason {
+    pub fn text(self) -> &'static str {
+        match self {
+            SizeReason::Recommended => "recommended",
+            SizeReason::PaperDefault => "paper default",
+            SizeReason::User => "user's",
+        }
+    }
+}
+
+/// A model's size knobs in words ("capacity 5, tau 1") and why they were used.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModelSize {
+    pub knobs: String,
+    pub reason: SizeReason,
+}
+
+impl ModelSize {
+    /// "capacity 5, tau 1 (recommended)".
+    pub fn text(&self) -> String {
+        format!("{} ({})", self.knobs, self.reason.text())
+    }
 }
 
 /// Detail figures selected by interacting with one of a result's figures: a click on an
@@ -431,6 +473,7 @@ mod tests {
             details: Vec::new(),
             links: Vec::new(),
             grasp_codes: Vec::new(),
+            model_size: None,
         }
     }
 
@@ -515,6 +558,10 @@ mod tests {
         json.as_object_mut().unwrap().remove("details");
         let back: AnalysisResult = serde_json::from_value(json).unwrap();
         assert!(back.details.is_empty());
+        let mut json = serde_json::to_value(result()).unwrap();
+        json.as_object_mut().unwrap().remove("model_size");
+        let back: AnalysisResult = serde_json::from_value(json).unwrap();
+        assert_eq!(back.model_size, None);
     }
 
     #[test]

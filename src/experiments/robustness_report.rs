@@ -171,5 +171,6 @@ pub fn robustness_report(session: &str, r: &RobustnessResult) -> AnalysisResult 
         details: Vec::new(),
         links: Vec::new(),
         grasp_codes: Vec::new(),
+        model_size: None,
     }
 }

@@ -7,8 +7,12 @@
 use std::collections::BTreeMap;
 
 use super::links::{GraspLinks, basis_links, grasps_text};
-use super::report::{AnalysisKind, AnalysisResult, FigureDetails, distinct_sorted, now_unix};
-use super::stability::{BasisUsage, GridImage as PatchImage, StabilityReport};
+use super::report::{
+    AnalysisKind, AnalysisResult, FigureDetails, ModelSize, SizeReason, distinct_sorted, now_unix,
+};
+use super::stability::{
+    BasisUsage, CvScheme, GridImage as PatchImage, StabilityOptions, StabilityReport,
+};
 use crate::figures::{
     Axis, AxisTitle, BarGroup, ColorScale, ErrorDisplay, ErrorRange, Figure, FigureKind, GridImage,
     Heatmap, ImageGrid, Orientation, Series, SeriesStyle,
@@ -153,6 +157,31 @@ fn confusion_links(
 }
 
 /// Scores, timings and figures of a grasp-stability run.
+/// The nested cross-validation scores beside the others, named by protocol: the score of
+/// the grid's selection that no selection saw, and the raw SVM under the same folds.
+fn nested_scores(r: &StabilityReport) -> Vec<(String, f64)> {
+    r.nested
+        .iter()
+        .flat_map(|n| {
+            let name = match n.protocol {
+                CvScheme::KFold { k } => format!("nested {k}-fold"),
+                CvScheme::LeaveObjectsOut { .. } => "nested new objects".into(),
+            };
+            [
+                (
+                    format!("weighted success rate ({name})"),
+                    n.weighted_success_rate,
+                ),
+                (format!("failure recall ({name})"), n.failure_recall),
+                (
+                    format!("raw linear SVM WSR ({name} folds)"),
+                    n.raw_weighted_success_rate,
+                ),
+            ]
+        })
+        .collect()
+}
+
 pub fn stability_report(r: &StabilityReport) -> AnalysisResult {
     let p = &r.parsimonious;
     let cfg = p.config;
@@ -513,7 +542,10 @@ pub fn stability_report(r: &StabilityReport) -> AnalysisResult {
                 "raw linear SVM WSR (new objects)".into(),
                 r.baseline.objects.weighted_success_rate,
             ),
-        ],
+        ]
+        .into_iter()
+        .chain(nested_scores(r))
+        .collect(),
         headline: Some((
             "weighted success rate (10-fold)".into(),
             p.kfold.weighted_success_rate,
@@ -525,5 +557,18 @@ pub fn stability_report(r: &StabilityReport) -> AnalysisResult {
         details,
         links,
         grasp_codes: r.grasp_codes.clone(),
+        model_size: Some(ModelSize {
+            knobs: format!(
+                "num_bases {}, beta {}, gamma {}",
+                cfg.num_bases, cfg.beta, cfg.gamma
+            ),
+            reason: if r.grid.is_some() {
+                SizeReason::Recommended
+            } else if cfg == StabilityOptions::default().single {
+                SizeReason::PaperDefault
+            } else {
+                SizeReason::User
+            },
+        }),
     }
 }

@@ -105,6 +105,52 @@ impl Ds {
         }
         (qs, ps)
     }
+
+    /// Train on a grasp as [`SequenceClassifier::train_sequence`] does, given its q (T × C)
+    /// just predicted by this learner. An expert not yet updated during the grasp would
+    /// observe exactly what it did when predicting, so its q is taken from `q_pred` (bit for
+    /// bit the same) and only the experts updated so far are observed again: a step costs
+    /// a few experts instead of every one (DU, which predicts each grasp before training on
+    /// it, keeps up to one expert per grasp).
+    pub fn train_sequence_predicted(
+        &mut self,
+        seq: ArrayView2<f64>,
+        class: usize,
+        q_pred: ArrayView2<f64>,
+    ) {
+        if class >= self.models.len() {
+            return;
+        }
+        let seq = seq.as_standard_layout();
+        let mut touched = vec![false; self.models.len()];
+        touched[class] = true;
+        self.window.reset();
+        for (t, o) in super::steps(&seq, self.dim)
+            .chunks_exact(self.dim)
+            .enumerate()
+        {
+            self.window.push(o);
+            for (j, (m, q)) in self.models.iter_mut().zip(self.q.iter_mut()).enumerate() {
+                if touched[j] || j >= q_pred.ncols() || t >= q_pred.nrows() {
+                    m.observe(self.window.as_slice());
+                    *q = m.probability();
+                } else {
+                    *q = q_pred[[t, j]];
+                }
+            }
+            let wrong = (0..self.models.len())
+                .filter(|&c| c != class)
+                .max_by(|&a, &b| self.q[a].total_cmp(&self.q[b]));
+            self.models[class].update(&[1.0]);
+            if let Some(w) = wrong {
+                if !touched[w] {
+                    self.models[w].observe(self.window.as_slice());
+                    touched[w] = true;
+                }
+                self.models[w].update(&[-1.0]);
+            }
+        }
+    }
 }
 
 impl SequenceClassifier for Ds {

@@ -95,7 +95,7 @@ impl Du {
         } else {
             (s, false)
         };
-        self.ds.train_sequence(seq, cluster);
+        self.ds.train_sequence_predicted(seq, cluster, q.view());
         Ok(Assignment {
             cluster,
             novelty,

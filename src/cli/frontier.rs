@@ -1,0 +1,177 @@
+//! `frontier`: speed–accuracy frontiers by model size on one session, with the recommended
+//! size of every method (`--json OUT` writes the frontiers as a list).
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use super::recognition::{open_session, write_json};
+use crate::experiments::frontier::{
+    CostAxis, Frontier, FrontierMethod, FrontierParams, RecognitionScore, run_frontier,
+};
+use crate::features::FeatureSet;
+use crate::jobs::Progress;
+
+#[derive(Args, Debug)]
+pub struct FrontierArgs {
+    /// A native session file, a BTS3 CSV or the iCub dataset folder.
+    pub session: PathBuf,
+    /// Methods, comma separated: ds, gs, sparse-svm.
+    #[arg(long, value_delimiter = ',', default_value = "gs")]
+    pub method: Vec<String>,
+    /// DS/GS feature sets, comma separated: all, tactile, encoder (one frontier each).
+    #[arg(long, value_delimiter = ',', default_value = "all")]
+    pub features: Vec<String>,
+    /// Seeded repetitions per size (at least 2).
+    #[arg(long, default_value_t = 10)]
+    pub reps: usize,
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// DS/GS BV budgets (default 2, 5, 10, 20, 50, 100).
+    #[arg(long, value_delimiter = ',')]
+    pub capacities: Vec<usize>,
+    /// DS/GS kernel lags (default 1, 2, 5, 15, 30).
+    #[arg(long, value_delimiter = ',')]
+    pub taus: Vec<usize>,
+    /// Sparse coding dictionary sizes (default 2, 3, 5, 10, 15, 20, 29, 40, 60).
+    #[arg(long, value_delimiter = ',')]
+    pub num_bases: Vec<usize>,
+    /// Sparse coding: beta values tried at every num_bases (default 0.5, 1, 2).
+    #[arg(long, value_delimiter = ',')]
+    pub beta: Vec<f64>,
+    /// Sparse coding: gamma values tried at every num_bases (default 0.5, 1, 2).
+    #[arg(long, value_delimiter = ',')]
+    pub gamma: Vec<f64>,
+    /// DS/GS score: all (every predicted grasp) or final-20.
+    #[arg(long, default_value = "all")]
+    pub score: String,
+    /// The time that defines the cheapest model: prediction or training.
+    #[arg(long, default_value = "prediction")]
+    pub cost: String,
+    /// Write the frontiers here as JSON (a list).
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+impl FrontierArgs {
+    /// One parameter set per method × feature set (sparse coding ignores the features).
+    fn params(&self) -> anyhow::Result<Vec<FrontierParams>> {
+        let score = match self.score.as_str() {
+            "all" => RecognitionScore::All,
+            "final-20" => RecognitionScore::Final20,
+            other => anyhow::bail!("--score: `{other}` is not all or final-20"),
+        };
+        let cost = match self.cost.as_str() {
+            "prediction" => CostAxis::Prediction,
+            "training" => CostAxis::Training,
+            other => anyhow::bail!("--cost: `{other}` is not prediction or training"),
+        };
+        let features = self
+            .features
+            .iter()
+            .map(|f| f.parse::<FeatureSet>())
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut out = Vec::new();
+        for m in &self.method {
+            let method: FrontierMethod = m.parse()?;
+            let sets = if method == FrontierMethod::SparseSvm {
+                &features[..1]
+            } else {
+                &features[..]
+            };
+            for &features in sets {
+                let mut p = FrontierParams {
+                    features,
+                    score,
+                    cost,
+                    reps: self.reps,
+                    seed: self.seed,
+                    ..FrontierParams::for_method(method)
+                };
+                set_if(&mut p.capacities, &self.capacities);
+                set_if(&mut p.taus, &self.taus);
+                set_if(&mut p.num_bases, &self.num_bases);
+                set_if(&mut p.beta, &self.beta);
+                set_if(&mut p.gamma, &self.gamma);
+                p.validate()?;
+                out.push(p);
+            }
+        }
+        Ok(out)
+    }
+}
+
+fn set_if<T: Clone>(target: &mut Vec<T>, given: &[T]) {
+    if !given.is_empty() {
+        *target = given.to_vec();
+    }
+}
+
+/// The frontier as a table, the Pareto and recommended sizes marked.
+pub fn print_frontier(f: &Frontier) {
+    println!(
+        "{} on {}: {} sizes, {} repetitions each, {:.1} s",
+        f.label(),
+        f.session,
+        f.points.len(),
+        f.params.reps,
+        f.wall_seconds
+    );
+    println!(
+        "  {:<10} {:>14} {:>8}  {:>12} {:>12}  marks",
+        "size",
+        f.score_name.split(' ').next().unwrap_or(""),
+        "SE",
+        format!("train µs/{}", f.unit),
+        format!("pred µs/{}", f.unit)
+    );
+    for (i, p) in f.points.iter().enumerate() {
+        let mut marks = Vec::new();
+        if i == f.best {
+            marks.push("best");
+        }
+        if i == f.recommended {
+            marks.push("RECOMMENDED");
+        }
+        if Some(i) == f.paper_default {
+            marks.push("paper default");
+        }
+        if f.pareto_prediction.contains(&i) {
+            marks.push("front(pred)");
+        }
+        if f.pareto_training.contains(&i) {
+            marks.push("front(train)");
+        }
+        println!(
+            "  {:<10} {:>14.4} {:>8.4}  {:>12.2} {:>12.2}  {}",
+            p.label,
+            p.score,
+            p.score_se,
+            p.train_us,
+            p.predict_us,
+            marks.join(", ")
+        );
+    }
+    let (b, r) = (&f.points[f.best], &f.points[f.recommended]);
+    println!(
+        "  recommended {} ({:.4}; best {} {:.4} ± {:.4}); {:.1}× faster to predict than the best",
+        r.detail,
+        r.score,
+        b.label,
+        b.score,
+        b.score_se,
+        b.predict_us / r.predict_us
+    );
+}
+
+pub fn run(args: FrontierArgs) -> anyhow::Result<()> {
+    let params = args.params()?;
+    let session = open_session(&args.session)?;
+    let mut frontiers = Vec::new();
+    for p in &params {
+        let f = run_frontier(&session, p, &Progress::new())?;
+        print_frontier(&f);
+        frontiers.push(f);
+    }
+    write_json(&frontiers, args.json.as_deref())
+}

@@ -1,0 +1,110 @@
+//! Figures of speed–accuracy frontiers: score against time (log axis), one colour per
+//! method, each size with its standard-error bar, each method's Pareto front as a line, and
+//! the recommended and paper-default sizes marked with short labels.
+
+use super::frontier::{CostAxis, Frontier};
+use crate::figures::{Axis, Figure, Rgb, Series, SeriesStyle, series_color};
+
+/// One chart per time axis (prediction first: it defines "cheapest" by default), named
+/// for export; none without frontiers.
+pub fn frontier_figures(frontiers: &[Frontier]) -> Vec<(String, Figure)> {
+    if frontiers.is_empty() {
+        return Vec::new();
+    }
+    [
+        (CostAxis::Prediction, "frontier-prediction"),
+        (CostAxis::Training, "frontier-training"),
+    ]
+    .into_iter()
+    .map(|(axis, name)| (name.to_string(), frontier_chart(frontiers, axis)))
+    .collect()
+}
+
+fn frontier_chart(frontiers: &[Frontier], axis: CostAxis) -> Figure {
+    let mut units: Vec<&str> = frontiers.iter().map(|f| f.unit.as_str()).collect();
+    units.dedup();
+    let per = units.join(" or ");
+    let (title, x) = match axis {
+        CostAxis::Prediction => (
+            "Score against prediction time, by model size",
+            Axis::new(format!("prediction time per {per}"), "µs"),
+        ),
+        CostAxis::Training => (
+            "Score against training time, by model size",
+            Axis::new(format!("training time per {per}"), "µs"),
+        ),
+    };
+    let mut scores: Vec<&str> = frontiers.iter().map(|f| f.score_name.as_str()).collect();
+    scores.dedup();
+    let mut series = Vec::new();
+    let mut marked: [(Vec<f64>, Vec<f64>, Vec<String>); 2] = Default::default();
+    for (i, f) in frontiers.iter().enumerate() {
+        let color = series_color(i);
+        let name = f.short_label();
+        let x_of = |k: usize| f.points[k].cost(axis);
+        let y_of = |k: usize| f.points[k].score;
+        let all: Vec<usize> = (0..f.points.len()).collect();
+        series.push(
+            Series::new(
+                name.clone(),
+                all.iter().map(|&k| x_of(k)).collect(),
+                all.iter().map(|&k| y_of(k)).collect(),
+            )
+            .style(SeriesStyle::Markers)
+            .error_bars(
+                f.points.iter().map(|p| p.score - p.score_se).collect(),
+                f.points.iter().map(|p| p.score + p.score_se).collect(),
+            )
+            .color(color),
+        );
+        let front = match axis {
+            CostAxis::Prediction => &f.pareto_prediction,
+            CostAxis::Training => &f.pareto_training,
+        };
+        series.push(
+            Series::new(
+                format!("{name} Pareto front"),
+                front.iter().map(|&k| x_of(k)).collect(),
+                front.iter().map(|&k| y_of(k)).collect(),
+            )
+            .color(color),
+        );
+        let rec = f.recommended;
+        marked[0].0.push(x_of(rec));
+        marked[0].1.push(y_of(rec));
+        marked[0].2.push(format!("{name} {}", f.points[rec].label));
+        if let Some(d) = f.paper_default.filter(|&d| d != rec) {
+            marked[1].0.push(x_of(d));
+            marked[1].1.push(y_of(d));
+            marked[1].2.push(format!("paper {}", f.points[d].label));
+        }
+    }
+    let [(rx, ry, rl), (px, py, pl)] = marked;
+    series.push(
+        Series::new("recommended", rx, ry)
+            .style(SeriesStyle::Markers)
+            .labels(rl)
+            .color(Rgb(0, 0, 0)),
+    );
+    if !px.is_empty() {
+        series.push(
+            Series::new("paper default", px, py)
+                .style(SeriesStyle::Markers)
+                .labels(pl)
+                .color(Rgb(0x88, 0x88, 0x88)),
+        );
+    }
+    let cheapest = match frontiers[0].params.cost {
+        CostAxis::Prediction => "prediction",
+        CostAxis::Training => "training",
+    };
+    Figure::chart(title, x.log(), Axis::new(scores.join(" / "), ""), series).subtitle(format!(
+        "{} on {}; mean ± SE over repetitions; recommended: the cheapest (by {cheapest} time) within one SE of the best",
+        frontiers
+            .iter()
+            .map(|f| f.short_label())
+            .collect::<Vec<_>>()
+            .join(", "),
+        frontiers[0].session
+    ))
+}
