@@ -4,11 +4,13 @@
 pub mod baselines;
 mod figures;
 pub mod paper_figures;
+mod progress;
 pub mod recognition;
 pub mod robustness;
 pub mod session;
 pub mod simulate;
 pub mod stability;
+pub mod sweep;
 
 use std::path::PathBuf;
 
@@ -93,6 +95,9 @@ pub enum Command {
     /// Where the methods fail: sweep one perturbation at a time (noise, dead taxels, drift,
     /// gain, truncation, ...) and print each method's break point.
     Robustness(robustness::RobustnessArgs),
+    /// Sharded sweeps for a cluster: plan the shards and a Slurm job array, run a shard,
+    /// show their status, merge them into the single-machine result.
+    Sweep(sweep::SweepArgs),
 }
 
 /// Run a subcommand.
@@ -111,5 +116,6 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Stability(a) => stability::run(a),
         Command::BenchStability(a) => stability::run_bench(a),
         Command::Robustness(a) => robustness::run(a),
+        Command::Sweep(a) => sweep::run(a),
     }
 }
