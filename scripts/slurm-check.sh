@@ -38,7 +38,7 @@ if ! command -v slurmctld >/dev/null || ! command -v munged >/dev/null; then
   apt-get update
   DEBIAN_FRONTEND=noninteractive apt-get install -y slurm-wlm munge
 fi
-sbatch --version
+dpkg-query -W slurm-wlm munge
 
 if [ ! -x "$BIN" ]; then
   say "building $BIN"
@@ -54,8 +54,8 @@ chown munge:munge /etc/munge /etc/munge/munge.key /run/munge /var/lib/munge /var
 chmod 0700 /etc/munge /var/lib/munge /var/log/munge
 chmod 0400 /etc/munge/munge.key
 chmod 0755 /run/munge
-runuser -u munge -- munged --pid-file="$WORK/munged.pid"
-PIDS+=("$(cat "$WORK/munged.pid")")
+runuser -u munge -- munged --pid-file=/run/munge/munged.pid
+PIDS+=("$(cat /run/munge/munged.pid)")
 munge -n | unmunge >/dev/null
 
 NODE=$(hostname -s)
@@ -122,7 +122,7 @@ while [ -n "$(squeue -h -j "$JOB" 2>/dev/null)" ]; do
 done
 T3=$(date +%s.%N)
 SLURM=$(awk "BEGIN { print $T3 - $T2 }")
-if sacct -j "$JOB" -X -n -o JobID,State,Elapsed 2>/dev/null; then
+if sacct -j "$JOB" -X -n -o JobID,State,Elapsed; then
   :
 else
   say "sacct has no accounting database here; the tasks' states from scontrol:"

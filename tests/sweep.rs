@@ -143,23 +143,27 @@ fn merged_robustness_equals_the_local_run() {
 #[test]
 fn merged_clustering_and_recognition_equal_the_local_runs() {
     let s = sample("object-recognition.json");
-    let c = ClusteringParams {
+    let mut c = ClusteringParams {
         thresholds: vec![0.2, 0.6],
         reps: 2,
         seed: 4,
         baseline_max_k: 4,
         ..ClusteringParams::default()
     };
+    c.ds.gp.capacity = 15;
+    c.ds.gp.tau = 4;
     let local = serde_json::to_value(run_clustering(&s, &c, &Progress::new()).unwrap()).unwrap();
     let (_, merged) = sharded("sweep-clustering", &s, Experiment::Clustering(c), 3);
     assert_same(&merged, &local);
     assert_eq!(merged["runs"].as_array().unwrap().len(), 4);
 
-    let r = RecognitionParams {
-        reps: 3,
+    let mut r = RecognitionParams {
+        reps: 2,
         seed: 2,
         ..RecognitionParams::default()
     };
+    r.gs.gp.capacity = 15;
+    r.gs.gp.tau = 4;
     let local = serde_json::to_value(run_recognition(&s, &r, &Progress::new()).unwrap()).unwrap();
     let (_, merged) = sharded("sweep-recognition", &s, Experiment::Recognition(r), 2);
     assert_same(&merged, &local);

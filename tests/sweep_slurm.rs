@@ -18,7 +18,10 @@ fn run(program: &str, args: &[&str]) -> Option<String> {
 }
 
 fn tw(args: &[&str]) -> String {
-    let out = Command::new(BIN).args(args).output().expect("the program runs");
+    let out = Command::new(BIN)
+        .args(args)
+        .output()
+        .expect("the program runs");
     assert!(
         out.status.success(),
         "tactile-workbench {}: {}{}",
@@ -31,8 +34,12 @@ fn tw(args: &[&str]) -> String {
 
 #[test]
 fn a_sweep_through_slurm_merges_into_the_local_result() {
-    if run("sbatch", &["--version"]).is_none() {
-        eprintln!("skipped: sbatch is not on PATH (scripts/slurm-check.sh installs and starts Slurm)");
+    let on_path = std::env::var_os("PATH")
+        .is_some_and(|p| std::env::split_paths(&p).any(|d| d.join("sbatch").is_file()));
+    if !on_path {
+        eprintln!(
+            "skipped: sbatch is not on PATH (scripts/slurm-check.sh installs and starts Slurm)"
+        );
         return;
     }
     if run("sinfo", &["-h"]).is_none() {
@@ -42,9 +49,24 @@ fn a_sweep_through_slurm_merges_into_the_local_result() {
     let dir = common::temp_dir("sweep-slurm");
     let session = common::sample("grasp-stability.json");
     let session = session.to_str().unwrap();
-    let grid = ["--num-bases", "2,4,6", "--beta", "0.5,1", "--gamma", "0.5,1", "--cv", "3"];
+    let grid = [
+        "--num-bases",
+        "2,4,6",
+        "--beta",
+        "0.5,1",
+        "--gamma",
+        "0.5,1",
+        "--cv",
+        "3",
+    ];
     let local = dir.join("local.json");
-    let mut args = vec!["stability", session, "--quiet", "--json", local.to_str().unwrap()];
+    let mut args = vec![
+        "stability",
+        session,
+        "--quiet",
+        "--json",
+        local.to_str().unwrap(),
+    ];
     args.extend(grid);
     tw(&args);
     let plan = dir.join("plan");
@@ -64,7 +86,11 @@ fn a_sweep_through_slurm_merges_into_the_local_result() {
         std::thread::sleep(Duration::from_secs(2));
     }
     let status = tw(&["sweep", "status", plan.to_str().unwrap()]);
-    assert!(status.contains("2 done, 0 missing, 0 failed of 2"), "{status}\n{}", logs(&plan));
+    assert!(
+        status.contains("2 done, 0 missing, 0 failed of 2"),
+        "{status}\n{}",
+        logs(&plan)
+    );
     let merged = dir.join("merged.json");
     let out = tw(&[
         "sweep",

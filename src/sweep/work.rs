@@ -93,17 +93,19 @@ fn patch_values(session: &Session) -> f64 {
     (session.grasps.len().max(1) * taxels.max(1)) as f64
 }
 
-// Cost constants: CPU-seconds per unit of work on the development machine, from the runs
-// docs/cluster.md quotes (rough: the sbatch time limit adds a wide margin, and flags
-// override it).
+// Cost constants: CPU-seconds per unit of work, from the timings docs/cluster.md quotes on a
+// 2-core desktop (the default grid on BTS3, 1,276 grasps × 72 taxels: about 520 CPU-s; its
+// robustness sweep with 10 repetitions: about 2,100 CPU-s over some 460 tasks; DU's sweep
+// on iCub, about 2,600 grasps' frames × 60 taxels: about 1,100 CPU-s over 900 runs). Rough:
+// the time limit adds a wide margin, and flags override it.
 /// Stability: per (patch value × basis × gamma) of a grid task.
-const STABILITY_COST: f64 = 1.6e-6;
+const STABILITY_COST: f64 = 1.2e-7;
 /// Robustness: per task and reading.
-const ROBUSTNESS_COST: f64 = 1.2e-5;
+const ROBUSTNESS_COST: f64 = 5.0e-5;
 /// Clustering: per learning run and reading; a baseline run costs a tenth of it.
-const CLUSTERING_COST: f64 = 4.0e-6;
-/// Recognition: per repetition and reading.
-const RECOGNITION_COST: f64 = 8.0e-6;
+const CLUSTERING_COST: f64 = 8.0e-6;
+/// Recognition: per repetition and reading (a repetition teaches and predicts every grasp).
+const RECOGNITION_COST: f64 = 1.6e-5;
 
 /// The grasp-stability grid search and the pipeline after it.
 #[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
