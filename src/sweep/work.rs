@@ -93,11 +93,11 @@ fn patch_values(session: &Session) -> f64 {
     (session.grasps.len().max(1) * taxels.max(1)) as f64
 }
 
-// Cost constants: CPU-seconds per unit of work, from the timings docs/cluster.md quotes on a
-// 2-core desktop (the default grid on BTS3, 1,276 grasps × 72 taxels: about 520 CPU-s; its
-// robustness sweep with 10 repetitions: about 2,100 CPU-s over some 460 tasks; DU's sweep
-// on iCub, about 2,600 grasps' frames × 60 taxels: about 1,100 CPU-s over 900 runs). Rough:
-// the time limit adds a wide margin, and flags override it.
+// Cost constants: CPU-seconds per unit of work on a 2-core desktop, from the default grid
+// on BTS3 (1,276 grasps × 72 taxels: about 520 CPU-s; docs/cluster.md), its robustness
+// sweep with 10 repetitions (about 2,100 CPU-s over some 460 tasks) and DU's sweep on iCub
+// (about 1,100 CPU-s over 900 runs on some 156,000 readings). Rough: the time limit adds a
+// wide margin, and flags override it.
 /// Stability: per (patch value × basis × gamma) of a grid task.
 const STABILITY_COST: f64 = 1.2e-7;
 /// Robustness: per task and reading.
