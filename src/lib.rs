@@ -20,6 +20,7 @@ pub mod session;
 pub mod sparse;
 pub mod special;
 pub mod svm;
+pub mod sweep;
 
 #[cfg(feature = "gui")]
 pub mod app;

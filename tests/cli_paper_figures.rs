@@ -17,6 +17,7 @@ fn baselines_figures_are_written_with_an_index() {
         height: 420,
         dpi: 96.0,
         project: None,
+        quiet: true,
     })
     .expect("paper-figures");
     let index = std::fs::read_to_string(out.join("index.md")).unwrap();
@@ -50,6 +51,7 @@ fn stability_figures_and_project_regenerate_the_first_paper() {
         height: 420,
         dpi: 96.0,
         project: Some(project.clone()),
+        quiet: true,
     })
     .expect("paper-figures");
     let index = std::fs::read_to_string(out.join("index.md")).unwrap();

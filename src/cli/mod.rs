@@ -5,11 +5,13 @@ pub mod baselines;
 mod figures;
 pub mod frontier;
 pub mod paper_figures;
+mod progress;
 pub mod recognition;
 pub mod robustness;
 pub mod session;
 pub mod simulate;
 pub mod stability;
+pub mod sweep;
 
 use std::path::PathBuf;
 
@@ -98,6 +100,9 @@ pub enum Command {
     /// over seeded repetitions, and recommend the cheapest within one standard error of
     /// the best.
     Frontier(frontier::FrontierArgs),
+    /// Sharded sweeps for a cluster: plan the shards and a Slurm job array, run a shard,
+    /// show their status, merge them into the single-machine result.
+    Sweep(sweep::SweepArgs),
 }
 
 /// Run a subcommand.
@@ -117,5 +122,6 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::BenchStability(a) => stability::run_bench(a),
         Command::Robustness(a) => robustness::run(a),
         Command::Frontier(a) => frontier::run(a),
+        Command::Sweep(a) => sweep::run(a),
     }
 }

@@ -5,12 +5,13 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
+use super::progress::with_progress;
 use super::recognition::open_session;
 use crate::cluster::baselines::{BaselinesParams, grid_for, run_baselines};
 use crate::cluster::grasp_features::session_features;
 use crate::experiments::baselines_report::baselines_report;
 use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_clustering};
-use crate::experiments::frontier::{FrontierMethod, FrontierParams, run_frontier};
+use crate::experiments::frontier::{Frontier, FrontierMethod, FrontierParams, run_frontier};
 use crate::experiments::frontier_report::frontier_figures;
 use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
 use crate::experiments::recognition_report::{
@@ -26,6 +27,7 @@ use crate::experiments::stability_report::stability_report;
 use crate::features::FeatureSet;
 use crate::figures::{FigureEntry, Format, RenderOptions, export_all};
 use crate::jobs::Progress;
+use crate::session::Session;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum Experiment {
@@ -72,129 +74,15 @@ pub struct PaperFiguresArgs {
     /// Also save the results as a project, to inspect them in the workbench.
     #[arg(long)]
     pub project: Option<PathBuf>,
+    /// Print no progress.
+    #[arg(long, short)]
+    pub quiet: bool,
 }
 
 pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
     let session = open_session(&a.session)?;
     let name = session.meta.name.clone();
-    let progress = Progress::new();
-    let mut results: Vec<AnalysisResult> = Vec::new();
-    let mut frontiers = Vec::new();
-    match a.experiment {
-        Experiment::Recognition => {
-            let mut settings = Vec::new();
-            for learner in [SupervisedLearner::Ds, SupervisedLearner::Gs] {
-                for features in [FeatureSet::All, FeatureSet::Tactile, FeatureSet::Encoder] {
-                    settings.push((learner, features, 0.0));
-                }
-                for noise in [100.0, 1000.0] {
-                    settings.push((learner, FeatureSet::All, noise));
-                }
-            }
-            for (learner, features, noise) in settings {
-                let params = RecognitionParams {
-                    learner,
-                    features,
-                    reps: a.reps,
-                    seed: a.seed,
-                    taxel_noise_variance: noise,
-                    ..Default::default()
-                };
-                let r = run_recognition(&session, &params, &progress)?;
-                let report = recognition_report(&name, &r);
-                eprintln!("{}: final 20% {:.3}", report.label, r.summary.final_20.mean);
-                results.push(report);
-            }
-        }
-        Experiment::Clustering => {
-            for learner in [UnsupervisedLearner::Du, UnsupervisedLearner::Gu] {
-                let params = ClusteringParams {
-                    reps: a.reps,
-                    seed: a.seed,
-                    ..ClusteringParams::for_learner(learner)
-                };
-                let r = run_clustering(&session, &params, &progress)?;
-                let report = clustering_report(&name, &r);
-                eprintln!("{}: done in {:.1} s", report.label, r.wall_seconds);
-                results.push(report);
-            }
-        }
-        Experiment::Baselines => {
-            let set = session
-                .label_set("object")
-                .ok_or_else(|| anyhow::anyhow!("the session has no `object` label set"))?;
-            let truth = session.labels_of(set);
-            let features = session_features(&session)?;
-            let (rows, cols) = grid_for(10);
-            let mut params = BaselinesParams {
-                orders: a.reps,
-                seed: a.seed,
-                ..Default::default()
-            };
-            params.som.rows = rows;
-            params.som.cols = cols;
-            let t0 = std::time::Instant::now();
-            let r = run_baselines(features.view(), &truth, &params, &progress)?;
-            results.push(baselines_report(&name, &r, t0.elapsed().as_secs_f64()));
-        }
-        Experiment::Stability => {
-            let data = StabilityData::from_session(&session, &DataOptions::default())?;
-            let mut settings = PipelineSettings {
-                cv_seed: a.seed,
-                ..Default::default()
-            };
-            settings.dictionary.seed = a.seed;
-            settings.svm.seed = a.seed;
-            let opts = StabilityOptions {
-                grid: Some(GridSpec::bench()),
-                settings,
-                ..Default::default()
-            };
-            let r = stability::run(&data, &opts, &progress)?;
-            let report = stability_report(&r);
-            eprintln!("{}: done in {:.1} s", report.label, r.secs);
-            results.push(report);
-        }
-        Experiment::RobustnessStability | Experiment::RobustnessRecognition => {
-            let family = if a.experiment == Experiment::RobustnessStability {
-                Family::Stability
-            } else {
-                Family::Recognition
-            };
-            let params = RobustnessParams {
-                reps: a.reps,
-                seed: a.seed,
-                ..RobustnessParams::defaults(family)
-            };
-            let r = run_robustness(&session, &params, &progress)?;
-            eprint!("{}", super::robustness::table(&r));
-            results.push(robustness_report(&name, &r));
-        }
-        Experiment::Frontier => {
-            let methods: &[(FrontierMethod, FeatureSet)] = if session.label_set("object").is_some()
-            {
-                &[
-                    (FrontierMethod::Ds, FeatureSet::All),
-                    (FrontierMethod::Ds, FeatureSet::Encoder),
-                    (FrontierMethod::Gs, FeatureSet::All),
-                    (FrontierMethod::Gs, FeatureSet::Encoder),
-                ]
-            } else {
-                &[(FrontierMethod::SparseSvm, FeatureSet::All)]
-            };
-            for &(method, features) in methods {
-                let params = FrontierParams {
-                    features,
-                    reps: a.reps,
-                    seed: a.seed,
-                    ..FrontierParams::for_method(method)
-                };
-                let f = run_frontier(&session, &params, &progress)?;
-                super::frontier::print_frontier(&f);
-                frontiers.push(f);
-            }
-        }
-    }
+    let (results, frontiers) = with_progress(a.quiet, |p| experiment_results(&a, &session, p))?;
     if let Some(path) = &a.project {
         Project::new(vec![a.session.display().to_string()], results.clone()).save(path)?;
         println!("wrote {}", path.display());
@@ -232,4 +120,131 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
         t0.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// Run the experiment's analyses (and, for `frontier`, its frontiers).
+fn experiment_results(
+    a: &PaperFiguresArgs,
+    session: &Session,
+    progress: &Progress,
+) -> anyhow::Result<(Vec<AnalysisResult>, Vec<Frontier>)> {
+    let mut frontiers = Vec::new();
+    let name = session.meta.name.clone();
+    let mut results: Vec<AnalysisResult> = Vec::new();
+    match a.experiment {
+        Experiment::Recognition => {
+            let mut settings = Vec::new();
+            for learner in [SupervisedLearner::Ds, SupervisedLearner::Gs] {
+                for features in [FeatureSet::All, FeatureSet::Tactile, FeatureSet::Encoder] {
+                    settings.push((learner, features, 0.0));
+                }
+                for noise in [100.0, 1000.0] {
+                    settings.push((learner, FeatureSet::All, noise));
+                }
+            }
+            for (learner, features, noise) in settings {
+                let params = RecognitionParams {
+                    learner,
+                    features,
+                    reps: a.reps,
+                    seed: a.seed,
+                    taxel_noise_variance: noise,
+                    ..Default::default()
+                };
+                let r = run_recognition(session, &params, progress)?;
+                let report = recognition_report(&name, &r);
+                eprintln!("{}: final 20% {:.3}", report.label, r.summary.final_20.mean);
+                results.push(report);
+            }
+        }
+        Experiment::Clustering => {
+            for learner in [UnsupervisedLearner::Du, UnsupervisedLearner::Gu] {
+                let params = ClusteringParams {
+                    reps: a.reps,
+                    seed: a.seed,
+                    ..ClusteringParams::for_learner(learner)
+                };
+                let r = run_clustering(session, &params, progress)?;
+                let report = clustering_report(&name, &r);
+                eprintln!("{}: done in {:.1} s", report.label, r.wall_seconds);
+                results.push(report);
+            }
+        }
+        Experiment::Baselines => {
+            let set = session
+                .label_set("object")
+                .ok_or_else(|| anyhow::anyhow!("the session has no `object` label set"))?;
+            let truth = session.labels_of(set);
+            let features = session_features(session)?;
+            let (rows, cols) = grid_for(10);
+            let mut params = BaselinesParams {
+                orders: a.reps,
+                seed: a.seed,
+                ..Default::default()
+            };
+            params.som.rows = rows;
+            params.som.cols = cols;
+            let t0 = std::time::Instant::now();
+            let r = run_baselines(features.view(), &truth, &params, progress)?;
+            results.push(baselines_report(&name, &r, t0.elapsed().as_secs_f64()));
+        }
+        Experiment::Stability => {
+            let data = StabilityData::from_session(session, &DataOptions::default())?;
+            let mut settings = PipelineSettings {
+                cv_seed: a.seed,
+                ..Default::default()
+            };
+            settings.dictionary.seed = a.seed;
+            settings.svm.seed = a.seed;
+            let opts = StabilityOptions {
+                grid: Some(GridSpec::bench()),
+                settings,
+                ..Default::default()
+            };
+            let r = stability::run(&data, &opts, progress)?;
+            let report = stability_report(&r);
+            eprintln!("{}: done in {:.1} s", report.label, r.secs);
+            results.push(report);
+        }
+        Experiment::RobustnessStability | Experiment::RobustnessRecognition => {
+            let family = if a.experiment == Experiment::RobustnessStability {
+                Family::Stability
+            } else {
+                Family::Recognition
+            };
+            let params = RobustnessParams {
+                reps: a.reps,
+                seed: a.seed,
+                ..RobustnessParams::defaults(family)
+            };
+            let r = run_robustness(session, &params, progress)?;
+            eprint!("{}", super::robustness::table(&r));
+            results.push(robustness_report(&name, &r));
+        }
+        Experiment::Frontier => {
+            let methods: &[(FrontierMethod, FeatureSet)] = if session.label_set("object").is_some()
+            {
+                &[
+                    (FrontierMethod::Ds, FeatureSet::All),
+                    (FrontierMethod::Ds, FeatureSet::Encoder),
+                    (FrontierMethod::Gs, FeatureSet::All),
+                    (FrontierMethod::Gs, FeatureSet::Encoder),
+                ]
+            } else {
+                &[(FrontierMethod::SparseSvm, FeatureSet::All)]
+            };
+            for &(method, features) in methods {
+                let params = FrontierParams {
+                    features,
+                    reps: a.reps,
+                    seed: a.seed,
+                    ..FrontierParams::for_method(method)
+                };
+                let f = run_frontier(session, &params, progress)?;
+                super::frontier::print_frontier(&f);
+                frontiers.push(f);
+            }
+        }
+    }
+    Ok((results, frontiers))
 }

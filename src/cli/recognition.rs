@@ -6,6 +6,8 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use clap::Args;
 
+use super::progress::with_progress;
+use crate::experiments::clustering::{ClusteringParams, run_clustering};
 use crate::experiments::frontier::{Frontier, FrontierMethod};
 use crate::experiments::recognition::{
     RecognitionParams, RecognitionResult, SupervisedLearner, run_recognition,
@@ -65,10 +67,13 @@ pub struct RecognitionArgs {
     /// Write the full result here as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Print no progress.
+    #[arg(long, short)]
+    pub quiet: bool,
 }
 
 impl RecognitionArgs {
-    fn params(&self) -> anyhow::Result<RecognitionParams> {
+    pub(crate) fn params(&self) -> anyhow::Result<RecognitionParams> {
         let mut p = RecognitionParams {
             learner: self.learner.parse()?,
             features: self.features.parse::<FeatureSet>()?,
@@ -184,7 +189,7 @@ pub fn print_recognition(r: &RecognitionResult) {
 pub fn recognition(args: RecognitionArgs) -> anyhow::Result<()> {
     let params = args.params()?;
     let session = open_session(&args.session)?;
-    let result = run_recognition(&session, &params, &Progress::new())?;
+    let result = with_progress(args.quiet, |p| run_recognition(&session, &params, p))?;
     print_recognition(&result);
     write_json(&result, args.json.as_deref())
 }
@@ -240,6 +245,61 @@ pub struct ClusteringArgs {
     /// Write the full result here as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Print no progress.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+impl ClusteringArgs {
+    /// The parameters the arguments describe (checked).
+    pub(crate) fn params(&self) -> anyhow::Result<ClusteringParams> {
+        let args = self;
+        let learner = args.learner.parse()?;
+        let mut params = ClusteringParams {
+            features: args.features.parse::<FeatureSet>()?,
+            reps: args.reps,
+            seed: args.seed,
+            baseline_max_k: args.baseline_max_k,
+            ..ClusteringParams::for_learner(learner)
+        };
+        params.gu_aggregate = match args.gu_aggregate.as_str() {
+            "max" => crate::learners::GuAggregate::Max,
+            "mean" => crate::learners::GuAggregate::Mean,
+            "joint" => crate::learners::GuAggregate::Joint,
+            other => anyhow::bail!("--gu-aggregate: `{other}` is not mean, max or joint"),
+        };
+        params.gu_draws = match args.gu_draws.as_str() {
+            "grasps" => crate::learners::EvtDraws::Grasps,
+            "steps" => crate::learners::EvtDraws::Steps,
+            other => anyhow::bail!("--gu-draws: `{other}` is not grasps or steps"),
+        };
+        params.gu_noise = match args.gu_noise.as_str() {
+            "shared" => crate::learners::GuNoise::Shared,
+            "per-dimension" => crate::learners::GuNoise::PerDimension,
+            "per-dimension-filter" => crate::learners::GuNoise::PerDimensionFilter,
+            other => anyhow::bail!(
+                "--gu-noise: `{other}` is not shared, per-dimension or per-dimension-filter"
+            ),
+        };
+        if let Some(k) = args.gu_min_grasps {
+            params.gu_min_grasps = k;
+        }
+        if let Some(f) = args.gu_noise_floor {
+            params.gu_noise_floor = f;
+        }
+        if let Some(sn) = args.gu_sigma_n {
+            params.gs.gp.sigma_n = sn;
+        }
+        if !args.thresholds.is_empty() {
+            params.thresholds = args.thresholds.clone();
+        }
+        if args.no_adapt {
+            params.ds.gp.adaptation = None;
+            params.gs.gp.adaptation = None;
+        }
+        params.validate()?;
+        Ok(params)
+    }
 }
 
 fn print_point(name: &str, p: &Option<crate::experiments::clustering::EffectivePoint>) {
@@ -253,53 +313,9 @@ fn print_point(name: &str, p: &Option<crate::experiments::clustering::EffectiveP
 }
 
 pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
-    use crate::experiments::clustering::{ClusteringParams, run_clustering};
-    let learner = args.learner.parse()?;
-    let mut params = ClusteringParams {
-        features: args.features.parse::<FeatureSet>()?,
-        reps: args.reps,
-        seed: args.seed,
-        baseline_max_k: args.baseline_max_k,
-        ..ClusteringParams::for_learner(learner)
-    };
-    params.gu_aggregate = match args.gu_aggregate.as_str() {
-        "max" => crate::learners::GuAggregate::Max,
-        "mean" => crate::learners::GuAggregate::Mean,
-        "joint" => crate::learners::GuAggregate::Joint,
-        other => anyhow::bail!("--gu-aggregate: `{other}` is not mean, max or joint"),
-    };
-    params.gu_draws = match args.gu_draws.as_str() {
-        "grasps" => crate::learners::EvtDraws::Grasps,
-        "steps" => crate::learners::EvtDraws::Steps,
-        other => anyhow::bail!("--gu-draws: `{other}` is not grasps or steps"),
-    };
-    params.gu_noise = match args.gu_noise.as_str() {
-        "shared" => crate::learners::GuNoise::Shared,
-        "per-dimension" => crate::learners::GuNoise::PerDimension,
-        "per-dimension-filter" => crate::learners::GuNoise::PerDimensionFilter,
-        other => anyhow::bail!(
-            "--gu-noise: `{other}` is not shared, per-dimension or per-dimension-filter"
-        ),
-    };
-    if let Some(k) = args.gu_min_grasps {
-        params.gu_min_grasps = k;
-    }
-    if let Some(f) = args.gu_noise_floor {
-        params.gu_noise_floor = f;
-    }
-    if let Some(sn) = args.gu_sigma_n {
-        params.gs.gp.sigma_n = sn;
-    }
-    if !args.thresholds.is_empty() {
-        params.thresholds = args.thresholds.clone();
-    }
-    if args.no_adapt {
-        params.ds.gp.adaptation = None;
-        params.gs.gp.adaptation = None;
-    }
-    params.validate()?;
+    let params = args.params()?;
     let session = open_session(&args.session)?;
-    let r = run_clustering(&session, &params, &Progress::new())?;
+    let r = with_progress(args.quiet, |p| run_clustering(&session, &params, p))?;
     println!(
         "{:?}, {} orders per threshold, {:.1} s",
         params.learner, params.reps, r.wall_seconds

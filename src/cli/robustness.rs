@@ -5,11 +5,11 @@ use std::path::PathBuf;
 use anyhow::{Context, bail};
 use clap::Args;
 
+use super::progress::with_progress;
 use super::recognition::open_session;
 use crate::experiments::robustness::{
     Family, Method, Perturbation, RobustnessParams, RobustnessResult, Sweep, run_robustness,
 };
-use crate::jobs::Progress;
 
 #[derive(Args, Debug)]
 pub struct RobustnessArgs {
@@ -67,6 +67,9 @@ pub struct RobustnessArgs {
     /// Write the machine-readable results here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Print no progress.
+    #[arg(long, short)]
+    pub quiet: bool,
 }
 
 /// The parameters the arguments describe (checked by `validate` before any work).
@@ -146,7 +149,7 @@ pub fn run(a: RobustnessArgs) -> anyhow::Result<()> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.threads.unwrap_or(0))
         .build()?;
-    let r = pool.install(|| run_robustness(&session, &params, &Progress::new()))?;
+    let r = pool.install(|| with_progress(a.quiet, |p| run_robustness(&session, &params, p)))?;
     print!("{}", table(&r));
     super::recognition::write_json(&r, a.json.as_deref())
 }

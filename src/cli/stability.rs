@@ -8,6 +8,7 @@ use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 
+use super::progress::with_progress;
 use crate::experiments::stability::{
     self, Config, CvScheme, DataOptions, GridSpec, PipelineSettings, StabilityData,
     StabilityOptions, StabilityReport,
@@ -112,7 +113,7 @@ pub struct StabilityArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Print less.
+    /// Print no progress.
     #[arg(long, short)]
     pub quiet: bool,
 }
@@ -377,38 +378,10 @@ pub fn report(r: &StabilityReport) -> String {
     out
 }
 
-/// Print the job's progress to stderr every two seconds while `f` runs.
-fn with_progress<T>(quiet: bool, f: impl FnOnce(&Progress) -> T) -> T {
-    let progress = Progress::new();
-    if quiet {
-        return f(&progress);
-    }
-    let done = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    let watcher = {
-        let (p, done) = (progress.clone(), done.clone());
-        std::thread::spawn(move || {
-            let mut last = String::new();
-            let mut ticks = 0;
-            while !done.load(std::sync::atomic::Ordering::Relaxed) {
-                std::thread::sleep(std::time::Duration::from_millis(100));
-                ticks += 1;
-                if ticks % 20 == 0 {
-                    let msg = p.message();
-                    if msg != last && !msg.is_empty() {
-                        eprintln!("[{:>3.0} %] {msg}", 100.0 * p.fraction());
-                        last = msg;
-                    }
-                }
-            }
-        })
-    };
-    let out = f(&progress);
-    done.store(true, std::sync::atomic::Ordering::Relaxed);
-    let _ = watcher.join();
-    out
-}
-
-fn in_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> anyhow::Result<T> {
+pub(crate) fn in_pool<T: Send>(
+    threads: Option<usize>,
+    f: impl FnOnce() -> T + Send,
+) -> anyhow::Result<T> {
     match threads {
         Some(n) => Ok(rayon::ThreadPoolBuilder::new()
             .num_threads(n)
@@ -424,20 +397,22 @@ fn write_json(path: &Path, value: &impl Serialize) -> anyhow::Result<()> {
         .with_context(|| format!("writing {}", path.display()))
 }
 
+/// Which labels and scaling the arguments ask for.
+pub fn data_options(a: &StabilityArgs) -> DataOptions {
+    DataOptions {
+        label_set: a.label_set.clone(),
+        failure_class: a.failure_class.clone(),
+        scaling: if a.no_scaling {
+            PatchScaling::None
+        } else {
+            PatchScaling::ZScorePerTaxel
+        },
+    }
+}
+
 pub fn run(a: StabilityArgs) -> anyhow::Result<()> {
     let session = open(&a.session)?;
-    let data = StabilityData::from_session(
-        &session,
-        &DataOptions {
-            label_set: a.label_set.clone(),
-            failure_class: a.failure_class.clone(),
-            scaling: if a.no_scaling {
-                PatchScaling::None
-            } else {
-                PatchScaling::ZScorePerTaxel
-            },
-        },
-    )?;
+    let data = StabilityData::from_session(&session, &data_options(&a))?;
     let opts = options_from(&a, &data)?;
     let report = in_pool(a.threads, || {
         with_progress(a.quiet, |p| stability::run(&data, &opts, p))

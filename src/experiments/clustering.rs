@@ -22,13 +22,14 @@ use super::ExperimentError;
 use super::recognition::{MeanSd, session_labels};
 use crate::cluster::grasp_features::{Normalisation, Normaliser, session_features};
 use crate::cluster::{Schedule, SequentialKMeansParams, SomParams, scores};
-use crate::features::{FeatureSet, SequenceParams, feature_sequences};
+use crate::features::{FeatureSequences, FeatureSet, SequenceParams, feature_sequences};
 use crate::jobs::Progress;
 use crate::learners::{
     DsParams, Du, DuParams, EvtDraws, Gs, GsParams, Gu, GuAggregate, GuNoise, GuParams,
 };
 use crate::rng::Rng;
 use crate::session::Session;
+use ndarray::Array2;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -327,58 +328,46 @@ pub fn som_setup(k: usize, seed: u64) -> SomParams {
     }
 }
 
-type Baselines = (Vec<EffectivePoint>, Vec<EffectivePoint>);
 /// (effective clusters, purity, ARI, NMI) of one clustering.
-type Scored = (usize, f64, f64, f64);
+pub type Scored = (usize, f64, f64, f64);
 
-fn baselines(
-    session: &Session,
-    labels: &[usize],
-    params: &ClusteringParams,
-) -> Result<Baselines, ExperimentError> {
-    if params.baseline_max_k < 2 {
-        return Ok((Vec::new(), Vec::new()));
-    }
-    let cluster_err = |e: crate::cluster::ClusterError| ExperimentError::Data(e.to_string());
-    let raw = session_features(session).map_err(cluster_err)?;
-    let data = Normaliser::fit(Normalisation::ZScore, raw.view())
-        .and_then(|n| n.transform(raw.view()))
-        .map_err(cluster_err)?;
-    let jobs: Vec<(usize, usize)> = (2..=params.baseline_max_k.min(data.nrows()))
-        .flat_map(|k| (0..params.reps).map(move |r| (k, r)))
-        .collect();
-    let out: Vec<(Scored, Scored)> = jobs
-        .par_iter()
-        .map(|&(k, r)| {
-            let seed = Rng::stream(params.seed, (k * 100_000 + r) as u64).next_u64();
-            let km = SequentialKMeansParams { k, passes: 1, seed }
-                .fit(data.view())
-                .and_then(|m| m.assign(data.view()))
-                .map_err(cluster_err)?;
-            let som = som_setup(k, seed)
-                .fit(data.view())
-                .and_then(|m| m.assign(data.view()))
-                .map_err(cluster_err)?;
-            let (a, b) = (scores(labels, &km), scores(labels, &som));
-            Ok((
-                (distinct(&km), a.purity, a.ari, a.nmi),
-                (distinct(&som), b.purity, b.ari, b.nmi),
-            ))
-        })
-        .collect::<Result<_, ExperimentError>>()?;
-    Ok((
-        by_effective(out.iter().map(|x| x.0)),
-        by_effective(out.iter().map(|x| x.1)),
-    ))
+/// A unit of a clustering run: one learning run (threshold, order) or one seeded run of
+/// the k-means and SOM baselines with `k` centres / units. Its seeds follow from the run's
+/// seed and the item, so any machine computes it alike.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum ClusteringItem {
+    Run { threshold: f64, rep: usize },
+    Baseline { k: usize, rep: usize },
 }
 
-pub fn run_clustering(
+/// What an item leaves.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum ClusteringOutput {
+    Run { run: ClusteringRun },
+    Baseline { kmeans: Scored, som: Scored },
+}
+
+/// What every item shares: the labels, the feature sequences and the baselines' z-scored
+/// Table I features (None without baselines).
+pub struct ClusteringPrep {
+    pub labels: Vec<usize>,
+    pub class_names: Vec<String>,
+    pub feats: FeatureSequences,
+    pub table: Option<Array2<f64>>,
+}
+
+fn cluster_err(e: crate::cluster::ClusterError) -> ExperimentError {
+    ExperimentError::Data(e.to_string())
+}
+
+/// Check the parameters and prepare what every item shares.
+pub fn prepare_clustering(
     session: &Session,
     params: &ClusteringParams,
-    progress: &Progress,
-) -> Result<ClusteringResult, ExperimentError> {
+) -> Result<ClusteringPrep, ExperimentError> {
     params.validate()?;
-    let start = Instant::now();
     let (labels, class_names) = session_labels(session, &params.label_set)?;
     let feats = feature_sequences(
         session,
@@ -390,26 +379,98 @@ pub fn run_clustering(
     )?;
     // Fail early on parameters the learners reject.
     Gs::new(feats.dim(), &params.gs)?;
-    let jobs: Vec<(f64, usize)> = params
+    let table = if params.baseline_max_k >= 2 {
+        let raw = session_features(session).map_err(cluster_err)?;
+        Some(
+            Normaliser::fit(Normalisation::ZScore, raw.view())
+                .and_then(|n| n.transform(raw.view()))
+                .map_err(cluster_err)?,
+        )
+    } else {
+        None
+    };
+    Ok(ClusteringPrep {
+        labels,
+        class_names,
+        feats,
+        table,
+    })
+}
+
+/// The items of a run on `grasps` grasps: every (threshold, order), then every (k, order)
+/// of the baselines.
+pub fn clustering_items(params: &ClusteringParams, grasps: usize) -> Vec<ClusteringItem> {
+    let mut items: Vec<ClusteringItem> = params
         .thresholds
         .iter()
-        .flat_map(|&t| (0..params.reps).map(move |r| (t, r)))
-        .collect();
-    let done = AtomicUsize::new(0);
-    progress.set(0.0, "clustering: starting");
-    let runs: Vec<ClusteringRun> = jobs
-        .par_iter()
-        .map(|&(t, r)| {
-            progress.checkpoint()?;
-            let run = one_run(params, &feats.sequences, &labels, feats.dim(), t, r)?;
-            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-            progress.set(
-                d as f64 / jobs.len() as f64,
-                format!("clustering: {d}/{} runs", jobs.len()),
-            );
-            Ok(run)
+        .flat_map(|&threshold| {
+            (0..params.reps).map(move |rep| ClusteringItem::Run { threshold, rep })
         })
-        .collect::<Result<_, ExperimentError>>()?;
+        .collect();
+    if params.baseline_max_k >= 2 {
+        items
+            .extend((2..=params.baseline_max_k.min(grasps)).flat_map(|k| {
+                (0..params.reps).map(move |rep| ClusteringItem::Baseline { k, rep })
+            }));
+    }
+    items
+}
+
+/// Compute one item.
+pub fn clustering_item(
+    params: &ClusteringParams,
+    prep: &ClusteringPrep,
+    item: ClusteringItem,
+) -> Result<ClusteringOutput, ExperimentError> {
+    match item {
+        ClusteringItem::Run { threshold, rep } => Ok(ClusteringOutput::Run {
+            run: one_run(
+                params,
+                &prep.feats.sequences,
+                &prep.labels,
+                prep.feats.dim(),
+                threshold,
+                rep,
+            )?,
+        }),
+        ClusteringItem::Baseline { k, rep } => {
+            let data = prep.table.as_ref().ok_or_else(|| {
+                ExperimentError::param("baseline_max_k", "the baselines are switched off")
+            })?;
+            let seed = Rng::stream(params.seed, (k * 100_000 + rep) as u64).next_u64();
+            let km = SequentialKMeansParams { k, passes: 1, seed }
+                .fit(data.view())
+                .and_then(|m| m.assign(data.view()))
+                .map_err(cluster_err)?;
+            let som = som_setup(k, seed)
+                .fit(data.view())
+                .and_then(|m| m.assign(data.view()))
+                .map_err(cluster_err)?;
+            let (a, b) = (scores(&prep.labels, &km), scores(&prep.labels, &som));
+            Ok(ClusteringOutput::Baseline {
+                kmeans: (distinct(&km), a.purity, a.ari, a.nmi),
+                som: (distinct(&som), b.purity, b.ari, b.nmi),
+            })
+        }
+    }
+}
+
+/// The sweep's summaries, the effective-cluster curves and Table IV from the items'
+/// outputs (in item order).
+pub fn assemble_clustering(
+    params: &ClusteringParams,
+    prep: ClusteringPrep,
+    outputs: Vec<ClusteringOutput>,
+    wall_seconds: f64,
+) -> ClusteringResult {
+    let mut runs = Vec::new();
+    let mut base: Vec<(Scored, Scored)> = Vec::new();
+    for o in outputs {
+        match o {
+            ClusteringOutput::Run { run } => runs.push(run),
+            ClusteringOutput::Baseline { kmeans, som } => base.push((kmeans, som)),
+        }
+    }
     let sweep = params
         .thresholds
         .iter()
@@ -426,9 +487,9 @@ pub fn run_clustering(
         })
         .collect();
     let by_eff = by_effective(runs.iter().map(|r| (r.effective, r.purity, r.ari, r.nmi)));
-    progress.checkpoint()?;
-    let (kmeans, som) = baselines(session, &labels, params)?;
-    Ok(ClusteringResult {
+    let kmeans = by_effective(base.iter().map(|x| x.0));
+    let som = by_effective(base.iter().map(|x| x.1));
+    ClusteringResult {
         params: params.clone(),
         at_10: at(&by_eff, 10),
         kmeans_at_10: at(&kmeans, 10),
@@ -439,8 +500,39 @@ pub fn run_clustering(
         kmeans,
         som,
         som_setup: som_setup(10, params.seed),
-        wall_seconds: start.elapsed().as_secs_f64(),
-        labels,
-        class_names,
-    })
+        wall_seconds,
+        labels: prep.labels,
+        class_names: prep.class_names,
+    }
+}
+
+pub fn run_clustering(
+    session: &Session,
+    params: &ClusteringParams,
+    progress: &Progress,
+) -> Result<ClusteringResult, ExperimentError> {
+    let start = Instant::now();
+    let prep = prepare_clustering(session, params)?;
+    let items = clustering_items(params, session.grasps.len());
+    let done = AtomicUsize::new(0);
+    progress.set(0.0, "clustering: starting");
+    let outputs = items
+        .par_iter()
+        .map(|&item| {
+            progress.checkpoint()?;
+            let out = clustering_item(params, &prep, item)?;
+            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+            progress.set(
+                d as f64 / items.len() as f64,
+                format!("clustering: {d}/{} runs", items.len()),
+            );
+            Ok(out)
+        })
+        .collect::<Result<Vec<_>, ExperimentError>>()?;
+    Ok(assemble_clustering(
+        params,
+        prep,
+        outputs,
+        start.elapsed().as_secs_f64(),
+    ))
 }

@@ -3,9 +3,9 @@
 
 pub mod baselines_report;
 pub mod clustering;
-pub mod links;
 pub mod frontier;
 pub mod frontier_report;
+pub mod links;
 pub mod recognition;
 pub mod recognition_report;
 pub mod report;

@@ -388,16 +388,20 @@ fn run_repetition(
     })
 }
 
-/// Run the supervised protocol `params.reps` times (in parallel, each repetition on its own
-/// random stream, so results do not depend on the thread count).
-pub fn run_recognition(
+/// What every repetition shares: the labels, the class names and the clean feature
+/// sequences.
+pub struct RecognitionPrep {
+    pub labels: Vec<usize>,
+    pub classes: Vec<String>,
+    pub feats: FeatureSequences,
+}
+
+/// Check the parameters and prepare what every repetition shares.
+pub fn prepare_recognition(
     session: &Session,
     params: &RecognitionParams,
-    progress: &Progress,
-) -> Result<RecognitionResult, ExperimentError> {
+) -> Result<RecognitionPrep, ExperimentError> {
     params.validate()?;
-    let start = Instant::now();
-    let cpu_start = cpu_seconds(true);
     let (labels, classes) = session_labels(session, &params.label_set)?;
     let feats = feature_sequences(
         session,
@@ -407,14 +411,68 @@ pub fn run_recognition(
             seed: params.seed,
         },
     )?;
-    let n_classes = classes.len();
+    Ok(RecognitionPrep {
+        labels,
+        classes,
+        feats,
+    })
+}
+
+/// Repetition `rep` of the protocol, on its own random stream (`Rng::stream(seed, rep)`),
+/// so any machine computes it alike.
+pub fn recognition_repetition(
+    params: &RecognitionParams,
+    session: &Session,
+    prep: &RecognitionPrep,
+    rep: usize,
+) -> Result<RepetitionResult, ExperimentError> {
+    run_repetition(
+        params,
+        session,
+        &prep.feats,
+        &prep.labels,
+        prep.classes.len(),
+        rep,
+    )
+}
+
+/// The result from the repetitions (in order) and the run's timings.
+pub fn assemble_recognition(
+    params: &RecognitionParams,
+    prep: RecognitionPrep,
+    reps: Vec<RepetitionResult>,
+    wall_seconds: f64,
+    cpu_seconds: Option<f64>,
+) -> RecognitionResult {
+    let summary = summarise(&reps, prep.classes.len(), prep.feats.dim(), params);
+    RecognitionResult {
+        params: params.clone(),
+        classes: prep.classes,
+        feature_names: prep.feats.names,
+        summary,
+        repetitions: reps,
+        wall_seconds,
+        cpu_seconds,
+    }
+}
+
+/// Run the supervised protocol `params.reps` times (in parallel, each repetition on its own
+/// random stream, so results do not depend on the thread count).
+pub fn run_recognition(
+    session: &Session,
+    params: &RecognitionParams,
+    progress: &Progress,
+) -> Result<RecognitionResult, ExperimentError> {
+    let start = Instant::now();
+    let cpu_start = cpu_seconds(true);
+    let prep = prepare_recognition(session, params)?;
     let done = AtomicUsize::new(0);
     progress.set(0.0, "recognition: starting");
     let reps: Vec<RepetitionResult> = (0..params.reps)
         .into_par_iter()
         .map(|rep| {
             progress.checkpoint()?;
-            let r = run_repetition(params, session, &feats, &labels, n_classes, rep)?;
+            let r = recognition_repetition(params, session, &prep, rep)?;
             let d = done.fetch_add(1, Ordering::Relaxed) + 1;
             progress.set(
                 d as f64 / params.reps as f64,
@@ -423,16 +481,13 @@ pub fn run_recognition(
             Ok(r)
         })
         .collect::<Result<_, ExperimentError>>()?;
-    let summary = summarise(&reps, n_classes, feats.dim(), params);
-    Ok(RecognitionResult {
-        params: params.clone(),
-        classes,
-        feature_names: feats.names.clone(),
-        summary,
-        repetitions: reps,
-        wall_seconds: start.elapsed().as_secs_f64(),
-        cpu_seconds: cpu_seconds(true).zip(cpu_start).map(|(b, a)| b - a),
-    })
+    Ok(assemble_recognition(
+        params,
+        prep,
+        reps,
+        start.elapsed().as_secs_f64(),
+        cpu_seconds(true).zip(cpu_start).map(|(b, a)| b - a),
+    ))
 }
 
 fn summarise(

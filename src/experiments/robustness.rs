@@ -721,8 +721,12 @@ pub fn break_point(
 // The run
 // ---------------------------------------------------------------------------------------
 
-/// Prepared once per run.
-enum Prepared {
+/// What every task of a run shares, prepared once per run (or once per shard of a sweep).
+pub struct Prepared {
+    kind: PreparedKind,
+}
+
+enum PreparedKind {
     Stability(Box<StabilityPrep>),
     Recognition(Box<RecognitionPrep>),
 }
@@ -743,12 +747,21 @@ struct RecognitionPrep {
     table: Option<(Array2<f64>, Normaliser)>,
 }
 
-/// A task: the clean protocol (`sweep` None) or one strength of one sweep, one repetition.
-#[derive(Clone, Copy)]
-struct Task {
-    sweep: Option<usize>,
-    strength: usize,
-    rep: usize,
+/// A task: the clean protocol (`sweep` None) or one strength of one sweep (indices into
+/// the parameters' sweeps and their strengths), one repetition. Its seeds follow from the
+/// run's seed and `rep`, so any machine computes it alike.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Task {
+    pub sweep: Option<usize>,
+    pub strength: usize,
+    pub rep: usize,
+}
+
+/// A task's score for each method (in the parameters' order) and its seconds.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TaskScores {
+    pub scores: Vec<f64>,
+    pub seconds: f64,
 }
 
 /// Stream indices: the folds / order of repetition r use stream r; these offsets keep the
@@ -762,12 +775,12 @@ fn cluster_err(e: ClusterError) -> ExperimentError {
     ExperimentError::Data(e.to_string())
 }
 
-/// Run every sweep. Cancellable between tasks; `progress` gets the share of tasks done.
-pub fn run_robustness(
+/// The run's tasks, in order: the clean protocol's repetitions, then every applicable
+/// sweep's strengths and repetitions. Checks the parameters against the session first.
+pub fn robustness_tasks(
     session: &Session,
     params: &RobustnessParams,
-    progress: &Progress,
-) -> Result<RobustnessResult, ExperimentError> {
+) -> Result<Vec<Task>, ExperimentError> {
     params.validate()?;
     if let Some(sw) = params
         .sweeps
@@ -786,15 +799,6 @@ pub fn run_robustness(
             ),
         ));
     }
-    let start = Instant::now();
-    progress.set(0.0, "robustness: preparing");
-    let prepared = prepare(session, params, progress)?;
-    let setup_seconds = start.elapsed().as_secs_f64();
-    let not_applicable: Vec<Option<String>> = params
-        .sweeps
-        .iter()
-        .map(|sw| applicability(session, params.family, sw.perturbation))
-        .collect();
     let mut tasks: Vec<Task> = (0..params.reps)
         .map(|rep| Task {
             sweep: None,
@@ -803,7 +807,7 @@ pub fn run_robustness(
         })
         .collect();
     for (i, sw) in params.sweeps.iter().enumerate() {
-        if not_applicable[i].is_some() {
+        if applicability(session, params.family, sw.perturbation).is_some() {
             continue;
         }
         for s in 0..sw.strengths.len() {
@@ -816,36 +820,71 @@ pub fn run_robustness(
             }
         }
     }
+    Ok(tasks)
+}
+
+/// Run every sweep. Cancellable between tasks; `progress` gets the share of tasks done.
+pub fn run_robustness(
+    session: &Session,
+    params: &RobustnessParams,
+    progress: &Progress,
+) -> Result<RobustnessResult, ExperimentError> {
+    let tasks = robustness_tasks(session, params)?;
+    let start = Instant::now();
+    progress.set(0.0, "robustness: preparing");
+    let prepared = prepare(session, params, progress)?;
+    let setup_seconds = start.elapsed().as_secs_f64();
     let total = tasks.len();
     let done = AtomicUsize::new(0);
-    type TaskOut = (Vec<f64>, f64);
-    let outputs: Vec<Result<TaskOut, ExperimentError>> = tasks
+    let results = tasks
         .par_iter()
         .map(|t| {
             progress.checkpoint()?;
-            let t0 = Instant::now();
-            let scores = run_task(session, params, &prepared, *t)?;
+            let r = robustness_task(session, params, &prepared, *t)?;
             let d = done.fetch_add(1, Ordering::Relaxed) + 1;
             progress.set(
                 d as f64 / total as f64,
                 format!("robustness: {d}/{total} runs"),
             );
-            Ok((scores, t0.elapsed().as_secs_f64()))
+            Ok(r)
         })
+        .collect::<Result<Vec<_>, ExperimentError>>()?;
+    progress.set(1.0, format!("robustness: {total}/{total} runs done"));
+    Ok(assemble_robustness(
+        session,
+        params,
+        &tasks,
+        &results,
+        setup_seconds,
+        start.elapsed().as_secs_f64(),
+        rayon::current_num_threads(),
+    ))
+}
+
+/// The curves, clean scores and break points from the tasks' scores (in `tasks` order).
+pub fn assemble_robustness(
+    session: &Session,
+    params: &RobustnessParams,
+    tasks: &[Task],
+    results: &[TaskScores],
+    setup_seconds: f64,
+    wall_seconds: f64,
+    threads: usize,
+) -> RobustnessResult {
+    let not_applicable: Vec<Option<String>> = params
+        .sweeps
+        .iter()
+        .map(|sw| applicability(session, params.family, sw.perturbation))
         .collect();
-    let mut results: Vec<TaskOut> = Vec::with_capacity(total);
-    for o in outputs {
-        results.push(o?);
-    }
     // Assemble: results follow `tasks` order.
     let m = params.methods.len();
     let scores_of = |pred: &dyn Fn(&Task) -> bool, method: usize| -> (Vec<f64>, f64) {
         let mut v = Vec::new();
         let mut secs = 0.0;
-        for (t, (s, dt)) in tasks.iter().zip(&results) {
+        for (t, r) in tasks.iter().zip(results) {
             if pred(t) {
-                v.push(s[method]);
-                secs += dt / m as f64;
+                v.push(r.scores[method]);
+                secs += r.seconds / m as f64;
             }
         }
         (v, secs)
@@ -900,17 +939,16 @@ pub fn run_robustness(
             });
         }
     }
-    progress.set(1.0, format!("robustness: {total}/{total} runs done"));
-    Ok(RobustnessResult {
+    RobustnessResult {
         params: params.clone(),
         session: session.meta.name.clone(),
         score_name: params.family.score_name().into(),
         clean,
         curves,
         setup_seconds,
-        wall_seconds: start.elapsed().as_secs_f64(),
-        threads: rayon::current_num_threads(),
-    })
+        wall_seconds,
+        threads,
+    }
 }
 
 /// Why a perturbation cannot be applied to this session and family (None: it can).
@@ -927,23 +965,25 @@ fn applicability(session: &Session, family: Family, p: Perturbation) -> Option<S
     }
 }
 
-fn prepare(
+/// Prepare what every task shares: the stability data and its clean dictionary, or the
+/// clean feature sequences and labels.
+pub fn prepare(
     session: &Session,
     params: &RobustnessParams,
     progress: &Progress,
 ) -> Result<Prepared, ExperimentError> {
-    match params.family {
+    let kind = match params.family {
         Family::Stability => {
             let st = &params.stability;
             let data = StabilityData::from_session(session, &st.data)?;
             let dictionary = learn_dictionary(&data, st, progress)?;
             let (sparse, raw) = stability_features(&data, &dictionary, st.config.gamma)?;
-            Ok(Prepared::Stability(Box::new(StabilityPrep {
+            PreparedKind::Stability(Box::new(StabilityPrep {
                 data,
                 dictionary,
                 sparse,
                 raw,
-            })))
+            }))
         }
         Family::Recognition => {
             let rc = &params.recognition;
@@ -964,14 +1004,30 @@ fn prepare(
             } else {
                 None
             };
-            Ok(Prepared::Recognition(Box::new(RecognitionPrep {
+            PreparedKind::Recognition(Box::new(RecognitionPrep {
                 clean,
                 labels,
                 n_classes: classes.len(),
                 table,
-            })))
+            }))
         }
-    }
+    };
+    Ok(Prepared { kind })
+}
+
+/// One task's scores, timed.
+pub fn robustness_task(
+    session: &Session,
+    params: &RobustnessParams,
+    prepared: &Prepared,
+    task: Task,
+) -> Result<TaskScores, ExperimentError> {
+    let t0 = Instant::now();
+    let scores = run_task(session, params, prepared, task)?;
+    Ok(TaskScores {
+        scores,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
 }
 
 fn run_task(
@@ -995,11 +1051,11 @@ fn run_task(
         )?),
         None => None,
     };
-    match prepared {
-        Prepared::Stability(prep) => {
+    match &prepared.kind {
+        PreparedKind::Stability(prep) => {
             stability_task(params, prep, pert, perturbed.as_ref(), task.rep)
         }
-        Prepared::Recognition(prep) => {
+        PreparedKind::Recognition(prep) => {
             recognition_task(params, prep, pert, perturbed.as_ref(), task.rep)
         }
     }

@@ -473,96 +473,125 @@ pub struct GridResult {
     pub threads: usize,
 }
 
-/// Run the grid in parallel (rayon: one task per (num_bases, beta) dictionary, its gamma
-/// values coded and cross-validated in turn; the folds of each cross validation run in
-/// parallel too). Cancellable between dictionaries and learning iterations; `progress`
-/// gets the fraction of cells done. The same seeds give the same numbers whatever the
-/// thread count.
-pub fn grid_search(
+/// One task of the grid: a (num_bases, beta) dictionary, its gamma values coded and
+/// cross-validated in turn. The unit of parallel work here and of a sharded sweep.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GridTask {
+    pub num_bases: usize,
+    pub beta: f64,
+}
+
+/// What a grid task leaves: its cells (in gamma order) and its dictionary.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct GridTaskOutput {
+    pub cells: Vec<CellResult>,
+    pub dictionary: Dictionary,
+}
+
+impl GridSpec {
+    /// The grid's tasks in grid order (num_bases, then beta).
+    pub fn tasks(&self) -> Vec<GridTask> {
+        self.num_bases
+            .iter()
+            .flat_map(|&num_bases| {
+                self.beta
+                    .iter()
+                    .map(move |&beta| GridTask { num_bases, beta })
+            })
+            .collect()
+    }
+}
+
+/// Check the grid and the settings, and make the folds of the selection protocol.
+pub fn grid_folds(
     data: &StabilityData,
     spec: &GridSpec,
     settings: &PipelineSettings,
     cv: CvScheme,
-    progress: &Progress,
-) -> Result<GridResult, StabilityError> {
+) -> Result<Folds, StabilityError> {
     spec.validate()?;
     settings.dictionary.validate()?;
     settings.svm.validate()?;
-    let start = Instant::now();
-    let folds = cv.folds(data, settings.cv_seed)?;
-    let tasks: Vec<(usize, f64)> = spec
-        .num_bases
-        .iter()
-        .flat_map(|&k| spec.beta.iter().map(move |&b| (k, b)))
-        .collect();
-    let total = spec.cells();
-    let done = AtomicUsize::new(0);
-    progress.set(0.0, format!("grid search: {total} configurations"));
-    type TaskOut = (Vec<CellResult>, Dictionary);
-    let outputs: Vec<Result<TaskOut, StabilityError>> = tasks
-        .par_iter()
-        .map(|&(k, beta)| {
-            progress.checkpoint()?;
-            let params = DictionaryParams {
-                num_bases: k,
+    cv.folds(data, settings.cv_seed)
+}
+
+/// Learn the task's dictionary and score it with every gamma on `folds`; `on_cell` is told
+/// of each finished cell. Depends on nothing but its arguments (every seed is in
+/// `settings`), so any machine computes the same task alike.
+pub fn grid_task(
+    data: &StabilityData,
+    gamma: &[f64],
+    folds: &Folds,
+    settings: &PipelineSettings,
+    task: GridTask,
+    progress: &Progress,
+    on_cell: &(dyn Fn(&CellResult) + Sync),
+) -> Result<GridTaskOutput, StabilityError> {
+    progress.checkpoint()?;
+    let GridTask { num_bases, beta } = task;
+    let params = DictionaryParams {
+        num_bases,
+        beta,
+        ..settings.dictionary.clone()
+    };
+    let fit = params.fit_within(data.x.view(), progress)?;
+    let mut cells = Vec::with_capacity(gamma.len());
+    for &gamma in gamma {
+        progress.checkpoint()?;
+        let (codes, cvr, coding_secs, cv_secs) =
+            score_codes(data, &fit.dictionary, gamma, folds, &settings.svm)?;
+        let (sparsity, active) = sparsity_of(codes.view());
+        let cell = CellResult {
+            config: Config {
+                num_bases,
                 beta,
-                ..settings.dictionary.clone()
-            };
-            let fit = params.fit_within(data.x.view(), progress)?;
-            let mut cells = Vec::with_capacity(spec.gamma.len());
-            for &gamma in &spec.gamma {
-                progress.checkpoint()?;
-                let (codes, cvr, coding_secs, cv_secs) =
-                    score_codes(data, &fit.dictionary, gamma, &folds, &settings.svm)?;
-                let (sparsity, active) = sparsity_of(codes.view());
-                cells.push(CellResult {
-                    config: Config {
-                        num_bases: k,
-                        beta,
-                        gamma,
-                    },
-                    weighted_success_rate: cvr.weighted_success_rate,
-                    failure_recall: cvr.failure_recall,
-                    fold_wsr_mean: cvr.fold_wsr_mean,
-                    fold_wsr_se: cvr.fold_wsr_se,
-                    sparsity,
-                    active_bases_per_patch: active,
-                    dictionary_objective: fit.objective,
-                    dictionary_iterations: fit.iterations,
-                    dictionary_secs: fit.secs,
-                    coding_secs,
-                    cv_secs,
-                });
-                let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-                progress.set(
-                    n as f64 / total as f64,
-                    format!("grid search: {n}/{total} (num_bases {k}, beta {beta}, gamma {gamma})"),
-                );
-            }
-            Ok((cells, fit.dictionary))
-        })
-        .collect();
-    let mut cells = Vec::with_capacity(total);
+                gamma,
+            },
+            weighted_success_rate: cvr.weighted_success_rate,
+            failure_recall: cvr.failure_recall,
+            fold_wsr_mean: cvr.fold_wsr_mean,
+            fold_wsr_se: cvr.fold_wsr_se,
+            sparsity,
+            active_bases_per_patch: active,
+            dictionary_objective: fit.objective,
+            dictionary_iterations: fit.iterations,
+            dictionary_secs: fit.secs,
+            coding_secs,
+            cv_secs,
+        };
+        on_cell(&cell);
+        cells.push(cell);
+    }
+    Ok(GridTaskOutput {
+        cells,
+        dictionary: fit.dictionary,
+    })
+}
+
+/// The grid's result from the outputs of its tasks (in the order of `tasks`).
+pub fn assemble_grid(
+    spec: &GridSpec,
+    cv: CvScheme,
+    tasks: &[GridTask],
+    outputs: Vec<GridTaskOutput>,
+    secs: f64,
+    threads: usize,
+) -> GridResult {
+    let mut cells = Vec::with_capacity(spec.cells());
     let mut dicts = Vec::with_capacity(tasks.len());
     for out in outputs {
-        let (c, d) = out?;
-        cells.extend(c);
-        dicts.push(d);
+        cells.extend(out.cells);
+        dicts.push(out.dictionary);
     }
-    // Workers report out of order; the last word is the whole grid.
-    progress.set(
-        1.0,
-        format!("grid search: {total}/{total} configurations done"),
-    );
     let dict_of = |cell: &CellResult| -> Dictionary {
         let i = tasks
             .iter()
-            .position(|&(k, b)| k == cell.config.num_bases && b == cell.config.beta)
+            .position(|t| t.num_bases == cell.config.num_bases && t.beta == cell.config.beta)
             .expect("every cell comes from a task");
         dicts[i].clone()
     };
     let (best_per_num_bases, best, parsimonious) = choose(&cells, &spec.num_bases);
-    Ok(GridResult {
+    GridResult {
         spec: spec.clone(),
         cv,
         best_dictionary: dict_of(&best),
@@ -571,9 +600,52 @@ pub fn grid_search(
         best_per_num_bases,
         best,
         parsimonious,
-        secs: start.elapsed().as_secs_f64(),
-        threads: rayon::current_num_threads(),
-    })
+        secs,
+        threads,
+    }
+}
+
+/// Run the grid in parallel (rayon: one [`GridTask`] per (num_bases, beta) dictionary; the
+/// folds of each cross validation run in parallel too). Cancellable between dictionaries
+/// and learning iterations; `progress` gets the fraction of cells done. The same seeds
+/// give the same numbers whatever the thread count.
+pub fn grid_search(
+    data: &StabilityData,
+    spec: &GridSpec,
+    settings: &PipelineSettings,
+    cv: CvScheme,
+    progress: &Progress,
+) -> Result<GridResult, StabilityError> {
+    let folds = grid_folds(data, spec, settings, cv)?;
+    let start = Instant::now();
+    let tasks = spec.tasks();
+    let total = spec.cells();
+    let done = AtomicUsize::new(0);
+    progress.set(0.0, format!("grid search: {total} configurations"));
+    let on_cell = |c: &CellResult| {
+        let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+        progress.set(
+            n as f64 / total as f64,
+            format!("grid search: {n}/{total} ({})", c.config),
+        );
+    };
+    let outputs = tasks
+        .par_iter()
+        .map(|&t| grid_task(data, &spec.gamma, &folds, settings, t, progress, &on_cell))
+        .collect::<Result<Vec<_>, _>>()?;
+    // Workers report out of order; the last word is the whole grid.
+    progress.set(
+        1.0,
+        format!("grid search: {total}/{total} configurations done"),
+    );
+    Ok(assemble_grid(
+        spec,
+        cv,
+        &tasks,
+        outputs,
+        start.elapsed().as_secs_f64(),
+        rayon::current_num_threads(),
+    ))
 }
 
 /// Best cell per num_bases, the best overall (ties: fewer bases, then grid order) and the
@@ -1495,11 +1567,30 @@ pub fn run(
     progress: &Progress,
 ) -> Result<StabilityReport, StabilityError> {
     let start = Instant::now();
-    let s = &opts.settings;
     let grid = match &opts.grid {
-        Some(spec) => Some(grid_search(data, spec, s, opts.selection_cv, progress)?),
+        Some(spec) => Some(grid_search(
+            data,
+            spec,
+            &opts.settings,
+            opts.selection_cv,
+            progress,
+        )?),
         None => None,
     };
+    finish(data, opts, grid, start, progress)
+}
+
+/// The pipeline after the grid (if any): evaluation of the best and the parsimonious
+/// configurations under both protocols, the raw baseline, the analyses and the final
+/// model. `start` is when the run began (for the report's seconds).
+pub fn finish(
+    data: &StabilityData,
+    opts: &StabilityOptions,
+    grid: Option<GridResult>,
+    start: Instant,
+    progress: &Progress,
+) -> Result<StabilityReport, StabilityError> {
+    let s = &opts.settings;
     progress.set(1.0, "evaluating the chosen models");
     let (best_cfg, best_dict, pars_cfg, pars_dict) = match &grid {
         Some(g) => (

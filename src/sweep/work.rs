@@ -1,0 +1,386 @@
+//! The experiments a sweep can shard, each as the same units of work its single-machine
+//! run computes: the items (in the single-machine order), what every item shares, one
+//! item, and the result assembled from the items' outputs. The single-machine functions
+//! (`stability::grid_search`, `run_robustness`, `run_clustering`, `run_recognition`) call
+//! the same per-item functions, so a merged sweep equals the local run for the same seeds.
+
+use std::time::Instant;
+
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+
+use crate::experiments::clustering::{
+    ClusteringItem, ClusteringOutput, ClusteringParams, ClusteringPrep, assemble_clustering,
+    clustering_item, clustering_items, prepare_clustering,
+};
+use crate::experiments::recognition::{
+    RecognitionParams, RecognitionPrep, RepetitionResult, assemble_recognition,
+    prepare_recognition, recognition_repetition,
+};
+use crate::experiments::recognition_report::{clustering_report, recognition_report};
+use crate::experiments::report::AnalysisResult;
+use crate::experiments::robustness::{
+    self, RobustnessParams, Task, TaskScores, assemble_robustness, robustness_task,
+    robustness_tasks,
+};
+use crate::experiments::robustness_report::robustness_report;
+use crate::experiments::stability::{
+    self, DataOptions, GridTask, GridTaskOutput, StabilityData, StabilityOptions,
+};
+use crate::experiments::stability_report::stability_report;
+use crate::jobs::Progress;
+use crate::session::Session;
+use crate::svm::Folds;
+
+/// Timings of the shards a merge gathers.
+#[derive(Clone, Copy, Debug)]
+pub struct WorkTime {
+    /// Seconds of the shards' work, summed (the single-machine run's wall time on one
+    /// machine, roughly, when the shards ran one after another).
+    pub seconds: f64,
+    /// Worker threads of the shards (the largest).
+    pub threads: usize,
+}
+
+/// An experiment as a sweep: implement this for its parameters and add a variant to
+/// [`super::Experiment`] (and a line to its dispatch macro) to make it shardable.
+pub trait Sweepable: Serialize + DeserializeOwned + Clone + Sync {
+    type Item: Serialize + DeserializeOwned + Clone + Send + Sync;
+    type Prep: Sync;
+    type Output: Serialize + DeserializeOwned + Send;
+    type Result: Serialize;
+
+    /// A short name for logs and the Slurm job ("stability", ...).
+    fn name(&self) -> &'static str;
+    /// Every item, in the order the single-machine run assembles them. Checks the
+    /// parameters against the session.
+    fn items(&self, session: &Session) -> Result<Vec<Self::Item>, String>;
+    /// Relative cost of an item (to balance shards and estimate their time), in
+    /// CPU-seconds on a reference core for this session.
+    fn cost(&self, session: &Session, item: &Self::Item) -> f64;
+    /// What every item shares (computed once per shard).
+    fn prepare(&self, session: &Session, progress: &Progress) -> Result<Self::Prep, String>;
+    fn compute(
+        &self,
+        session: &Session,
+        prep: &Self::Prep,
+        item: &Self::Item,
+        progress: &Progress,
+    ) -> Result<Self::Output, String>;
+    /// The single-machine result from every item's output (in item order).
+    fn assemble(
+        &self,
+        session: &Session,
+        items: &[Self::Item],
+        outputs: Vec<Self::Output>,
+        time: WorkTime,
+        progress: &Progress,
+    ) -> Result<Self::Result, String>;
+    /// The result as the workbench keeps it (for a project file).
+    fn analysis(&self, session: &Session, result: &Self::Result) -> AnalysisResult;
+}
+
+/// Readings in a session (grasps × frames × taxels): the size the cost models scale with.
+fn readings(session: &Session) -> f64 {
+    let taxels: usize = session.sensors.iter().map(|s| s.layout.taxel_count()).sum();
+    let frames: usize = session.grasps.iter().map(|g| g.frames.len()).sum();
+    (taxels.max(1) * frames.max(1)) as f64
+}
+
+/// Patches of the stability pipeline (grasps × sensors) times the taxels of a patch.
+fn patch_values(session: &Session) -> f64 {
+    let taxels: usize = session.sensors.iter().map(|s| s.layout.taxel_count()).sum();
+    (session.grasps.len().max(1) * taxels.max(1)) as f64
+}
+
+// Cost constants: CPU-seconds per unit of work on a 2-core desktop, from the default grid
+// on BTS3 (1,276 grasps × 72 taxels: about 520 CPU-s; docs/cluster.md), its robustness
+// sweep with 10 repetitions (about 2,100 CPU-s over some 460 tasks) and DU's sweep on iCub
+// (about 1,100 CPU-s over 900 runs on some 156,000 readings). Rough: the time limit adds a
+// wide margin, and flags override it.
+/// Stability: per (patch value × basis × gamma) of a grid task.
+const STABILITY_COST: f64 = 1.2e-7;
+/// Robustness: per task and reading.
+const ROBUSTNESS_COST: f64 = 5.0e-5;
+/// Clustering: per learning run and reading; a baseline run costs a tenth of it.
+const CLUSTERING_COST: f64 = 8.0e-6;
+/// Recognition: per repetition and reading (a repetition teaches and predicts every grasp).
+const RECOGNITION_COST: f64 = 1.6e-5;
+
+/// The grasp-stability grid search and the pipeline after it.
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct StabilitySweep {
+    pub data: DataOptions,
+    /// Must hold a grid: its tasks are the items.
+    pub options: StabilityOptions,
+}
+
+pub struct StabilityPrep {
+    data: StabilityData,
+    folds: Folds,
+}
+
+impl StabilitySweep {
+    fn spec(&self) -> Result<&stability::GridSpec, String> {
+        self.options
+            .grid
+            .as_ref()
+            .ok_or_else(|| "a stability sweep needs a grid (one configuration is one item)".into())
+    }
+}
+
+impl Sweepable for StabilitySweep {
+    type Item = GridTask;
+    type Prep = StabilityPrep;
+    type Output = GridTaskOutput;
+    type Result = stability::StabilityReport;
+
+    fn name(&self) -> &'static str {
+        "stability"
+    }
+
+    fn items(&self, session: &Session) -> Result<Vec<GridTask>, String> {
+        let spec = self.spec()?;
+        let data = StabilityData::from_session(session, &self.data).map_err(|e| e.to_string())?;
+        stability::grid_folds(
+            &data,
+            spec,
+            &self.options.settings,
+            self.options.selection_cv,
+        )
+        .map_err(|e| e.to_string())?;
+        Ok(spec.tasks())
+    }
+
+    fn cost(&self, session: &Session, item: &GridTask) -> f64 {
+        let gammas = self.options.grid.as_ref().map_or(1, |g| g.gamma.len());
+        STABILITY_COST * patch_values(session) * item.num_bases as f64 * gammas as f64
+    }
+
+    fn prepare(&self, session: &Session, _progress: &Progress) -> Result<StabilityPrep, String> {
+        let data = StabilityData::from_session(session, &self.data).map_err(|e| e.to_string())?;
+        let folds = stability::grid_folds(
+            &data,
+            self.spec()?,
+            &self.options.settings,
+            self.options.selection_cv,
+        )
+        .map_err(|e| e.to_string())?;
+        Ok(StabilityPrep { data, folds })
+    }
+
+    fn compute(
+        &self,
+        _session: &Session,
+        prep: &StabilityPrep,
+        item: &GridTask,
+        progress: &Progress,
+    ) -> Result<GridTaskOutput, String> {
+        stability::grid_task(
+            &prep.data,
+            &self.spec()?.gamma,
+            &prep.folds,
+            &self.options.settings,
+            *item,
+            progress,
+            &|_| {},
+        )
+        .map_err(|e| e.to_string())
+    }
+
+    fn assemble(
+        &self,
+        session: &Session,
+        items: &[GridTask],
+        outputs: Vec<GridTaskOutput>,
+        time: WorkTime,
+        progress: &Progress,
+    ) -> Result<stability::StabilityReport, String> {
+        let start = Instant::now();
+        let data = StabilityData::from_session(session, &self.data).map_err(|e| e.to_string())?;
+        let grid = stability::assemble_grid(
+            self.spec()?,
+            self.options.selection_cv,
+            items,
+            outputs,
+            time.seconds,
+            time.threads,
+        );
+        stability::finish(&data, &self.options, Some(grid), start, progress)
+            .map_err(|e| e.to_string())
+    }
+
+    fn analysis(&self, _session: &Session, r: &stability::StabilityReport) -> AnalysisResult {
+        stability_report(r)
+    }
+}
+
+impl Sweepable for RobustnessParams {
+    type Item = Task;
+    type Prep = robustness::Prepared;
+    type Output = TaskScores;
+    type Result = robustness::RobustnessResult;
+
+    fn name(&self) -> &'static str {
+        "robustness"
+    }
+
+    fn items(&self, session: &Session) -> Result<Vec<Task>, String> {
+        robustness_tasks(session, self).map_err(|e| e.to_string())
+    }
+
+    fn cost(&self, session: &Session, _item: &Task) -> f64 {
+        ROBUSTNESS_COST * readings(session)
+    }
+
+    fn prepare(&self, session: &Session, progress: &Progress) -> Result<Self::Prep, String> {
+        robustness::prepare(session, self, progress).map_err(|e| e.to_string())
+    }
+
+    fn compute(
+        &self,
+        session: &Session,
+        prep: &Self::Prep,
+        item: &Task,
+        progress: &Progress,
+    ) -> Result<TaskScores, String> {
+        progress.checkpoint().map_err(|e| e.to_string())?;
+        robustness_task(session, self, prep, *item).map_err(|e| e.to_string())
+    }
+
+    fn assemble(
+        &self,
+        session: &Session,
+        items: &[Task],
+        outputs: Vec<TaskScores>,
+        time: WorkTime,
+        _progress: &Progress,
+    ) -> Result<Self::Result, String> {
+        // The shards' setup time is inside their seconds; the merge prepares nothing.
+        Ok(assemble_robustness(
+            session,
+            self,
+            items,
+            &outputs,
+            0.0,
+            time.seconds,
+            time.threads,
+        ))
+    }
+
+    fn analysis(&self, session: &Session, r: &Self::Result) -> AnalysisResult {
+        robustness_report(&session.meta.name, r)
+    }
+}
+
+impl Sweepable for ClusteringParams {
+    type Item = ClusteringItem;
+    type Prep = ClusteringPrep;
+    type Output = ClusteringOutput;
+    type Result = crate::experiments::clustering::ClusteringResult;
+
+    fn name(&self) -> &'static str {
+        "clustering"
+    }
+
+    fn items(&self, session: &Session) -> Result<Vec<ClusteringItem>, String> {
+        self.validate().map_err(|e| e.to_string())?;
+        Ok(clustering_items(self, session.grasps.len()))
+    }
+
+    fn cost(&self, session: &Session, item: &ClusteringItem) -> f64 {
+        let share = match item {
+            ClusteringItem::Run { .. } => 1.0,
+            ClusteringItem::Baseline { .. } => 0.1,
+        };
+        CLUSTERING_COST * share * readings(session)
+    }
+
+    fn prepare(&self, session: &Session, _progress: &Progress) -> Result<ClusteringPrep, String> {
+        prepare_clustering(session, self).map_err(|e| e.to_string())
+    }
+
+    fn compute(
+        &self,
+        _session: &Session,
+        prep: &ClusteringPrep,
+        item: &ClusteringItem,
+        progress: &Progress,
+    ) -> Result<ClusteringOutput, String> {
+        progress.checkpoint().map_err(|e| e.to_string())?;
+        clustering_item(self, prep, *item).map_err(|e| e.to_string())
+    }
+
+    fn assemble(
+        &self,
+        session: &Session,
+        _items: &[ClusteringItem],
+        outputs: Vec<ClusteringOutput>,
+        time: WorkTime,
+        _progress: &Progress,
+    ) -> Result<Self::Result, String> {
+        let prep = prepare_clustering(session, self).map_err(|e| e.to_string())?;
+        Ok(assemble_clustering(self, prep, outputs, time.seconds))
+    }
+
+    fn analysis(&self, session: &Session, r: &Self::Result) -> AnalysisResult {
+        clustering_report(&session.meta.name, r)
+    }
+}
+
+impl Sweepable for RecognitionParams {
+    type Item = usize;
+    type Prep = RecognitionPrep;
+    type Output = RepetitionResult;
+    type Result = crate::experiments::recognition::RecognitionResult;
+
+    fn name(&self) -> &'static str {
+        "recognition"
+    }
+
+    fn items(&self, _session: &Session) -> Result<Vec<usize>, String> {
+        self.validate().map_err(|e| e.to_string())?;
+        Ok((0..self.reps).collect())
+    }
+
+    fn cost(&self, session: &Session, _item: &usize) -> f64 {
+        RECOGNITION_COST * readings(session)
+    }
+
+    fn prepare(&self, session: &Session, _progress: &Progress) -> Result<RecognitionPrep, String> {
+        prepare_recognition(session, self).map_err(|e| e.to_string())
+    }
+
+    fn compute(
+        &self,
+        session: &Session,
+        prep: &RecognitionPrep,
+        rep: &usize,
+        progress: &Progress,
+    ) -> Result<RepetitionResult, String> {
+        progress.checkpoint().map_err(|e| e.to_string())?;
+        recognition_repetition(self, session, prep, *rep).map_err(|e| e.to_string())
+    }
+
+    fn assemble(
+        &self,
+        session: &Session,
+        _items: &[usize],
+        outputs: Vec<RepetitionResult>,
+        time: WorkTime,
+        _progress: &Progress,
+    ) -> Result<Self::Result, String> {
+        let prep = prepare_recognition(session, self).map_err(|e| e.to_string())?;
+        Ok(assemble_recognition(
+            self,
+            prep,
+            outputs,
+            time.seconds,
+            None,
+        ))
+    }
+
+    fn analysis(&self, session: &Session, r: &Self::Result) -> AnalysisResult {
+        recognition_report(&session.meta.name, r)
+    }
+}

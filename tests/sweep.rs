@@ -1,0 +1,298 @@
+//! Sharded sweeps on the bundled samples: merging the shards gives exactly the
+//! single-machine result (timings aside) for the stability grid, robustness, clustering and
+//! recognition; a killed shard, a rerun, a corrupted shard file and a plan from another
+//! session or plan are handled.
+
+mod common;
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use serde_json::Value;
+use tactile_workbench::experiments::clustering::{ClusteringParams, run_clustering};
+use tactile_workbench::experiments::recognition::{RecognitionParams, run_recognition};
+use tactile_workbench::experiments::robustness::{
+    Family, Perturbation, RobustnessParams, Sweep, run_robustness,
+};
+use tactile_workbench::experiments::stability::{
+    self, CvScheme, DataOptions, GridSpec, StabilityData, StabilityOptions,
+};
+use tactile_workbench::jobs::Progress;
+use tactile_workbench::session::{self, Session};
+use tactile_workbench::sweep::{
+    self, Experiment, PlanRequest, ShardRun, ShardState, StabilitySweep, SweepError,
+    result_difference,
+};
+
+fn sample(name: &str) -> Session {
+    session::load(&common::sample(name)).expect("sample session")
+}
+
+fn request(shards: usize) -> PlanRequest {
+    PlanRequest {
+        shards,
+        source: "sample".into(),
+        time_minutes: None,
+        cpus: None,
+        mem_mb: None,
+        partition: None,
+        program: "tactile-workbench".into(),
+    }
+}
+
+/// A small grid on the grasp-stability sample: 3 × 2 dictionaries, 2 gammas, 3 folds.
+fn stability_sweep() -> StabilitySweep {
+    let mut options = StabilityOptions {
+        grid: Some(GridSpec {
+            num_bases: vec![2, 4, 6],
+            beta: vec![0.5, 1.0],
+            gamma: vec![0.5, 1.0],
+        }),
+        selection_cv: CvScheme::KFold { k: 3 },
+        kfold: CvScheme::KFold { k: 3 },
+        objects: CvScheme::LeaveObjectsOut { folds: Some(3) },
+        ..StabilityOptions::default()
+    };
+    options.settings.dictionary.max_iter = 20;
+    options.settings.cv_seed = 3;
+    options.settings.dictionary.seed = 3;
+    StabilitySweep {
+        data: DataOptions::default(),
+        options,
+    }
+}
+
+fn local_stability(s: &Session, sw: &StabilitySweep) -> Value {
+    let data = StabilityData::from_session(s, &sw.data).unwrap();
+    let r = stability::run(&data, &sw.options, &Progress::new()).unwrap();
+    serde_json::to_value(&r).unwrap()
+}
+
+/// Plan into a fresh folder, run every shard (in reverse order: the order must not
+/// matter) and merge.
+fn sharded(tag: &str, s: &Session, e: Experiment, shards: usize) -> (PathBuf, Value) {
+    let dir = common::temp_dir(tag).join("plan");
+    let plan = sweep::write_plan(&dir, s, e, &request(shards)).unwrap();
+    assert_eq!(plan.shard_count(), shards);
+    for i in (0..shards).rev() {
+        let r = sweep::run_shard(&dir, i, &Progress::new()).unwrap();
+        assert!(matches!(r, ShardRun::Done { .. }), "{r:?}");
+    }
+    let merged = sweep::merge(&dir, &Progress::new()).unwrap();
+    (dir, merged.result)
+}
+
+fn assert_same(merged: &Value, local: &Value) {
+    if let Some(d) = result_difference(merged, local) {
+        panic!("merged and local results differ at {d}");
+    }
+}
+
+#[test]
+fn merged_stability_grid_equals_the_local_run() {
+    let s = sample("grasp-stability.json");
+    let sw = stability_sweep();
+    let local = local_stability(&s, &sw);
+    let (dir, merged) = sharded("sweep-stability", &s, Experiment::Stability(sw), 4);
+    assert_same(&merged, &local);
+    // Something to compare: 12 cells, and the sbatch script asks for 4 array tasks.
+    assert_eq!(merged["grid"]["cells"].as_array().unwrap().len(), 12);
+    let script = fs::read_to_string(dir.join(sweep::SBATCH_FILE)).unwrap();
+    assert!(script.contains("#SBATCH --array=0-3\n"), "{script}");
+    assert!(script.contains("sweep run"), "{script}");
+}
+
+#[test]
+fn the_comparison_sees_a_changed_score_but_not_a_timing() {
+    let a: Value =
+        serde_json::json!({"grid": {"secs": 1.0, "cells": [{"wsr": 0.5, "cv_secs": 2.0}]}});
+    let mut b = a.clone();
+    b["grid"]["secs"] = 9.0.into();
+    b["grid"]["cells"][0]["cv_secs"] = 7.0.into();
+    assert_eq!(result_difference(&a, &b), None);
+    b["grid"]["cells"][0]["wsr"] = 0.5000001.into();
+    let d = result_difference(&a, &b).expect("a difference");
+    assert!(d.starts_with(".grid.cells[0].wsr"), "{d}");
+}
+
+#[test]
+fn merged_robustness_equals_the_local_run() {
+    let s = sample("grasp-stability.json");
+    let mut p = RobustnessParams::defaults(Family::Stability);
+    p.reps = 2;
+    p.seed = 5;
+    p.stability.config.num_bases = 6;
+    p.stability.folds = 3;
+    p.stability.settings.dictionary.max_iter = 20;
+    p.sweeps = vec![
+        Sweep {
+            perturbation: Perturbation::Noise,
+            strengths: vec![0.5, 2.0],
+        },
+        Sweep {
+            perturbation: Perturbation::DeadTaxels,
+            strengths: vec![0.3],
+        },
+    ];
+    let local = serde_json::to_value(run_robustness(&s, &p, &Progress::new()).unwrap()).unwrap();
+    let (_, merged) = sharded("sweep-robustness", &s, Experiment::Robustness(p), 3);
+    assert_same(&merged, &local);
+    assert_eq!(merged["curves"].as_array().unwrap().len(), 4);
+}
+
+#[test]
+fn merged_clustering_and_recognition_equal_the_local_runs() {
+    let s = sample("object-recognition.json");
+    let mut c = ClusteringParams {
+        thresholds: vec![0.2, 0.6],
+        reps: 2,
+        seed: 4,
+        baseline_max_k: 4,
+        ..ClusteringParams::default()
+    };
+    c.ds.gp.capacity = 15;
+    c.ds.gp.tau = 4;
+    let local = serde_json::to_value(run_clustering(&s, &c, &Progress::new()).unwrap()).unwrap();
+    let (_, merged) = sharded("sweep-clustering", &s, Experiment::Clustering(c), 3);
+    assert_same(&merged, &local);
+    assert_eq!(merged["runs"].as_array().unwrap().len(), 4);
+
+    let mut r = RecognitionParams {
+        reps: 2,
+        seed: 2,
+        ..RecognitionParams::default()
+    };
+    r.gs.gp.capacity = 15;
+    r.gs.gp.tau = 4;
+    let local = serde_json::to_value(run_recognition(&s, &r, &Progress::new()).unwrap()).unwrap();
+    let (_, merged) = sharded("sweep-recognition", &s, Experiment::Recognition(r), 2);
+    assert_same(&merged, &local);
+}
+
+/// A plan of the small stability grid in `tag`, its shards not run.
+fn planned(tag: &str, shards: usize) -> (PathBuf, Session, StabilitySweep) {
+    let s = sample("grasp-stability.json");
+    let sw = stability_sweep();
+    let dir = common::temp_dir(tag).join("plan");
+    sweep::write_plan(
+        &dir,
+        &s,
+        Experiment::Stability(sw.clone()),
+        &request(shards),
+    )
+    .unwrap();
+    (dir, s, sw)
+}
+
+fn states(dir: &Path) -> Vec<ShardState> {
+    sweep::status(dir).unwrap().shards
+}
+
+#[test]
+fn a_killed_shard_is_missing_until_rerun_and_a_rerun_skips_a_done_shard() {
+    let (dir, s, sw) = planned("sweep-killed", 2);
+    sweep::run_shard(&dir, 0, &Progress::new()).unwrap();
+    let done = fs::read(sweep::shard_path(&dir, 0)).unwrap();
+    // Shard 1 was killed while writing: only its temporary file is there, half written.
+    let partial = dir.join("shards").join(".1.json.4242.tmp");
+    fs::write(&partial, &done[..done.len() / 2]).unwrap();
+    let st = states(&dir);
+    assert!(matches!(st[0], ShardState::Done { .. }), "{st:?}");
+    assert_eq!(st[1], ShardState::Missing { partial: true });
+    let err = sweep::merge(&dir, &Progress::new()).err().expect("refused");
+    let msg = err.to_string();
+    assert!(matches!(err, SweepError::Incomplete(_)), "{msg}");
+    assert!(msg.contains("shard 1: missing"), "{msg}");
+    assert!(
+        msg.contains("sweep run") && msg.contains("--shard 1"),
+        "{msg}"
+    );
+    assert!(msg.contains("sbatch --array=1 "), "{msg}");
+    // A rerun of the done shard does nothing; of the killed one, completes it.
+    assert_eq!(
+        sweep::run_shard(&dir, 0, &Progress::new()).unwrap(),
+        ShardRun::Skipped
+    );
+    assert_eq!(fs::read(sweep::shard_path(&dir, 0)).unwrap(), done);
+    assert!(matches!(
+        sweep::run_shard(&dir, 1, &Progress::new()).unwrap(),
+        ShardRun::Done { .. }
+    ));
+    assert!(!partial.exists(), "the partial file is cleaned up");
+    let merged = sweep::merge(&dir, &Progress::new()).unwrap();
+    assert_same(&merged.result, &local_stability(&s, &sw));
+}
+
+#[test]
+fn a_corrupted_shard_file_is_failed_until_rerun() {
+    let (dir, _, _) = planned("sweep-corrupt", 2);
+    for i in 0..2 {
+        sweep::run_shard(&dir, i, &Progress::new()).unwrap();
+    }
+    let path = sweep::shard_path(&dir, 1);
+    let good = fs::read_to_string(&path).unwrap();
+    fs::write(&path, &good[..good.len() - 10]).unwrap();
+    let st = states(&dir);
+    match &st[1] {
+        ShardState::Failed { reason } => assert!(reason.contains("not a shard result"), "{reason}"),
+        other => panic!("expected failed, got {other:?}"),
+    }
+    let msg = sweep::merge(&dir, &Progress::new())
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(msg.contains("shard 1: failed"), "{msg}");
+    // Changed numbers with valid JSON are caught too: another plan's hash.
+    let edited = good.replacen("\"plan_hash\": \"sha256:", "\"plan_hash\": \"sha256:0", 1);
+    fs::write(&path, edited).unwrap();
+    assert!(matches!(states(&dir)[1], ShardState::Failed { .. }));
+    assert!(matches!(
+        sweep::run_shard(&dir, 1, &Progress::new()).unwrap(),
+        ShardRun::Done { .. }
+    ));
+    assert!(matches!(states(&dir)[1], ShardState::Done { .. }));
+    assert!(sweep::merge(&dir, &Progress::new()).is_ok());
+}
+
+#[test]
+fn a_plan_from_another_session_refuses_to_run_and_merge() {
+    let (dir, _, _) = planned("sweep-other-session", 2);
+    sweep::run_shard(&dir, 0, &Progress::new()).unwrap();
+    // The session copy is replaced by another session.
+    let other = sample("object-recognition.json");
+    fs::write(dir.join("session.json"), session::native::to_string(&other)).unwrap();
+    let err = sweep::run_shard(&dir, 1, &Progress::new()).expect_err("refused");
+    assert!(matches!(err, SweepError::Mismatch(_)), "{err}");
+    assert!(err.to_string().contains("another session"), "{err}");
+    assert!(!sweep::shard_path(&dir, 1).exists());
+    // A shard of another plan is not taken either.
+    let (dir2, _, _) = planned("sweep-other-plan", 2);
+    fs::copy(sweep::shard_path(&dir, 0), sweep::shard_path(&dir2, 0)).unwrap();
+    let fresh = fs::read_to_string(dir2.join("plan.json")).unwrap();
+    fs::write(
+        dir2.join("plan.json"),
+        fresh.replace("\"source\": \"sample\"", "\"source\": \"elsewhere\""),
+    )
+    .unwrap();
+    match &states(&dir2)[0] {
+        ShardState::Failed { reason } => assert!(reason.contains("hash mismatch"), "{reason}"),
+        other => panic!("expected failed, got {other:?}"),
+    }
+}
+
+#[test]
+fn a_plan_refuses_more_shards_than_items_and_an_existing_plan() {
+    let (dir, s, sw) = planned("sweep-refuse", 2);
+    let again = sweep::write_plan(&dir, &s, Experiment::Stability(sw.clone()), &request(2));
+    assert!(
+        again
+            .err()
+            .unwrap()
+            .to_string()
+            .contains("already holds a plan")
+    );
+    let other = common::temp_dir("sweep-refuse-many").join("plan");
+    let many = sweep::write_plan(&other, &s, Experiment::Stability(sw), &request(7));
+    let msg = many.err().unwrap().to_string();
+    assert!(msg.contains("7 shards for 6 work items"), "{msg}");
+}
