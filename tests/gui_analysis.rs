@@ -249,7 +249,10 @@ fn stability_view_shows_the_first_papers_figures() {
     h.run_ok();
     h.state_mut().view = View::Stability;
     h.run_ok();
-    h.state_mut().analyses.stability.num_bases = 8;
+    {
+        let f = &mut h.state_mut().analyses.stability;
+        (f.num_bases, f.beta, f.gamma) = (10, 0.5, 0.5);
+    }
     run_job(&mut h);
     assert_result_count(&h, 1);
     for title in [
@@ -266,7 +269,12 @@ fn stability_view_shows_the_first_papers_figures() {
         .score("weighted success rate (10-fold)")
         .unwrap();
     h.get_by_label(&format!("{wsr:.4}"));
-    assert!(wsr > 0.6, "the sample's failures are learnable: {wsr}");
+    // Documented for K = 10, β = γ = 0.5 on the sample (docs/grasp-stability.md): 74.69 %,
+    // here to 2 points (about one standard error on 540 grasps; chance is 50 %).
+    assert!(
+        (wsr - 0.7469).abs() <= 0.02,
+        "10-fold weighted success rate {wsr}"
+    );
 
     // A click on a basis image shows that basis's usage by label.
     assert_eq!(h.get_all_by_label_contains("Click a basis").count(), 2);
