@@ -20,6 +20,8 @@ pub mod session;
 pub mod sparse;
 pub mod special;
 pub mod svm;
+#[cfg(test)]
+mod test_datasets;
 
 #[cfg(feature = "gui")]
 pub mod app;

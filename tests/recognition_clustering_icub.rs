@@ -1,7 +1,7 @@
 //! DU and GU on the real iCub dataset, one random order per threshold (the full sweep with
 //! 50 orders runs from the CLI): the shapes of the paper's Figs. 11–12.
 
-use std::path::Path;
+mod common;
 
 use tactile_workbench::experiments::clustering::{
     ClusteringParams, UnsupervisedLearner, run_clustering,
@@ -9,14 +9,9 @@ use tactile_workbench::experiments::clustering::{
 use tactile_workbench::jobs::Progress;
 use tactile_workbench::session::{Session, import_icub};
 
-const ICUB: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/datasets/icub-grasp");
-
 fn icub() -> Option<Session> {
-    if !Path::new(ICUB).exists() {
-        eprintln!("skipping: {ICUB} is absent");
-        return None;
-    }
-    Some(import_icub(Path::new(ICUB)).expect("the iCub dataset imports"))
+    let dir = common::dataset("icub-grasp")?;
+    Some(import_icub(&dir).expect("the iCub dataset imports"))
 }
 
 /// DU as in the paper's Fig. 11: purity falls as the threshold rises, and NMI rises to a

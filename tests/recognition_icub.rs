@@ -3,7 +3,7 @@
 //! "final 20%" ≥ 0.995 on all features; encoder only GS ≥ 0.92, DS ≥ 0.90 (the paper's
 //! Table II means, 0.921 and 0.907).
 
-use std::path::Path;
+mod common;
 
 use tactile_workbench::experiments::recognition::{
     RecognitionParams, SupervisedLearner, grasp_trace, run_recognition,
@@ -12,14 +12,9 @@ use tactile_workbench::features::FeatureSet;
 use tactile_workbench::jobs::Progress;
 use tactile_workbench::session::{Session, import_icub};
 
-const ICUB: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/datasets/icub-grasp");
-
 fn icub() -> Option<Session> {
-    if !Path::new(ICUB).exists() {
-        eprintln!("skipping: {ICUB} is absent");
-        return None;
-    }
-    Some(import_icub(Path::new(ICUB)).expect("the iCub dataset imports"))
+    let dir = common::dataset("icub-grasp")?;
+    Some(import_icub(&dir).expect("the iCub dataset imports"))
 }
 
 fn run(session: &Session, learner: SupervisedLearner, features: FeatureSet) -> (f64, f64) {
