@@ -9,13 +9,30 @@ use std::time::{Duration, Instant};
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use tactile_workbench::app::{View, WorkbenchApp};
+use tactile_workbench::app::WorkbenchApp;
 
 fn harness() -> Harness<'static, WorkbenchApp> {
     let mut h = common::gui::workbench(1400.0, 1000.0);
     h.get_by_label("Simulated object recognition").click();
     h.run_ok();
     h
+}
+
+/// Open a view by its tab, as a user does.
+fn open_view(h: &mut Harness<'static, WorkbenchApp>, title: &str) {
+    h.get_by_label(title).click();
+    h.run_ok();
+}
+
+/// Enter `value` in the numeric field labelled `label`: a click puts the field in text mode
+/// with its text selected, typing replaces the text, Enter commits it.
+fn enter(h: &mut Harness<'static, WorkbenchApp>, label: &str, value: &str) {
+    h.get_by_label(label).click();
+    h.run_ok();
+    h.get_by_label(label).type_text(value);
+    h.run_ok();
+    h.key_press(egui::Key::Enter);
+    h.run_ok();
 }
 
 /// Step until no job runs (bounded), sleeping so the worker gets the CPU.
@@ -50,11 +67,13 @@ fn assert_result_count(h: &Harness<'static, WorkbenchApp>, n: usize) {
 #[test]
 fn baselines_run_in_the_background_and_show_their_figures() {
     let mut h = harness();
-    h.get_by_label("Baselines").click();
-    h.run_ok();
+    open_view(&mut h, "Baselines");
     h.get_by_label_contains("No results yet");
-    h.state_mut().analyses.baselines.orders = 2;
-    h.state_mut().analyses.baselines.with_svm = false;
+    enter(&mut h, "orders", "2");
+    h.get_by_label("RBF SVM (5-fold)").click();
+    h.run_ok();
+    let form = &h.state().analyses.baselines;
+    assert_eq!((form.orders, form.with_svm), (2, false));
     h.get_by_label("Run").click();
     h.step();
     h.step();
@@ -70,9 +89,18 @@ fn baselines_run_in_the_background_and_show_their_figures() {
     h.get_by_label(&format!("{nmi:.4}"));
     assert!((0.0..=1.0).contains(&nmi));
 
+    // Without the SVM the result has no SVM score.
+    assert!(
+        h.state().analyses.results[0]
+            .scores
+            .iter()
+            .all(|(name, _)| !name.contains("SVM")),
+        "{:?}",
+        h.state().analyses.results[0].scores
+    );
+
     // The result appears on the speed-against-accuracy chart.
-    h.state_mut().view = View::SpeedAccuracy;
-    h.run_ok();
+    open_view(&mut h, "Speed vs accuracy");
     assert!(
         h.get_all_by_label("Speed against accuracy").count() >= 2,
         "heading and figure title"
@@ -107,9 +135,9 @@ fn baselines_run_in_the_background_and_show_their_figures() {
 #[test]
 fn a_cancelled_job_leaves_the_app_usable() {
     let mut h = harness();
-    h.state_mut().view = View::Baselines;
-    h.run_ok();
-    h.state_mut().analyses.baselines.orders = 200;
+    open_view(&mut h, "Baselines");
+    enter(&mut h, "orders", "200");
+    assert_eq!(h.state().analyses.baselines.orders, 200);
     h.get_by_label("Run").click();
     h.step();
     std::thread::sleep(Duration::from_millis(100));
@@ -128,8 +156,7 @@ fn a_cancelled_job_leaves_the_app_usable() {
     assert!(h.state().analyses.results.is_empty());
     h.get_by_label_contains("cancelled");
     // The replay still works.
-    h.state_mut().view = View::Replay;
-    h.run_ok();
+    open_view(&mut h, "Replay");
     h.get_by_label_contains("sponge #1 ·").click();
     h.run_ok();
     h.get_by_label_contains("Frame 1 /");
@@ -138,9 +165,9 @@ fn a_cancelled_job_leaves_the_app_usable() {
 #[test]
 fn recognition_and_clustering_views_show_the_papers_figures() {
     let mut h = harness();
-    h.state_mut().view = View::Recognition;
-    h.run_ok();
-    h.state_mut().analyses.recognition.reps = 1;
+    open_view(&mut h, "Recognition");
+    enter(&mut h, "repetitions", "1");
+    assert_eq!(h.state().analyses.recognition.reps, 1);
     run_job(&mut h);
     assert_result_count(&h, 1);
     for title in [
@@ -156,16 +183,17 @@ fn recognition_and_clustering_views_show_the_papers_figures() {
     h.get_by_label(&format!("{acc:.4}"));
 
     // The speed chart puts either training or prediction time on its axis.
-    h.state_mut().view = View::SpeedAccuracy;
-    h.run_ok();
+    open_view(&mut h, "Speed vs accuracy");
     h.get_by_label("prediction time per step or sample").click();
     h.run_ok();
     h.get_by_label("Prediction speed against accuracy");
 
-    h.state_mut().view = View::Clustering;
-    h.run_ok();
-    h.state_mut().analyses.clustering.reps = 1;
-    h.state_mut().analyses.clustering.thresholds = [0.2, 0.4, 0.1];
+    open_view(&mut h, "Clustering");
+    enter(&mut h, "repetitions", "1");
+    enter(&mut h, "from", "0.2");
+    enter(&mut h, "to", "0.4");
+    enter(&mut h, "step", "0.1");
+    assert_eq!(h.state().analyses.clustering.reps, 1);
     assert_eq!(
         h.state().analyses.clustering.threshold_list(),
         vec![0.2, 0.3, 0.4]
@@ -221,8 +249,7 @@ fn recognition_and_clustering_views_show_the_papers_figures() {
 #[test]
 fn choosing_gu_offers_its_thresholds_and_cluster_confirmation() {
     let mut h = harness();
-    h.state_mut().view = View::Clustering;
-    h.run_ok();
+    open_view(&mut h, "Clustering");
     assert_eq!(h.state().analyses.clustering.thresholds, [0.1, 0.95, 0.05]);
     assert!(h.query_by_label("grasps to keep a cluster:").is_none());
     h.get_by_role_and_label(egui::accesskit::Role::ComboBox, "Learner")
@@ -232,10 +259,15 @@ fn choosing_gu_offers_its_thresholds_and_cluster_confirmation() {
     h.run_ok();
     assert_eq!(h.state().analyses.clustering.thresholds, [0.02, 0.25, 0.01]);
     h.get_by_label("grasps to keep a cluster:");
-    h.state_mut().analyses.clustering.reps = 1;
-    h.state_mut().analyses.clustering.thresholds = [0.02, 0.04, 0.02];
-    h.state_mut().analyses.clustering.gu_min_grasps = 2;
-    h.run_ok();
+    enter(&mut h, "repetitions", "1");
+    enter(&mut h, "to", "0.04");
+    enter(&mut h, "step", "0.02");
+    enter(&mut h, "grasps to keep a cluster:", "2");
+    let form = &h.state().analyses.clustering;
+    assert_eq!(
+        (form.reps, form.thresholds, form.gu_min_grasps),
+        (1, [0.02, 0.04, 0.02], 2)
+    );
     run_job(&mut h);
     assert_result_count(&h, 1);
     let label = &h.state().analyses.results[0].label;
@@ -250,12 +282,12 @@ fn stability_view_shows_the_first_papers_figures() {
     let mut h = harness();
     h.get_by_label("Simulated grasp stability").click();
     h.run_ok();
-    h.state_mut().view = View::Stability;
-    h.run_ok();
-    {
-        let f = &mut h.state_mut().analyses.stability;
-        (f.num_bases, f.beta, f.gamma) = (10, 0.5, 0.5);
-    }
+    open_view(&mut h, "Grasp stability");
+    enter(&mut h, "num_bases", "10");
+    enter(&mut h, "β", "0.5");
+    enter(&mut h, "γ", "0.5");
+    let f = &h.state().analyses.stability;
+    assert_eq!((f.num_bases, f.beta, f.gamma), (10, 0.5, 0.5));
     run_job(&mut h);
     assert_result_count(&h, 1);
     for title in [
@@ -329,7 +361,7 @@ fn a_project_on_the_command_line_reopens_its_sessions_and_shows_its_results() {
     .save(&path)
     .unwrap();
     let mut h = common::gui::workbench_opening(vec![path], 1200.0, 900.0);
-    h.state_mut().view = View::Stability;
+    open_view(&mut h, "Grasp stability");
     for _ in 0..10 {
         h.step();
     }
@@ -342,7 +374,6 @@ fn a_project_on_the_command_line_reopens_its_sessions_and_shows_its_results() {
 
 #[test]
 fn robustness_view_sweeps_a_perturbation_and_charts_it() {
-    use tactile_workbench::experiments::robustness::{Method, Perturbation};
     let mut h = harness();
     h.get_by_label("Simulated grasp stability").click();
     h.run_ok();
@@ -352,12 +383,12 @@ fn robustness_view_sweeps_a_perturbation_and_charts_it() {
     h.get_by_label("sparse coding + SVM");
     assert!(h.query_by_label("DS").is_none());
     h.get_by_label("new-objects");
-    {
-        let form = &mut h.state_mut().analyses.robustness;
-        form.methods = vec![Method::RawSvm];
-        form.perturbations = vec![Perturbation::Noise, Perturbation::Truncation];
-        form.reps = 1;
+    // Untick the sparse pipeline and two of the default perturbations, tick truncation.
+    for label in ["sparse coding + SVM", "dead-taxels", "gain", "truncation"] {
+        h.get_by_label(label).click();
+        h.run_ok();
     }
+    enter(&mut h, "repetitions", "1");
     run_job(&mut h);
     let r = h.state().analyses.results.last().expect("a result");
     assert!(
@@ -371,4 +402,18 @@ fn robustness_view_sweeps_a_perturbation_and_charts_it() {
     h.get_by_label(&format!("{clean:.4}"));
     h.get_by_label("Robustness to noise");
     h.get_by_label("Robustness to truncation");
+    // Only what was ticked ran.
+    assert!(
+        r.score("sparse coding + SVM: clean weighted success rate")
+            .is_none()
+    );
+    let titles: Vec<&str> = r.figures.iter().map(|(_, f)| f.title.as_str()).collect();
+    assert_eq!(
+        titles
+            .iter()
+            .filter(|t| t.starts_with("Robustness to"))
+            .count(),
+        2,
+        "{titles:?}"
+    );
 }
