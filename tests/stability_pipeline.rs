@@ -283,6 +283,12 @@ fn parsimony_picks_the_smallest_dictionary_within_one_standard_error() {
     // Ties of the best go to the smaller dictionary.
     let (_, best, _) = stability::choose(&[cell(30, 0.9, 0.0), cell(20, 0.9, 0.0)], &[20, 30]);
     assert_eq!(best.config.num_bases, 20);
+    // A score exactly one standard error below the best qualifies (0.75 − 0.25 = 0.5 exactly).
+    let (_, best, pars) = stability::choose(&[cell(8, 0.5, 0.0), cell(16, 0.75, 0.25)], &[8, 16]);
+    assert_eq!((best.config.num_bases, pars.config.num_bases), (16, 8));
+    // Just below it does not.
+    let (_, _, pars) = stability::choose(&[cell(8, 0.49, 0.0), cell(16, 0.75, 0.25)], &[8, 16]);
+    assert_eq!(pars.config.num_bases, 16);
 }
 
 #[test]
