@@ -30,9 +30,12 @@ run() {
 scope() {
     case $1 in
     scores) run scores --file src/cluster/scores.rs -- --lib cluster::scores ;;
+    scores-pairs-entropy)
+        # The part of `scores` whose counts docs/testing.md records.
+        run scores-pairs-entropy --file src/cluster/scores.rs --re 'entropy|pairs' -- --lib cluster::scores ;;
     svm-eval) run svm-eval --file src/svm/eval.rs -- --test svm_eval ;;
     stability-selection)
-        # The grid's selection and parsimony rule, and the pooled scores of a CV.
+        # The grid's selection and parsimony rule.
         run stability-selection --file src/experiments/stability.rs \
             --re 'choose' -- --test stability_pipeline parsimony ;;
     sparse)
