@@ -21,6 +21,8 @@ pub mod sparse;
 pub mod special;
 pub mod svm;
 pub mod sweep;
+#[cfg(test)]
+mod test_datasets;
 
 #[cfg(feature = "gui")]
 pub mod app;

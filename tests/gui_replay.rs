@@ -99,11 +99,27 @@ fn filters_and_replays_an_object_recognition_grasp() {
     h.run_ok();
     h.get_by_label_contains("Class distribution at step 2 (true: sponge");
 
-    // Filtering by object keeps only that object's grasps.
-    h.state_mut().browser.object = Some("mug".into());
+    // Filtering by object keeps only that object's grasps: the combo offers every object.
+    h.get_by_role_and_label(egui::accesskit::Role::ComboBox, "Filter by object")
+        .click();
+    h.run_ok();
+    // The list is taller than the popup: scroll to the object first.
+    h.get_by_label("mug").scroll_to_me();
+    h.run_ok();
+    h.get_by_label("mug").click();
     h.run_ok();
     h.get_by_label("20 of 200 grasps");
     assert!(h.query_by_label_contains("sponge #1 ·").is_none());
+    assert_eq!(h.get_all_by_label_contains("mug #").count(), 20);
+    // And back to all of them.
+    h.get_by_role_and_label(egui::accesskit::Role::ComboBox, "Filter by object")
+        .click();
+    h.run_ok();
+    h.get_by_label("all objects").scroll_to_me();
+    h.run_ok();
+    h.get_by_label("all objects").click();
+    h.run_ok();
+    h.get_by_label("200 of 200 grasps");
 }
 
 /// A tile layout the user changed comes back after a restart (through what eframe stores).

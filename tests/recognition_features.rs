@@ -1,20 +1,17 @@
 //! Per-step feature sequences on the real iCub data: sizes, normalisation, feature switches
 //! and the raw-taxel noise of the robustness experiment.
 
-use std::path::Path;
+mod common;
 
 use tactile_workbench::features::{FeatureSet, SequenceParams, feature_sequences};
 use tactile_workbench::session::import_icub;
 
-const ICUB: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/datasets/icub-grasp");
-
 #[test]
 fn icub_sequences_have_the_papers_sizes_and_are_normalised() {
-    if !Path::new(ICUB).exists() {
-        eprintln!("skipping: {ICUB} is absent");
+    let Some(dir) = common::dataset("icub-grasp") else {
         return;
-    }
-    let s = import_icub(Path::new(ICUB)).unwrap();
+    };
+    let s = import_icub(&dir).unwrap();
     let of = |features, noise: f64, seed| {
         feature_sequences(
             &s,

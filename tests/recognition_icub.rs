@@ -1,9 +1,9 @@
 //! The paper's supervised protocol on the real iCub dataset, with 3 of the 50 repetitions
 //! (the full protocol runs from the CLI). Bars from the issue: DS and GS "all" ≥ 0.985 and
-//! "final 20%" ≥ 0.995 on all features; encoder only GS ≥ 0.92, DS ≥ 0.90, both raised to
-//! 0.93 here since this implementation reaches 0.947–0.948 over the full 50 repetitions.
+//! "final 20%" ≥ 0.995 on all features; encoder only GS ≥ 0.92, DS ≥ 0.90 (the paper's
+//! Table II means, 0.921 and 0.907).
 
-use std::path::Path;
+mod common;
 
 use tactile_workbench::experiments::recognition::{
     RecognitionParams, SupervisedLearner, grasp_trace, run_recognition,
@@ -12,14 +12,9 @@ use tactile_workbench::features::FeatureSet;
 use tactile_workbench::jobs::Progress;
 use tactile_workbench::session::{Session, import_icub};
 
-const ICUB: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/datasets/icub-grasp");
-
 fn icub() -> Option<Session> {
-    if !Path::new(ICUB).exists() {
-        eprintln!("skipping: {ICUB} is absent");
-        return None;
-    }
-    Some(import_icub(Path::new(ICUB)).expect("the iCub dataset imports"))
+    let dir = common::dataset("icub-grasp")?;
+    Some(import_icub(&dir).expect("the iCub dataset imports"))
 }
 
 fn run(session: &Session, learner: SupervisedLearner, features: FeatureSet) -> (f64, f64) {
@@ -56,9 +51,9 @@ fn table_ii_all_features() {
 fn table_ii_encoder_features() {
     let Some(s) = icub() else { return };
     let (gs, _) = run(&s, SupervisedLearner::Gs, FeatureSet::Encoder);
-    assert!(gs >= 0.93, "GS encoder all {gs}");
+    assert!(gs >= 0.92, "GS encoder all {gs}");
     let (ds, _) = run(&s, SupervisedLearner::Ds, FeatureSet::Encoder);
-    assert!(ds >= 0.93, "DS encoder all {ds}");
+    assert!(ds >= 0.90, "DS encoder all {ds}");
 }
 
 #[test]

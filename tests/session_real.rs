@@ -98,3 +98,23 @@ fn real_sessions_round_trip_exactly() {
     }
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Which real datasets this run has, on the terminal whatever the outcome: where one is
+/// absent every test that needs it skips (and says so); under CI this test fails instead.
+#[test]
+fn real_datasets_found() {
+    use std::io::Write;
+    let found: Vec<String> = ["icub-grasp", "bts3/biotac-palmdown-grasps.csv"]
+        .into_iter()
+        .map(|rel| match common::dataset(rel) {
+            Some(_) => format!("{rel} found"),
+            None => format!("{rel} ABSENT, its tests skipped"),
+        })
+        .collect();
+    let _ = writeln!(
+        std::io::stderr(),
+        "real datasets in {}: {}",
+        common::datasets_dir().display(),
+        found.join(", ")
+    );
+}

@@ -8,7 +8,8 @@
 //! - the raw-electrode linear SVM reaches ≥ 88.5 % (10-fold) and ≥ 86.5 % (leave one
 //!   object out).
 //!
-//! Skipped with a message when `../shared/datasets` is absent.
+//! Skipped, with a line on the terminal, when `../shared/datasets` is absent (a failure
+//! under CI).
 
 mod common;
 

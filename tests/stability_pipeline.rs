@@ -283,6 +283,12 @@ fn parsimony_picks_the_smallest_dictionary_within_one_standard_error() {
     // Ties of the best go to the smaller dictionary.
     let (_, best, _) = stability::choose(&[cell(30, 0.9, 0.0), cell(20, 0.9, 0.0)], &[20, 30]);
     assert_eq!(best.config.num_bases, 20);
+    // A score exactly one standard error below the best qualifies (0.75 − 0.25 = 0.5 exactly).
+    let (_, best, pars) = stability::choose(&[cell(8, 0.5, 0.0), cell(16, 0.75, 0.25)], &[8, 16]);
+    assert_eq!((best.config.num_bases, pars.config.num_bases), (16, 8));
+    // Just below it does not.
+    let (_, _, pars) = stability::choose(&[cell(8, 0.49, 0.0), cell(16, 0.75, 0.25)], &[8, 16]);
+    assert_eq!(pars.config.num_bases, 16);
 }
 
 #[test]
@@ -297,23 +303,29 @@ fn grid_search_can_be_cancelled_before_and_during() {
     p.cancel();
     let r = stability::grid_search(&d, &spec, &fast_settings(), CvScheme::KFold { k: 10 }, &p);
     assert_eq!(r.unwrap_err(), StabilityError::Cancelled);
-    // Cancelled from another thread while it runs: it stops well within a second.
+    // Cancelled from another thread once the first cell is done: it stops, and no cell
+    // starts after the cancel (each worker may finish the one it is scoring). The long wait
+    // only guards against a hang.
+    let cells = spec.cells() as f64;
     let p = Progress::new();
     let q = p.clone();
     let canceller = std::thread::spawn(move || {
-        std::thread::sleep(Duration::from_millis(200));
+        let t = Instant::now();
+        while q.fraction() == 0.0 && t.elapsed() < Duration::from_secs(300) {
+            std::thread::sleep(Duration::from_millis(1));
+        }
         q.cancel();
-        Instant::now()
+        (q.fraction() * cells).round()
     });
     let r = stability::grid_search(&d, &spec, &fast_settings(), CvScheme::KFold { k: 10 }, &p);
-    let asked = canceller.join().unwrap();
+    let done_at_cancel = canceller.join().unwrap();
     assert_eq!(r.unwrap_err(), StabilityError::Cancelled);
+    let done = (p.fraction() * cells).round();
     assert!(
-        asked.elapsed() < Duration::from_secs(1),
-        "stopped {:?} after the cancel",
-        asked.elapsed()
+        done_at_cancel >= 1.0 && done <= done_at_cancel + rayon::current_num_threads() as f64,
+        "{done_at_cancel} cells done at the cancel, {done} at the end"
     );
-    assert!(p.fraction() < 1.0);
+    assert!(done < cells);
 }
 
 #[test]
@@ -455,8 +467,19 @@ fn the_trained_model_scales_new_grasps_like_the_session() {
     );
 }
 
+/// The sample session's documented results (docs/grasp-stability.md, "The sample
+/// grasp-stability session", seeds 0): the default grid's best cell K = 11, β = 1, γ = 0.25
+/// scores 77.90 % (10-fold) and 76.79 % (leave-one-object-out), its recommended cell K = 10,
+/// β = 0.5, γ = 0.25 76.42 % and 75.68 %, the raw taxels 68.89 % and 68.77 %. The grid here
+/// holds those two cells and their two neighbours, so the same cells must win.
+///
+/// Tolerance: 2 points on each documented score, about one standard error of a weighted
+/// success rate on 540 grasps with 135 failures and twice the spread that the documented
+/// results show between dictionary starts; chance is 50 %. The codes' documented lead over
+/// the raw taxels (6.9–9.0 points) must hold to the same 2 points.
 #[test]
 fn the_whole_pipeline_runs_on_the_sample_session() {
+    const TOL: f64 = 0.02;
     let path = common::sample("grasp-stability.json");
     let session = tactile_workbench::session::load(&path).unwrap();
     let data = StabilityData::from_session(&session, &DataOptions::default()).unwrap();
@@ -464,28 +487,74 @@ fn the_whole_pipeline_runs_on_the_sample_session() {
     assert_eq!(data.sensor_count(), 2);
     let opts = StabilityOptions {
         grid: Some(GridSpec {
-            num_bases: vec![10, 29],
-            beta: vec![1.0],
-            gamma: vec![0.5, 1.0],
+            num_bases: vec![10, 11],
+            beta: vec![0.5, 1.0],
+            gamma: vec![0.25],
         }),
         ..StabilityOptions::default()
     };
     let r = stability::run(&data, &opts, &Progress::new()).unwrap();
     let g = r.grid.as_ref().unwrap();
     assert_eq!(g.cells.len(), 4);
-    assert!(g.parsimonious.config.num_bases <= g.best.config.num_bases);
-    for e in [&r.best, &r.parsimonious] {
+    let config = |k, beta| Config {
+        num_bases: k,
+        beta,
+        gamma: 0.25,
+    };
+    assert_eq!(r.best.config, config(11, 1.0));
+    assert_eq!(r.parsimonious.config, config(10, 0.5));
+    let baseline = &r.baseline;
+    assert_eq!(baseline.features, 56);
+    for (what, got, documented) in [
+        ("best, 10-fold", r.best.kfold.weighted_success_rate, 0.7790),
+        (
+            "best, new objects",
+            r.best.objects.weighted_success_rate,
+            0.7679,
+        ),
+        (
+            "recommended, 10-fold",
+            r.parsimonious.kfold.weighted_success_rate,
+            0.7642,
+        ),
+        (
+            "recommended, new objects",
+            r.parsimonious.objects.weighted_success_rate,
+            0.7568,
+        ),
+        (
+            "raw taxels, 10-fold",
+            baseline.kfold.weighted_success_rate,
+            0.6889,
+        ),
+        (
+            "raw taxels, new objects",
+            baseline.objects.weighted_success_rate,
+            0.6877,
+        ),
+    ] {
         assert!(
-            e.kfold.weighted_success_rate > 0.6,
-            "{}",
-            e.kfold.weighted_success_rate
+            (got - documented).abs() <= TOL,
+            "{what}: weighted success rate {got:.4}, documented {documented:.4}"
         );
-        assert!(e.objects.weighted_success_rate > 0.55);
-        assert!(e.sparsity > 0.5 && e.sparsity < 1.0);
+    }
+    // The codes beat the raw taxels under both protocols.
+    for e in [&r.best, &r.parsimonious] {
+        let kfold = e.kfold.weighted_success_rate - baseline.kfold.weighted_success_rate;
+        let objects = e.objects.weighted_success_rate - baseline.objects.weighted_success_rate;
+        assert!(
+            kfold >= 0.069 - TOL && objects >= 0.069 - TOL,
+            "{}: {kfold:.4} (10-fold), {objects:.4} (new objects) over the raw taxels",
+            e.config
+        );
+        // γ = 0.25 is a light penalty: codes with zeros, but not mostly zeros.
+        assert!(
+            e.sparsity > 0.0 && e.sparsity < 1.0,
+            "sparsity {}",
+            e.sparsity
+        );
         assert_eq!(e.kfold.confusion.total(), 540);
     }
-    assert!(r.baseline.kfold.weighted_success_rate > 0.6);
-    assert_eq!(r.baseline.features, 56);
     // The report serialises and names the convention and scaling.
     let text = serde_json::to_string(&r).unwrap();
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();

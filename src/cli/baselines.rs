@@ -204,11 +204,10 @@ mod tests {
     /// The command line end to end on the iCub dataset folder, with few orders.
     #[test]
     fn baselines_command_writes_json() {
-        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/datasets/icub-grasp");
-        if !std::path::Path::new(dir).exists() {
-            eprintln!("skipping: {dir} is absent");
+        let Some(dir) = crate::test_datasets::dataset("icub-grasp") else {
             return;
-        }
+        };
+        let dir = dir.to_str().expect("a UTF-8 path");
         let out = std::env::temp_dir().join(format!("baselines-{}.json", std::process::id()));
         let out_arg = out.to_string_lossy().into_owned();
         let args = [

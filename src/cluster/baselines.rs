@@ -432,12 +432,10 @@ mod tests {
     /// 0.04), and the SOM inside the 0.85–0.93 NMI range of its set-ups.
     #[test]
     fn icub_clustering_baselines() {
-        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/datasets/icub-grasp");
-        if !std::path::Path::new(dir).exists() {
-            eprintln!("skipping: {dir} is absent");
+        let Some(dir) = crate::test_datasets::dataset("icub-grasp") else {
             return;
-        }
-        let session = crate::session::import_icub(std::path::Path::new(dir)).unwrap();
+        };
+        let session = crate::session::import_icub(&dir).unwrap();
         let x = session_features(&session).unwrap();
         let truth = session.labels_of(session.label_set("object").unwrap());
         let params = BaselinesParams {

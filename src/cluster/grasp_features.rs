@@ -311,12 +311,10 @@ mod tests {
     /// On the iCub dataset: 200 grasps × 165 finite features.
     #[test]
     fn icub_table_one_features() {
-        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/datasets/icub-grasp");
-        if !std::path::Path::new(dir).exists() {
-            eprintln!("skipping: {dir} is absent");
+        let Some(dir) = crate::test_datasets::dataset("icub-grasp") else {
             return;
-        }
-        let session = crate::session::import_icub(std::path::Path::new(dir)).unwrap();
+        };
+        let session = crate::session::import_icub(&dir).unwrap();
         let data = session_features(&session).unwrap();
         assert_eq!(data.dim(), (200, 165));
         // the tactile moments vary across grasps

@@ -310,6 +310,24 @@ mod tests {
         ));
     }
 
+    /// I(T; T) = H(T); nothing to share on empty input or with a single group.
+    #[test]
+    fn mutual_info_of_a_labelling_with_itself_is_its_entropy() {
+        assert_eq!(mutual_info(&[], &[]), 0.0);
+        assert_eq!(mutual_info(&[3, 3, 3], &[0, 1, 2]), 0.0);
+        assert!(close(
+            mutual_info(&[0, 0, 1, 1], &[5, 5, 9, 9]),
+            2f64.ln(),
+            1e-15
+        ));
+        // Sizes 1, 1, 2 of 4: H = 2 (1/4) ln 4 + (1/2) ln 2 = 1.5 ln 2.
+        assert!(close(
+            mutual_info(&[0, 1, 2, 2], &[0, 1, 2, 2]),
+            1.5 * 2f64.ln(),
+            1e-15
+        ));
+    }
+
     /// scikit-learn `test_exactly_zero_info_score`: one class against all singletons.
     #[test]
     fn nmi_is_exactly_zero_without_shared_information() {

@@ -165,7 +165,7 @@ mod tests {
     }
 
     #[test]
-    fn an_error_is_reported_and_cancel_stops_within_a_unit() {
+    fn an_error_is_reported_and_cancel_stops_at_the_next_checkpoint() {
         let job: Job<()> = Job::spawn(
             "bad",
             || {},
@@ -173,22 +173,31 @@ mod tests {
         );
         assert_eq!(job.wait(), Outcome::Failed("beta must be positive".into()));
 
-        let job: Job<u32> = Job::spawn(
+        // Work that only a cancel ends (the minute is a guard against a hang, not a timing).
+        let job: Job<u64> = Job::spawn(
             "long",
             || {},
             |p| {
-                for i in 0..10_000 {
+                let t = Instant::now();
+                let mut units = 0u64;
+                while t.elapsed() < Duration::from_secs(60) {
                     p.checkpoint()?;
-                    p.set_fraction(i as f64 / 10_000.0);
+                    units += 1;
+                    p.set(0.5, units.to_string());
                     std::thread::sleep(Duration::from_millis(1));
                 }
-                Ok(1)
+                Ok(units)
             },
         );
-        std::thread::sleep(Duration::from_millis(20));
-        let t = Instant::now();
+        while job.progress.message().is_empty() {
+            std::thread::sleep(Duration::from_millis(1));
+        }
         job.cancel();
+        let progress = job.progress.clone();
         assert_eq!(job.wait(), Outcome::Cancelled);
-        assert!(t.elapsed() < Duration::from_secs(1));
+        // The worker has stopped: its count of units no longer advances.
+        let stopped = progress.message();
+        std::thread::sleep(Duration::from_millis(20));
+        assert_eq!(progress.message(), stopped);
     }
 }

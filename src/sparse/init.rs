@@ -183,16 +183,47 @@ mod tests {
     use super::*;
     use ndarray::array;
 
+    /// A v = λ v alone holds for zero vectors too: the eigenvectors must also be
+    /// orthonormal (Vᵀ V = I) and the eigenvalues must sum to the trace and multiply to the
+    /// determinant (invariants of any similarity transform).
     #[test]
     fn jacobi_diagonalises() {
-        let a = array![[4.0, 1.0, 0.5], [1.0, 3.0, 0.2], [0.5, 0.2, 1.0]];
-        let (vals, vecs) = symmetric_eigen(a.view());
-        for (i, &val) in vals.iter().enumerate() {
-            let v = vecs.column(i);
-            let av = a.dot(&v);
-            for r in 0..3 {
-                assert!((av[r] - val * v[r]).abs() < 1e-12);
+        let small = array![[4.0, 1.0, 0.5], [1.0, 3.0, 0.2], [0.5, 0.2, 1.0]];
+        // A larger one with a repeated eigenvalue: B Bᵀ of a 6 × 4 B has rank 4, so 0 twice.
+        let mut rng = Rng::new(7);
+        let b = Array2::from_shape_fn((6, 4), |_| rng.normal());
+        let large = b.dot(&b.t());
+        for a in [small, large] {
+            let n = a.nrows();
+            let (vals, vecs) = symmetric_eigen(a.view());
+            let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (i, &val) in vals.iter().enumerate() {
+                let v = vecs.column(i);
+                let av = a.dot(&v);
+                for r in 0..n {
+                    assert!((av[r] - val * v[r]).abs() < 1e-10 * scale);
+                }
+            }
+            let vtv = vecs.t().dot(&vecs);
+            for i in 0..n {
+                for j in 0..n {
+                    let want = if i == j { 1.0 } else { 0.0 };
+                    assert!((vtv[[i, j]] - want).abs() < 1e-12, "VᵀV[{i}][{j}]");
+                }
+            }
+            let trace: f64 = (0..n).map(|i| a[[i, i]]).sum();
+            assert!((vals.iter().sum::<f64>() - trace).abs() < 1e-10 * scale);
+            // V diag(λ) Vᵀ rebuilds A.
+            let rebuilt = vecs.dot(&Array2::from_diag(&ndarray::Array1::from(vals.clone())));
+            let rebuilt = rebuilt.dot(&vecs.t());
+            for (x, y) in rebuilt.iter().zip(a.iter()) {
+                assert!((x - y).abs() < 1e-10 * scale);
             }
         }
+        // The 3 × 3 one's determinant, by cofactors: 4(3 − 0.04) − 1(1 − 0.1) + 0.5(0.2 − 1.5).
+        let (vals, _) =
+            symmetric_eigen(array![[4.0, 1.0, 0.5], [1.0, 3.0, 0.2], [0.5, 0.2, 1.0]].view());
+        let det = 4.0 * (3.0 - 0.04) - (1.0 - 0.1) + 0.5 * (0.2 - 1.5);
+        assert!((vals.iter().product::<f64>() - det).abs() < 1e-12);
     }
 }

@@ -592,12 +592,10 @@ mod tests {
     /// features of the iCub dataset.
     #[test]
     fn icub_five_fold_accuracy() {
-        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/datasets/icub-grasp");
-        if !std::path::Path::new(dir).exists() {
-            eprintln!("skipping: {dir} is absent");
+        let Some(dir) = crate::test_datasets::dataset("icub-grasp") else {
             return;
-        }
-        let session = crate::session::import_icub(std::path::Path::new(dir)).unwrap();
+        };
+        let session = crate::session::import_icub(&dir).unwrap();
         let x = crate::cluster::grasp_features::session_features(&session).unwrap();
         let set = session.label_set("object").unwrap();
         let y = session.labels_of(set);

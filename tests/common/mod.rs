@@ -6,17 +6,10 @@ pub mod gui;
 
 use std::path::PathBuf;
 
-/// `../shared/datasets/<rel>` beside the checkout, or None (with the reason printed) when
-/// the real data is not there: tests that need it then skip.
-pub fn dataset(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/datasets")).join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("skipped: real dataset {} is not present", p.display());
-        None
-    }
-}
+#[path = "../../src/test_datasets.rs"]
+mod test_datasets;
+#[allow(unused_imports)] // as dead_code above
+pub use test_datasets::{dataset, datasets_dir};
 
 pub fn sample(name: &str) -> PathBuf {
     PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/sample-sessions")).join(name)
