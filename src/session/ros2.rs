@@ -101,7 +101,7 @@ fn parse_bag_time(text: &str) -> Option<u64> {
     }
     // Scientific notation and the like: through f64 (microsecond precision at epoch times).
     let v: f64 = t.parse().ok()?;
-    (v.is_finite() && v >= 0.0 && v < 1.8e10).then(|| (v * 1e9).round() as u64)
+    (0.0..1.8e10).contains(&v).then(|| (v * 1e9).round() as u64)
 }
 
 fn read_windows(csv: &Path, spec: &ImportSpec) -> Result<Vec<Window>, SessionError> {
