@@ -236,6 +236,12 @@ fn truncated_bag() {
     }
     std::fs::write(&cut, b"not a bag at all").unwrap();
     assert_has(&error_of(&cut, &spec), &["not an MCAP file"]);
+    // A damaged chunk on which the MCAP library panics (found by fuzzing).
+    let damaged = fixtures().join("ros2/bad/damaged-chunk.mcap");
+    assert_has(
+        &error_of(&damaged, &events_bag().1),
+        &["damaged-chunk.mcap: the bag is damaged"],
+    );
 }
 
 #[test]

@@ -306,7 +306,18 @@ pub fn read(path: &Path, spec: &ImportSpec, events: Option<&str>) -> Result<Bag,
     // Every topic of the bag with its type, to name them when a spec topic is missing.
     let mut seen: Vec<(String, String)> = Vec::new();
     for file in &files {
-        read_file(file, spec, &roles, &mut bag, &mut seen)?;
+        // The MCAP library (0.26) panics on some damaged chunks — it reserves an inner
+        // record's length before checking it (found by fuzzing, tests/fixtures/ros2/bad/
+        // damaged-chunk.mcap): a damaged bag is an error, never a crash.
+        let read = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            read_file(file, spec, &roles, &mut bag, &mut seen)
+        }));
+        read.unwrap_or_else(|_| {
+            Err(SessionError::file(
+                file,
+                "the bag is damaged: a chunk's records do not fit in it",
+            ))
+        })?;
     }
     for (topic, role) in &roles {
         if !seen.iter().any(|(t, _)| t == topic) {
