@@ -306,18 +306,7 @@ pub fn read(path: &Path, spec: &ImportSpec, events: Option<&str>) -> Result<Bag,
     // Every topic of the bag with its type, to name them when a spec topic is missing.
     let mut seen: Vec<(String, String)> = Vec::new();
     for file in &files {
-        // The MCAP library (0.26) panics on some damaged chunks — it reserves an inner
-        // record's length before checking it (found by fuzzing, tests/fixtures/ros2/bad/
-        // damaged-chunk.mcap): a damaged bag is an error, never a crash.
-        let read = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            read_file(file, spec, &roles, &mut bag, &mut seen)
-        }));
-        read.unwrap_or_else(|_| {
-            Err(SessionError::file(
-                file,
-                "the bag is damaged: a chunk's records do not fit in it",
-            ))
-        })?;
+        read_file(file, spec, &roles, &mut bag, &mut seen)?;
     }
     for (topic, role) in &roles {
         if !seen.iter().any(|(t, _)| t == topic) {
@@ -358,7 +347,21 @@ fn read_file(
     let mut channels: HashMap<u16, Option<Checked>> = HashMap::new();
     let mut scratch: Vec<f64> = Vec::new();
     let joint_names = spec.encoder_names();
-    while let Some(next) = stream.next() {
+    loop {
+        // The MCAP library (0.26) panics on some damaged chunks — it reserves an inner
+        // record's length before checking it (found by fuzzing, tests/fixtures/ros2/bad/
+        // damaged-chunk.mcap): a damaged bag is an error, never a crash. Only the
+        // library's step is guarded, so a fault of our own still shows.
+        let next = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| stream.next()))
+            .map_err(|_| {
+                SessionError::file(
+                    file,
+                    "the bag is damaged: a chunk's records do not fit in it",
+                )
+            })?;
+        let Some(next) = next else {
+            break;
+        };
         let msg = next.map_err(|e| mcap_error(file, &e))?;
         let id = msg.header.channel_id;
         let t = msg.header.log_time;
