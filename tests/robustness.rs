@@ -32,6 +32,7 @@ fn session(grasps: usize, frames: usize, wide: bool) -> Session {
             layout: Layout::Grid { rows: 3, cols: 4 },
             unit: "raw capacitance (0–255, falls under pressure)".into(),
             transform: ValueTransform::Reversed { offset: 255.0 },
+            range: None,
         })
         .collect();
     if wide {
@@ -42,6 +43,7 @@ fn session(grasps: usize, frames: usize, wide: bool) -> Session {
             transform: ValueTransform::BaselineMinus {
                 baseline: vec![900.0; 12],
             },
+            range: None,
         });
     }
     let mut rng = Rng::new(7);

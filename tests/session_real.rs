@@ -23,6 +23,12 @@ fn icub_dataset_imports_the_papers_200_grasps() {
     assert_eq!(*lengths.iter().min().unwrap(), 4);
     assert_eq!(*lengths.iter().max().unwrap(), 22);
     assert!(s.meta.licence.contains("Copyright 2012 Harold Soh"));
+    // The source names the folder, not where it lies on this machine.
+    assert_eq!(
+        s.meta.source,
+        "iCub grasp dataset (Soh & Demiris), imported from icub-grasp"
+    );
+    assert_eq!(s.sensors[0].range, Some([0.0, 255.0]));
     // blue_bear_1.txt, first time step: encoder 0 is 20.7273, thumb taxel 0 reads 242.
     let g = s
         .grasps
@@ -78,6 +84,36 @@ fn bts3_imports_1276_grasps_on_41_objects() {
         .collect();
     assert!(p.iter().all(|&v| v >= 0.0));
     assert!(p.contains(&0.0));
+}
+
+#[test]
+fn a_bts3_file_is_named_after_the_file_not_the_palm_down_set() {
+    let Some(csv) = common::dataset("bts3/biotac-palmdown-grasps.csv") else {
+        return;
+    };
+    let s = session::import_bts3(&csv).expect("import");
+    assert_eq!(
+        s.meta.name,
+        "BioTac SP grasp stability (biotac-palmdown-grasps)"
+    );
+    assert_eq!(
+        s.meta.source,
+        "BTS3 BioTac SP grasps, imported from biotac-palmdown-grasps.csv"
+    );
+    // The palm-side file of the same set, here the first grasps under that name.
+    let dir = common::temp_dir("bts3-name");
+    let side = dir.join("biotac-palmside-grasps.csv");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let head: Vec<&str> = text.lines().take(6).collect();
+    std::fs::write(&side, head.join("\n")).unwrap();
+    let s = session::import_bts3(&side).expect("import");
+    assert_eq!(
+        s.meta.name,
+        "BioTac SP grasp stability (biotac-palmside-grasps)"
+    );
+    assert!(!s.meta.name.contains("palm down") && !s.meta.notes.contains("palm"));
+    assert!(!s.meta.source.contains(&*dir.to_string_lossy()));
+    let _ = std::fs::remove_dir_all(dir);
 }
 
 #[test]

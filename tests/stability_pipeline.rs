@@ -26,6 +26,7 @@ fn session(grasps: usize, seed: u64) -> Session {
         layout: Layout::Grid { rows: 2, cols: 3 },
         unit: "kPa".into(),
         transform: ValueTransform::Reversed { offset: 100.0 },
+        range: None,
     };
     let grasps = (0..grasps)
         .map(|g| {

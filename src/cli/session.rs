@@ -39,13 +39,35 @@ pub enum ImportSource {
         #[arg(long)]
         include_full_coke: bool,
     },
-    /// The BioTac SP palm-down grasp CSV.
+    /// A BioTac SP grasp CSV of the BTS3 set (e.g. the palm-down grasps).
     Bts3 {
         /// The CSV file.
         csv: PathBuf,
         /// Write the native session here.
         #[arg(short, long)]
         output: PathBuf,
+    },
+    /// A ROS 2 bag (MCAP) described by an import spec (docs/import.md).
+    Mcap {
+        /// A .mcap file, or a bag folder as `ros2 bag record` writes it.
+        bag: PathBuf,
+        /// Write the native session here.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// The import spec (JSON): sensors, joints, label sets, how grasps are cut.
+        #[arg(long)]
+        spec: PathBuf,
+    },
+    /// A long-format CSV (one row per frame) described by an import spec (docs/import.md).
+    Csv {
+        /// The CSV file.
+        file: PathBuf,
+        /// Write the native session here.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// The import spec (JSON): sensors, joints, label sets.
+        #[arg(long)]
+        spec: PathBuf,
     },
 }
 
@@ -157,6 +179,18 @@ pub fn import(args: ImportArgs) -> anyhow::Result<()> {
         ImportSource::Bts3 { csv, output } => {
             let s = session::import_bts3(&csv)
                 .with_context(|| format!("importing BTS3 grasps from {}", csv.display()))?;
+            write(&s, &output)
+        }
+        ImportSource::Mcap { bag, output, spec } => {
+            let spec = session::ImportSpec::load(&spec)?;
+            let s = session::ros2::import_bag(&bag, &spec)
+                .with_context(|| format!("importing the ROS 2 bag {}", bag.display()))?;
+            write(&s, &output)
+        }
+        ImportSource::Csv { file, output, spec } => {
+            let spec = session::ImportSpec::load(&spec)?;
+            let s = session::long_csv::import_long_csv(&file, &spec)
+                .with_context(|| format!("importing the long-format CSV {}", file.display()))?;
             write(&s, &output)
         }
     }

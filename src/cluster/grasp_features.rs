@@ -222,6 +222,7 @@ mod tests {
             layout: Layout::Grid { rows: 1, cols: 3 },
             unit: "raw".into(),
             transform: ValueTransform::Reversed { offset: 10.0 },
+            range: None,
         };
         let frame = |t: f64, a: [f64; 3], b: [f64; 3], enc: [f64; 2]| Frame {
             t,

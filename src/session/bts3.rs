@@ -1,4 +1,6 @@
-//! Importer of the BioTac SP grasp-stability set, palm-down (`datasets/bts3/`).
+//! Importer of the BioTac SP grasp-stability set (BTS3) CSVs, e.g. the palm-down
+//! `datasets/bts3/biotac-palmdown-grasps.csv`; a session is named after its file, since
+//! the set's files (palm down, palm side) share one format.
 //!
 //! One CSV row per grasp: `object,slipped,ff_biotac_1..24,mf_biotac_1..24,th_biotac_1..24`.
 //! A grasp is a single static reading at the grasp (one frame, the key frame). Electrode
@@ -12,11 +14,13 @@ use std::path::Path;
 use super::error::{parse_number, read_text, shorten};
 use super::{
     Frame, Grasp, LabelSet, Layout, Sensor, Session, SessionError, SessionMeta, ValueTransform,
-    validate,
+    file_name, file_stem, validate,
 };
 
 pub const FINGERS: [&str; 3] = ["ff", "mf", "th"];
 pub const ELECTRODES: usize = 24;
+/// An electrode reading is a 12-bit ADC value: 0–4095.
+pub const READING_RANGE: [f64; 2] = [0.0, 4095.0];
 /// The dataset authors' 8 × 9 placement of electrodes 1..24 (LAYOUTS.md).
 const ROWS: [usize; ELECTRODES] = [
     0, 1, 3, 3, 4, 4, 4, 5, 6, 7, 0, 1, 3, 3, 4, 4, 4, 5, 6, 7, 1, 2, 2, 3,
@@ -48,7 +52,7 @@ fn expected_header() -> Vec<String> {
     h
 }
 
-/// Import the palm-down CSV.
+/// Import a BTS3 CSV.
 pub fn import_bts3(path: &Path) -> Result<Session, SessionError> {
     parse_bts3(&read_text(path)?, path)
 }
@@ -125,7 +129,17 @@ pub fn parse_bts3(text: &str, path: &Path) -> Result<Session, SessionError> {
             let mut values = Vec::with_capacity(ELECTRODES);
             for e in 0..ELECTRODES {
                 let col = 2 + f * ELECTRODES + e;
-                values.push(parse_number(path, line_no, &expected[col], fields[col])?);
+                let v = parse_number(path, line_no, &expected[col], fields[col])?;
+                let [lo, hi] = READING_RANGE;
+                if !(lo..=hi).contains(&v) {
+                    return Err(SessionError::line_field(
+                        path,
+                        line_no,
+                        &expected[col],
+                        format!("reading {v} is outside the BioTac SP electrode range {lo}–{hi}"),
+                    ));
+                }
+                values.push(v);
             }
             taxels.push(values);
         }
@@ -173,13 +187,14 @@ pub fn parse_bts3(text: &str, path: &Path) -> Result<Session, SessionError> {
                 layout: biotac_layout(),
                 unit: "raw electrode reading".into(),
                 transform: ValueTransform::BaselineMinus { baseline },
+                range: Some(READING_RANGE),
             }
         })
         .collect();
     let session = Session {
         meta: SessionMeta {
-            name: "BioTac SP grasp stability (palm down)".into(),
-            source: format!("BTS3 palm-down grasps, imported from {}", path.display()),
+            name: format!("BioTac SP grasp stability ({})", file_stem(path)),
+            source: format!("BTS3 BioTac SP grasps, imported from {}", file_name(path)),
             licence: String::new(),
             citation: String::new(),
             frame_rate_hz: None,

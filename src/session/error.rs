@@ -14,6 +14,13 @@ pub enum Location {
     LineColumn { line: usize, column: usize },
     /// A field path inside the session, e.g. `grasps[3].frames[2].taxels[1]`.
     Field(String),
+    /// A topic of a ROS 2 bag, and the bag time (ns) of the message at fault, if one is.
+    Topic { topic: String, time_ns: Option<u64> },
+}
+
+/// A bag time (ns since the epoch) as seconds with all nine decimals.
+pub fn bag_time(ns: u64) -> String {
+    format!("{}.{:09}", ns / 1_000_000_000, ns % 1_000_000_000)
 }
 
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -64,6 +71,22 @@ impl SessionError {
         }
     }
 
+    pub fn topic(
+        path: &Path,
+        topic: &str,
+        time_ns: Option<u64>,
+        message: impl Into<String>,
+    ) -> Self {
+        SessionError {
+            path: path.to_path_buf(),
+            location: Location::Topic {
+                topic: topic.to_string(),
+                time_ns,
+            },
+            message: message.into(),
+        }
+    }
+
     pub fn io(path: &Path, err: &std::io::Error) -> Self {
         Self::file(path, err.to_string())
     }
@@ -83,6 +106,19 @@ impl fmt::Display for SessionError {
                 write!(f, "{p}:{line}:{column}: {}", self.message)
             }
             Location::Field(field) => write!(f, "{p}: `{field}`: {}", self.message),
+            Location::Topic {
+                topic,
+                time_ns: Some(t),
+            } => write!(
+                f,
+                "{p}: topic `{topic}`, message at {} s: {}",
+                bag_time(*t),
+                self.message
+            ),
+            Location::Topic {
+                topic,
+                time_ns: None,
+            } => write!(f, "{p}: topic `{topic}`: {}", self.message),
         }
     }
 }

@@ -12,12 +12,14 @@ use std::path::{Path, PathBuf};
 use super::error::{parse_number, read_text};
 use super::{
     Frame, Grasp, LabelSet, Layout, Sensor, Session, SessionError, SessionMeta, TaxelPos,
-    ValueTransform, validate,
+    ValueTransform, file_name, key_frame_by_pressure, validate,
 };
 
 pub const FINGERS: [&str; 5] = ["thumb", "index", "middle", "ring", "little"];
 pub const TAXELS: usize = 12;
 pub const ENCODERS: usize = 9;
+/// A raw taxel reading is one byte of capacitance: 0–255.
+pub const READING_RANGE: [f64; 2] = [0.0, 255.0];
 const LINES_PER_STEP: usize = 7;
 pub const TRIALS: u32 = 20;
 /// The ten objects of the paper (`full_coke` is unreliable, per the dataset's README).
@@ -138,7 +140,21 @@ pub fn parse_trial(text: &str, path: &Path) -> Result<Vec<Frame>, SessionError> 
         row(1, FINGERS.len(), "finger maxima")?;
         let mut taxels = Vec::with_capacity(FINGERS.len());
         for (f, name) in FINGERS.iter().enumerate() {
-            taxels.push(row(2 + f, TAXELS, &format!("{name} taxels"))?);
+            let what = format!("{name} taxels");
+            let values = row(2 + f, TAXELS, &what)?;
+            let [lo, hi] = READING_RANGE;
+            if let Some(i) = values.iter().position(|v| !(lo..=hi).contains(v)) {
+                return Err(SessionError::line_field(
+                    path,
+                    block[2 + f].0,
+                    format!("{what}[{i}]"),
+                    format!(
+                        "reading {} is outside the iCub taxel range {lo}–{hi}",
+                        values[i]
+                    ),
+                ));
+            }
+            taxels.push(values);
         }
         frames.push(Frame {
             t: step as f64 * 0.1,
@@ -174,18 +190,6 @@ fn readme_notice(dir: &Path, data: &Path) -> Option<String> {
     ))
 }
 
-/// Grasp's key frame: the step of greatest total pressure (full contact).
-fn key_frame(frames: &[Frame]) -> usize {
-    let total = |f: &Frame| -> f64 { f.taxels.iter().flatten().map(|v| 255.0 - v).sum() };
-    let mut best = 0;
-    for (i, f) in frames.iter().enumerate() {
-        if total(f) > total(&frames[best]) {
-            best = i;
-        }
-    }
-    best
-}
-
 /// Import the dataset from its folder: the paper's 10 classes × trials 1–20.
 pub fn import_icub(dir: &Path) -> Result<Session, SessionError> {
     import_icub_with(dir, &IcubOptions::default())
@@ -203,6 +207,16 @@ pub fn import_icub_with(dir: &Path, options: &IcubOptions) -> Result<Session, Se
     if options.include_full_coke {
         classes.push(UNRELIABLE_CLASS);
     }
+    let sensors: Vec<Sensor> = FINGERS
+        .iter()
+        .map(|name| Sensor {
+            name: name.to_string(),
+            layout: fingertip_layout(),
+            unit: "raw capacitance (0–255, falls under pressure)".into(),
+            transform: ValueTransform::Reversed { offset: 255.0 },
+            range: Some(READING_RANGE),
+        })
+        .collect();
     let mut grasps = Vec::with_capacity(classes.len() * TRIALS as usize);
     for (c, class) in classes.iter().enumerate() {
         for trial in 1..=TRIALS {
@@ -220,26 +234,17 @@ pub fn import_icub_with(dir: &Path, options: &IcubOptions) -> Result<Session, Se
                 object: class.to_string(),
                 trial: Some(trial),
                 labels: vec![c],
-                key_frame: key_frame(&frames),
+                key_frame: key_frame_by_pressure(&sensors, &frames),
                 frames,
             });
         }
     }
-    let sensors = FINGERS
-        .iter()
-        .map(|name| Sensor {
-            name: name.to_string(),
-            layout: fingertip_layout(),
-            unit: "raw capacitance (0–255, falls under pressure)".into(),
-            transform: ValueTransform::Reversed { offset: 255.0 },
-        })
-        .collect();
     let session = Session {
         meta: SessionMeta {
             name: "iCub grasp dataset".into(),
             source: format!(
                 "iCub grasp dataset (Soh & Demiris), imported from {}",
-                dir.display()
+                file_name(dir)
             ),
             licence: readme_notice(dir, &data).unwrap_or_else(|| COPYRIGHT.to_string()),
             citation: CITATION.into(),

@@ -128,6 +128,27 @@ pub struct Sensor {
     /// Unit of the raw reading (e.g. "kPa", "raw capacitance (0–255)", "raw electrode").
     pub unit: String,
     pub transform: ValueTransform,
+    /// The documented range of a raw reading, `[min, max]`: readers refuse values outside
+    /// it (a reading out of range is a wrong layout, unit or file, not a touch).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub range: Option<[f64; 2]>,
+}
+
+impl Sensor {
+    /// Whether a raw reading lies in the sensor's documented range (any finite value when
+    /// it has none).
+    #[inline]
+    pub fn in_range(&self, raw: f64) -> bool {
+        self.range.is_none_or(|[lo, hi]| (lo..=hi).contains(&raw))
+    }
+
+    /// The range as text for messages, e.g. `0–255`.
+    pub fn range_text(&self) -> String {
+        match self.range {
+            Some([lo, hi]) => format!("{lo}–{hi}"),
+            None => "any finite value".into(),
+        }
+    }
 }
 
 /// A named set of mutually exclusive labels, e.g. "outcome": [success, failure].
@@ -226,6 +247,34 @@ impl Session {
             .map(|s| self.frame_pressures(frame, s))
             .collect()
     }
+}
+
+/// The key frame by the importers' rule: the frame of greatest total pressure over all
+/// sensors (the moment of fullest contact); the first such frame on a tie.
+pub fn key_frame_by_pressure(sensors: &[Sensor], frames: &[Frame]) -> usize {
+    let total = |f: &Frame| -> f64 {
+        sensors
+            .iter()
+            .zip(&f.taxels)
+            .map(|(s, values)| {
+                values
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &v)| s.transform.apply(i, v))
+                    .sum::<f64>()
+            })
+            .sum()
+    };
+    let mut best = 0;
+    let mut best_total = f64::NEG_INFINITY;
+    for (i, f) in frames.iter().enumerate() {
+        let t = total(f);
+        if t > best_total {
+            best = i;
+            best_total = t;
+        }
+    }
+    best
 }
 
 impl Grasp {

@@ -45,7 +45,7 @@ struct File {
     session: Session,
 }
 
-fn json_error(path: &Path, e: &serde_json::Error) -> SessionError {
+pub(crate) fn json_error(path: &Path, e: &serde_json::Error) -> SessionError {
     let message = match e.classify() {
         serde_json::error::Category::Eof => format!("the file ends too early (truncated?): {e}"),
         _ => e.to_string(),

@@ -247,6 +247,7 @@ pub fn grasp_stability(seed: u64) -> Session {
         },
         unit: "kPa".into(),
         transform: ValueTransform::Identity,
+        range: None,
     };
     Session {
         meta: SessionMeta {
@@ -406,6 +407,7 @@ pub fn object_recognition(seed: u64) -> Session {
                 layout: layout.clone(),
                 unit: "raw capacitance (0–255, falls under pressure)".into(),
                 transform: ValueTransform::Reversed { offset: 255.0 },
+                range: None,
             })
             .collect(),
         encoders: (7..16).map(|j| format!("joint {j:02}")).collect(),

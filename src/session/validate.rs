@@ -78,6 +78,14 @@ pub fn validate(session: &Session, path: &Path) -> Result<(), SessionError> {
             }
             _ => {}
         }
+        if let Some([lo, hi]) = sensor.range
+            && !(lo.is_finite() && hi.is_finite() && lo <= hi)
+        {
+            return Err(err(
+                format!("sensors[{s}].range"),
+                format!("[{lo}, {hi}] is not a range of finite values, low to high"),
+            ));
+        }
         match &sensor.transform {
             ValueTransform::BaselineMinus { baseline } => {
                 if baseline.len() != n {
@@ -183,6 +191,18 @@ pub fn validate(session: &Session, path: &Path) -> Result<(), SessionError> {
                     return Err(err(
                         fat(&format!(".taxels[{s}][{i}]")),
                         "value is not finite".into(),
+                    ));
+                }
+                let sensor = &session.sensors[s];
+                if let Some(i) = values.iter().position(|&v| !sensor.in_range(v)) {
+                    return Err(err(
+                        fat(&format!(".taxels[{s}][{i}]")),
+                        format!(
+                            "reading {} is outside sensor `{}`'s range {}",
+                            values[i],
+                            sensor.name,
+                            sensor.range_text()
+                        ),
                     ));
                 }
             }

@@ -1,0 +1,545 @@
+//! The import spec: how a researcher's own recording — a ROS 2 bag or a long-format CSV —
+//! becomes a session. JSON, documented with examples in `docs/import.md`:
+//!
+//! ```json
+//! {
+//!   "name": "Allegro hand, five objects",
+//!   "frame_rate_hz": 100,
+//!   "sensors": [
+//!     {"name": "index", "topic": "/tactile/index", "layout": "biotac-sp",
+//!      "unit": "raw electrode", "range": [0, 4095],
+//!      "transform": {"kind": "reversed", "offset": 4095}},
+//!     {"name": "thumb", "topic": "/tactile/hand", "slice": [24, 36], "layout": "grid 3x4",
+//!      "unit": "kPa"}
+//!   ],
+//!   "joints": {"topic": "/joint_states", "names": ["index_mcp", "thumb_cmc"]},
+//!   "label_sets": [{"name": "outcome", "classes": ["success", "failure"]}],
+//!   "grasps": {"events": "/grasp_events"}
+//! }
+//! ```
+//!
+//! Reading checks every field and names it in errors (`sensors[1].layout`); what the spec
+//! says about the recording (topics, lengths, times) is checked by the readers.
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use super::error::read_text;
+use super::native::json_error;
+use super::validate::MAX_GRID_CELLS;
+use super::{
+    Frame, Grasp, LabelSet, Layout, Sensor, Session, SessionError, SessionMeta, ValueTransform,
+    bts3, file_name, file_stem, icub, key_frame_by_pressure, validate,
+};
+
+/// The label set every imported session has: the grasped object.
+pub const OBJECT: &str = "object";
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SpecFile {
+    #[serde(default)]
+    name: Option<String>,
+    #[serde(default)]
+    frame_rate_hz: Option<f64>,
+    sensors: Vec<SensorFile>,
+    #[serde(default)]
+    joints: Option<JointsSpec>,
+    #[serde(default)]
+    label_sets: Vec<LabelSet>,
+    #[serde(default)]
+    grasps: Option<GraspsFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SensorFile {
+    name: String,
+    #[serde(default)]
+    topic: Option<String>,
+    #[serde(default)]
+    slice: Option<[usize; 2]>,
+    layout: serde_json::Value,
+    unit: String,
+    #[serde(default)]
+    range: Option<[f64; 2]>,
+    #[serde(default)]
+    transform: Option<ValueTransform>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GraspsFile {
+    #[serde(default)]
+    windows: Option<String>,
+    #[serde(default)]
+    events: Option<String>,
+}
+
+/// One sensor of the spec: the session's sensor, and where its values are in a bag.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SensorSpec {
+    pub sensor: Sensor,
+    /// The bag topic (required for bags; unused for CSVs).
+    pub topic: Option<String>,
+    /// The sensor's values in the topic's array, `start..end` (default: the whole array).
+    pub slice: Option<[usize; 2]>,
+}
+
+impl SensorSpec {
+    /// The sensor's values in a message's array.
+    pub fn range_in_message(&self) -> std::ops::Range<usize> {
+        match self.slice {
+            Some([a, b]) => a..b,
+            None => 0..self.sensor.layout.taxel_count(),
+        }
+    }
+}
+
+/// The joint encoders: a `sensor_msgs/msg/JointState` topic and the joints taken from it
+/// (in the session's encoder order), or the CSV columns of those names.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointsSpec {
+    #[serde(default)]
+    pub topic: Option<String>,
+    pub names: Vec<String>,
+}
+
+/// How a bag is cut into grasps.
+#[derive(Clone, Debug, PartialEq)]
+pub enum GraspCut {
+    /// A CSV of windows (`start`, `end` in bag time, `object`, one column per label set,
+    /// optionally `key`), its path resolved against the spec's folder.
+    Windows(PathBuf),
+    /// A `std_msgs/msg/String` topic of `start:OBJECT`, optional `key`, `end:LABELS`.
+    Events(String),
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImportSpec {
+    /// The spec file (errors name it; the windows CSV is found beside it).
+    pub path: PathBuf,
+    pub name: Option<String>,
+    pub frame_rate_hz: Option<f64>,
+    pub sensors: Vec<SensorSpec>,
+    pub joints: Option<JointsSpec>,
+    /// The label sets as the spec gives them; `object` may be among them to fix its classes.
+    pub label_sets: Vec<LabelSet>,
+    pub cut: Option<GraspCut>,
+}
+
+/// A built-in layout by name: `icub-fingertip`, `biotac-sp`, `grid RxC`.
+pub fn layout_by_name(name: &str) -> Option<Layout> {
+    let n = name.trim();
+    match n {
+        "icub-fingertip" => return Some(icub::fingertip_layout()),
+        "biotac-sp" => return Some(bts3::biotac_layout()),
+        _ => {}
+    }
+    let dims = n.strip_prefix("grid")?.trim();
+    let (r, c) = dims.split_once(['x', 'X', '×'])?;
+    let rows = r.trim().parse().ok()?;
+    let cols = c.trim().parse().ok()?;
+    Some(Layout::Grid { rows, cols })
+}
+
+fn layout_of(value: &serde_json::Value) -> Result<Layout, String> {
+    match value {
+        serde_json::Value::String(name) => layout_by_name(name).ok_or_else(|| {
+            format!(
+                "`{}` is not a layout: use icub-fingertip, biotac-sp, grid RxC (e.g. grid 4x4) \
+                 or a layout object",
+                super::error::shorten(name)
+            )
+        }),
+        serde_json::Value::Object(_) => {
+            serde_json::from_value(value.clone()).map_err(|e| format!("{e}"))
+        }
+        _ => Err("expected a layout name or a layout object".into()),
+    }
+}
+
+fn duplicate<'a>(names: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    let mut seen: Vec<&str> = Vec::new();
+    for n in names {
+        if seen.contains(&n) {
+            return Some(n);
+        }
+        seen.push(n);
+    }
+    None
+}
+
+impl ImportSpec {
+    /// Read a spec file.
+    pub fn load(path: &Path) -> Result<ImportSpec, SessionError> {
+        Self::from_str(&read_text(path)?, path)
+    }
+
+    /// Parse spec text (`path` names it in errors and anchors the windows CSV).
+    pub fn from_str(text: &str, path: &Path) -> Result<ImportSpec, SessionError> {
+        if text.trim().is_empty() {
+            return Err(SessionError::file(path, "the spec is empty"));
+        }
+        let file: SpecFile = serde_json::from_str(text).map_err(|e| json_error(path, &e))?;
+        let err = |field: String, msg: String| SessionError::field(path, field, msg);
+        if let Some(name) = &file.name
+            && name.trim().is_empty()
+        {
+            return Err(err("name".into(), "an empty name".into()));
+        }
+        if let Some(hz) = file.frame_rate_hz
+            && !(hz.is_finite() && hz > 0.0)
+        {
+            return Err(err(
+                "frame_rate_hz".into(),
+                format!("{hz} is not a positive frame rate"),
+            ));
+        }
+        if file.sensors.is_empty() {
+            return Err(err("sensors".into(), "the spec has no sensors".into()));
+        }
+        let mut sensors = Vec::with_capacity(file.sensors.len());
+        for (s, f) in file.sensors.into_iter().enumerate() {
+            let at = |rest: &str| format!("sensors[{s}]{rest}");
+            if f.name.trim().is_empty() {
+                return Err(err(at(".name"), "an empty sensor name".into()));
+            }
+            let layout = layout_of(&f.layout).map_err(|m| err(at(".layout"), m))?;
+            if let Some((rows, cols)) = layout.grid_shape()
+                && (rows == 0
+                    || cols == 0
+                    || rows.checked_mul(cols).is_none_or(|a| a > MAX_GRID_CELLS))
+            {
+                return Err(err(
+                    at(".layout"),
+                    format!("a {rows} × {cols} grid is empty or too large"),
+                ));
+            }
+            let n = layout.taxel_count();
+            if n == 0 {
+                return Err(err(at(".layout"), "the layout has no taxels".into()));
+            }
+            if let Some([a, b]) = f.slice
+                && b.checked_sub(a) != Some(n)
+            {
+                return Err(err(
+                    at(".slice"),
+                    format!(
+                        "[{a}, {b}] holds {} values but the layout has {n} taxels",
+                        b.saturating_sub(a)
+                    ),
+                ));
+            }
+            if let Some(t) = &f.topic
+                && t.trim().is_empty()
+            {
+                return Err(err(at(".topic"), "an empty topic".into()));
+            }
+            if let Some([lo, hi]) = f.range
+                && !(lo.is_finite() && hi.is_finite() && lo <= hi)
+            {
+                return Err(err(
+                    at(".range"),
+                    format!("[{lo}, {hi}] is not a range of finite values, low to high"),
+                ));
+            }
+            let transform = f.transform.unwrap_or(ValueTransform::Identity);
+            match &transform {
+                ValueTransform::BaselineMinus { baseline }
+                    if baseline.len() != n || baseline.iter().any(|b| !b.is_finite()) =>
+                {
+                    return Err(err(
+                        at(".transform.baseline"),
+                        format!(
+                            "{} baselines for {n} taxels (each must be finite)",
+                            baseline.len()
+                        ),
+                    ));
+                }
+                ValueTransform::Reversed { offset } if !offset.is_finite() => {
+                    return Err(err(
+                        at(".transform.offset"),
+                        "the offset must be finite".into(),
+                    ));
+                }
+                _ => {}
+            }
+            sensors.push(SensorSpec {
+                sensor: Sensor {
+                    name: f.name,
+                    layout,
+                    unit: f.unit,
+                    transform,
+                    range: f.range,
+                },
+                topic: f.topic,
+                slice: f.slice,
+            });
+        }
+        if let Some(d) = duplicate(sensors.iter().map(|s| s.sensor.name.as_str())) {
+            return Err(err(
+                "sensors".into(),
+                format!("two sensors are named `{d}`"),
+            ));
+        }
+        if let Some(j) = &file.joints {
+            if j.names.is_empty() {
+                return Err(err("joints.names".into(), "no joints named".into()));
+            }
+            if let Some(d) = duplicate(j.names.iter().map(String::as_str)) {
+                return Err(err("joints.names".into(), format!("`{d}` is named twice")));
+            }
+            if let Some(t) = &j.topic
+                && t.trim().is_empty()
+            {
+                return Err(err("joints.topic".into(), "an empty topic".into()));
+            }
+        }
+        for (l, set) in file.label_sets.iter().enumerate() {
+            if set.name.trim().is_empty() {
+                return Err(err(
+                    format!("label_sets[{l}].name"),
+                    "an empty label set name".into(),
+                ));
+            }
+            if set.classes.is_empty() {
+                return Err(err(
+                    format!("label_sets[{l}].classes"),
+                    format!("label set `{}` has no classes", set.name),
+                ));
+            }
+            if let Some(d) = duplicate(set.classes.iter().map(String::as_str)) {
+                return Err(err(
+                    format!("label_sets[{l}].classes"),
+                    format!("class `{d}` is listed twice"),
+                ));
+            }
+        }
+        if let Some(d) = duplicate(file.label_sets.iter().map(|s| s.name.as_str())) {
+            return Err(err(
+                "label_sets".into(),
+                format!("two label sets are named `{d}`"),
+            ));
+        }
+        let cut = match file.grasps {
+            None => None,
+            Some(GraspsFile {
+                windows: Some(w),
+                events: None,
+            }) => {
+                let base = path.parent().unwrap_or(Path::new(""));
+                Some(GraspCut::Windows(base.join(w)))
+            }
+            Some(GraspsFile {
+                windows: None,
+                events: Some(topic),
+            }) => Some(GraspCut::Events(topic)),
+            Some(_) => {
+                return Err(err(
+                    "grasps".into(),
+                    "give exactly one of `windows` (a CSV file) or `events` (a topic)".into(),
+                ));
+            }
+        };
+        Ok(ImportSpec {
+            path: path.to_path_buf(),
+            name: file.name,
+            frame_rate_hz: file.frame_rate_hz,
+            sensors,
+            joints: file.joints,
+            label_sets: file.label_sets,
+            cut,
+        })
+    }
+
+    /// The label sets a recording gives a class of, besides the object: their names are
+    /// the windows CSV's and the long CSV's columns, and an `end:` event lists them in order.
+    pub fn recorded_label_sets(&self) -> Vec<&LabelSet> {
+        self.label_sets
+            .iter()
+            .filter(|l| l.name != OBJECT)
+            .collect()
+    }
+
+    /// Index of `class` in recorded label set `set` (of [`Self::recorded_label_sets`]), or
+    /// a message naming the classes.
+    pub fn class_index(&self, set: &LabelSet, class: &str) -> Result<usize, String> {
+        set.classes.iter().position(|c| c == class).ok_or_else(|| {
+            format!(
+                "`{}` is not a class of label set `{}` ({})",
+                super::error::shorten(class),
+                set.name,
+                set.classes.join(", ")
+            )
+        })
+    }
+
+    /// Check an object name: any non-empty name, or one of the spec's `object` classes.
+    pub fn check_object(&self, object: &str) -> Result<(), String> {
+        if object.trim().is_empty() {
+            return Err("an empty object name".into());
+        }
+        match self.label_sets.iter().find(|l| l.name == OBJECT) {
+            Some(set) if !set.classes.iter().any(|c| c == object) => Err(format!(
+                "object `{}` is not a class of label set `object` ({})",
+                super::error::shorten(object),
+                set.classes.join(", ")
+            )),
+            _ => Ok(()),
+        }
+    }
+
+    /// Encoder names (empty without joints).
+    pub fn encoder_names(&self) -> Vec<String> {
+        self.joints
+            .as_ref()
+            .map(|j| j.names.clone())
+            .unwrap_or_default()
+    }
+}
+
+/// A grasp as a reader found it, before the session's label indices are known.
+pub struct RawGrasp {
+    pub object: String,
+    /// One class index per recorded label set, in their order.
+    pub classes: Vec<usize>,
+    pub frames: Vec<Frame>,
+    /// The key frame, where the recording gives it.
+    pub key_frame: Option<usize>,
+}
+
+/// The median frame interval's rate over all grasps, when there are intervals.
+fn measured_rate(grasps: &[RawGrasp]) -> Option<f64> {
+    let mut dt: Vec<f64> = grasps
+        .iter()
+        .flat_map(|g| g.frames.windows(2).map(|w| w[1].t - w[0].t))
+        .filter(|d| *d > 0.0)
+        .collect();
+    if dt.is_empty() {
+        return None;
+    }
+    dt.sort_by(f64::total_cmp);
+    let rate = 1.0 / dt[dt.len() / 2];
+    // Three significant digits: a rate estimated from stamps is not exact.
+    let scale = 10f64.powi(2 - rate.log10().floor() as i32);
+    Some((rate * scale).round() / scale)
+}
+
+/// Build and validate the session: label sets (`object` first unless the spec places it),
+/// key frames (given, or the frame of greatest total pressure), metadata naming the
+/// source by file name only.
+pub fn assemble(
+    spec: &ImportSpec,
+    source: &Path,
+    kind: &str,
+    how: &str,
+    grasps: Vec<RawGrasp>,
+) -> Result<Session, SessionError> {
+    if grasps.is_empty() {
+        return Err(SessionError::file(source, "the recording holds no grasps"));
+    }
+    let sensors: Vec<Sensor> = spec.sensors.iter().map(|s| s.sensor.clone()).collect();
+    let mut label_sets = spec.label_sets.clone();
+    let object_set = match label_sets.iter().position(|l| l.name == OBJECT) {
+        Some(i) => i,
+        None => {
+            let mut objects: Vec<String> = Vec::new();
+            for g in &grasps {
+                if !objects.contains(&g.object) {
+                    objects.push(g.object.clone());
+                }
+            }
+            label_sets.insert(
+                0,
+                LabelSet {
+                    name: OBJECT.into(),
+                    classes: objects,
+                },
+            );
+            0
+        }
+    };
+    let rate = spec.frame_rate_hz.or_else(|| measured_rate(&grasps));
+    let mut out = Vec::with_capacity(grasps.len());
+    let mut trials: Vec<(String, u32)> = Vec::new();
+    for g in grasps {
+        let mut recorded = g.classes.into_iter();
+        let labels = label_sets
+            .iter()
+            .enumerate()
+            .map(|(i, set)| {
+                if i == object_set {
+                    set.classes.iter().position(|c| *c == g.object).unwrap_or(0)
+                } else {
+                    recorded.next().unwrap_or(0)
+                }
+            })
+            .collect();
+        let trial = match trials.iter_mut().find(|(o, _)| *o == g.object) {
+            Some((_, n)) => {
+                *n += 1;
+                *n
+            }
+            None => {
+                trials.push((g.object.clone(), 1));
+                1
+            }
+        };
+        let key_frame = g
+            .key_frame
+            .unwrap_or_else(|| key_frame_by_pressure(&sensors, &g.frames));
+        out.push(Grasp {
+            object: g.object,
+            trial: Some(trial),
+            labels,
+            frames: g.frames,
+            key_frame,
+        });
+    }
+    let session = Session {
+        meta: SessionMeta {
+            name: spec.name.clone().unwrap_or_else(|| file_stem(source)),
+            source: format!(
+                "{kind} {}, imported with the spec {}",
+                file_name(source),
+                file_name(&spec.path)
+            ),
+            licence: String::new(),
+            citation: String::new(),
+            frame_rate_hz: rate,
+            notes: format!(
+                "{how} Key frame: where the recording marks it, else the frame of greatest \
+                 total pressure."
+            ),
+        },
+        sensors,
+        encoders: spec.encoder_names(),
+        label_sets,
+        grasps: out,
+    };
+    validate(&session, source)?;
+    Ok(session)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn built_in_layout_names() {
+        assert_eq!(
+            layout_by_name("grid 3x4"),
+            Some(Layout::Grid { rows: 3, cols: 4 })
+        );
+        assert_eq!(
+            layout_by_name("grid 2 × 5"),
+            Some(Layout::Grid { rows: 2, cols: 5 })
+        );
+        assert_eq!(layout_by_name("biotac-sp").unwrap().taxel_count(), 24);
+        assert_eq!(layout_by_name("icub-fingertip").unwrap().taxel_count(), 12);
+        assert_eq!(layout_by_name("grid 3by4"), None);
+    }
+}

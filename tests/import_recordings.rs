@@ -1,0 +1,527 @@
+//! Researchers' own recordings: ROS 2 bags (MCAP) written by real ROS 2 writers and a
+//! long-format CSV, imported with their specs (tests/fixtures/, written by
+//! tests/fixtures/make_fixtures.py, which also wrote the expected values checked here);
+//! every bad input gives its error, names its file and place, and writes nothing; the
+//! imported sessions run the stability and recognition analyses.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use serde::Deserialize;
+use tactile_workbench::experiments::recognition::{RecognitionParams, run_recognition};
+use tactile_workbench::experiments::stability::{
+    self, Config, CvScheme, DataOptions, PipelineSettings, StabilityData, StabilityOptions,
+};
+use tactile_workbench::jobs::Progress;
+use tactile_workbench::session::{self, Session};
+use tactile_workbench::sparse::DictionaryParams;
+
+fn fixtures() -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures"))
+}
+
+fn events_bag() -> (PathBuf, PathBuf) {
+    let d = fixtures().join("ros2");
+    (d.join("zstd-events"), d.join("zstd-events.spec.json"))
+}
+
+fn windows_bag() -> (PathBuf, PathBuf) {
+    let d = fixtures().join("ros2");
+    (
+        d.join("plain-windows.mcap"),
+        d.join("plain-windows.spec.json"),
+    )
+}
+
+fn long_csv() -> (PathBuf, PathBuf) {
+    let d = fixtures().join("long");
+    (d.join("grasps.csv"), d.join("grasps.spec.json"))
+}
+
+#[derive(Deserialize)]
+struct Expected {
+    sensors: Vec<String>,
+    encoders: Vec<String>,
+    objects: Vec<String>,
+    frame_rate_hz: f64,
+    grasps: Vec<ExpectedGrasp>,
+}
+
+#[derive(Deserialize)]
+struct ExpectedGrasp {
+    object: String,
+    labels: std::collections::BTreeMap<String, String>,
+    key_frame: usize,
+    frames: Vec<ExpectedFrame>,
+}
+
+#[derive(Deserialize)]
+struct ExpectedFrame {
+    t: f64,
+    taxels: Vec<Vec<f64>>,
+    encoders: Vec<f64>,
+}
+
+/// Every value of the session against what the fixture script wrote.
+fn check_against_script(s: &Session, expected: &str) {
+    let path = fixtures().join("expected").join(expected);
+    let e: Expected = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let names: Vec<&str> = s.sensors.iter().map(|x| x.name.as_str()).collect();
+    assert_eq!(names, e.sensors);
+    assert_eq!(s.encoders, e.encoders);
+    assert_eq!(
+        s.label_sets[s.label_set("object").unwrap()].classes,
+        e.objects
+    );
+    assert_eq!(s.meta.frame_rate_hz, Some(e.frame_rate_hz));
+    assert_eq!(s.grasps.len(), e.grasps.len());
+    let mut values = 0;
+    for (g, (got, want)) in s.grasps.iter().zip(&e.grasps).enumerate() {
+        assert_eq!(got.object, want.object, "grasp {g}");
+        assert_eq!(got.key_frame, want.key_frame, "grasp {g}: key frame");
+        for (set, class) in &want.labels {
+            let l = s.label_set(set).unwrap();
+            assert_eq!(
+                &s.label_sets[l].classes[got.labels[l]], class,
+                "grasp {g}: {set}"
+            );
+        }
+        assert_eq!(got.frames.len(), want.frames.len(), "grasp {g}: frames");
+        for (f, (a, b)) in got.frames.iter().zip(&want.frames).enumerate() {
+            assert_eq!(a.t, b.t, "grasp {g} frame {f}: t");
+            assert_eq!(a.taxels, b.taxels, "grasp {g} frame {f}: taxels");
+            assert_eq!(a.encoders, b.encoders, "grasp {g} frame {f}: encoders");
+            values += a.taxels.iter().map(Vec::len).sum::<usize>() + a.encoders.len();
+        }
+    }
+    assert!(values > 500, "only {values} values checked");
+}
+
+fn import(pair: &(PathBuf, PathBuf)) -> Result<Session, String> {
+    session::import_with_spec(&pair.0, &pair.1).map_err(|e| e.to_string())
+}
+
+#[test]
+fn zstd_split_bag_cut_by_events_matches_the_script() {
+    let s = import(&events_bag()).unwrap();
+    check_against_script(&s, "zstd-events.json");
+    assert_eq!(s.meta.name, "Two fingers, grasps cut by events");
+    // The source is named without a machine's path.
+    assert_eq!(
+        s.meta.source,
+        "ROS 2 bag zstd-events, imported with the spec zstd-events.spec.json"
+    );
+    assert_eq!(s.label_sets[0].name, "object");
+    assert_eq!(s.sensors[0].range, Some([0.0, 4095.0]));
+}
+
+#[test]
+fn uncompressed_bag_cut_by_windows_matches_the_script() {
+    let s = import(&windows_bag()).unwrap();
+    check_against_script(&s, "plain-windows.json");
+    // The spec placed `object` itself, with its own class order.
+    assert_eq!(s.label_sets[0].classes, ["ball", "can"]);
+    assert_eq!(s.label_sets[1].name, "outcome");
+}
+
+#[test]
+fn long_csv_matches_the_script() {
+    let s = import(&long_csv()).unwrap();
+    check_against_script(&s, "long-grasps.json");
+    assert_eq!(
+        s.meta.source,
+        "long-format CSV grasps.csv, imported with the spec grasps.spec.json"
+    );
+}
+
+#[test]
+fn imported_sessions_round_trip_through_the_native_format() {
+    let dir = common::temp_dir("import-roundtrip");
+    for (i, pair) in [events_bag(), windows_bag(), long_csv()].iter().enumerate() {
+        let s = import(pair).unwrap();
+        let p = dir.join(format!("s{i}.json"));
+        session::save(&s, &p).unwrap();
+        assert_eq!(session::load(&p).unwrap(), s);
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn imported_sessions_run_stability_and_recognition() {
+    for pair in [events_bag(), windows_bag(), long_csv()] {
+        let s = import(&pair).unwrap();
+        let data = StabilityData::from_session(&s, &DataOptions::default()).unwrap();
+        assert_eq!(data.grasp_count(), s.grasps.len());
+        let opts = StabilityOptions {
+            settings: PipelineSettings {
+                dictionary: DictionaryParams {
+                    max_iter: 20,
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+            selection_cv: CvScheme::KFold { k: 2 },
+            kfold: CvScheme::KFold { k: 2 },
+            objects: CvScheme::LeaveObjectsOut { folds: None },
+            grid: None,
+            nested: Vec::new(),
+            single: Config {
+                num_bases: 4,
+                beta: 1.0,
+                gamma: 1.0,
+            },
+        };
+        let report = stability::run(&data, &opts, &Progress::new()).unwrap();
+        let wsr = report.best.kfold.weighted_success_rate;
+        assert!((0.0..=1.0).contains(&wsr), "{}: {wsr}", s.meta.name);
+
+        let params = RecognitionParams {
+            reps: 2,
+            trial_sets: 2,
+            ..Default::default()
+        };
+        let r = run_recognition(&s, &params, &Progress::new()).unwrap();
+        assert_eq!(
+            r.classes,
+            s.label_sets[s.label_set("object").unwrap()].classes
+        );
+        assert!(r.summary.all.mean.is_finite(), "{}", s.meta.name);
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Bad input: each gives its error, naming the file and the topic or line.
+// ---------------------------------------------------------------------------------------
+
+/// A scratch copy of a fixture with its spec rewritten by `edit` (JSON text replacement).
+fn with_spec(pair: &(PathBuf, PathBuf), tag: &str, edit: impl Fn(String) -> String) -> PathBuf {
+    let dir = common::temp_dir(tag);
+    let text = std::fs::read_to_string(&pair.1).unwrap();
+    let edited = edit(text.clone());
+    assert_ne!(edited, text, "the edit changed nothing");
+    let spec = dir.join("spec.json");
+    std::fs::write(&spec, edited).unwrap();
+    // A windows CSV is found beside the spec.
+    let windows = pair.1.with_file_name("plain-windows.windows.csv");
+    if text.contains("plain-windows.windows.csv") {
+        std::fs::copy(&windows, dir.join("plain-windows.windows.csv")).unwrap();
+    }
+    spec
+}
+
+fn error_of(bag: &Path, spec: &Path) -> String {
+    match session::import_with_spec(bag, spec) {
+        Ok(_) => panic!("{} imported without error", bag.display()),
+        Err(e) => e.to_string(),
+    }
+}
+
+fn assert_has(e: &str, parts: &[&str]) {
+    for p in parts {
+        assert!(e.contains(p), "expected `{p}` in: {e}");
+    }
+}
+
+#[test]
+fn truncated_bag() {
+    let (bag, spec) = windows_bag();
+    let bytes = std::fs::read(&bag).unwrap();
+    let dir = common::temp_dir("truncated-bag");
+    let cut = dir.join("cut.mcap");
+    for n in [bytes.len() / 2, bytes.len() - 10] {
+        std::fs::write(&cut, &bytes[..n]).unwrap();
+        let e = error_of(&cut, &spec);
+        assert_has(&e, &[&cut.display().to_string(), "truncated"]);
+    }
+    std::fs::write(&cut, b"not a bag at all").unwrap();
+    assert_has(&error_of(&cut, &spec), &["not an MCAP file"]);
+    // A damaged chunk on which the MCAP library panics (found by fuzzing).
+    let damaged = fixtures().join("ros2/bad/damaged-chunk.mcap");
+    assert_has(
+        &error_of(&damaged, &events_bag().1),
+        &["damaged-chunk.mcap: the bag is damaged"],
+    );
+}
+
+#[test]
+fn unknown_message_type() {
+    let pair = events_bag();
+    let spec = with_spec(&pair, "unknown-type", |t| {
+        t.replace("\"/hand/thumb/tactile\"", "\"/hand/temperature\"")
+    });
+    let e = error_of(&pair.0, &spec);
+    assert_has(
+        &e,
+        &[
+            "zstd-events_0.mcap",
+            "topic `/hand/temperature`",
+            "sensor_msgs/msg/Temperature",
+            "Float32MultiArray",
+        ],
+    );
+}
+
+#[test]
+fn spec_topic_not_in_the_bag() {
+    let pair = events_bag();
+    let spec = with_spec(&pair, "missing-topic", |t| {
+        t.replace("\"/joint_states\"", "\"/arm/joint_states\"")
+    });
+    let e = error_of(&pair.0, &spec);
+    assert_has(
+        &e,
+        &[
+            "zstd-events: topic `/arm/joint_states`",
+            "not in the bag",
+            "/joint_states (sensor_msgs/msg/JointState)",
+        ],
+    );
+}
+
+#[test]
+fn multiarray_length_does_not_match_the_layout() {
+    let pair = events_bag();
+    let spec = with_spec(&pair, "wrong-length", |t| t.replace("grid 4x6", "grid 4x5"));
+    let e = error_of(&pair.0, &spec);
+    assert_has(
+        &e,
+        &[
+            "zstd-events_0.mcap: topic `/hand/thumb/tactile`, message at 1700000000.007000000 s",
+            "holds 24 values",
+            "`thumb` (20 taxels at 0..20)",
+        ],
+    );
+    // Two sensors side by side: the slices must cover the array exactly.
+    let pair = windows_bag();
+    let spec = with_spec(&pair, "wrong-slices", |t| {
+        t.replace("[12, 24]", "[10, 22]")
+            .replace("[0, 12]", "[0, 10]")
+            .replace("grid 3x4", "grid 2x5")
+    });
+    let e = error_of(&pair.0, &spec);
+    assert_has(&e, &["topic `/tactile`", "holds 24 values", "read 22"]);
+}
+
+/// The windows fixture with its windows CSV replaced.
+fn with_windows(tag: &str, csv: &str) -> (PathBuf, PathBuf, PathBuf) {
+    let (bag, spec) = windows_bag();
+    let dir = common::temp_dir(tag);
+    let text = std::fs::read_to_string(&spec).unwrap();
+    let spec_copy = dir.join("spec.json");
+    std::fs::write(&spec_copy, text).unwrap();
+    let windows = dir.join("plain-windows.windows.csv");
+    std::fs::write(&windows, csv).unwrap();
+    (bag, spec_copy, windows)
+}
+
+#[test]
+fn windows_that_overlap() {
+    let (bag, spec, windows) = with_windows(
+        "overlap",
+        "start,end,object,outcome\n1700000000.2,1700000000.5,can,success\n\
+         1700000001.0,1700000001.2,ball,failure\n1700000000.4,1700000000.6,can,failure\n",
+    );
+    let e = error_of(&bag, &spec);
+    assert_has(
+        &e,
+        &[
+            &format!("{}:4:", windows.display()),
+            "overlaps the one of line 2",
+        ],
+    );
+}
+
+#[test]
+fn windows_outside_the_bag() {
+    let (bag, spec, windows) = with_windows(
+        "outside",
+        "start,end,object,outcome\n1700000000.2,1700000000.5,can,success\n\
+         1700000003.0,1700000004.0,ball,failure\n",
+    );
+    let e = error_of(&bag, &spec);
+    assert_has(
+        &e,
+        &[
+            &format!("{}:3:", windows.display()),
+            "falls outside the bag, which spans 1700000000.000000000–",
+        ],
+    );
+    let (bag, spec, windows) = with_windows(
+        "backwards-window",
+        "start,end,object,outcome\n1700000000.5,1700000000.2,can,success\n",
+    );
+    let e = error_of(&bag, &spec);
+    assert_has(&e, &[&format!("{}:2:", windows.display()), "ends"]);
+}
+
+#[test]
+fn time_going_backwards() {
+    let (_, spec) = windows_bag();
+    let bag = fixtures().join("ros2/bad/time-backwards.mcap");
+    let e = error_of(&bag, &spec);
+    assert_has(
+        &e,
+        &[
+            "time-backwards.mcap: topic `/tactile`, message at 1700000000.025000000 s",
+            "time goes backwards: the previous message was at 1700000000.050000000 s",
+        ],
+    );
+    let (csv, spec) = long_csv();
+    let text = std::fs::read_to_string(&csv)
+        .unwrap()
+        .replacen("g1,0.5625,", "g1,0.25,", 1);
+    let dir = common::temp_dir("csv-backwards");
+    let bad = dir.join("grasps.csv");
+    std::fs::write(&bad, text).unwrap();
+    let e = error_of(&bad, &spec);
+    assert_has(
+        &e,
+        &[&format!("{}:3: field `time`", bad.display()), "backwards"],
+    );
+}
+
+#[test]
+fn non_finite_values() {
+    let (_, spec) = windows_bag();
+    let bag = fixtures().join("ros2/bad/nan.mcap");
+    let e = error_of(&bag, &spec);
+    assert_has(
+        &e,
+        &[
+            "nan.mcap: topic `/tactile`, message at 1700000000.100000000 s",
+            "value 14 is NaN",
+        ],
+    );
+    let (csv, spec) = long_csv();
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let mut fields: Vec<&str> = lines[4].split(',').collect();
+    fields[7] = "inf";
+    lines[4] = fields.join(",");
+    let dir = common::temp_dir("csv-inf");
+    let bad = dir.join("grasps.csv");
+    std::fs::write(&bad, lines.join("\n")).unwrap();
+    let e = error_of(&bad, &spec);
+    assert_has(
+        &e,
+        &[
+            &format!("{}:5: field `ff_3`", bad.display()),
+            "not a finite number",
+        ],
+    );
+}
+
+#[test]
+fn readings_outside_the_range_name_the_value() {
+    let pair = events_bag();
+    let spec = with_spec(&pair, "range-bag", |t| t.replace("[0, 1000]", "[0, 100]"));
+    let e = error_of(&pair.0, &spec);
+    assert_has(
+        &e,
+        &["topic `/hand/thumb/tactile`", "outside its range 0–100"],
+    );
+    let pair = long_csv();
+    let spec = with_spec(&pair, "range-csv", |t| t.replacen("[0, 100]", "[0, 10]", 1));
+    let e = error_of(&pair.0, &spec);
+    assert_has(
+        &e,
+        &[
+            "grasps.csv:2: field `ff_1`",
+            "reading 11 is outside sensor `ff`'s range 0–10",
+        ],
+    );
+}
+
+#[test]
+fn bad_events() {
+    // The events bag read with `end` events that carry too few labels for the spec.
+    let pair = events_bag();
+    let spec = with_spec(&pair, "events-labels", |t| {
+        t.replace(
+            "\"label_sets\": [",
+            "\"label_sets\": [{\"name\": \"weight\", \"classes\": [\"light\"]}, ",
+        )
+    });
+    let e = error_of(&pair.0, &spec);
+    assert_has(
+        &e,
+        &[
+            "zstd-events: topic `/grasp_events`, message at 1700000000.445000000 s",
+            "gives 1 labels",
+        ],
+    );
+}
+
+#[test]
+fn bad_specs_name_the_field() {
+    let pair = events_bag();
+    let cases: [(&str, &str, &str); 4] = [
+        (
+            "grid 4x6",
+            "grid 4by6",
+            "`sensors[1].layout`: `grid 4by6` is not a layout",
+        ),
+        (
+            "\"unit\": \"raw\"",
+            "\"unit\": \"raw\", \"colour\": 1",
+            "unknown field `colour`",
+        ),
+        (
+            "\"events\": \"/grasp_events\"",
+            "\"events\": \"/e\", \"windows\": \"w.csv\"",
+            "`grasps`: give exactly one",
+        ),
+        ("[0, 4095]", "[4095, 0]", "`sensors[0].range`"),
+    ];
+    for (i, (from, to, want)) in cases.iter().enumerate() {
+        let spec = with_spec(&pair, &format!("spec-{i}"), |t| t.replace(from, to));
+        let e = error_of(&pair.0, &spec);
+        assert_has(&e, &[&spec.display().to_string(), want]);
+    }
+}
+
+#[test]
+fn a_failed_import_writes_nothing() {
+    let dir = common::temp_dir("cli-import");
+    let out = dir.join("session.json");
+    let (_, spec) = windows_bag();
+    let bad = fixtures().join("ros2/bad/nan.mcap");
+    let run = |bag: &Path, spec: &Path| {
+        Command::new(env!("CARGO_BIN_EXE_tactile-workbench"))
+            .args(["import", "mcap"])
+            .arg(bag)
+            .arg("-o")
+            .arg(&out)
+            .arg("--spec")
+            .arg(spec)
+            .output()
+            .unwrap()
+    };
+    let r = run(&bad, &spec);
+    assert!(!r.status.success());
+    assert!(String::from_utf8_lossy(&r.stderr).contains("not a finite number"));
+    assert!(!out.exists());
+    let (bag, spec) = windows_bag();
+    let r = run(&bag, &spec);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert_eq!(
+        session::load(&out).unwrap(),
+        import(&windows_bag()).unwrap()
+    );
+    let (csv, spec) = long_csv();
+    let out_csv = dir.join("long.json");
+    let r = Command::new(env!("CARGO_BIN_EXE_tactile-workbench"))
+        .args(["import", "csv"])
+        .arg(&csv)
+        .arg("-o")
+        .arg(&out_csv)
+        .arg("--spec")
+        .arg(&spec)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(session::load(&out_csv).is_ok());
+    let _ = std::fs::remove_dir_all(dir);
+}
