@@ -32,9 +32,10 @@ impl Default for BaselinesForm {
 }
 
 /// Seconds per order (k-means and SOM) and per repeat of the SVM's 5-fold grid, per grasp,
-/// measured on the recognition sample (release build, 2 cores).
-const SECONDS_PER_ORDER_GRASP: f64 = 0.00002;
-const SECONDS_PER_SVM_REPEAT_GRASP: f64 = 0.004;
+/// on 2 cores: 10 orders of the recognition sample (200 grasps) took 0.2 s, and two repeats
+/// of the SVM grid 2.8 s more.
+const SECONDS_PER_ORDER_GRASP: f64 = 0.0001;
+const SECONDS_PER_SVM_REPEAT_GRASP: f64 = 0.007;
 
 impl BaselinesForm {
     pub fn expected_seconds(&self, grasps: usize) -> f64 {

@@ -63,13 +63,13 @@ impl ClusteringForm {
     }
 }
 
-/// Seconds per observed step per threshold and order, measured on the recognition sample
-/// (release build, 2 cores) at the default sweeps: DU scores each step against every expert,
-/// so it costs more than GU's generative experts at their thresholds.
+/// Seconds per observed step per threshold and order on 2 cores: DU at thresholds 0.1 and 0.5
+/// took 16.5 s and GU at 0.05 and 0.1 took 1.6 s for one order of the recognition sample
+/// (about 2,600 steps). DU scores each step against every expert it has opened.
 fn seconds_per_step(learner: UnsupervisedLearner) -> f64 {
     match learner {
-        UnsupervisedLearner::Du => 0.0004,
-        UnsupervisedLearner::Gu => 0.0002,
+        UnsupervisedLearner::Du => 0.003,
+        UnsupervisedLearner::Gu => 0.0003,
     }
 }
 

@@ -107,9 +107,10 @@ fn family_of(s: &LoadedSession) -> Option<Family> {
     }
 }
 
-/// Seconds per method, perturbation strength and repetition, per grasp, measured on the
-/// samples (release build, 2 cores) with the default methods.
-const SECONDS_PER_CELL_GRASP: f64 = 0.0006;
+/// Seconds per method, perturbation strength and repetition, per grasp, on 2 cores: both
+/// stability methods under every perturbation (292 cells) took 17.5 s on the grasp-stability
+/// sample (540 grasps). The recognition family's learners cost more per grasp.
+const SECONDS_PER_CELL_GRASP: f64 = 0.00011;
 
 impl RobustnessForm {
     pub fn expected_seconds(&self, family: Family, grasps: usize) -> f64 {
