@@ -281,8 +281,23 @@ impl WorkbenchApp {
 
     /// Start `view`'s run, as its form stands, on the active session.
     pub fn start(&mut self, ctx: &egui::Context, view: View) {
-        let room = self.rooms.get(view);
-        let mut cx = Cx {
+        let (room, mut cx, ..) = self.parts(ctx, view);
+        room.start(&mut cx);
+    }
+
+    /// `view`'s room, what it may read and ask for, and the layouts and form switch beside
+    /// them (disjoint borrows of the app).
+    fn parts(
+        &mut self,
+        ctx: &egui::Context,
+        view: View,
+    ) -> (
+        &mut dyn views::Room,
+        Cx<'_>,
+        &mut BTreeMap<String, Layout>,
+        &mut bool,
+    ) {
+        let cx = Cx {
             ctx: ctx.clone(),
             sessions: &self.sessions,
             active: self.browser.active,
@@ -291,7 +306,12 @@ impl WorkbenchApp {
             commands: &mut self.commands,
             replay: &mut self.replay,
         };
-        room.start(&mut cx);
+        (
+            self.rooms.get(view),
+            cx,
+            &mut self.layouts,
+            &mut self.form_open,
+        )
     }
 
     /// Apply the commands the views pushed while drawing.
@@ -600,17 +620,9 @@ impl WorkbenchApp {
                 }
             });
         let ctx = ui.ctx().clone();
-        let room = self.rooms.get(self.view);
-        let mut cx = Cx {
-            ctx: ctx.clone(),
-            sessions: &self.sessions,
-            active: self.browser.active,
-            analyses: &mut self.analyses,
-            selection: &self.selection,
-            commands: &mut self.commands,
-            replay: &mut self.replay,
-        };
-        if self.view != View::Replay && self.form_open {
+        let view = self.view;
+        let (room, mut cx, layouts, form_open) = self.parts(&ctx, view);
+        if view != View::Replay && *form_open {
             egui::Panel::right("form")
                 .resizable(true)
                 .default_size(250.0)
@@ -623,22 +635,22 @@ impl WorkbenchApp {
                 });
         }
         egui::CentralPanel::default_margins().show(ui, |ui| {
-            if self.view != View::Replay {
+            if view != View::Replay {
                 ui.horizontal(|ui| {
-                    ui.strong(self.view.title());
+                    ui.strong(view.title());
                     ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
-                        let (text, hint) = if self.form_open {
+                        let (text, hint) = if *form_open {
                             ("Hide form", "More room for the tiles")
                         } else {
                             ("Show form", "Parameters and Run")
                         };
                         if ui.small_button(text).on_hover_text(hint).clicked() {
-                            self.form_open = !self.form_open;
+                            *form_open = !*form_open;
                         }
                     });
                 });
             }
-            views::central_ui(ui, room, &mut self.layouts, &mut cx);
+            views::central_ui(ui, room, layouts, &mut cx);
         });
         let now = ctx.input(|i| i.time);
         cx.analyses.notes.ui(&ctx, now);

@@ -1,7 +1,7 @@
 //! Baselines: sequential k-means, a SOM and an RBF SVM on the per-grasp Table I features.
 
 use super::tiles::Pane;
-use super::{Cx, Room, duration_text};
+use super::{Cx, Room, duration_text, run_button};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
 use crate::app::results::{JobOutput, recognition_ready};
@@ -95,16 +95,13 @@ impl Room for BaselinesRoom {
         ui.add(egui::DragValue::new(&mut f.k).range(2..=40).prefix("k "));
         ui.add(egui::DragValue::new(&mut f.seed).prefix("seed "));
         ui.checkbox(&mut f.with_svm, "RBF SVM (5-fold)");
-        let Some(s) = cx.session() else { return };
-        let ok = recognition_ready(s);
-        if !ok {
-            ui.label("(needs an object-recognition session: encoders and `object` labels)");
-        }
-        let running = cx.analyses.is_running(AnalysisKind::Baselines);
-        if ui
-            .add_enabled(!running && ok, egui::Button::new("Run"))
-            .clicked()
-        {
+        if run_button(
+            ui,
+            cx,
+            AnalysisKind::Baselines,
+            recognition_ready,
+            "(needs an object-recognition session: encoders and `object` labels)",
+        ) {
             self.start(cx);
         }
     }
@@ -113,10 +110,8 @@ impl Room for BaselinesRoom {
         let Some(s) = cx.session() else { return };
         let form = self.form.clone();
         let session = s.session.clone();
-        let ctx = cx.ctx.clone();
-        cx.analyses.spawn(
-            &ctx,
-            Some(AnalysisKind::Baselines),
+        cx.spawn(
+            AnalysisKind::Baselines,
             format!("Baselines on {}", session.meta.name),
             move |p| {
                 let t0 = std::time::Instant::now();

@@ -3,7 +3,7 @@
 //! clusters at the threshold the marker selects, as tiles.
 
 use super::tiles::Pane;
-use super::{Cx, Room, duration_text};
+use super::{Cx, Room, duration_text, run_button};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
 use crate::app::results::{JobOutput, experiment_error, recognition_ready};
@@ -182,16 +182,13 @@ impl Room for ClusteringRoom {
                     .prefix("step "),
             );
         });
-        let Some(s) = cx.session() else { return };
-        let ok = recognition_ready(s);
-        if !ok {
-            ui.label("(needs an object-recognition session: encoders and `object` labels)");
-        }
-        let running = cx.analyses.is_running(AnalysisKind::Clustering);
-        if ui
-            .add_enabled(!running && ok, egui::Button::new("Run"))
-            .clicked()
-        {
+        if run_button(
+            ui,
+            cx,
+            AnalysisKind::Clustering,
+            recognition_ready,
+            "(needs an object-recognition session: encoders and `object` labels)",
+        ) {
             self.start(cx);
         }
     }
@@ -200,10 +197,8 @@ impl Room for ClusteringRoom {
         let Some(s) = cx.session() else { return };
         let f = self.form.clone();
         let session = s.session.clone();
-        let ctx = cx.ctx.clone();
-        cx.analyses.spawn(
-            &ctx,
-            Some(AnalysisKind::Clustering),
+        cx.spawn(
+            AnalysisKind::Clustering,
             format!("Clustering on {}", session.meta.name),
             move |p| {
                 let params = ClusteringParams {

@@ -37,6 +37,21 @@ impl Cx<'_> {
         self.sessions.get(self.active)
     }
 
+    /// Run `work` as a background job of analysis `kind`.
+    pub fn spawn(
+        &mut self,
+        kind: AnalysisKind,
+        title: String,
+        work: impl FnOnce(
+            &crate::jobs::Progress,
+        ) -> Result<super::results::JobOutput, crate::jobs::JobError>
+        + Send
+        + 'static,
+    ) {
+        let ctx = self.ctx.clone();
+        self.analyses.spawn(&ctx, Some(kind), title, work);
+    }
+
     /// The result of `kind` shown for the active session (index into the results).
     pub fn shown(&self, kind: AnalysisKind) -> Option<usize> {
         let name = &self.session()?.session.meta.name;
@@ -99,6 +114,25 @@ impl Rooms {
             View::Robustness => &mut self.robustness,
         }
     }
+}
+
+/// The form's Run button: enabled while no `kind` job runs and the active session can run it
+/// (`ready`); otherwise `needs` says what the session lacks. Returns whether it was clicked.
+pub fn run_button(
+    ui: &mut egui::Ui,
+    cx: &Cx,
+    kind: AnalysisKind,
+    ready: impl Fn(&LoadedSession) -> bool,
+    needs: &str,
+) -> bool {
+    let Some(s) = cx.session() else { return false };
+    let ok = ready(s);
+    if !ok {
+        ui.label(needs);
+    }
+    let running = cx.analyses.is_running(kind);
+    ui.add_enabled(!running && ok, egui::Button::new("Run"))
+        .clicked()
 }
 
 /// Show a number compactly (scores to 3 decimals, large values without decimals).

@@ -3,7 +3,7 @@
 //! lengthscale relevance as tiles, with every model of the session compared on one chart.
 
 use super::tiles::Pane;
-use super::{Cx, Room, duration_text};
+use super::{Cx, Room, duration_text, run_button};
 use crate::app::View;
 use crate::app::figure_view::{self, Selection as FigureSelection};
 use crate::app::loader::LoadedSession;
@@ -120,16 +120,13 @@ impl Room for RecognitionRoom {
                 }
             });
         ui.add(egui::DragValue::new(&mut f.seed).prefix("seed "));
-        let Some(s) = cx.session() else { return };
-        let ok = recognition_ready(s);
-        if !ok {
-            ui.label("(needs an object-recognition session: encoders and `object` labels)");
-        }
-        let running = cx.analyses.is_running(AnalysisKind::Recognition);
-        if ui
-            .add_enabled(!running && ok, egui::Button::new("Run"))
-            .clicked()
-        {
+        if run_button(
+            ui,
+            cx,
+            AnalysisKind::Recognition,
+            recognition_ready,
+            "(needs an object-recognition session: encoders and `object` labels)",
+        ) {
             self.start(cx);
         }
     }
@@ -138,10 +135,8 @@ impl Room for RecognitionRoom {
         let Some(s) = cx.session() else { return };
         let f = self.form.clone();
         let session = s.session.clone();
-        let ctx = cx.ctx.clone();
-        cx.analyses.spawn(
-            &ctx,
-            Some(AnalysisKind::Recognition),
+        cx.spawn(
+            AnalysisKind::Recognition,
             format!("Recognition on {}", session.meta.name),
             move |p| {
                 let params = RecognitionParams {

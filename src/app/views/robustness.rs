@@ -208,10 +208,8 @@ impl Room for RobustnessRoom {
         let Some(family) = family_of(s) else { return };
         let params = self.form.params(family);
         let session = s.session.clone();
-        let ctx = cx.ctx.clone();
-        cx.analyses.spawn(
-            &ctx,
-            Some(AnalysisKind::Robustness),
+        cx.spawn(
+            AnalysisKind::Robustness,
             format!("Robustness sweep on {}", session.meta.name),
             move |p| {
                 let r = run_robustness(&session, &params, p).map_err(experiment_error)?;

@@ -3,7 +3,7 @@
 //! maps as tiles.
 
 use super::tiles::Pane;
-use super::{Cx, Room, duration_text};
+use super::{Cx, Room, duration_text, run_button};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
 use crate::app::results::JobOutput;
@@ -161,16 +161,13 @@ impl Room for StabilityRoom {
             );
         }
         ui.small("Pressures are z-scored per taxel over the session; β and γ use the 0.5·|x − Da|² + λ·|a|₁ convention.");
-        let Some(s) = cx.session() else { return };
-        let ok = ready(s);
-        if !ok {
-            ui.label("(needs a session with a two-class outcome label, e.g. success / failure)");
-        }
-        let running = cx.analyses.is_running(AnalysisKind::Stability);
-        if ui
-            .add_enabled(!running && ok, egui::Button::new("Run"))
-            .clicked()
-        {
+        if run_button(
+            ui,
+            cx,
+            AnalysisKind::Stability,
+            ready,
+            "(needs a session with a two-class outcome label, e.g. success / failure)",
+        ) {
             self.start(cx);
         }
     }
@@ -179,10 +176,8 @@ impl Room for StabilityRoom {
         let Some(s) = cx.session() else { return };
         let f = self.form.clone();
         let session = s.session.clone();
-        let ctx = cx.ctx.clone();
-        cx.analyses.spawn(
-            &ctx,
-            Some(AnalysisKind::Stability),
+        cx.spawn(
+            AnalysisKind::Stability,
             format!("Grasp stability on {}", session.meta.name),
             move |p| {
                 let data = StabilityData::from_session(&session, &DataOptions::default())
