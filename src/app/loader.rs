@@ -1,5 +1,5 @@
-//! Opening sessions off the UI thread: native files, the BTS3 CSV, the iCub folder, and
-//! the sample sessions bundled into the binary.
+//! Opening sessions off the UI thread: native files, the BTS3 CSV, the iCub folder,
+//! recordings imported with a spec, and the sample sessions bundled into the binary.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -26,7 +26,15 @@ pub const BUNDLED: [(&str, &str); 2] = [
 pub enum Source {
     Bundled(String),
     File(PathBuf),
+    /// A ROS 2 bag or long-format CSV read with its import spec.
+    Imported {
+        recording: PathBuf,
+        spec: PathBuf,
+    },
 }
+
+/// How a project's session list writes an imported recording's spec after its path.
+const WITH_SPEC: &str = " with spec ";
 
 impl Source {
     /// The source a `label` names (as a project file lists its sessions).
@@ -35,7 +43,13 @@ impl Source {
             Some(name) if BUNDLED.iter().any(|(n, _)| *n == name) => {
                 Source::Bundled(name.to_string())
             }
-            _ => Source::File(PathBuf::from(label)),
+            _ => match label.rsplit_once(WITH_SPEC) {
+                Some((recording, spec)) => Source::Imported {
+                    recording: PathBuf::from(recording),
+                    spec: PathBuf::from(spec),
+                },
+                None => Source::File(PathBuf::from(label)),
+            },
         }
     }
 
@@ -43,6 +57,9 @@ impl Source {
         match self {
             Source::Bundled(name) => format!("sample: {name}"),
             Source::File(p) => p.display().to_string(),
+            Source::Imported { recording, spec } => {
+                format!("{}{WITH_SPEC}{}", recording.display(), spec.display())
+            }
         }
     }
 }
@@ -90,6 +107,9 @@ pub fn open(source: &Source) -> Result<LoadedSession, String> {
             session::native::from_str(text, Path::new(name)).map_err(|e| e.to_string())?
         }
         Source::File(path) => session::open(path).map_err(|e| e.to_string())?,
+        Source::Imported { recording, spec } => {
+            session::import_with_spec(recording, spec).map_err(|e| e.to_string())?
+        }
     };
     Ok(LoadedSession {
         source: source.clone(),

@@ -6,6 +6,7 @@
 pub mod browser;
 pub mod figure_view;
 pub mod heatmap;
+pub mod import;
 pub mod loader;
 pub mod notify;
 pub mod replay;
@@ -146,6 +147,8 @@ pub struct WorkbenchApp {
     /// Sources in the order they were asked for, so sessions list in a stable order.
     requested: Vec<Source>,
     dialog: Option<(Dialog, Receiver<Vec<PathBuf>>)>,
+    /// Recordings (ROS 2 bags, long-format CSVs) waiting for their import spec.
+    pub import: import::ImportDialog,
     /// The selection to restore once the persisted sessions have loaded.
     restore: Option<(usize, usize)>,
     /// After a project opens: once its sessions have loaded, show the open view's results,
@@ -174,6 +177,7 @@ impl WorkbenchApp {
             loader: Loader::default(),
             requested: Vec::new(),
             dialog: None,
+            import: import::ImportDialog::default(),
             restore: None,
             focus_pending: None,
         };
@@ -203,10 +207,13 @@ impl WorkbenchApp {
         }
     }
 
-    /// Open a session file, or a project file (which reopens its sessions).
+    /// Open a session file, or a project file (which reopens its sessions); a recording
+    /// that needs an import spec waits in the import dialog.
     pub fn open_path(&mut self, path: PathBuf, ctx: &egui::Context) {
         if crate::experiments::report::is_project(&path) {
             self.analyses.open_project(ctx, path);
+        } else if crate::session::needs_spec(&path) {
+            self.import.push(path);
         } else {
             self.open(Source::File(path), ctx);
         }
@@ -436,7 +443,7 @@ impl WorkbenchApp {
             self.dialog = None;
             for p in paths {
                 match kind {
-                    Dialog::Sessions | Dialog::Folder => self.open(Source::File(p), ctx),
+                    Dialog::Sessions | Dialog::Folder => self.open_path(p, ctx),
                     Dialog::OpenProject => self.analyses.open_project(ctx, p),
                     Dialog::SaveProject => {
                         let sessions = self.sessions.iter().map(|s| s.source.label()).collect();
@@ -517,7 +524,10 @@ impl WorkbenchApp {
             let picked = match kind {
                 Dialog::Folder => dialog.pick_folder().map(|p| vec![p]),
                 Dialog::Sessions => dialog
-                    .add_filter("Sessions and datasets", &["json", "csv"])
+                    .add_filter(
+                        "Sessions, datasets and recordings",
+                        &["json", "csv", "mcap"],
+                    )
                     .pick_files(),
                 Dialog::OpenProject => dialog
                     .add_filter("Projects", &["json"])
@@ -539,7 +549,10 @@ impl WorkbenchApp {
                 if ui.button("Open sessions…").clicked() {
                     self.open_dialog(Dialog::Sessions);
                 }
-                if ui.button("Open iCub dataset folder…").clicked() {
+                if ui
+                    .button("Open folder (iCub dataset or ROS 2 bag)…")
+                    .clicked()
+                {
                     self.open_dialog(Dialog::Folder);
                 }
                 ui.separator();
@@ -654,6 +667,9 @@ impl WorkbenchApp {
         });
         let now = ctx.input(|i| i.time);
         cx.analyses.notes.ui(&ctx, now);
+        if let Some(source) = self.import.show(&ctx) {
+            self.open(source, &ctx);
+        }
     }
 }
 
