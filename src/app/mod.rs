@@ -149,6 +149,7 @@ pub struct WorkbenchApp {
     dialog: Option<(Dialog, Receiver<Vec<PathBuf>>)>,
     /// Recordings (ROS 2 bags, long-format CSVs) waiting for their import spec.
     pub import: import::ImportDialog,
+    pub cluster: views::cluster::ClusterForm,
     /// The selection to restore once the persisted sessions have loaded.
     restore: Option<(usize, usize)>,
     /// After a project opens: once its sessions have loaded, show the open view's results,
@@ -178,6 +179,7 @@ impl WorkbenchApp {
             requested: Vec::new(),
             dialog: None,
             import: import::ImportDialog::default(),
+            cluster: views::cluster::ClusterForm::default(),
             restore: None,
             focus_pending: None,
         };
@@ -312,6 +314,7 @@ impl WorkbenchApp {
             selection: &self.selection,
             commands: &mut self.commands,
             replay: &mut self.replay,
+            cluster: &mut self.cluster,
         };
         (
             self.rooms.get(view),
@@ -642,6 +645,7 @@ impl WorkbenchApp {
                 .show(ui, |ui| {
                     egui::ScrollArea::vertical().show(ui, |ui| {
                         room.form_ui(ui, &mut cx);
+                        views::cluster::ui(ui, room, &mut cx);
                         ui.separator();
                         ui.collapsing("Export settings", |ui| cx.analyses.export.ui(ui));
                     });

@@ -10,6 +10,7 @@ use crate::app::results::{JobOutput, experiment_error, recognition_ready};
 use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_clustering};
 use crate::experiments::recognition_report::clustering_report;
 use crate::experiments::report::AnalysisKind;
+use crate::sweep::Experiment;
 
 /// Unsupervised clustering form.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
@@ -48,6 +49,18 @@ impl ClusteringForm {
         match learner {
             UnsupervisedLearner::Du => [0.1, 0.95, 0.05],
             UnsupervisedLearner::Gu => [0.02, 0.25, 0.01],
+        }
+    }
+
+    /// The parameters the form runs with.
+    pub fn params(&self) -> ClusteringParams {
+        ClusteringParams {
+            learner: self.learner,
+            reps: self.reps,
+            seed: self.seed,
+            thresholds: self.threshold_list(),
+            gu_min_grasps: self.gu_min_grasps,
+            ..Default::default()
         }
     }
 
@@ -193,6 +206,10 @@ impl Room for ClusteringRoom {
         }
     }
 
+    fn sweep(&self, _: &LoadedSession) -> Option<Result<Experiment, String>> {
+        Some(Ok(Experiment::Clustering(self.form.params())))
+    }
+
     fn start(&mut self, cx: &mut Cx) {
         let Some(s) = cx.session() else { return };
         let f = self.form.clone();
@@ -201,15 +218,7 @@ impl Room for ClusteringRoom {
             AnalysisKind::Clustering,
             format!("Clustering on {}", session.meta.name),
             move |p| {
-                let params = ClusteringParams {
-                    learner: f.learner,
-                    reps: f.reps,
-                    seed: f.seed,
-                    thresholds: f.threshold_list(),
-                    gu_min_grasps: f.gu_min_grasps,
-                    ..Default::default()
-                };
-                let r = run_clustering(&session, &params, p).map_err(experiment_error)?;
+                let r = run_clustering(&session, &f.params(), p).map_err(experiment_error)?;
                 Ok(JobOutput::Result(Box::new(clustering_report(
                     &session.meta.name,
                     &r,

@@ -3,6 +3,7 @@
 //! reset. Rooms read the shared selection and push commands; they never change another view.
 
 pub mod baselines;
+pub mod cluster;
 pub mod clustering;
 pub mod panes;
 pub mod recognition;
@@ -30,6 +31,8 @@ pub struct Cx<'a> {
     pub selection: &'a Selection,
     pub commands: &'a mut Vec<Command>,
     pub replay: &'a mut Replay,
+    /// The settings of "Run on a cluster…", shared by the views.
+    pub cluster: &'a mut cluster::ClusterForm,
 }
 
 impl Cx<'_> {
@@ -82,6 +85,12 @@ pub trait Room {
 
     /// Start the form's run on the active session (a background job).
     fn start(&mut self, _cx: &mut Cx) {}
+
+    /// The form's run as a sweep a cluster can shard: None for rooms whose runs do not
+    /// shard, an error saying why when the form as it is cannot be sharded on `session`.
+    fn sweep(&self, _session: &LoadedSession) -> Option<Result<crate::sweep::Experiment, String>> {
+        None
+    }
 
     /// Draw a pane this room owns (not a result's figure). Returns false for panes it
     /// does not know.

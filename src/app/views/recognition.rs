@@ -14,6 +14,7 @@ use crate::experiments::recognition_report::{
 };
 use crate::experiments::report::AnalysisKind;
 use crate::features::sequence::FeatureSet;
+use crate::sweep::Experiment;
 
 /// Supervised recognition form: a few repetitions by default so the view answers quickly;
 /// the CLI runs the paper's 50.
@@ -44,6 +45,18 @@ impl Default for RecognitionForm {
 const SECONDS_PER_STEP: f64 = 0.0006;
 
 impl RecognitionForm {
+    /// The parameters the form runs with.
+    pub fn params(&self) -> RecognitionParams {
+        RecognitionParams {
+            learner: self.learner,
+            features: self.features,
+            reps: self.reps,
+            seed: self.seed,
+            taxel_noise_variance: self.noise_variance,
+            ..Default::default()
+        }
+    }
+
     pub fn expected_seconds(&self, s: &LoadedSession) -> f64 {
         let steps: usize = s.session.grasps.iter().map(|g| g.frames.len()).sum();
         SECONDS_PER_STEP * steps as f64 * self.reps as f64
@@ -131,6 +144,14 @@ impl Room for RecognitionRoom {
         }
     }
 
+    fn sweep(&self, s: &LoadedSession) -> Option<Result<Experiment, String>> {
+        Some(if recognition_ready(s) {
+            Ok(Experiment::Recognition(self.form.params()))
+        } else {
+            Err("This session has no objects with encoders.".into())
+        })
+    }
+
     fn start(&mut self, cx: &mut Cx) {
         let Some(s) = cx.session() else { return };
         let f = self.form.clone();
@@ -139,15 +160,7 @@ impl Room for RecognitionRoom {
             AnalysisKind::Recognition,
             format!("Recognition on {}", session.meta.name),
             move |p| {
-                let params = RecognitionParams {
-                    learner: f.learner,
-                    features: f.features,
-                    reps: f.reps,
-                    seed: f.seed,
-                    taxel_noise_variance: f.noise_variance,
-                    ..Default::default()
-                };
-                let r = run_recognition(&session, &params, p).map_err(experiment_error)?;
+                let r = run_recognition(&session, &f.params(), p).map_err(experiment_error)?;
                 Ok(JobOutput::Result(Box::new(recognition_report(
                     &session.meta.name,
                     &r,

@@ -15,6 +15,7 @@ use crate::experiments::robustness::{
     Family, Method, Perturbation, RobustnessParams, Sweep, run_robustness,
 };
 use crate::experiments::robustness_report::robustness_report;
+use crate::sweep::Experiment;
 
 /// The form: which methods and perturbations, with few repetitions by default so the view
 /// answers in minutes; the CLI runs the full sweeps.
@@ -201,6 +202,21 @@ impl Room for RobustnessRoom {
         {
             self.start(cx);
         }
+    }
+
+    fn sweep(&self, s: &LoadedSession) -> Option<Result<Experiment, String>> {
+        let Some(family) = family_of(s) else {
+            return Some(Err(
+                "This session has no family of methods to perturb.".into()
+            ));
+        };
+        let params = self.form.params(family);
+        Some(
+            params
+                .validate()
+                .map(|()| Experiment::Robustness(params))
+                .map_err(|e| e.to_string()),
+        )
     }
 
     fn start(&mut self, cx: &mut Cx) {

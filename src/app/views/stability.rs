@@ -13,6 +13,7 @@ use crate::experiments::stability::{
 };
 use crate::experiments::stability_report::stability_report;
 use crate::jobs::JobError;
+use crate::sweep::{Experiment, StabilitySweep};
 
 /// Grasp-stability form: one configuration, or a grid search with the parsimony rule.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
@@ -43,6 +44,19 @@ impl Default for StabilityForm {
 const SECONDS_PER_GRASP_CONFIG: f64 = 0.0004;
 
 impl StabilityForm {
+    /// The options the form runs with.
+    pub fn options(&self) -> StabilityOptions {
+        StabilityOptions {
+            single: Config {
+                num_bases: self.num_bases,
+                beta: self.beta,
+                gamma: self.gamma,
+            },
+            grid: self.grid_spec(),
+            ..Default::default()
+        }
+    }
+
     fn grid_spec(&self) -> Option<GridSpec> {
         let [from, to, step] = self.bases;
         self.grid.then(|| GridSpec {
@@ -172,6 +186,19 @@ impl Room for StabilityRoom {
         }
     }
 
+    fn sweep(&self, s: &LoadedSession) -> Option<Result<Experiment, String>> {
+        Some(if !ready(s) {
+            Err("This session has no two-class outcome.".into())
+        } else if !self.form.grid {
+            Err("A cluster shards a grid search: tick Grid search.".into())
+        } else {
+            Ok(Experiment::Stability(StabilitySweep {
+                data: DataOptions::default(),
+                options: self.form.options(),
+            }))
+        })
+    }
+
     fn start(&mut self, cx: &mut Cx) {
         let Some(s) = cx.session() else { return };
         let f = self.form.clone();
@@ -182,20 +209,12 @@ impl Room for StabilityRoom {
             move |p| {
                 let data = StabilityData::from_session(&session, &DataOptions::default())
                     .map_err(JobError::failed)?;
-                let opts = StabilityOptions {
-                    single: Config {
-                        num_bases: f.num_bases,
-                        beta: f.beta,
-                        gamma: f.gamma,
-                    },
-                    grid: f.grid_spec(),
-                    ..Default::default()
-                };
-                let r =
-                    crate::experiments::stability::run(&data, &opts, p).map_err(|e| match e {
+                let r = crate::experiments::stability::run(&data, &f.options(), p).map_err(
+                    |e| match e {
                         StabilityError::Cancelled => JobError::Cancelled,
                         other => JobError::failed(other),
-                    })?;
+                    },
+                )?;
                 Ok(JobOutput::Result(Box::new(stability_report(&r))))
             },
         );
