@@ -127,8 +127,9 @@ fn filters_and_replays_an_object_recognition_grasp() {
 fn a_changed_layout_comes_back_after_a_restart() {
     use tactile_workbench::app::View;
     let mut h = harness();
-    h.state_mut().view = View::SpeedAccuracy;
+    h.get_by_label("Speed vs accuracy").click();
     h.run_ok();
+    assert_eq!(h.state().view, View::SpeedAccuracy);
     h.get_all_by_label("Maximise").next().unwrap().click();
     h.run_ok();
     h.get_by_label("Restore layout");

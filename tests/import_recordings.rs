@@ -167,6 +167,7 @@ fn imported_sessions_run_stability_and_recognition() {
             objects: CvScheme::LeaveObjectsOut { folds: None },
             grid: None,
             nested: Vec::new(),
+            size_reason: None,
             single: Config {
                 num_bases: 4,
                 beta: 1.0,

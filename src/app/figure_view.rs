@@ -57,6 +57,8 @@ pub struct Interaction {
     pub marker_x: Option<f64>,
     /// A marker point of a chart was clicked: (series, point) indices.
     pub clicked_point: Option<(usize, usize)>,
+    /// The marker point of a chart under the pointer: (series, point) indices.
+    pub hovered_point: Option<(usize, usize)>,
     /// A heatmap cell was clicked: [row, column].
     pub clicked_cell: Option<[usize; 2]>,
 }
@@ -196,6 +198,11 @@ pub fn show(
                 }
             });
             let r = &shown.response;
+            ui.ctx()
+                .data_mut(|d| d.insert_temp(transform_id(id), shown.transform));
+            if let Some(pos) = r.hover_pos() {
+                interaction.hovered_point = nearest_marker(chart, &shown.transform, pos, 12.0);
+            }
             if marker.is_some()
                 && (r.dragged() || r.clicked())
                 && let Some(pos) = r.interact_pointer_pos()
@@ -420,6 +427,26 @@ pub fn show(
 }
 
 /// The marker point of `chart` drawn nearest to `pos`, if within `radius` points.
+fn transform_id(figure_id: &str) -> egui::Id {
+    egui::Id::unique(("chart-transform", figure_id))
+}
+
+/// Where point `k` of series `series` of `chart`, drawn with figure id `id`, was on the
+/// screen in the last frame (to point at a marker from outside the chart).
+pub fn marker_position(
+    ctx: &egui::Context,
+    id: &str,
+    chart: &figures::Chart,
+    series: usize,
+    k: usize,
+) -> Option<Pos2> {
+    let t: egui_plot::PlotTransform = ctx.data(|d| d.get_temp(transform_id(id)))?;
+    let s = chart.series.get(series)?;
+    let x = coord(chart.x.scale, *s.x.get(k)?)?;
+    let y = coord(chart.y.scale, *s.y.get(k)?)?;
+    Some(t.position_from_point(&PlotPoint::new(x, y)))
+}
+
 fn nearest_marker(
     chart: &figures::Chart,
     transform: &egui_plot::PlotTransform,

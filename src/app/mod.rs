@@ -26,7 +26,7 @@ use browser::{Browser, BrowserAction};
 use loader::{LoadedSession, Loader, Source};
 use replay::Replay;
 use results::Analyses;
-use selection::{Command, Selection};
+use selection::{Command, ModelSpec, Selection};
 use views::{Cx, Layout, Pane, Rooms};
 
 const STORAGE_KEY: &str = "tactile-workbench";
@@ -325,7 +325,7 @@ impl WorkbenchApp {
     }
 
     /// Apply the commands the views pushed while drawing.
-    pub fn apply_commands(&mut self) {
+    pub fn apply_commands(&mut self, ctx: &egui::Context) {
         for c in std::mem::take(&mut self.commands) {
             match c {
                 Command::SelectGrasps {
@@ -364,7 +364,66 @@ impl WorkbenchApp {
                     }
                 }
                 Command::Open(v) => self.view = v,
+                Command::TrainModel(spec) => self.train_model(spec, ctx),
             }
+        }
+    }
+
+    /// Open the active session's result of the model `spec`, or set the form of its view to
+    /// that size and train it there.
+    fn train_model(&mut self, spec: ModelSpec, ctx: &egui::Context) {
+        let Some(session) = self.sessions.get(self.browser.active) else {
+            return;
+        };
+        let name = session.session.meta.name.clone();
+        let (kind, view) = match &spec {
+            ModelSpec::Recognition { .. } => (AnalysisKind::Recognition, View::Recognition),
+            ModelSpec::Stability(_) => (AnalysisKind::Stability, View::Stability),
+        };
+        let same = |r: &crate::experiments::report::AnalysisResult| {
+            let of = |key: &str| r.parameters.get(key).map(String::as_str);
+            r.kind == kind
+                && r.session == name
+                && r.model_size.as_ref().map(|m| m.knobs.as_str()) == Some(&spec.knobs())
+                && match &spec {
+                    ModelSpec::Recognition {
+                        learner, features, ..
+                    } => {
+                        of("learner") == Some(&format!("{learner:?}").to_uppercase())
+                            && of("features")
+                                == Some(crate::experiments::recognition_report::features_text(
+                                    *features,
+                                ))
+                    }
+                    ModelSpec::Stability(_) => true,
+                }
+        };
+        if let Some(i) = self.analyses.results.iter().rposition(same) {
+            self.commands.push(Command::OpenResult(i));
+            return;
+        }
+        match spec {
+            ModelSpec::Recognition {
+                learner,
+                features,
+                capacity,
+                tau,
+            } => {
+                let f = &mut self.rooms.recognition.form;
+                (f.learner, f.features) = (learner, features);
+                (f.capacity, f.tau, f.user_size) = (capacity, tau, true);
+            }
+            ModelSpec::Stability(c) => {
+                let f = &mut self.rooms.stability.form;
+                f.grid = false;
+                (f.num_bases, f.beta, f.gamma) = (c.num_bases, c.beta, c.gamma);
+                f.user_size = true;
+            }
+        }
+        self.view = view;
+        let (room, mut cx, _, _) = self.parts(ctx, view);
+        if !cx.analyses.is_running(kind) {
+            room.start(&mut cx);
         }
     }
 
@@ -455,7 +514,7 @@ impl WorkbenchApp {
                 }
             }
         }
-        self.apply_commands();
+        self.apply_commands(ctx);
         if self.analyses.poll() {
             ctx.request_repaint();
         }

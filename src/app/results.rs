@@ -8,13 +8,19 @@ use egui::ProgressBar;
 use super::loader::LoadedSession;
 use super::notify::Notifications;
 use crate::experiments::ExperimentError;
+use crate::experiments::frontier::{Frontier, FrontierMethod};
+use crate::experiments::frontier_report::frontier_figures;
 use crate::experiments::recognition::{
     GraspTrace, RecognitionParams, SupervisedLearner, grasp_trace,
 };
 use crate::experiments::recognition_report::comparison_figures;
 use crate::experiments::report::{self, AnalysisKind, AnalysisResult, date_text};
+use crate::features::FeatureSet;
 use crate::figures::{self, Format, RenderOptions};
 use crate::jobs::{Job, JobError, Outcome};
+
+/// How a frontier job's title starts (one frontier runs at a time).
+pub const FRONTIER_JOB: &str = "Frontier of ";
 
 /// A job and what it is for.
 pub struct RunningJob {
@@ -25,6 +31,7 @@ pub struct RunningJob {
 
 pub enum JobOutput {
     Result(Box<AnalysisResult>),
+    Frontier(Box<Frontier>),
     Message(String),
     Project(report::Project),
     Trace(Box<ReplayTrace>),
@@ -144,6 +151,8 @@ pub struct Analyses {
     pub export: ExportSettings,
     /// What finished, failed or was exported (toasts and the log).
     pub notes: Notifications,
+    /// Speed–accuracy frontiers, at most one per session, method and feature set.
+    pub frontiers: Vec<Frontier>,
     /// The last recognition trace computed for the replay.
     pub trace: Option<ReplayTrace>,
     /// Projects that just opened: the sessions each names (for the app to reopen) and the
@@ -178,6 +187,18 @@ impl Analyses {
                     self.results.push(*r);
                     self.shown.insert(kind, self.results.len() - 1);
                 }
+                Some(Outcome::Done(JobOutput::Frontier(f))) => {
+                    let rec = &f.points[f.recommended];
+                    self.notes.info(format!(
+                        "{} on {}: recommended {} (score {:.3} ± {:.3})",
+                        f.label(),
+                        f.session,
+                        rec.detail,
+                        rec.score,
+                        rec.score_se
+                    ));
+                    self.add_frontier(*f);
+                }
                 Some(Outcome::Done(JobOutput::Message(m))) => self.notes.info(m),
                 Some(Outcome::Done(JobOutput::Trace(t))) => self.trace = Some(*t),
                 Some(Outcome::Done(JobOutput::Project(p))) => {
@@ -189,6 +210,9 @@ impl Analyses {
                     ));
                     let first = p.results.first().map(|r| r.session.clone());
                     self.results.extend(p.results);
+                    for f in p.frontiers {
+                        self.add_frontier(f);
+                    }
                     self.opened_projects.push((p.sessions, first));
                 }
                 Some(Outcome::Cancelled) => self.notes.info(format!("{}: cancelled", rj.title)),
@@ -197,6 +221,38 @@ impl Analyses {
             }
         }
         changed
+    }
+
+    /// Keep `f`, replacing the frontier of the same session, method and features.
+    pub fn add_frontier(&mut self, f: Frontier) {
+        let same = |g: &Frontier| {
+            g.session == f.session
+                && g.params.method == f.params.method
+                && g.params.features == f.params.features
+        };
+        match self.frontiers.iter().position(same) {
+            Some(i) => self.frontiers[i] = f,
+            None => self.frontiers.push(f),
+        }
+    }
+
+    /// The frontier of `method` with `features` on `session`.
+    pub fn frontier(
+        &self,
+        session: &str,
+        method: FrontierMethod,
+        features: FeatureSet,
+    ) -> Option<&Frontier> {
+        self.frontiers.iter().find(|f| {
+            f.session == session
+                && f.params.method == method
+                && (method == FrontierMethod::SparseSvm || f.params.features == features)
+        })
+    }
+
+    /// A frontier is being computed.
+    pub fn frontier_running(&self) -> bool {
+        self.jobs.iter().any(|j| j.title.starts_with(FRONTIER_JOB))
     }
 
     pub fn spawn(
@@ -250,6 +306,26 @@ impl Analyses {
                 date: date_text(report::now_unix()),
             });
         }
+        // Each session's frontiers on one chart per time axis.
+        let mut sessions: Vec<&str> = self.frontiers.iter().map(|f| f.session.as_str()).collect();
+        sessions.dedup();
+        for session in sessions {
+            let of: Vec<Frontier> = self
+                .frontiers
+                .iter()
+                .filter(|f| f.session == session)
+                .cloned()
+                .collect();
+            for (name, f) in frontier_figures(&of) {
+                set_all.entries.push(figures::FigureEntry {
+                    name: format!("{name}-{}", report::slug(session)),
+                    figure: f,
+                    parameters: Default::default(),
+                    session: session.to_string(),
+                    date: date_text(report::now_unix()),
+                });
+            }
+        }
         let dir = self.export.dir.clone();
         let opts = self.export.options();
         self.spawn(ctx, None, "Export all figures".into(), move |p| {
@@ -273,7 +349,8 @@ impl Analyses {
 
     /// Save the results and the sessions they came from as a project file (in the background).
     pub fn save_project(&mut self, ctx: &egui::Context, path: PathBuf, sessions: Vec<String>) {
-        let project = report::Project::new(sessions, self.results.clone());
+        let project = report::Project::new(sessions, self.results.clone())
+            .with_frontiers(self.frontiers.clone());
         self.spawn(
             ctx,
             None,

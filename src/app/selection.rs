@@ -3,6 +3,9 @@
 //! the queue between frames, so every view of a frame sees the same selection.
 
 use super::View;
+use crate::experiments::recognition::SupervisedLearner;
+use crate::experiments::stability::Config;
+use crate::features::FeatureSet;
 
 /// What the user has selected: a set of grasps of one session, one focused grasp (the one the
 /// replay shows), and the part of a figure the set came from.
@@ -72,4 +75,34 @@ pub enum Command {
     OpenResult(usize),
     /// Switch view.
     Open(View),
+    /// Open the result of this model on the active session, or train it if there is none
+    /// (a point of a frontier).
+    TrainModel(ModelSpec),
+}
+
+/// A model of a given size: what a frontier's point stands for.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ModelSpec {
+    Recognition {
+        learner: SupervisedLearner,
+        features: FeatureSet,
+        capacity: usize,
+        tau: usize,
+    },
+    Stability(Config),
+}
+
+impl ModelSpec {
+    /// The size in the words a result's `model_size` uses.
+    pub fn knobs(&self) -> String {
+        match self {
+            ModelSpec::Recognition { capacity, tau, .. } => {
+                format!("capacity {capacity}, tau {tau}")
+            }
+            ModelSpec::Stability(c) => format!(
+                "num_bases {}, beta {}, gamma {}",
+                c.num_bases, c.beta, c.gamma
+            ),
+        }
+    }
 }

@@ -224,19 +224,22 @@ pub fn distinct_sorted(values: impl Iterator<Item = f64>) -> Vec<f64> {
     out
 }
 
+/// A name for files and folders: lower-case ASCII letters and digits, every other run of
+/// characters one dash ("BTS3 (palm down)" → "bts3-palm-down").
+pub fn slug(s: &str) -> String {
+    let mut out = String::new();
+    for c in s.chars() {
+        if c.is_ascii_alphanumeric() {
+            out.push(c.to_ascii_lowercase());
+        } else if !out.ends_with('-') {
+            out.push('-');
+        }
+    }
+    out.trim_matches('-').to_string()
+}
+
 /// Every figure of `results`, named for export (`<analysis>-<label>-<figure>`).
 pub fn figure_set(results: &[AnalysisResult]) -> FigureSet {
-    let slug = |s: &str| {
-        let mut out = String::new();
-        for c in s.chars() {
-            if c.is_ascii_alphanumeric() {
-                out.push(c.to_ascii_lowercase());
-            } else if !out.ends_with('-') {
-                out.push('-');
-            }
-        }
-        out.trim_matches('-').to_string()
-    };
     let mut entries: Vec<FigureEntry> = Vec::new();
     for (i, r) in results.iter().enumerate() {
         for (name, figure) in &r.figures {
@@ -265,6 +268,10 @@ pub struct Project {
     /// Where each session came from, as the workbench names it.
     pub sessions: Vec<String>,
     pub results: Vec<AnalysisResult>,
+    /// Speed–accuracy frontiers computed on the sessions (projects saved before frontiers
+    /// were kept have none).
+    #[serde(default)]
+    pub frontiers: Vec<super::frontier::Frontier>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -296,7 +303,13 @@ impl Project {
             version: PROJECT_VERSION,
             sessions,
             results,
+            frontiers: Vec::new(),
         }
+    }
+
+    pub fn with_frontiers(mut self, frontiers: Vec<super::frontier::Frontier>) -> Self {
+        self.frontiers = frontiers;
+        self
     }
 
     pub fn save(&self, path: &Path) -> Result<(), ProjectError> {
@@ -449,6 +462,15 @@ pub fn speed_accuracy_figures(results: &[AnalysisResult]) -> Vec<(String, Figure
 mod tests {
     use super::*;
     use crate::figures::{Axis, Series};
+
+    #[test]
+    fn slugs_keep_words_and_drop_the_rest() {
+        assert_eq!(
+            slug("Simulated grasp stability"),
+            "simulated-grasp-stability"
+        );
+        assert_eq!(slug("BTS3 (palm down), 2 × 5"), "bts3-palm-down-2-5");
+    }
 
     fn result() -> AnalysisResult {
         AnalysisResult {

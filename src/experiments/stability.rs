@@ -18,6 +18,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::links::{GraspCode, PatchCode};
+use super::report::SizeReason;
 use crate::features::{KeyFramePatches, PatchError, PatchScaling, Standardizer};
 use crate::jobs::Progress;
 use crate::session::{Layout, Session};
@@ -1493,6 +1494,11 @@ pub struct StabilityOptions {
     /// validation (none by default: it costs about ten grid searches each).
     #[serde(default)]
     pub nested: Vec<CvScheme>,
+    /// Why `single` has its size, when the caller knows (a frontier's recommendation);
+    /// None: judged from the options (a grid's choice is recommended, the paper's
+    /// configuration is the default, any other the user's).
+    #[serde(default)]
+    pub size_reason: Option<SizeReason>,
 }
 
 impl Default for StabilityOptions {
@@ -1509,6 +1515,7 @@ impl Default for StabilityOptions {
                 gamma: 1.0,
             },
             nested: Vec::new(),
+            size_reason: None,
         }
     }
 }

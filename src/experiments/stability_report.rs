@@ -564,6 +564,8 @@ pub fn stability_report(r: &StabilityReport) -> AnalysisResult {
             ),
             reason: if r.grid.is_some() {
                 SizeReason::Recommended
+            } else if let Some(reason) = r.options.size_reason {
+                reason
             } else if cfg == StabilityOptions::default().single {
                 SizeReason::PaperDefault
             } else {

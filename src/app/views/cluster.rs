@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use super::{Cx, Room};
 use crate::app::results::JobOutput;
+use crate::experiments::report::slug;
 use crate::jobs::JobError;
 use crate::sweep::{self, PlanRequest, SBATCH_FILE};
 
@@ -32,16 +33,6 @@ impl Default for ClusterForm {
     }
 }
 
-/// A folder name from a session's name: lower case, words joined by dashes.
-fn slug(name: &str) -> String {
-    let words: Vec<String> = name
-        .split(|c: char| !c.is_ascii_alphanumeric())
-        .filter(|w| !w.is_empty())
-        .map(|w| w.to_ascii_lowercase())
-        .collect();
-    words.join("-")
-}
-
 impl ClusterForm {
     fn folder_for(&self, experiment: &str, session: &str) -> PathBuf {
         if self.folder.trim().is_empty() {
@@ -54,10 +45,10 @@ impl ClusterForm {
 
 /// The section under a room's form; nothing for rooms whose runs do not shard.
 pub fn ui(ui: &mut egui::Ui, room: &dyn Room, cx: &mut Cx) {
-    let Some(session) = cx.session() else { return };
-    let Some(experiment) = room.sweep(session) else {
+    let Some(experiment) = room.sweep(cx) else {
         return;
     };
+    let Some(session) = cx.session() else { return };
     let name = session.session.meta.name.clone();
     let source = session.source.label();
     let data = session.session.clone();
@@ -139,18 +130,4 @@ pub fn ui(ui: &mut egui::Ui, room: &dyn Room, cx: &mut Cx) {
                 },
             );
         });
-}
-
-#[cfg(test)]
-mod tests {
-    use super::slug;
-
-    #[test]
-    fn slugs_keep_words_and_drop_the_rest() {
-        assert_eq!(
-            slug("Simulated grasp stability"),
-            "simulated-grasp-stability"
-        );
-        assert_eq!(slug("BTS3 (palm down), 2 × 5"), "bts3-palm-down-2-5");
-    }
 }

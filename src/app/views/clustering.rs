@@ -206,7 +206,8 @@ impl Room for ClusteringRoom {
         }
     }
 
-    fn sweep(&self, _: &LoadedSession) -> Option<Result<Experiment, String>> {
+    fn sweep(&self, cx: &Cx) -> Option<Result<Experiment, String>> {
+        cx.session()?;
         Some(Ok(Experiment::Clustering(self.form.params())))
     }
 

@@ -86,9 +86,9 @@ pub trait Room {
     /// Start the form's run on the active session (a background job).
     fn start(&mut self, _cx: &mut Cx) {}
 
-    /// The form's run as a sweep a cluster can shard: None for rooms whose runs do not
-    /// shard, an error saying why when the form as it is cannot be sharded on `session`.
-    fn sweep(&self, _session: &LoadedSession) -> Option<Result<crate::sweep::Experiment, String>> {
+    /// The form's run on the active session as a sweep a cluster can shard: None for rooms
+    /// whose runs do not shard, an error saying why when the form as it is cannot be sharded.
+    fn sweep(&self, _cx: &Cx) -> Option<Result<crate::sweep::Experiment, String>> {
         None
     }
 

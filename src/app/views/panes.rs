@@ -79,7 +79,7 @@ pub fn pane_ui(
                 ui.label("No result yet.");
             }
         },
-        Pane::Comparison | Pane::SpeedChart | Pane::Models => {
+        Pane::Comparison | Pane::SpeedChart | Pane::Models | Pane::Frontier => {
             ui.label("This pane belongs to another view.");
         }
     }

@@ -7,12 +7,13 @@ use super::{Cx, Room, duration_text, run_button};
 use crate::app::View;
 use crate::app::figure_view::{self, Selection as FigureSelection};
 use crate::app::loader::LoadedSession;
-use crate::app::results::{JobOutput, experiment_error, recognition_ready};
+use crate::app::results::{Analyses, JobOutput, experiment_error, recognition_ready};
+use crate::experiments::frontier::FrontierMethod;
 use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
 use crate::experiments::recognition_report::{
     accuracy_comparison, features_text, recognition_report,
 };
-use crate::experiments::report::AnalysisKind;
+use crate::experiments::report::{AnalysisKind, SizeReason};
 use crate::features::sequence::FeatureSet;
 use crate::sweep::Experiment;
 
@@ -25,6 +26,11 @@ pub struct RecognitionForm {
     pub reps: usize,
     pub noise_variance: f64,
     pub seed: u64,
+    /// The experts' budget and kernel lags: automatic (the session's frontier
+    /// recommendation, else the paper's 50 and 15) until the user sets them.
+    pub capacity: usize,
+    pub tau: usize,
+    pub user_size: bool,
 }
 
 impl Default for RecognitionForm {
@@ -35,7 +41,50 @@ impl Default for RecognitionForm {
             reps: 3,
             noise_variance: 0.0,
             seed: 0,
+            capacity: paper_size().0,
+            tau: paper_size().1,
+            user_size: false,
         }
+    }
+}
+
+/// The paper's capacity and tau (the learners' defaults).
+fn paper_size() -> (usize, usize) {
+    let gp = RecognitionParams::default().ds.gp;
+    (gp.capacity, gp.tau)
+}
+
+impl RecognitionForm {
+    fn method(&self) -> FrontierMethod {
+        match self.learner {
+            SupervisedLearner::Ds => FrontierMethod::Ds,
+            SupervisedLearner::Gs => FrontierMethod::Gs,
+        }
+    }
+
+    /// The size the form runs with and why: the user's, else the recommendation of the
+    /// frontier of this learner and feature set on the session, else the paper's. A size
+    /// equal to the recommended or the paper's is called so, whoever set it.
+    pub fn size(&self, analyses: &Analyses, session: &str) -> (usize, usize, SizeReason) {
+        let recommended = analyses
+            .frontier(session, self.method(), self.features)
+            .and_then(|f| {
+                let p = &f.points[f.recommended];
+                Some((p.knob("capacity")? as usize, p.knob("tau")? as usize))
+            });
+        let size = match (self.user_size, recommended) {
+            (true, _) => (self.capacity, self.tau),
+            (false, Some(r)) => r,
+            (false, None) => paper_size(),
+        };
+        let reason = if Some(size) == recommended {
+            SizeReason::Recommended
+        } else if size == paper_size() {
+            SizeReason::PaperDefault
+        } else {
+            SizeReason::User
+        };
+        (size.0, size.1, reason)
     }
 }
 
@@ -45,16 +94,23 @@ impl Default for RecognitionForm {
 const SECONDS_PER_STEP: f64 = 0.0006;
 
 impl RecognitionForm {
-    /// The parameters the form runs with.
-    pub fn params(&self) -> RecognitionParams {
-        RecognitionParams {
+    /// The parameters the form runs with on `session`.
+    pub fn params(&self, analyses: &Analyses, session: &str) -> RecognitionParams {
+        let (capacity, tau, size_reason) = self.size(analyses, session);
+        let mut p = RecognitionParams {
             learner: self.learner,
             features: self.features,
             reps: self.reps,
             seed: self.seed,
             taxel_noise_variance: self.noise_variance,
+            size_reason,
             ..Default::default()
+        };
+        for gp in [&mut p.ds.gp, &mut p.gs.gp] {
+            gp.capacity = capacity;
+            gp.tau = tau;
         }
+        p
     }
 
     pub fn expected_seconds(&self, s: &LoadedSession) -> f64 {
@@ -133,6 +189,37 @@ impl Room for RecognitionRoom {
                 }
             });
         ui.add(egui::DragValue::new(&mut f.seed).prefix("seed "));
+        if let Some(s) = cx.session() {
+            let (capacity, tau, reason) = f.size(cx.analyses, &s.session.meta.name);
+            (f.capacity, f.tau) = (capacity, tau);
+            ui.label(format!("Model size ({}):", reason.text()));
+            ui.horizontal(|ui| {
+                let c = ui.add(
+                    egui::DragValue::new(&mut f.capacity)
+                        .range(1..=500)
+                        .prefix("capacity "),
+                );
+                let t = ui.add(
+                    egui::DragValue::new(&mut f.tau)
+                        .range(1..=100)
+                        .prefix("tau "),
+                );
+                if c.changed() || t.changed() {
+                    f.user_size = true;
+                }
+            });
+            if f.user_size
+                && ui
+                    .small_button("Automatic size")
+                    .on_hover_text(
+                        "The session's frontier recommendation for this learner and these \
+                         features (Speed vs accuracy view), else the paper's 50 and 15",
+                    )
+                    .clicked()
+            {
+                f.user_size = false;
+            }
+        }
         if run_button(
             ui,
             cx,
@@ -144,9 +231,12 @@ impl Room for RecognitionRoom {
         }
     }
 
-    fn sweep(&self, s: &LoadedSession) -> Option<Result<Experiment, String>> {
+    fn sweep(&self, cx: &Cx) -> Option<Result<Experiment, String>> {
+        let s = cx.session()?;
         Some(if recognition_ready(s) {
-            Ok(Experiment::Recognition(self.form.params()))
+            Ok(Experiment::Recognition(
+                self.form.params(cx.analyses, &s.session.meta.name),
+            ))
         } else {
             Err("This session has no objects with encoders.".into())
         })
@@ -154,13 +244,13 @@ impl Room for RecognitionRoom {
 
     fn start(&mut self, cx: &mut Cx) {
         let Some(s) = cx.session() else { return };
-        let f = self.form.clone();
+        let params = self.form.params(cx.analyses, &s.session.meta.name);
         let session = s.session.clone();
         cx.spawn(
             AnalysisKind::Recognition,
             format!("Recognition on {}", session.meta.name),
             move |p| {
-                let r = run_recognition(&session, &f.params(), p).map_err(experiment_error)?;
+                let r = run_recognition(&session, &params, p).map_err(experiment_error)?;
                 Ok(JobOutput::Result(Box::new(recognition_report(
                     &session.meta.name,
                     &r,

@@ -204,7 +204,8 @@ impl Room for RobustnessRoom {
         }
     }
 
-    fn sweep(&self, s: &LoadedSession) -> Option<Result<Experiment, String>> {
+    fn sweep(&self, cx: &Cx) -> Option<Result<Experiment, String>> {
+        let s = cx.session()?;
         let Some(family) = family_of(s) else {
             return Some(Err(
                 "This session has no family of methods to perturb.".into()

@@ -1,19 +1,140 @@
 //! Speed against accuracy: every trained model's training time, or its prediction time per
-//! step or sample (log axis), against its headline score, with the Pareto front. Clicking a
-//! model's point (or its button) opens its view on that result.
+//! step or sample (log axis), against its headline score, with the Pareto front; and the
+//! active session's frontiers by model size, computed from the form, with the recommended
+//! size marked. Clicking a trained model opens its view; clicking a size on a frontier opens
+//! that model's result, or trains it.
 
 use super::tiles::Pane;
 use super::{Cx, Room};
 use crate::app::View;
 use crate::app::figure_view::{self, Selection as FigureSelection};
-use crate::app::selection::Command;
+use crate::app::results::{FRONTIER_JOB, JobOutput, experiment_error, recognition_ready};
+use crate::app::selection::{Command, ModelSpec};
+use crate::experiments::frontier::{CostAxis, Frontier, FrontierMethod, FrontierParams};
+use crate::experiments::frontier_report::frontier_figures;
+use crate::experiments::recognition::SupervisedLearner;
 use crate::experiments::report::{self, TimeAxis, date_text};
-use crate::figures;
+use crate::experiments::stability::Config;
+use crate::features::FeatureSet;
+use crate::figures::{self, Rgb, Series, SeriesStyle};
+
+/// What the frontier form sweeps: a method, its knobs' values as typed, and repetitions.
+#[derive(Clone, Debug)]
+pub struct FrontierForm {
+    pub method: FrontierMethod,
+    pub features: FeatureSet,
+    /// Fewer than the CLI's 10, so the view answers in minutes.
+    pub reps: usize,
+    pub capacities: String,
+    pub taus: String,
+    pub num_bases: String,
+}
+
+fn list_text<T: ToString>(v: &[T]) -> String {
+    v.iter().map(T::to_string).collect::<Vec<_>>().join(", ")
+}
+
+impl Default for FrontierForm {
+    fn default() -> Self {
+        let d = FrontierParams::for_method(FrontierMethod::Ds);
+        FrontierForm {
+            method: FrontierMethod::Ds,
+            features: FeatureSet::All,
+            reps: 3,
+            capacities: list_text(&d.capacities),
+            taus: list_text(&d.taus),
+            num_bases: list_text(&d.num_bases),
+        }
+    }
+}
+
+/// "2, 5, 10" as numbers; the error names the field.
+fn parse_list(text: &str, field: &str) -> Result<Vec<usize>, String> {
+    let v: Result<Vec<usize>, _> = text
+        .split([',', ' '])
+        .filter(|t| !t.is_empty())
+        .map(|t| t.parse::<usize>())
+        .collect();
+    match v {
+        Ok(v) if !v.is_empty() => Ok(v),
+        Ok(_) => Err(format!("{field}: give at least one value")),
+        Err(_) => Err(format!("{field}: `{text}` is not a list of whole numbers")),
+    }
+}
+
+impl FrontierForm {
+    /// The frontier's parameters, or what is wrong with the form.
+    pub fn params(&self) -> Result<FrontierParams, String> {
+        let mut p = FrontierParams::for_method(self.method);
+        p.reps = self.reps;
+        match self.method {
+            FrontierMethod::Ds | FrontierMethod::Gs => {
+                p.features = self.features;
+                p.capacities = parse_list(&self.capacities, "capacities")?;
+                p.taus = parse_list(&self.taus, "taus")?;
+            }
+            FrontierMethod::SparseSvm => {
+                p.num_bases = parse_list(&self.num_bases, "num_bases")?;
+            }
+        }
+        p.validate().map_err(|e| e.to_string())?;
+        Ok(p)
+    }
+
+    fn ready(&self, s: &crate::app::loader::LoadedSession) -> bool {
+        match self.method {
+            FrontierMethod::Ds | FrontierMethod::Gs => recognition_ready(s),
+            FrontierMethod::SparseSvm => s.session.label_sets.iter().any(|l| l.classes.len() == 2),
+        }
+    }
+
+    fn ui(&mut self, ui: &mut egui::Ui) {
+        egui::ComboBox::from_label("Frontier method")
+            .selected_text(self.method.name())
+            .show_ui(ui, |ui| {
+                for m in [
+                    FrontierMethod::Ds,
+                    FrontierMethod::Gs,
+                    FrontierMethod::SparseSvm,
+                ] {
+                    ui.selectable_value(&mut self.method, m, m.name());
+                }
+            });
+        match self.method {
+            FrontierMethod::Ds | FrontierMethod::Gs => {
+                egui::ComboBox::from_label("Frontier features")
+                    .selected_text(self.features.name())
+                    .show_ui(ui, |ui| {
+                        for f in [FeatureSet::All, FeatureSet::Tactile, FeatureSet::Encoder] {
+                            ui.selectable_value(&mut self.features, f, f.name());
+                        }
+                    });
+                let label = ui.label("capacities");
+                ui.text_edit_singleline(&mut self.capacities)
+                    .labelled_by(label.id);
+                let label = ui.label("taus");
+                ui.text_edit_singleline(&mut self.taus)
+                    .labelled_by(label.id);
+            }
+            FrontierMethod::SparseSvm => {
+                let label = ui.label("numbers of bases (each with its best β, γ)");
+                ui.text_edit_singleline(&mut self.num_bases)
+                    .labelled_by(label.id);
+            }
+        }
+        ui.add(
+            egui::DragValue::new(&mut self.reps)
+                .range(2..=50)
+                .prefix("frontier repetitions "),
+        );
+    }
+}
 
 #[derive(Default)]
 pub struct SpeedRoom {
-    /// The time on the chart's x axis.
+    /// The time on the charts' x axis.
     pub time_axis: TimeAxis,
+    pub frontier: FrontierForm,
 }
 
 impl Room for SpeedRoom {
@@ -22,10 +143,10 @@ impl Room for SpeedRoom {
     }
 
     fn default_groups(&self) -> Vec<Vec<Pane>> {
-        vec![vec![Pane::SpeedChart], vec![Pane::Models]]
+        vec![vec![Pane::Frontier], vec![Pane::SpeedChart, Pane::Models]]
     }
 
-    fn form_ui(&mut self, ui: &mut egui::Ui, _cx: &mut Cx) {
+    fn form_ui(&mut self, ui: &mut egui::Ui, cx: &mut Cx) {
         ui.heading("Speed against accuracy");
         ui.label("Time axis:");
         ui.selectable_value(&mut self.time_axis, TimeAxis::Training, "training time");
@@ -34,16 +155,130 @@ impl Room for SpeedRoom {
             TimeAxis::Prediction,
             "prediction time per step or sample",
         );
+        ui.separator();
+        ui.strong("Frontier by model size");
+        ui.label(
+            "Sweep a method's size on the active session; the cheapest size within one \
+             standard error of the best becomes the size its view trains by default.",
+        );
+        self.frontier.ui(ui);
+        let Some(s) = cx.session() else { return };
+        let problem = if !self.frontier.ready(s) {
+            Some(match self.frontier.method {
+                FrontierMethod::SparseSvm => "(needs a session with a two-class outcome)".into(),
+                _ => "(needs an object-recognition session: encoders and `object` labels)".into(),
+            })
+        } else {
+            self.frontier.params().err()
+        };
+        if let Some(p) = &problem {
+            ui.label(egui::RichText::new(p).color(ui.visuals().warn_fg_color));
+        }
+        let running = cx.analyses.frontier_running();
+        if ui
+            .add_enabled(
+                problem.is_none() && !running,
+                egui::Button::new("Compute frontier"),
+            )
+            .clicked()
+            && let Ok(params) = self.frontier.params()
+        {
+            let session = s.session.clone();
+            let ctx = cx.ctx.clone();
+            cx.analyses.spawn(
+                &ctx,
+                None,
+                format!(
+                    "{FRONTIER_JOB}{} on {}",
+                    params.method.name(),
+                    session.meta.name
+                ),
+                move |p| {
+                    let f = crate::experiments::frontier::run_frontier(&session, &params, p)
+                        .map_err(experiment_error)?;
+                    Ok(JobOutput::Frontier(Box::new(f)))
+                },
+            );
+        }
     }
 
     fn pane_ui(&mut self, ui: &mut egui::Ui, pane: &Pane, cx: &mut Cx) -> bool {
         match pane {
             Pane::SpeedChart => self.chart(ui, cx),
             Pane::Models => models(ui, cx),
+            Pane::Frontier => self.frontier_pane(ui, cx),
             _ => return false,
         }
         true
     }
+}
+
+/// What a point of the frontier chart stands for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Charted {
+    /// Frontier `f`, size `k`.
+    Size(usize, usize),
+    /// A trained model: index into the results.
+    Model(usize),
+}
+
+/// Each marker series of the frontier chart, in `frontier_figures`' order: every frontier's
+/// sizes, then the recommended sizes (one per frontier), the paper defaults that are not
+/// recommended, and the trained models added here.
+fn charted(chart: &figures::Chart, frontiers: &[Frontier], models: &[usize]) -> Vec<Vec<Charted>> {
+    let paper: Vec<usize> = (0..frontiers.len())
+        .filter(|&i| {
+            let f = &frontiers[i];
+            f.paper_default.is_some_and(|d| d != f.recommended)
+        })
+        .collect();
+    chart
+        .series
+        .iter()
+        .map(|s| {
+            if let Some(i) = frontiers.iter().position(|f| f.short_label() == s.name) {
+                (0..frontiers[i].points.len())
+                    .map(|k| Charted::Size(i, k))
+                    .collect()
+            } else if s.name == "recommended" {
+                (0..frontiers.len())
+                    .map(|i| Charted::Size(i, frontiers[i].recommended))
+                    .collect()
+            } else if s.name == "paper default" {
+                paper
+                    .iter()
+                    .filter_map(|&i| Some(Charted::Size(i, frontiers[i].paper_default?)))
+                    .collect()
+            } else if s.name == TRAINED {
+                models.iter().map(|&r| Charted::Model(r)).collect()
+            } else {
+                Vec::new()
+            }
+        })
+        .collect()
+}
+
+const TRAINED: &str = "trained models";
+
+/// The model a frontier's size stands for.
+fn spec_of(f: &Frontier, k: usize) -> Option<ModelSpec> {
+    let p = &f.points[k];
+    Some(match f.params.method {
+        FrontierMethod::Ds | FrontierMethod::Gs => ModelSpec::Recognition {
+            learner: match f.params.method {
+                FrontierMethod::Ds => SupervisedLearner::Ds,
+                _ => SupervisedLearner::Gs,
+            },
+            features: f.params.features,
+            capacity: p.knob("capacity")? as usize,
+            tau: p.knob("tau")? as usize,
+        },
+        FrontierMethod::SparseSvm => ModelSpec::Stability(Config {
+            num_bases: p.knob("num_bases")? as usize,
+            beta: p.knob("beta")?,
+            gamma: p.knob("gamma")?,
+        }),
+    })
 }
 
 impl SpeedRoom {
@@ -75,12 +310,134 @@ impl SpeedRoom {
         let sources = report::speed_accuracy_sources(&cx.analyses.results, axis);
         if let Some((series, k)) = act.clicked_point
             && let figures::FigureKind::Chart(c) = &fig.kind
-            && c.series
-                .get(series)
-                .is_some_and(|s| s.name == "trained models")
+            && c.series.get(series).is_some_and(|s| s.name == TRAINED)
             && let Some(&i) = sources.get(k)
         {
             cx.commands.push(Command::OpenResult(i));
+        }
+    }
+
+    /// The active session's frontiers on the chosen time axis, with the session's trained
+    /// models of the same methods (on the prediction axis, where their times are per step
+    /// or grasp like the frontier's); hovering a size gives its details, clicking it opens
+    /// or trains it.
+    fn frontier_pane(&self, ui: &mut egui::Ui, cx: &mut Cx) {
+        let Some(s) = cx.session() else { return };
+        let name = s.session.meta.name.clone();
+        let frontiers: Vec<Frontier> = cx
+            .analyses
+            .frontiers
+            .iter()
+            .filter(|f| f.session == name)
+            .cloned()
+            .collect();
+        if frontiers.is_empty() {
+            ui.label(format!(
+                "No frontier for «{name}» yet: choose a method in the form and Compute \
+                 frontier to chart its score against its time by model size."
+            ));
+            return;
+        }
+        let (cost, file) = match self.time_axis {
+            TimeAxis::Training => (CostAxis::Training, "frontier-training"),
+            TimeAxis::Prediction => (CostAxis::Prediction, "frontier-prediction"),
+        };
+        let Some((_, mut fig)) = frontier_figures(&frontiers)
+            .into_iter()
+            .find(|(n, _)| n == file)
+        else {
+            return;
+        };
+        let mut models = Vec::new();
+        if cost == CostAxis::Prediction
+            && let figures::FigureKind::Chart(c) = &mut fig.kind
+        {
+            let (mut x, mut y, mut labels) = (Vec::new(), Vec::new(), Vec::new());
+            for (i, r) in cx.analyses.results.iter().enumerate() {
+                if r.session != name || r.model_size.is_none() {
+                    continue;
+                }
+                if let (Some(t), Some((_, score))) = (r.predict_seconds_per_sample, &r.headline) {
+                    models.push(i);
+                    x.push(t * 1e6);
+                    y.push(*score);
+                    labels.push(String::new());
+                }
+            }
+            if !models.is_empty() {
+                c.series.push(
+                    Series::new(TRAINED, x, y)
+                        .style(SeriesStyle::Markers)
+                        .labels(labels)
+                        .color(Rgb(0xd0, 0x30, 0x30)),
+                );
+            }
+        }
+        if ui
+            .small_button("Export")
+            .on_hover_text("SVG, PNG and CSV into the export folder")
+            .clicked()
+        {
+            let export = format!("{file}-{}", report::slug(&name));
+            cx.analyses
+                .export
+                .write(&fig, &export, &mut cx.analyses.notes);
+        }
+        let height = (ui.available_height() - 110.0).max(160.0);
+        let act = figure_view::show(ui, "frontier", &fig, height, FigureSelection::None);
+        let figures::FigureKind::Chart(chart) = &fig.kind else {
+            return;
+        };
+        let map = charted(chart, &frontiers, &models);
+        let at = |hit: Option<(usize, usize)>| hit.and_then(|(s, k)| map.get(s)?.get(k).copied());
+        match at(act.hovered_point) {
+            Some(Charted::Size(i, k)) => {
+                let f = &frontiers[i];
+                let p = &f.points[k];
+                ui.label(format!(
+                    "{}: {} · {} {:.3} ± {:.3} · training {:.1} µs, prediction {:.1} µs per {} · click to open or train",
+                    f.short_label(),
+                    p.detail,
+                    f.score_name,
+                    p.score,
+                    p.score_se,
+                    p.train_us,
+                    p.predict_us,
+                    f.unit
+                ));
+            }
+            Some(Charted::Model(r)) => {
+                let r = &cx.analyses.results[r];
+                let size = r.model_size.as_ref().map(|m| m.text()).unwrap_or_default();
+                ui.label(format!(
+                    "{} · {size} · {} · click to open",
+                    r.label,
+                    date_text(r.created)
+                ));
+            }
+            None => {
+                for f in &frontiers {
+                    let p = &f.points[f.recommended];
+                    ui.label(format!(
+                        "{}: recommended {} ({:.3} ± {:.3}, {:.1} µs per {} to predict)",
+                        f.label(),
+                        p.detail,
+                        p.score,
+                        p.score_se,
+                        p.predict_us,
+                        f.unit
+                    ));
+                }
+            }
+        }
+        match at(act.clicked_point) {
+            Some(Charted::Size(i, k)) => {
+                if let Some(spec) = spec_of(&frontiers[i], k) {
+                    cx.commands.push(Command::TrainModel(spec));
+                }
+            }
+            Some(Charted::Model(r)) => cx.commands.push(Command::OpenResult(r)),
+            None => {}
         }
     }
 }
@@ -90,13 +447,19 @@ fn models(ui: &mut egui::Ui, cx: &mut Cx) {
     ui.label("Open a model's views:");
     egui::ScrollArea::vertical().show(ui, |ui| {
         for (i, r) in cx.analyses.results.iter().enumerate() {
-            if r.headline.is_some()
-                && ui
-                    .button(format!("{} · {}", r.label, r.session))
+            if r.headline.is_some() {
+                let size = r
+                    .model_size
+                    .as_ref()
+                    .map(|m| format!(" · {}", m.text()))
+                    .unwrap_or_default();
+                if ui
+                    .button(format!("{} · {}{size}", r.label, r.session))
                     .on_hover_text(date_text(r.created))
                     .clicked()
-            {
-                cx.commands.push(Command::OpenResult(i));
+                {
+                    cx.commands.push(Command::OpenResult(i));
+                }
             }
         }
     });

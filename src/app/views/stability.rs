@@ -6,12 +6,15 @@ use super::tiles::Pane;
 use super::{Cx, Room, duration_text, run_button};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
+use crate::app::results::Analyses;
 use crate::app::results::JobOutput;
-use crate::experiments::report::AnalysisKind;
+use crate::experiments::frontier::FrontierMethod;
+use crate::experiments::report::{AnalysisKind, SizeReason};
 use crate::experiments::stability::{
     Config, DataOptions, GridSpec, StabilityData, StabilityError, StabilityOptions,
 };
 use crate::experiments::stability_report::stability_report;
+use crate::features::FeatureSet;
 use crate::jobs::JobError;
 use crate::sweep::{Experiment, StabilitySweep};
 
@@ -24,6 +27,9 @@ pub struct StabilityForm {
     pub grid: bool,
     /// Grid over num_bases: from, to, step.
     pub bases: [usize; 3],
+    /// The single configuration's size is the user's; otherwise it is automatic (the
+    /// session's sparse-coding frontier recommendation, else the paper's).
+    pub user_size: bool,
 }
 
 impl Default for StabilityForm {
@@ -34,6 +40,7 @@ impl Default for StabilityForm {
             gamma: 1.0,
             grid: false,
             bases: [5, 60, 5],
+            user_size: false,
         }
     }
 }
@@ -44,15 +51,47 @@ impl Default for StabilityForm {
 const SECONDS_PER_GRASP_CONFIG: f64 = 0.0004;
 
 impl StabilityForm {
-    /// The options the form runs with.
-    pub fn options(&self) -> StabilityOptions {
-        StabilityOptions {
-            single: Config {
+    /// The single configuration the form runs with on `session` and why: the user's, else
+    /// the recommendation of the session's sparse-coding frontier, else the paper's.
+    /// A size equal to the recommended or the paper's is called so, whoever set it.
+    pub fn size(&self, analyses: &Analyses, session: &str) -> (Config, SizeReason) {
+        let paper = StabilityOptions::default().single;
+        let recommended = analyses
+            .frontier(session, FrontierMethod::SparseSvm, FeatureSet::All)
+            .and_then(|f| {
+                let p = &f.points[f.recommended];
+                Some(Config {
+                    num_bases: p.knob("num_bases")? as usize,
+                    beta: p.knob("beta")?,
+                    gamma: p.knob("gamma")?,
+                })
+            });
+        let size = match (self.user_size, recommended) {
+            (true, _) => Config {
                 num_bases: self.num_bases,
                 beta: self.beta,
                 gamma: self.gamma,
             },
+            (false, Some(r)) => r,
+            (false, None) => paper,
+        };
+        let reason = if Some(size) == recommended {
+            SizeReason::Recommended
+        } else if size == paper {
+            SizeReason::PaperDefault
+        } else {
+            SizeReason::User
+        };
+        (size, reason)
+    }
+
+    /// The options the form runs with on `session`.
+    pub fn options(&self, analyses: &Analyses, session: &str) -> StabilityOptions {
+        let (single, reason) = self.size(analyses, session);
+        StabilityOptions {
+            single,
             grid: self.grid_spec(),
+            size_reason: Some(reason).filter(|_| !self.grid),
             ..Default::default()
         }
     }
@@ -155,24 +194,45 @@ impl Room for StabilityRoom {
                     .range(1..=50)
                     .prefix("step "),
             );
-        } else {
-            ui.add(
-                egui::DragValue::new(&mut f.num_bases)
-                    .range(1..=200)
-                    .prefix("num_bases "),
-            );
-            ui.add(
-                egui::DragValue::new(&mut f.beta)
-                    .range(1e-4..=1e4)
-                    .speed(0.05)
-                    .prefix("β "),
-            );
-            ui.add(
-                egui::DragValue::new(&mut f.gamma)
-                    .range(1e-4..=1e4)
-                    .speed(0.05)
-                    .prefix("γ "),
-            );
+        } else if let Some(s) = cx.session() {
+            let (c, reason) = f.size(cx.analyses, &s.session.meta.name);
+            (f.num_bases, f.beta, f.gamma) = (c.num_bases, c.beta, c.gamma);
+            ui.label(format!("Model size ({}):", reason.text()));
+            let changed = [
+                ui.add(
+                    egui::DragValue::new(&mut f.num_bases)
+                        .range(1..=200)
+                        .prefix("num_bases "),
+                ),
+                ui.add(
+                    egui::DragValue::new(&mut f.beta)
+                        .range(1e-4..=1e4)
+                        .speed(0.05)
+                        .prefix("β "),
+                ),
+                ui.add(
+                    egui::DragValue::new(&mut f.gamma)
+                        .range(1e-4..=1e4)
+                        .speed(0.05)
+                        .prefix("γ "),
+                ),
+            ]
+            .iter()
+            .any(|r| r.changed());
+            if changed {
+                f.user_size = true;
+            }
+            if f.user_size
+                && ui
+                    .small_button("Automatic size")
+                    .on_hover_text(
+                        "The session's sparse-coding frontier recommendation (Speed vs \
+                         accuracy view), else the paper's 29 bases with β = γ = 1",
+                    )
+                    .clicked()
+            {
+                f.user_size = false;
+            }
         }
         ui.small("Pressures are z-scored per taxel over the session; β and γ use the 0.5·|x − Da|² + λ·|a|₁ convention.");
         if run_button(
@@ -186,7 +246,8 @@ impl Room for StabilityRoom {
         }
     }
 
-    fn sweep(&self, s: &LoadedSession) -> Option<Result<Experiment, String>> {
+    fn sweep(&self, cx: &Cx) -> Option<Result<Experiment, String>> {
+        let s = cx.session()?;
         Some(if !ready(s) {
             Err("This session has no two-class outcome.".into())
         } else if !self.form.grid {
@@ -194,14 +255,14 @@ impl Room for StabilityRoom {
         } else {
             Ok(Experiment::Stability(StabilitySweep {
                 data: DataOptions::default(),
-                options: self.form.options(),
+                options: self.form.options(cx.analyses, &s.session.meta.name),
             }))
         })
     }
 
     fn start(&mut self, cx: &mut Cx) {
         let Some(s) = cx.session() else { return };
-        let f = self.form.clone();
+        let options = self.form.options(cx.analyses, &s.session.meta.name);
         let session = s.session.clone();
         cx.spawn(
             AnalysisKind::Stability,
@@ -209,7 +270,7 @@ impl Room for StabilityRoom {
             move |p| {
                 let data = StabilityData::from_session(&session, &DataOptions::default())
                     .map_err(JobError::failed)?;
-                let r = crate::experiments::stability::run(&data, &f.options(), p).map_err(
+                let r = crate::experiments::stability::run(&data, &options, p).map_err(
                     |e| match e {
                         StabilityError::Cancelled => JobError::Cancelled,
                         other => JobError::failed(other),

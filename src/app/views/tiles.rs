@@ -37,6 +37,8 @@ pub enum Pane {
     SpeedChart,
     /// The models on the speed chart, to open.
     Models,
+    /// The active session's speed–accuracy frontiers by model size.
+    Frontier,
 }
 
 impl Pane {
@@ -54,8 +56,9 @@ impl Pane {
             Pane::Replay => "Replay".into(),
             Pane::Grasp => "Focused grasp".into(),
             Pane::Comparison => "Accuracy compared".into(),
-            Pane::SpeedChart => "Speed vs accuracy".into(),
+            Pane::SpeedChart => "All trained models".into(),
             Pane::Models => "Models".into(),
+            Pane::Frontier => "Frontier by model size".into(),
         }
     }
 }
