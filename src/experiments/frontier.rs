@@ -474,7 +474,7 @@ pub enum FrontierOutput {
 /// What every item of a frontier shares.
 pub enum FrontierPrep {
     Recognition(Box<RecognitionParams>, RecognitionPrep),
-    Sparse(StabilityData),
+    Sparse(Box<StabilityData>),
     Clustering(Box<ClusteringParams>, ClusteringPrep),
     /// The Table I features (z-scored for the clusterers; raw for the SVM, which scales
     /// inside each training fold) and the objects.
@@ -567,10 +567,10 @@ pub fn prepare_frontier(
             let prep = prepare_recognition(session, &p)?;
             FrontierPrep::Recognition(Box::new(p), prep)
         }
-        FrontierMethod::SparseSvm => FrontierPrep::Sparse(StabilityData::from_session(
+        FrontierMethod::SparseSvm => FrontierPrep::Sparse(Box::new(StabilityData::from_session(
             session,
             &DataOptions::default(),
-        )?),
+        )?)),
         FrontierMethod::Du | FrontierMethod::Gu => {
             let p = params.clustering();
             let prep = prepare_clustering(session, &p)?;
