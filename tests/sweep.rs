@@ -1,6 +1,6 @@
 //! Sharded sweeps on the bundled samples: merging the shards gives exactly the
-//! single-machine result (timings aside) for the stability grid, robustness, clustering and
-//! recognition; a killed shard, a rerun, a corrupted shard file and a plan from another
+//! single-machine result (timings aside) for the stability grid, robustness, clustering,
+//! recognition and the frontiers; a killed shard, a rerun, a corrupted shard file and a plan from another
 //! session or plan are handled.
 
 mod common;
@@ -10,6 +10,9 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 use tactile_workbench::experiments::clustering::{ClusteringParams, run_clustering};
+use tactile_workbench::experiments::frontier::{
+    Frontier, FrontierMethod, FrontierParams, run_frontier,
+};
 use tactile_workbench::experiments::recognition::{RecognitionParams, run_recognition};
 use tactile_workbench::experiments::robustness::{
     Family, Perturbation, RobustnessParams, Sweep, run_robustness,
@@ -20,7 +23,7 @@ use tactile_workbench::experiments::stability::{
 use tactile_workbench::jobs::Progress;
 use tactile_workbench::session::{self, Session};
 use tactile_workbench::sweep::{
-    self, Experiment, PlanRequest, ShardRun, ShardState, StabilitySweep, SweepError,
+    self, Experiment, FrontierSweep, PlanRequest, ShardRun, ShardState, StabilitySweep, SweepError,
     result_difference,
 };
 
@@ -167,6 +170,99 @@ fn merged_clustering_and_recognition_equal_the_local_runs() {
     let local = serde_json::to_value(run_recognition(&s, &r, &Progress::new()).unwrap()).unwrap();
     let (_, merged) = sharded("sweep-recognition", &s, Experiment::Recognition(r), 2);
     assert_same(&merged, &local);
+}
+
+/// The merged frontiers equal the local ones, timings aside; the sizes chosen by time
+/// (the recommended one, the Pareto fronts) follow the rule on the merged points' own
+/// means, SEs and times.
+fn assert_same_frontiers(merged: &Value, local: &[Frontier]) {
+    assert_same(merged, &serde_json::to_value(local).unwrap());
+    let merged: Vec<Frontier> = serde_json::from_value(merged.clone()).unwrap();
+    assert_eq!(merged.len(), local.len());
+    for f in &merged {
+        let axis = f.params.cost;
+        let top = f.points.iter().map(|p| p.score).fold(f64::MIN, f64::max);
+        let bar = top - f.points[f.best].score_se;
+        let rec = &f.points[f.recommended];
+        assert!(rec.score >= bar, "{}: {} below {bar}", f.label(), rec.label);
+        assert!(
+            f.points
+                .iter()
+                .filter(|p| p.score >= bar)
+                .all(|p| p.cost(axis) >= rec.cost(axis)),
+            "{}: a cheaper point is within one SE",
+            f.label()
+        );
+    }
+}
+
+#[test]
+fn merged_frontiers_equal_the_local_runs() {
+    let s = sample("object-recognition.json");
+    let frontiers = vec![
+        FrontierParams {
+            reps: 2,
+            seed: 5,
+            capacities: vec![2, 5],
+            taus: vec![1],
+            ..FrontierParams::for_method(FrontierMethod::Ds)
+        },
+        FrontierParams {
+            reps: 2,
+            seed: 5,
+            thresholds: vec![0.3, 0.6],
+            expert_capacity: Some(15),
+            expert_tau: Some(4),
+            ..FrontierParams::for_method(FrontierMethod::Du)
+        },
+        FrontierParams {
+            reps: 3,
+            seed: 5,
+            ks: vec![2, 4],
+            ..FrontierParams::for_method(FrontierMethod::Kmeans)
+        },
+        FrontierParams {
+            reps: 3,
+            seed: 5,
+            ks: vec![4],
+            ..FrontierParams::for_method(FrontierMethod::Som)
+        },
+        FrontierParams {
+            reps: 2,
+            seed: 5,
+            svm_c: vec![1.0, 10.0],
+            svm_gamma: vec![0.01],
+            ..FrontierParams::for_method(FrontierMethod::RbfSvm)
+        },
+    ];
+    let local: Vec<Frontier> = frontiers
+        .iter()
+        .map(|p| run_frontier(&s, p, &Progress::new()).unwrap())
+        .collect();
+    let (_, merged) = sharded(
+        "sweep-frontier",
+        &s,
+        Experiment::Frontier(FrontierSweep { frontiers }),
+        4,
+    );
+    assert_same_frontiers(&merged, &local);
+
+    let s = sample("grasp-stability.json");
+    let sparse = vec![FrontierParams {
+        reps: 2,
+        num_bases: vec![2, 4],
+        beta: vec![1.0],
+        gamma: vec![0.5, 1.0],
+        ..FrontierParams::for_method(FrontierMethod::SparseSvm)
+    }];
+    let local = vec![run_frontier(&s, &sparse[0], &Progress::new()).unwrap()];
+    let (_, merged) = sharded(
+        "sweep-frontier-sparse",
+        &s,
+        Experiment::Frontier(FrontierSweep { frontiers: sparse }),
+        2,
+    );
+    assert_same_frontiers(&merged, &local);
 }
 
 /// A plan of the small stability grid in `tag`, its shards not run.

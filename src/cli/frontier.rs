@@ -1,25 +1,26 @@
 //! `frontier`: speed–accuracy frontiers by model size on one session, with the recommended
-//! size of every method (`--json OUT` writes the frontiers as a list).
+//! size of every method (`--json OUT` writes the frontiers as a list), its progress on
+//! stderr.
 
 use std::path::PathBuf;
 
 use clap::Args;
 
+use super::progress::with_progress;
 use super::recognition::{open_session, write_json};
 use crate::experiments::frontier::{
     CostAxis, Frontier, FrontierMethod, FrontierParams, RecognitionScore, run_frontier,
 };
 use crate::features::FeatureSet;
-use crate::jobs::Progress;
 
 #[derive(Args, Debug)]
 pub struct FrontierArgs {
     /// A native session file, a BTS3 CSV or the iCub dataset folder.
     pub session: PathBuf,
-    /// Methods, comma separated: ds, gs, sparse-svm.
+    /// Methods, comma separated: ds, gs, sparse-svm, du, gu, kmeans, som, rbf-svm.
     #[arg(long, value_delimiter = ',', default_value = "gs")]
     pub method: Vec<String>,
-    /// DS/GS feature sets, comma separated: all, tactile, encoder (one frontier each).
+    /// DS/GS/DU/GU feature sets, comma separated: all, tactile, encoder (one frontier each).
     #[arg(long, value_delimiter = ',', default_value = "all")]
     pub features: Vec<String>,
     /// Seeded repetitions per size (at least 2).
@@ -42,6 +43,25 @@ pub struct FrontierArgs {
     /// Sparse coding: gamma values tried at every num_bases (default 0.5, 1, 2).
     #[arg(long, value_delimiter = ',')]
     pub gamma: Vec<f64>,
+    /// DU/GU novelty thresholds (default DU 0.2, 0.3, … 0.8; GU 0.05, 0.08, 0.1, 0.12,
+    /// 0.15, 0.2, 0.3).
+    #[arg(long, value_delimiter = ',')]
+    pub thresholds: Vec<f64>,
+    /// DU/GU: the experts' capacity (default the paper's 50).
+    #[arg(long)]
+    pub expert_capacity: Option<usize>,
+    /// DU/GU: the experts' tau (default the paper's 15).
+    #[arg(long)]
+    pub expert_tau: Option<usize>,
+    /// k-means centres / SOM units (default 2, 4, 6, 8, 10, 12, 16, 20).
+    #[arg(long, value_delimiter = ',')]
+    pub ks: Vec<usize>,
+    /// RBF SVM penalties C (default 1, 10, 100, 1000).
+    #[arg(long, value_delimiter = ',')]
+    pub svm_c: Vec<f64>,
+    /// RBF SVM kernel widths gamma (default 0.001, 0.003, 0.01, 0.03, 0.1).
+    #[arg(long, value_delimiter = ',')]
+    pub svm_gamma: Vec<f64>,
     /// DS/GS score: all (every predicted grasp) or final-20.
     #[arg(long, default_value = "all")]
     pub score: String,
@@ -51,11 +71,15 @@ pub struct FrontierArgs {
     /// Write the frontiers here as JSON (a list).
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Print no progress.
+    #[arg(long, short)]
+    pub quiet: bool,
 }
 
 impl FrontierArgs {
-    /// One parameter set per method × feature set (sparse coding ignores the features).
-    fn params(&self) -> anyhow::Result<Vec<FrontierParams>> {
+    /// One parameter set per method × feature set (the methods on fixed features take the
+    /// first feature set only).
+    pub(crate) fn params(&self) -> anyhow::Result<Vec<FrontierParams>> {
         let score = match self.score.as_str() {
             "all" => RecognitionScore::All,
             "final-20" => RecognitionScore::Final20,
@@ -74,10 +98,10 @@ impl FrontierArgs {
         let mut out = Vec::new();
         for m in &self.method {
             let method: FrontierMethod = m.parse()?;
-            let sets = if method == FrontierMethod::SparseSvm {
-                &features[..1]
-            } else {
+            let sets = if method.uses_features() {
                 &features[..]
+            } else {
+                &features[..1]
             };
             for &features in sets {
                 let mut p = FrontierParams {
@@ -93,6 +117,12 @@ impl FrontierArgs {
                 set_if(&mut p.num_bases, &self.num_bases);
                 set_if(&mut p.beta, &self.beta);
                 set_if(&mut p.gamma, &self.gamma);
+                set_if(&mut p.thresholds, &self.thresholds);
+                set_if(&mut p.ks, &self.ks);
+                p.expert_capacity = self.expert_capacity;
+                p.expert_tau = self.expert_tau;
+                set_if(&mut p.svm_c, &self.svm_c);
+                set_if(&mut p.svm_gamma, &self.svm_gamma);
                 p.validate()?;
                 out.push(p);
             }
@@ -118,7 +148,7 @@ pub fn print_frontier(f: &Frontier) {
         f.wall_seconds
     );
     println!(
-        "  {:<10} {:>14} {:>8}  {:>12} {:>12}  marks",
+        "  {:<14} {:>14} {:>8}  {:>12} {:>12}  marks",
         "size",
         f.score_name.split(' ').next().unwrap_or(""),
         "SE",
@@ -143,7 +173,7 @@ pub fn print_frontier(f: &Frontier) {
             marks.push("front(train)");
         }
         println!(
-            "  {:<10} {:>14.4} {:>8.4}  {:>12.2} {:>12.2}  {}",
+            "  {:<14} {:>14.4} {:>8.4}  {:>12.2} {:>12.2}  {}",
             p.label,
             p.score,
             p.score_se,
@@ -169,7 +199,7 @@ pub fn run(args: FrontierArgs) -> anyhow::Result<()> {
     let session = open_session(&args.session)?;
     let mut frontiers = Vec::new();
     for p in &params {
-        let f = run_frontier(&session, p, &Progress::new())?;
+        let f = with_progress(args.quiet, |progress| run_frontier(&session, p, progress))?;
         print_frontier(&f);
         frontiers.push(f);
     }

@@ -45,9 +45,9 @@ pub enum Experiment {
     RobustnessStability,
     /// Where DS and GS fail: every perturbation at its default strengths.
     RobustnessRecognition,
-    /// Speed against accuracy by model size, with the recommended sizes: DS and GS on all
-    /// and encoder features for a session with an `object` label set, else sparse coding +
-    /// SVM (`--reps` per size; 10 is plenty).
+    /// Speed against accuracy by model size, with the recommended sizes: for a session
+    /// with an `object` label set DS and GS on all and encoder features, DU, GU, k-means,
+    /// the SOM and the RBF SVM; else sparse coding + SVM (`--reps` per size; 10 is plenty).
     Frontier,
 }
 
@@ -91,7 +91,7 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
     let extra = speed_accuracy_figures(&results)
         .into_iter()
         .chain(comparison_figures(&results))
-        .chain(frontier_figures(&frontiers));
+        .chain(grouped_frontier_figures(&frontiers));
     for (figure_name, f) in extra {
         set.entries.push(FigureEntry {
             name: figure_name,
@@ -120,6 +120,47 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
         t0.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// The frontiers' figures, one set per score and time unit (DS/GS accuracy per step; the
+/// clusterers' NMI per grasp; ...), named `frontier-…` with the score's group when there
+/// are several.
+fn grouped_frontier_figures(frontiers: &[Frontier]) -> Vec<(String, crate::figures::Figure)> {
+    let mut groups: Vec<((String, String), Vec<Frontier>)> = Vec::new();
+    for f in frontiers {
+        let key = (f.score_name.clone(), f.unit.clone());
+        match groups.iter_mut().find(|g| g.0 == key) {
+            Some(g) => g.1.push(f.clone()),
+            None => groups.push((key, vec![f.clone()])),
+        }
+    }
+    let several = groups.len() > 1;
+    groups
+        .into_iter()
+        .flat_map(|((score, _), fs)| {
+            let tag: String = score
+                .chars()
+                .map(|c| {
+                    if c.is_ascii_alphanumeric() {
+                        c.to_ascii_lowercase()
+                    } else {
+                        '-'
+                    }
+                })
+                .collect::<String>()
+                .split('-')
+                .filter(|w| !w.is_empty())
+                .collect::<Vec<_>>()
+                .join("-");
+            frontier_figures(&fs).into_iter().map(move |(name, fig)| {
+                let name = match name.strip_prefix("frontier-") {
+                    Some(rest) if several => format!("frontier-{tag}-{rest}"),
+                    _ => name,
+                };
+                (name, fig)
+            })
+        })
+        .collect()
 }
 
 /// Run the experiment's analyses (and, for `frontier`, its frontiers).
@@ -229,6 +270,11 @@ fn experiment_results(
                     (FrontierMethod::Ds, FeatureSet::Encoder),
                     (FrontierMethod::Gs, FeatureSet::All),
                     (FrontierMethod::Gs, FeatureSet::Encoder),
+                    (FrontierMethod::Du, FeatureSet::All),
+                    (FrontierMethod::Gu, FeatureSet::All),
+                    (FrontierMethod::Kmeans, FeatureSet::All),
+                    (FrontierMethod::Som, FeatureSet::All),
+                    (FrontierMethod::RbfSvm, FeatureSet::All),
                 ]
             } else {
                 &[(FrontierMethod::SparseSvm, FeatureSet::All)]

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
 
+use super::frontier::FrontierArgs;
 use super::progress::with_progress;
 use super::recognition::{ClusteringArgs, RecognitionArgs, open_session};
 use super::robustness::{RobustnessArgs, params_of};
@@ -14,7 +15,8 @@ use crate::experiments::report::Project;
 use crate::experiments::stability::StabilityData;
 use crate::session::Session;
 use crate::sweep::{
-    self, Experiment, PlanRequest, ShardRun, ShardState, StabilitySweep, describe, rerun_commands,
+    self, Experiment, FrontierSweep, PlanRequest, ShardRun, ShardState, StabilitySweep, describe,
+    rerun_commands,
 };
 
 #[derive(Args, Debug)]
@@ -72,6 +74,14 @@ pub enum PlanExperiment {
     Recognition {
         #[command(flatten)]
         args: RecognitionArgs,
+        #[command(flatten)]
+        plan: PlanOptions,
+    },
+    /// Speed–accuracy frontiers (items: one repetition at one size; sparse coding: one
+    /// dictionary); the merge writes the `frontier --json` list.
+    Frontier {
+        #[command(flatten)]
+        args: FrontierArgs,
         #[command(flatten)]
         plan: PlanOptions,
     },
@@ -204,6 +214,16 @@ fn experiment_of(e: &PlanExperiment) -> anyhow::Result<(Experiment, Session, &Pa
                 &args.session,
             )
         }
+        PlanExperiment::Frontier { args, .. } => {
+            no_json(&args.json)?;
+            (
+                Experiment::Frontier(FrontierSweep {
+                    frontiers: args.params()?,
+                }),
+                open_session(&args.session)?,
+                &args.session,
+            )
+        }
     })
 }
 
@@ -212,7 +232,8 @@ fn plan(a: PlanArgs) -> anyhow::Result<()> {
         PlanExperiment::Stability { plan, .. }
         | PlanExperiment::Robustness { plan, .. }
         | PlanExperiment::Clustering { plan, .. }
-        | PlanExperiment::Recognition { plan, .. } => plan,
+        | PlanExperiment::Recognition { plan, .. }
+        | PlanExperiment::Frontier { plan, .. } => plan,
     };
     if let PlanExperiment::Stability { args, .. } = &a.experiment
         && args.threads.is_some()
@@ -332,8 +353,15 @@ fn merge(a: MergeArgs) -> anyhow::Result<()> {
         }
     }
     if let Some(path) = &a.project {
+        let Some(analysis) = m.analysis else {
+            bail!(
+                "--project: a {} result is kept as its JSON ({}), not as a project",
+                m.experiment.name(),
+                a.out.display()
+            );
+        };
         let session = session_name(&a.dir);
-        Project::new(vec![session], vec![m.analysis]).save(path)?;
+        Project::new(vec![session], vec![analysis]).save(path)?;
         println!("wrote {}", path.display());
     }
     Ok(())

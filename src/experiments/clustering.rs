@@ -165,6 +165,10 @@ pub struct ClusteringRun {
     pub nmi: f64,
     /// Microseconds per observation of the learning phase (predict + novelty + train).
     pub learn_step_us: f64,
+    /// Microseconds per observation of the re-assignment (every expert scores the grasp);
+    /// 0 in results saved before it was timed.
+    #[serde(default)]
+    pub assign_step_us: f64,
     /// The cluster of every grasp (session order) after re-assignment; kept for the first
     /// order only, so a view can show the clustering at each threshold.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -260,6 +264,7 @@ pub fn one_run(
         };
     }
     let learn_step_us = 1e6 * t0.elapsed().as_secs_f64() / steps.max(1) as f64;
+    let t1 = Instant::now();
     let (clusters, pred): (usize, Vec<usize>) = match &mut learner {
         Learner::Du(l) => (
             l.n_clusters(),
@@ -270,6 +275,7 @@ pub fn one_run(
             seqs.iter().map(|s| l.assign(s.view())).collect(),
         ),
     };
+    let assign_step_us = 1e6 * t1.elapsed().as_secs_f64() / steps.max(1) as f64;
     let sc = scores(labels, &pred);
     Ok(ClusteringRun {
         threshold,
@@ -280,11 +286,13 @@ pub fn one_run(
         ari: sc.ari,
         nmi: sc.nmi,
         learn_step_us,
+        assign_step_us,
         assignment: (rep == 0).then_some(pred),
     })
 }
 
-fn distinct(pred: &[usize]) -> usize {
+/// Clusters that hold at least one grasp.
+pub fn distinct(pred: &[usize]) -> usize {
     let mut v = pred.to_vec();
     v.sort_unstable();
     v.dedup();
@@ -326,6 +334,11 @@ pub fn som_setup(k: usize, seed: u64) -> SomParams {
         seed,
         ..SomParams::default()
     }
+}
+
+/// The seed of the baselines' run with `k` centres / units in order `rep`.
+pub fn baseline_seed(seed: u64, k: usize, rep: usize) -> u64 {
+    Rng::stream(seed, (k * 100_000 + rep) as u64).next_u64()
 }
 
 /// (effective clusters, purity, ARI, NMI) of one clustering.
@@ -437,7 +450,7 @@ pub fn clustering_item(
             let data = prep.table.as_ref().ok_or_else(|| {
                 ExperimentError::param("baseline_max_k", "the baselines are switched off")
             })?;
-            let seed = Rng::stream(params.seed, (k * 100_000 + rep) as u64).next_u64();
+            let seed = baseline_seed(params.seed, k, rep);
             let km = SequentialKMeansParams { k, passes: 1, seed }
                 .fit(data.view())
                 .and_then(|m| m.assign(data.view()))

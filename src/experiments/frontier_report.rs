@@ -1,23 +1,101 @@
 //! Figures of speed–accuracy frontiers: score against time (log axis), one colour per
 //! method, each size with its standard-error bar, each method's Pareto front as a line, and
-//! the recommended and paper-default sizes marked with short labels.
+//! the recommended and paper-default sizes marked with short labels; for the clusterers
+//! also score against the effective clusters each size leaves.
 
 use super::frontier::{CostAxis, Frontier};
 use crate::figures::{Axis, Figure, Rgb, Series, SeriesStyle, series_color};
 
-/// One chart per time axis (prediction first: it defines "cheapest" by default), named
-/// for export; none without frontiers.
+/// One chart per time axis (prediction first: it defines "cheapest" by default), and one
+/// of score against effective clusters when a frontier is of a clusterer (DU, GU, k-means,
+/// SOM), named for export; none without frontiers.
 pub fn frontier_figures(frontiers: &[Frontier]) -> Vec<(String, Figure)> {
     if frontiers.is_empty() {
         return Vec::new();
     }
-    [
+    let mut out: Vec<(String, Figure)> = [
         (CostAxis::Prediction, "frontier-prediction"),
         (CostAxis::Training, "frontier-training"),
     ]
     .into_iter()
     .map(|(axis, name)| (name.to_string(), frontier_chart(frontiers, axis)))
-    .collect()
+    .collect();
+    if let Some(chart) = clusters_chart(frontiers) {
+        out.push(("frontier-clusters".into(), chart));
+    }
+    out
+}
+
+/// Score against the mean effective clusters of every size, for the frontiers that count
+/// them (in the colours of the time charts); None when none does.
+fn clusters_chart(frontiers: &[Frontier]) -> Option<Figure> {
+    let mut series = Vec::new();
+    let (mut rx, mut ry, mut rl) = (Vec::new(), Vec::new(), Vec::new());
+    let mut names = Vec::new();
+    for (i, f) in frontiers.iter().enumerate() {
+        let Some(eff) = f
+            .points
+            .iter()
+            .map(|p| p.knob("effective"))
+            .collect::<Option<Vec<f64>>>()
+        else {
+            continue;
+        };
+        let name = f.short_label();
+        // Joined in the order of the clusters they leave, so the line reads left to right.
+        let mut order: Vec<usize> = (0..eff.len()).collect();
+        order.sort_by(|&a, &b| eff[a].total_cmp(&eff[b]).then(a.cmp(&b)));
+        let pts = |k: usize| &f.points[order[k]];
+        series.push(
+            Series::new(
+                name.clone(),
+                order.iter().map(|&k| eff[k]).collect(),
+                (0..order.len()).map(|k| pts(k).score).collect(),
+            )
+            .style(SeriesStyle::LineMarkers)
+            .error_bars(
+                (0..order.len())
+                    .map(|k| pts(k).score - pts(k).score_se)
+                    .collect(),
+                (0..order.len())
+                    .map(|k| pts(k).score + pts(k).score_se)
+                    .collect(),
+            )
+            .color(series_color(i)),
+        );
+        rx.push(eff[f.recommended]);
+        ry.push(f.points[f.recommended].score);
+        rl.push(format!("{name} {}", f.points[f.recommended].label));
+        names.push(name);
+    }
+    if series.is_empty() {
+        return None;
+    }
+    series.push(
+        Series::new("recommended", rx, ry)
+            .style(SeriesStyle::Markers)
+            .labels(rl)
+            .color(Rgb(0, 0, 0)),
+    );
+    let mut scores: Vec<&str> = frontiers
+        .iter()
+        .filter(|f| f.points.iter().all(|p| p.knob("effective").is_some()))
+        .map(|f| f.score_name.as_str())
+        .collect();
+    scores.dedup();
+    Some(
+        Figure::chart(
+            "Score against effective clusters, by model size",
+            Axis::new("effective clusters (mean over the orders)", ""),
+            Axis::new(scores.join(" / "), ""),
+            series,
+        )
+        .subtitle(format!(
+            "{} on {}; mean ± SE over the orders; recommended: the cheapest within one SE of the best",
+            names.join(", "),
+            frontiers[0].session
+        )),
+    )
 }
 
 fn frontier_chart(frontiers: &[Frontier], axis: CostAxis) -> Figure {

@@ -675,6 +675,7 @@ mod tests {
             ari: 0.0,
             nmi: 0.0,
             learn_step_us: 0.0,
+            assign_step_us: 0.0,
             assignment: Some(assignment.clone()),
         };
         let r = ClusteringResult {

@@ -22,7 +22,7 @@ use serde_json::Value;
 use sha2::{Digest, Sha256};
 
 pub use sbatch::{Resources, sbatch_script};
-pub use work::{StabilitySweep, Sweepable, WorkTime};
+pub use work::{FrontierSweep, FrontierSweepItem, StabilitySweep, Sweepable, WorkTime};
 
 use crate::experiments::clustering::ClusteringParams;
 use crate::experiments::recognition::RecognitionParams;
@@ -51,6 +51,7 @@ pub enum Experiment {
     Robustness(RobustnessParams),
     Clustering(ClusteringParams),
     Recognition(RecognitionParams),
+    Frontier(FrontierSweep),
 }
 
 /// Run `$body` with `$x` bound to the experiment's parameters (a [`Sweepable`]).
@@ -61,6 +62,7 @@ macro_rules! with_experiment {
             Experiment::Robustness($x) => $body,
             Experiment::Clustering($x) => $body,
             Experiment::Recognition($x) => $body,
+            Experiment::Frontier($x) => $body,
         }
     };
 }
@@ -627,12 +629,12 @@ pub fn rerun_commands(dir: &Path, program: &str, shards: &[usize]) -> Vec<String
 }
 
 /// A merged sweep: the single-machine result (as JSON) and the result as the workbench
-/// keeps it.
+/// keeps it (None for frontiers, kept as their JSON list).
 pub struct Merged {
     pub experiment: Experiment,
     pub session: Session,
     pub result: Value,
-    pub analysis: AnalysisResult,
+    pub analysis: Option<AnalysisResult>,
     pub time: WorkTime,
 }
 
@@ -643,7 +645,7 @@ fn merge_with<E: Sweepable>(
     outputs: Vec<Value>,
     time: WorkTime,
     progress: &Progress,
-) -> Result<(Value, AnalysisResult), SweepError> {
+) -> Result<(Value, Option<AnalysisResult>), SweepError> {
     fn parse<T: serde::de::DeserializeOwned>(i: usize, v: Value) -> Result<T, SweepError> {
         serde_json::from_value(v).map_err(|err| SweepError::Experiment(format!("item {i}: {err}")))
     }
@@ -747,6 +749,19 @@ pub const TIMING_KEYS: &[&str] = &[
     "train_seconds",
     "predict_step_us",
     "train_step_us",
+    "assign_step_us",
+    "train_us",
+    "predict_us",
+];
+
+/// Keys of a frontier (an object holding `points` and `recommended`) chosen by its times:
+/// the cheapest size within one SE of the best, the Pareto fronts, and the best among
+/// equal scores. Two runs of the same work may time near-equal sizes in another order.
+pub const TIME_CHOSEN_KEYS: &[&str] = &[
+    "best",
+    "recommended",
+    "pareto_training",
+    "pareto_prediction",
 ];
 
 /// The first difference between two results, timings aside (None: they are equal).
@@ -754,8 +769,12 @@ pub fn result_difference(a: &Value, b: &Value) -> Option<String> {
     fn walk(a: &Value, b: &Value, at: &str) -> Option<String> {
         match (a, b) {
             (Value::Object(x), Value::Object(y)) => {
+                let frontier = x.contains_key("points") && x.contains_key("recommended");
+                let skip = |k: &str| {
+                    TIMING_KEYS.contains(&k) || (frontier && TIME_CHOSEN_KEYS.contains(&k))
+                };
                 for (k, va) in x {
-                    if TIMING_KEYS.contains(&k.as_str()) {
+                    if skip(k) {
                         continue;
                     }
                     let here = format!("{at}.{k}");
@@ -768,7 +787,7 @@ pub fn result_difference(a: &Value, b: &Value) -> Option<String> {
                     }
                 }
                 y.keys()
-                    .find(|k| !x.contains_key(*k) && !TIMING_KEYS.contains(&k.as_str()))
+                    .find(|k| !x.contains_key(*k) && !skip(k))
                     .map(|k| format!("{at}.{k}: only in the second"))
             }
             (Value::Array(x), Value::Array(y)) => {

@@ -1,8 +1,9 @@
 //! The experiments a sweep can shard, each as the same units of work its single-machine
 //! run computes: the items (in the single-machine order), what every item shares, one
 //! item, and the result assembled from the items' outputs. The single-machine functions
-//! (`stability::grid_search`, `run_robustness`, `run_clustering`, `run_recognition`) call
-//! the same per-item functions, so a merged sweep equals the local run for the same seeds.
+//! (`stability::grid_search`, `run_robustness`, `run_clustering`, `run_recognition`,
+//! `run_frontier`) call the same per-item functions, so a merged sweep equals the local run
+//! for the same seeds.
 
 use std::time::Instant;
 
@@ -12,6 +13,10 @@ use serde::de::DeserializeOwned;
 use crate::experiments::clustering::{
     ClusteringItem, ClusteringOutput, ClusteringParams, ClusteringPrep, assemble_clustering,
     clustering_item, clustering_items, prepare_clustering,
+};
+use crate::experiments::frontier::{
+    Frontier, FrontierItem, FrontierOutput, FrontierParams, FrontierPrep, assemble_frontier,
+    frontier_item, frontier_items, prepare_frontier,
 };
 use crate::experiments::recognition::{
     RecognitionParams, RecognitionPrep, RepetitionResult, assemble_recognition,
@@ -76,8 +81,9 @@ pub trait Sweepable: Serialize + DeserializeOwned + Clone + Sync {
         time: WorkTime,
         progress: &Progress,
     ) -> Result<Self::Result, String>;
-    /// The result as the workbench keeps it (for a project file).
-    fn analysis(&self, session: &Session, result: &Self::Result) -> AnalysisResult;
+    /// The result as the workbench keeps it (for a project file); None when it is kept as
+    /// its own file (frontiers: the `frontier --json` list).
+    fn analysis(&self, session: &Session, result: &Self::Result) -> Option<AnalysisResult>;
 }
 
 /// Readings in a session (grasps × frames × taxels): the size the cost models scale with.
@@ -106,6 +112,8 @@ const ROBUSTNESS_COST: f64 = 5.0e-5;
 const CLUSTERING_COST: f64 = 8.0e-6;
 /// Recognition: per repetition and reading (a repetition teaches and predicts every grasp).
 const RECOGNITION_COST: f64 = 1.6e-5;
+/// The baselines of the frontier (k-means, SOM, RBF SVM): per run and grasp.
+const TABLE_COST: f64 = 1.0e-4;
 
 /// The grasp-stability grid search and the pipeline after it.
 #[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
@@ -210,8 +218,12 @@ impl Sweepable for StabilitySweep {
             .map_err(|e| e.to_string())
     }
 
-    fn analysis(&self, _session: &Session, r: &stability::StabilityReport) -> AnalysisResult {
-        stability_report(r)
+    fn analysis(
+        &self,
+        _session: &Session,
+        r: &stability::StabilityReport,
+    ) -> Option<AnalysisResult> {
+        Some(stability_report(r))
     }
 }
 
@@ -268,8 +280,8 @@ impl Sweepable for RobustnessParams {
         ))
     }
 
-    fn analysis(&self, session: &Session, r: &Self::Result) -> AnalysisResult {
-        robustness_report(&session.meta.name, r)
+    fn analysis(&self, session: &Session, r: &Self::Result) -> Option<AnalysisResult> {
+        Some(robustness_report(&session.meta.name, r))
     }
 }
 
@@ -323,8 +335,8 @@ impl Sweepable for ClusteringParams {
         Ok(assemble_clustering(self, prep, outputs, time.seconds))
     }
 
-    fn analysis(&self, session: &Session, r: &Self::Result) -> AnalysisResult {
-        clustering_report(&session.meta.name, r)
+    fn analysis(&self, session: &Session, r: &Self::Result) -> Option<AnalysisResult> {
+        Some(clustering_report(&session.meta.name, r))
     }
 }
 
@@ -380,7 +392,136 @@ impl Sweepable for RecognitionParams {
         ))
     }
 
-    fn analysis(&self, session: &Session, r: &Self::Result) -> AnalysisResult {
-        recognition_report(&session.meta.name, r)
+    fn analysis(&self, session: &Session, r: &Self::Result) -> Option<AnalysisResult> {
+        Some(recognition_report(&session.meta.name, r))
+    }
+}
+
+/// The frontiers of one `frontier` command: the result is its `--json` list.
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct FrontierSweep {
+    pub frontiers: Vec<FrontierParams>,
+}
+
+/// An item of a frontier sweep: which frontier, and its item.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct FrontierSweepItem {
+    pub frontier: usize,
+    pub item: FrontierItem,
+}
+
+impl FrontierSweep {
+    fn params(&self, i: usize) -> Result<&FrontierParams, String> {
+        self.frontiers
+            .get(i)
+            .ok_or_else(|| format!("frontier {i} is not in the plan"))
+    }
+}
+
+impl Sweepable for FrontierSweep {
+    type Item = FrontierSweepItem;
+    type Prep = Vec<FrontierPrep>;
+    type Output = FrontierOutput;
+    type Result = Vec<Frontier>;
+
+    fn name(&self) -> &'static str {
+        "frontier"
+    }
+
+    fn items(&self, session: &Session) -> Result<Vec<FrontierSweepItem>, String> {
+        if self.frontiers.is_empty() {
+            return Err("a frontier sweep needs at least one method".into());
+        }
+        let mut out = Vec::new();
+        for (frontier, p) in self.frontiers.iter().enumerate() {
+            prepare_frontier(session, p).map_err(|e| format!("{}: {e}", p.label()))?;
+            out.extend(
+                frontier_items(p)
+                    .into_iter()
+                    .map(|item| FrontierSweepItem { frontier, item }),
+            );
+        }
+        Ok(out)
+    }
+
+    fn cost(&self, session: &Session, it: &FrontierSweepItem) -> f64 {
+        let grasps = session.grasps.len().max(1) as f64;
+        match it.item {
+            // A kernel evaluation costs about capacity × tau; the paper's 50 × 15 is one
+            // repetition of `recognition`.
+            FrontierItem::Recognition { capacity, tau, .. } => {
+                RECOGNITION_COST * readings(session) * ((capacity * tau) as f64 / 750.0).max(0.05)
+            }
+            FrontierItem::Dictionary { num_bases, .. } => {
+                let (gammas, reps) = self
+                    .frontiers
+                    .get(it.frontier)
+                    .map_or((1, 1), |p| (p.gamma.len(), p.reps));
+                STABILITY_COST * patch_values(session) * (num_bases * gammas * reps) as f64
+            }
+            // DU's experts grow as the threshold falls.
+            FrontierItem::Threshold { threshold, .. } => {
+                CLUSTERING_COST * readings(session) * (1.5 - threshold)
+            }
+            FrontierItem::Clusters { .. } | FrontierItem::Svm { .. } => TABLE_COST * grasps,
+        }
+    }
+
+    fn prepare(
+        &self,
+        session: &Session,
+        _progress: &Progress,
+    ) -> Result<Vec<FrontierPrep>, String> {
+        self.frontiers
+            .iter()
+            .map(|p| prepare_frontier(session, p).map_err(|e| e.to_string()))
+            .collect()
+    }
+
+    fn compute(
+        &self,
+        session: &Session,
+        prep: &Self::Prep,
+        it: &FrontierSweepItem,
+        progress: &Progress,
+    ) -> Result<FrontierOutput, String> {
+        progress.checkpoint().map_err(|e| e.to_string())?;
+        let p = self.params(it.frontier)?;
+        let prep = prep
+            .get(it.frontier)
+            .ok_or_else(|| format!("frontier {} is not prepared", it.frontier))?;
+        frontier_item(session, p, prep, &it.item, progress).map_err(|e| e.to_string())
+    }
+
+    fn assemble(
+        &self,
+        session: &Session,
+        items: &[FrontierSweepItem],
+        outputs: Vec<FrontierOutput>,
+        time: WorkTime,
+        _progress: &Progress,
+    ) -> Result<Vec<Frontier>, String> {
+        let mut per: Vec<(Vec<FrontierItem>, Vec<FrontierOutput>)> =
+            vec![(Vec::new(), Vec::new()); self.frontiers.len()];
+        for (it, out) in items.iter().zip(outputs) {
+            let slot = per
+                .get_mut(it.frontier)
+                .ok_or_else(|| format!("frontier {} is not in the plan", it.frontier))?;
+            slot.0.push(it.item);
+            slot.1.push(out);
+        }
+        // The shards' work is not split by frontier: each gets the sweep's seconds.
+        self.frontiers
+            .iter()
+            .zip(per)
+            .map(|(p, (items, outputs))| {
+                assemble_frontier(&session.meta.name, p, &items, outputs, time.seconds)
+                    .map_err(|e| e.to_string())
+            })
+            .collect()
+    }
+
+    fn analysis(&self, _session: &Session, _result: &Self::Result) -> Option<AnalysisResult> {
+        None
     }
 }
