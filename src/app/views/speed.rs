@@ -28,15 +28,34 @@ pub struct FrontierForm {
     pub capacities: String,
     pub taus: String,
     pub num_bases: String,
+    pub thresholds: String,
+    pub ks: String,
+    pub svm_c: String,
+    pub svm_gamma: String,
 }
 
 fn list_text<T: ToString>(v: &[T]) -> String {
     v.iter().map(T::to_string).collect::<Vec<_>>().join(", ")
 }
 
+/// Every method a frontier sweeps, in the form's order.
+const METHODS: [FrontierMethod; 8] = [
+    FrontierMethod::Ds,
+    FrontierMethod::Gs,
+    FrontierMethod::SparseSvm,
+    FrontierMethod::Du,
+    FrontierMethod::Gu,
+    FrontierMethod::Kmeans,
+    FrontierMethod::Som,
+    FrontierMethod::RbfSvm,
+];
+
 impl Default for FrontierForm {
     fn default() -> Self {
         let d = FrontierParams::for_method(FrontierMethod::Ds);
+        let threshold_default = FrontierParams::for_method(FrontierMethod::Gu);
+        let k_default = FrontierParams::for_method(FrontierMethod::Kmeans);
+        let svm_default = FrontierParams::for_method(FrontierMethod::RbfSvm);
         FrontierForm {
             method: FrontierMethod::Ds,
             features: FeatureSet::All,
@@ -44,21 +63,25 @@ impl Default for FrontierForm {
             capacities: list_text(&d.capacities),
             taus: list_text(&d.taus),
             num_bases: list_text(&d.num_bases),
+            thresholds: list_text(&threshold_default.thresholds),
+            ks: list_text(&k_default.ks),
+            svm_c: list_text(&svm_default.svm_c),
+            svm_gamma: list_text(&svm_default.svm_gamma),
         }
     }
 }
 
 /// "2, 5, 10" as numbers; the error names the field.
-fn parse_list(text: &str, field: &str) -> Result<Vec<usize>, String> {
-    let v: Result<Vec<usize>, _> = text
+fn parse_list<T: std::str::FromStr>(text: &str, field: &str) -> Result<Vec<T>, String> {
+    let v: Result<Vec<T>, _> = text
         .split([',', ' '])
         .filter(|t| !t.is_empty())
-        .map(|t| t.parse::<usize>())
+        .map(|t| t.parse::<T>())
         .collect();
     match v {
         Ok(v) if !v.is_empty() => Ok(v),
         Ok(_) => Err(format!("{field}: give at least one value")),
-        Err(_) => Err(format!("{field}: `{text}` is not a list of whole numbers")),
+        Err(_) => Err(format!("{field}: `{text}` is not a list of numbers")),
     }
 }
 
@@ -67,14 +90,26 @@ impl FrontierForm {
     pub fn params(&self) -> Result<FrontierParams, String> {
         let mut p = FrontierParams::for_method(self.method);
         p.reps = self.reps;
+        if self.method.uses_features() {
+            p.features = self.features;
+        }
         match self.method {
             FrontierMethod::Ds | FrontierMethod::Gs => {
-                p.features = self.features;
                 p.capacities = parse_list(&self.capacities, "capacities")?;
                 p.taus = parse_list(&self.taus, "taus")?;
             }
             FrontierMethod::SparseSvm => {
                 p.num_bases = parse_list(&self.num_bases, "num_bases")?;
+            }
+            FrontierMethod::Du | FrontierMethod::Gu => {
+                p.thresholds = parse_list(&self.thresholds, "thresholds")?;
+            }
+            FrontierMethod::Kmeans | FrontierMethod::Som => {
+                p.ks = parse_list(&self.ks, "k")?;
+            }
+            FrontierMethod::RbfSvm => {
+                p.svm_c = parse_list(&self.svm_c, "C")?;
+                p.svm_gamma = parse_list(&self.svm_gamma, "γ")?;
             }
         }
         p.validate().map_err(|e| e.to_string())?;
@@ -83,8 +118,8 @@ impl FrontierForm {
 
     fn ready(&self, s: &crate::app::loader::LoadedSession) -> bool {
         match self.method {
-            FrontierMethod::Ds | FrontierMethod::Gs => recognition_ready(s),
             FrontierMethod::SparseSvm => s.session.label_sets.iter().any(|l| l.classes.len() == 2),
+            _ => recognition_ready(s),
         }
     }
 
@@ -92,34 +127,38 @@ impl FrontierForm {
         egui::ComboBox::from_label("Frontier method")
             .selected_text(self.method.name())
             .show_ui(ui, |ui| {
-                for m in [
-                    FrontierMethod::Ds,
-                    FrontierMethod::Gs,
-                    FrontierMethod::SparseSvm,
-                ] {
+                for m in METHODS {
                     ui.selectable_value(&mut self.method, m, m.name());
                 }
             });
+        if self.method.uses_features() {
+            egui::ComboBox::from_label("Frontier features")
+                .selected_text(self.features.name())
+                .show_ui(ui, |ui| {
+                    for f in [FeatureSet::All, FeatureSet::Tactile, FeatureSet::Encoder] {
+                        ui.selectable_value(&mut self.features, f, f.name());
+                    }
+                });
+        }
         match self.method {
             FrontierMethod::Ds | FrontierMethod::Gs => {
-                egui::ComboBox::from_label("Frontier features")
-                    .selected_text(self.features.name())
-                    .show_ui(ui, |ui| {
-                        for f in [FeatureSet::All, FeatureSet::Tactile, FeatureSet::Encoder] {
-                            ui.selectable_value(&mut self.features, f, f.name());
-                        }
-                    });
-                let label = ui.label("capacities");
-                ui.text_edit_singleline(&mut self.capacities)
-                    .labelled_by(label.id);
-                let label = ui.label("taus");
-                ui.text_edit_singleline(&mut self.taus)
-                    .labelled_by(label.id);
+                text_field(ui, "capacities", &mut self.capacities);
+                text_field(ui, "taus", &mut self.taus);
             }
-            FrontierMethod::SparseSvm => {
-                let label = ui.label("numbers of bases (each with its best β, γ)");
-                ui.text_edit_singleline(&mut self.num_bases)
-                    .labelled_by(label.id);
+            FrontierMethod::SparseSvm => text_field(
+                ui,
+                "numbers of bases (each with its best β, γ)",
+                &mut self.num_bases,
+            ),
+            FrontierMethod::Du | FrontierMethod::Gu => {
+                text_field(ui, "novelty thresholds", &mut self.thresholds)
+            }
+            FrontierMethod::Kmeans | FrontierMethod::Som => {
+                text_field(ui, "numbers of clusters k", &mut self.ks)
+            }
+            FrontierMethod::RbfSvm => {
+                text_field(ui, "penalties C", &mut self.svm_c);
+                text_field(ui, "kernel widths γ", &mut self.svm_gamma);
             }
         }
         ui.add(
@@ -128,6 +167,12 @@ impl FrontierForm {
                 .prefix("frontier repetitions "),
         );
     }
+}
+
+/// A labelled one-line field.
+fn text_field(ui: &mut egui::Ui, label: &str, text: &mut String) {
+    let label = ui.label(label);
+    ui.text_edit_singleline(text).labelled_by(label.id);
 }
 
 #[derive(Default)]
@@ -260,7 +305,8 @@ fn charted(chart: &figures::Chart, frontiers: &[Frontier], models: &[usize]) -> 
 
 const TRAINED: &str = "trained models";
 
-/// The model a frontier's size stands for.
+/// The model a frontier's size stands for; None for the clusterers and the RBF SVM, whose
+/// views sweep their sizes rather than train one.
 fn spec_of(f: &Frontier, k: usize) -> Option<ModelSpec> {
     let p = &f.points[k];
     Some(match f.params.method {
@@ -278,6 +324,7 @@ fn spec_of(f: &Frontier, k: usize) -> Option<ModelSpec> {
             beta: p.knob("beta")?,
             gamma: p.knob("gamma")?,
         }),
+        _ => return None,
     })
 }
 
@@ -394,8 +441,13 @@ impl SpeedRoom {
             Some(Charted::Size(i, k)) => {
                 let f = &frontiers[i];
                 let p = &f.points[k];
+                let click = if spec_of(f, k).is_some() {
+                    "click to open or train"
+                } else {
+                    "its view sweeps this size (Clustering or Baselines)"
+                };
                 ui.label(format!(
-                    "{}: {} · {} {:.3} ± {:.3} · training {:.1} µs, prediction {:.1} µs per {} · click to open or train",
+                    "{}: {} · {} {:.3} ± {:.3} · training {:.1} µs, prediction {:.1} µs per {} · {click}",
                     f.short_label(),
                     p.detail,
                     f.score_name,
