@@ -1,25 +1,46 @@
 #!/usr/bin/env bash
 # Mutation testing (cargo-mutants) of the modules whose numbers users trust. Not in CI: it
 # rebuilds the crate once per mutant. Rerun a scope when its module changes, and record the
-# counts (caught / missed / unviable) in docs/testing.md.
+# counts (caught / missed / unviable / timeouts) in docs/testing.md.
 #
 #   cargo install cargo-mutants
 #   scripts/mutants.sh                 # every scope
 #   scripts/mutants.sh scores svm-eval # some
+#   scripts/mutants.sh --list learners # only count a scope's mutants
 #
-# Each scope mutates one module (--file) and runs only the tests that guard it (the
-# arguments after -- go to cargo test). Mutants are built in place (the checkout's own
-# target/ and ../shared/datasets are used), so leave the checkout alone while it runs:
+# Each scope mutates one module (--file, narrowed to functions where noted) and builds and
+# runs only the test targets that guard it: the targets go to every cargo call (-C), so
+# the build of a mutant links those alone instead of every test binary, and the test
+# names after -- filter what runs. Mutants are built in place (the checkout's own target/
+# and ../shared/datasets are used), so leave the checkout alone while it runs:
 # cargo-mutants restores every file when a mutant is done or the run is interrupted.
+#
+# The crate (not its dependencies, which keep their own opt-level 3) is built at
+# opt-level 1 without debug info: an incremental rebuild of a mutant takes about half the
+# time of the dev profile's opt-level 2, and the dependencies are reused (a profile of its
+# own would rebuild them all in a directory of its own). Other cargo commands in this
+# checkout rebuild the crate at the dev settings afterwards.
+#
 # Results: target/mutants/<scope>/mutants.out/{caught,missed,unviable,timeout}.txt
 set -euo pipefail
 cd "$(dirname "$0")/.."
+export CARGO_PROFILE_DEV_OPT_LEVEL=1 CARGO_PROFILE_DEV_DEBUG=false
+
+list=
+if [ "${1:-}" = --list ]; then
+    list=--list
+    shift
+fi
 
 run() {
     local scope=$1
     shift
+    if [ -n "$list" ]; then
+        printf '%s: %s mutants\n' "$scope" "$(cargo mutants --list --no-default-features "$@" | wc -l)"
+        return
+    fi
     mkdir -p "target/mutants/$scope"
-    nice -n 10 cargo mutants --no-default-features --in-place --timeout 600 \
+    nice -n 10 cargo mutants --no-default-features --in-place --minimum-test-timeout 120 \
         --output "target/mutants/$scope" "$@" || true
     for outcome in caught missed unviable timeout; do
         local f="target/mutants/$scope/mutants.out/$outcome.txt"
@@ -27,23 +48,53 @@ run() {
     done
 }
 
+# A diff that adds the lines of function $2 in file $1, for --in-diff: it keeps a scope
+# to that function (--re does not filter the "delete field" mutants, which name no function).
+function_diff() {
+    local file=$1 name=$2 start end
+    start=$(grep -n "^pub fn $name\b\|^fn $name\b" "$file" | cut -d: -f1)
+    end=$(awk -v s="$start" 'NR > s && /^}/ { print NR; exit }' "$file")
+    local out="target/mutants/$name.diff"
+    mkdir -p target/mutants
+    {
+        printf -- '--- a/%s\n+++ b/%s\n@@ -%d,0 +%d,%d @@\n' "$file" "$file" \
+            $((start - 1)) "$start" $((end - start + 1))
+        sed -n "${start},${end}p" "$file" | sed 's/^/+/'
+    } >"$out"
+    echo "$out"
+}
+
+# The test functions of integration-test files: with a module path (e.g. `sparse::`) they
+# are the filters of a scope that runs the library's unit tests too, since one filter
+# applies to every test binary and an integration test's name has no module path.
+tests_in() {
+    grep -h -A1 '#\[test\]' "$@" | grep -o 'fn [a-z0-9_]*' | cut -c4-
+}
+
 scope() {
     case $1 in
-    scores) run scores --file src/cluster/scores.rs -- --lib cluster::scores ;;
-    scores-pairs-entropy)
-        # The part of `scores` whose counts docs/testing.md records.
-        run scores-pairs-entropy --file src/cluster/scores.rs --re 'entropy|pairs' -- --lib cluster::scores ;;
-    svm-eval) run svm-eval --file src/svm/eval.rs -- --test svm_eval ;;
+    scores) run scores --file src/cluster/scores.rs -C --lib -- cluster::scores ;;
+    svm-eval) run svm-eval --file src/svm/eval.rs -C --test=svm_eval ;;
     stability-selection)
         # The grid's selection and parsimony rule.
         run stability-selection --file src/experiments/stability.rs \
-            --re 'choose' -- --test stability_pipeline parsimony ;;
-    sparse)
-        run sparse --file 'src/sparse/*.rs' \
-            -- --lib --test sparse_dictionary --test sparse_feature_sign sparse ;;
+            --in-diff "$(function_diff src/experiments/stability.rs choose)" \
+            -C --test=stability_pipeline -- parsimony ;;
+    learners-novelty)
+        # The part of `learners` that assigns grasps to objects: DU's novelty (eq. 28)
+        # and learning step, GU's step and joint novelty and its winner.
+        run learners-novelty --file src/learners/du.rs --file src/learners/gu.rs \
+            --re 'du_novelty|Du::learn|Gu::step_novelty|Gu::joint_novelty|Gu::winner_among' \
+            -C --lib -C --test=learners_unsupervised \
+            -- -- learners:: $(tests_in tests/learners_unsupervised.rs) ;;
     learners)
         run learners --file 'src/learners/*.rs' \
-            -- --test learners_supervised --test learners_unsupervised ;;
+            -C --lib -C --test=learners_supervised -C --test=learners_unsupervised \
+            -- -- learners:: $(tests_in tests/learners_*.rs) ;;
+    sparse)
+        run sparse --file 'src/sparse/*.rs' \
+            -C --lib -C --test=sparse_dictionary -C --test=sparse_feature_sign \
+            -- -- sparse:: $(tests_in tests/sparse_*.rs) ;;
     *)
         echo "unknown scope $1" >&2
         exit 2

@@ -274,6 +274,16 @@ fn parsimony_picks_the_smallest_dictionary_within_one_standard_error() {
     let (per_k, best, pars) = stability::choose(&cells, &[5, 10, 20, 30, 40]);
     assert_eq!(per_k.len(), 5);
     assert_eq!(per_k[1].weighted_success_rate, 0.86);
+    // The best cell of a num_bases wherever it lies in the grid, not its first.
+    let (per_k, _, _) = stability::choose(
+        &[
+            cell(10, 0.84, 0.01),
+            cell(10, 0.86, 0.01),
+            cell(10, 0.85, 0.01),
+        ],
+        &[10],
+    );
+    assert_eq!(per_k[0].weighted_success_rate, 0.86);
     assert_eq!(best.config.num_bases, 30);
     // best − SE = 0.865: K = 20 (0.875) is the smallest at or above it.
     assert_eq!(pars.config.num_bases, 20);

@@ -140,3 +140,84 @@ fn cross_validation_tests_every_sample_once_and_is_deterministic() {
     let r1 = one.install(|| cross_validate(x.view(), &y, &folds, &p).unwrap());
     assert_eq!(r, r1);
 }
+
+/// Eq. 4's parts are undefined without their class: CCS/TS needs a success.
+#[test]
+fn success_recall_is_undefined_without_successes() {
+    let failures_only = Confusion::from_predictions(&[true, true], &[true, false]);
+    assert_eq!(failures_only.success_recall(), None);
+    assert_eq!(failures_only.weighted_success_rate(), None);
+    assert_eq!(failures_only.failure_recall(), Some(0.5));
+    assert_eq!(failures_only.accuracy(), Some(0.5));
+}
+
+#[test]
+fn accuracy_is_undefined_without_samples() {
+    assert_eq!(Confusion::default().accuracy(), None);
+}
+
+/// Two values: sd = √((0.1² + 0.1²) / 1), se = sd / √2 = 0.1.
+#[test]
+fn standard_error_of_two_folds_by_hand() {
+    let (m, se) = mean_se(&[0.6, 0.8]);
+    assert!((m - 0.7).abs() < 1e-15);
+    assert!((se - 0.1).abs() < 1e-12, "{se}");
+    let (m, se) = mean_se(&[]);
+    assert!(m.is_nan() && se.is_nan());
+}
+
+/// The dealing rule fixes how many of each class every fold gets, whatever the shuffle:
+/// the 77 successes are dealt first from fold 0 (folds 0–6 get 8, folds 7–9 get 7), and
+/// the 26 failures continue at fold 7 (folds 7, 8, 9, 0, 1, 2 get 3, the others 2).
+/// The smallest legal k (2) and n = k (one sample a fold) are accepted.
+#[test]
+fn stratified_folds_deal_the_classes_in_turn() {
+    let labels: Vec<bool> = (0..103).map(|i| i % 4 == 0).collect();
+    for seed in [3, 4] {
+        let f = stratified_k_fold(&labels, 10, seed).unwrap();
+        let pos: Vec<usize> = (0..10)
+            .map(|k| f.test_indices(k).iter().filter(|&&i| labels[i]).count())
+            .collect();
+        let neg: Vec<usize> = (0..10).map(|k| f.test_indices(k).len() - pos[k]).collect();
+        assert_eq!(pos, [3, 3, 3, 2, 2, 2, 2, 3, 3, 3], "seed {seed}");
+        assert_eq!(neg, [8, 8, 8, 8, 8, 8, 8, 7, 7, 7], "seed {seed}");
+    }
+    let two = stratified_k_fold(&labels, 2, 0).unwrap();
+    assert_eq!(two.count, 2);
+    assert_eq!(
+        (two.test_indices(0).len(), two.test_indices(1).len()),
+        (52, 51)
+    );
+    let each = stratified_k_fold(&labels[..4], 4, 0).unwrap();
+    assert!((0..4).all(|k| each.test_indices(k).len() == 1));
+}
+
+/// Two folds are the fewest: objects of sizes 5, 4, 3, 2 (largest first, each to the
+/// lighter fold) give folds of 5 + 2 and 4 + 3 samples.
+#[test]
+fn leave_objects_out_into_two_folds() {
+    let groups: Vec<usize> = [(0, 5), (1, 4), (2, 3), (3, 2)]
+        .iter()
+        .flat_map(|&(g, n)| std::iter::repeat_n(g, n))
+        .collect();
+    for seed in 0..4 {
+        let f = group_k_fold(&groups, Some(2), seed).unwrap();
+        assert_eq!(f.count, 2);
+        let mut sizes = [f.test_indices(0).len(), f.test_indices(1).len()];
+        sizes.sort_unstable();
+        assert_eq!(sizes, [7, 7], "seed {seed}");
+        // The two largest objects never share a fold.
+        assert_ne!(f.fold_of[0], f.fold_of[5]);
+    }
+}
+
+#[test]
+fn cross_validation_rejects_mismatched_lengths() {
+    let x = Array2::<f64>::zeros((6, 2));
+    let y = [false, true, false, true, false, true];
+    let folds = stratified_k_fold(&y, 2, 0).unwrap();
+    let p = LinearSvmParams::default();
+    assert!(cross_validate(x.view(), &y[..5], &folds, &p).is_err());
+    let short = stratified_k_fold(&y[..4], 2, 0).unwrap();
+    assert!(cross_validate(x.view(), &y, &short, &p).is_err());
+}
