@@ -81,7 +81,7 @@ fn a_frontier_sets_the_default_size_and_its_points_train_and_open_models() {
     assert_eq!(frontier.points.len(), 4);
     let rec = &frontier.points[frontier.recommended];
     let (capacity, tau) = (rec.knob("capacity").unwrap(), rec.knob("tau").unwrap());
-    h.get_by_label_contains("DS, all features: recommended");
+    h.get_by_label_contains("Recommended DS, all features: capacity");
 
     // The Recognition view now trains the recommended size by default, and says so.
     h.get_by_label("Recognition").click();

@@ -471,13 +471,8 @@ impl SpeedRoom {
                 for f in &frontiers {
                     let p = &f.points[f.recommended];
                     ui.label(format!(
-                        "{}: recommended {} ({:.3} ± {:.3}, {:.1} µs per {} to predict)",
-                        f.label(),
-                        p.detail,
-                        p.score,
-                        p.score_se,
-                        p.predict_us,
-                        f.unit
+                        "Recommended {} ({:.3} ± {:.3}, {:.1} µs per {} to predict)",
+                        p.detail, p.score, p.score_se, p.predict_us, f.unit
                     ));
                 }
             }
