@@ -181,3 +181,62 @@ fn training_from_the_predicted_q_changes_nothing() {
         );
     }
 }
+
+/// DU with GU's confirmation rule: a one-off grasp far from the three objects opens a
+/// cluster that no later grasp confirms. Every cluster kept, it wins that grasp back; with
+/// `min_grasps` 3 the grasp goes to a confirmed object's cluster, and every other grasp
+/// keeps its cluster.
+#[test]
+fn du_leaves_an_unconfirmed_cluster_out_of_the_reassignment() {
+    let (mut seqs, _) = data(3);
+    let odd = Array2::from_shape_fn(
+        (10, 2),
+        |(t, d)| {
+            if d == 0 { 1.6 } else { 1.6 * t as f64 / 10.0 }
+        },
+    );
+    seqs.insert(12, odd);
+    let reassign = |min_grasps: usize| {
+        let mut p = DuParams::default();
+        p.ds.gp = small(p.ds.gp);
+        p.threshold = 0.5;
+        p.min_grasps = min_grasps;
+        let mut du = Du::new(2, &p).unwrap();
+        let learned: Vec<usize> = seqs
+            .iter()
+            .map(|s| du.learn(s.view()).unwrap().cluster)
+            .collect();
+        let assigned: Vec<usize> = seqs.iter().map(|s| du.assign(s.view())).collect();
+        (learned, assigned)
+    };
+    let (learned, all) = reassign(1);
+    let odd_cluster = learned[12];
+    assert_eq!(
+        learned.iter().filter(|&&c| c == odd_cluster).count(),
+        1,
+        "the one-off opens its own cluster: {learned:?}"
+    );
+    assert_eq!(all[12], odd_cluster);
+    let (_, confirmed) = reassign(3);
+    assert_ne!(confirmed[12], odd_cluster);
+    assert!(learned.iter().filter(|&&c| c == confirmed[12]).count() >= 3);
+    for (i, (a, b)) in all.iter().zip(&confirmed).enumerate() {
+        if i != 12 {
+            assert_eq!(a, b, "grasp {i}");
+        }
+    }
+}
+
+#[test]
+fn a_du_min_grasps_of_zero_is_an_error() {
+    let p = DuParams {
+        min_grasps: 0,
+        ..DuParams::default()
+    };
+    assert!(
+        Du::new(2, &p)
+            .unwrap_err()
+            .to_string()
+            .contains("min_grasps")
+    );
+}

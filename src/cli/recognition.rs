@@ -239,9 +239,16 @@ pub struct ClusteringArgs {
     /// part in the final re-assignment (default 3; 1 keeps every cluster).
     #[arg(long)]
     pub gu_min_grasps: Option<usize>,
+    /// DU: the same rule (default 1, the paper's DU: every cluster takes part).
+    #[arg(long)]
+    pub du_min_grasps: Option<usize>,
     /// Largest k of the k-means / SOM baselines (0: skip them).
     #[arg(long, default_value_t = 20)]
     pub baseline_max_k: usize,
+    /// Choose a threshold without labels: stability (the clusterings' agreement across the
+    /// random orders, mean pairwise ARI) or none.
+    #[arg(long, default_value = "stability")]
+    pub choose_threshold: String,
     /// Write the full result here as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -281,8 +288,18 @@ impl ClusteringArgs {
                 "--gu-noise: `{other}` is not shared, per-dimension or per-dimension-filter"
             ),
         };
+        params.choose_threshold = match args.choose_threshold.as_str() {
+            "none" => None,
+            c => Some(
+                c.parse()
+                    .map_err(|e| anyhow::anyhow!("--choose-threshold: {e} or none"))?,
+            ),
+        };
         if let Some(k) = args.gu_min_grasps {
             params.gu_min_grasps = k;
+        }
+        if let Some(k) = args.du_min_grasps {
+            params.du_min_grasps = k;
         }
         if let Some(f) = args.gu_noise_floor {
             params.gu_noise_floor = f;
@@ -302,13 +319,65 @@ impl ClusteringArgs {
     }
 }
 
-fn print_point(name: &str, p: &Option<crate::experiments::clustering::EffectivePoint>) {
+fn print_point(name: &str, k: usize, p: &Option<crate::experiments::clustering::EffectivePoint>) {
     match p {
         Some(p) => println!(
-            "  {name:<8} at 10 effective: purity {:.3} ({:.3})  ARI {:.3} ({:.3})  NMI {:.3} ({:.3})  [{} runs]",
+            "  {name:<8} at {k} effective: purity {:.3} ({:.3})  ARI {:.3} ({:.3})  NMI {:.3} ({:.3})  [{} runs]",
             p.purity.mean, p.purity.sd, p.ari.mean, p.ari.sd, p.nmi.mean, p.nmi.sd, p.runs
         ),
-        None => println!("  {name:<8} no run with 10 effective clusters"),
+        None => println!("  {name:<8} no run with {k} effective clusters"),
+    }
+}
+
+fn print_summary(name: &str, s: &crate::experiments::clustering::ThresholdSummary) {
+    println!(
+        "  {name}: threshold {:.2}, {:.1} ({:.1}) effective, purity {:.3} ({:.3})  ARI {:.3} ({:.3})  NMI {:.3} ({:.3})",
+        s.threshold,
+        s.effective.mean,
+        s.effective.sd,
+        s.purity.mean,
+        s.purity.sd,
+        s.ari.mean,
+        s.ari.sd,
+        s.nmi.mean,
+        s.nmi.sd
+    );
+}
+
+/// The label-free threshold with its curve, the labelled optimum beside it, and the
+/// baselines at the effective count the label-free threshold gives.
+fn print_choice(r: &crate::experiments::clustering::ClusteringResult) {
+    let Some(c) = &r.threshold_choice else {
+        return;
+    };
+    println!(
+        "  {} (mean pairwise ARI of the orders' clusterings):",
+        c.criterion.text()
+    );
+    for a in &c.curve {
+        println!(
+            "    {:>5.2}  {:.3} ({:.3}){}",
+            a.threshold,
+            a.agreement,
+            a.sd,
+            if a.eligible() {
+                ""
+            } else {
+                "  (one cluster in most orders)"
+            }
+        );
+    }
+    if let Some(s) = r.at_choice() {
+        print_summary("chosen without labels", s);
+        let k = s.effective.mean.round() as usize;
+        let find = |v: &[crate::experiments::clustering::EffectivePoint]| {
+            v.iter().find(|p| p.effective == k).cloned()
+        };
+        print_point("k-means", k, &find(&r.kmeans));
+        print_point("SOM", k, &find(&r.som));
+    }
+    if let Some(s) = r.best_by_labels() {
+        print_summary("best NMI (labels)  ", s);
     }
 }
 
@@ -327,9 +396,10 @@ pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
             t.threshold, t.clusters.mean, t.effective.mean, t.purity.mean, t.ari.mean, t.nmi.mean
         );
     }
-    print_point("learner", &r.at_10);
-    print_point("k-means", &r.kmeans_at_10);
-    print_point("SOM", &r.som_at_10);
+    print_point("learner", 10, &r.at_10);
+    print_point("k-means", 10, &r.kmeans_at_10);
+    print_point("SOM", 10, &r.som_at_10);
+    print_choice(&r);
     let us = r.runs.iter().map(|x| x.learn_step_us).sum::<f64>() / r.runs.len().max(1) as f64;
     println!("  learning phase {us:.1} µs per observation (threads share the cores)");
     write_json(&r, args.json.as_deref())

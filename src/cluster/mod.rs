@@ -5,6 +5,7 @@
 pub mod baselines;
 pub mod grasp_features;
 pub mod kmeans;
+pub mod order_agreement;
 pub mod scores;
 pub mod som;
 

@@ -21,6 +21,7 @@ use serde::{Deserialize, Serialize};
 use super::ExperimentError;
 use super::recognition::{MeanSd, session_labels};
 use crate::cluster::grasp_features::{Normalisation, Normaliser, session_features};
+use crate::cluster::order_agreement::{ThresholdChoice, ThresholdCriterion, choose_threshold};
 use crate::cluster::{Schedule, SequentialKMeansParams, SomParams, scores};
 use crate::features::{FeatureSequences, FeatureSet, SequenceParams, feature_sequences};
 use crate::jobs::Progress;
@@ -75,8 +76,14 @@ pub struct ClusteringParams {
     /// GU: clusters trained on fewer grasps are left out of the re-assignment.
     #[serde(default = "every_gu_cluster")]
     pub gu_min_grasps: usize,
+    /// DU: the same rule (1, the paper's DU, keeps every cluster).
+    #[serde(default = "every_gu_cluster")]
+    pub du_min_grasps: usize,
     /// Run sequential k-means and the SOM for 2 … `baseline_max_k` clusters (0: skip).
     pub baseline_max_k: usize,
+    /// How to choose a threshold without labels (None: no choice).
+    #[serde(default)]
+    pub choose_threshold: Option<ThresholdCriterion>,
 }
 
 impl Default for ClusteringParams {
@@ -95,12 +102,14 @@ impl Default for ClusteringParams {
             gu_noise: GuNoise::Shared,
             gu_noise_floor: GuParams::default().noise_floor,
             gu_min_grasps: GuParams::default().min_grasps,
+            du_min_grasps: DuParams::default().min_grasps,
             baseline_max_k: 20,
+            choose_threshold: Some(ThresholdCriterion::OrderAgreement),
         }
     }
 }
 
-/// A project saved before GU's `min_grasps` existed re-assigned to every cluster.
+/// A project saved before DU's and GU's `min_grasps` existed re-assigned to every cluster.
 pub(crate) fn every_gu_cluster() -> usize {
     1
 }
@@ -169,8 +178,9 @@ pub struct ClusteringRun {
     /// 0 in results saved before it was timed.
     #[serde(default)]
     pub assign_step_us: f64,
-    /// The cluster of every grasp (session order) after re-assignment; kept for the first
-    /// order only, so a view can show the clustering at each threshold.
+    /// The cluster of every grasp (session order) after re-assignment. Every run has it
+    /// until the threshold is chosen; the result keeps it for the first order only, so a
+    /// view can show the clustering at each threshold.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub assignment: Option<Vec<usize>>,
 }
@@ -212,6 +222,9 @@ pub struct ClusteringResult {
     /// The SOM set-up of the baseline (grid 2 × ⌈k/2⌉ for k units).
     pub som_setup: SomParams,
     pub wall_seconds: f64,
+    /// The threshold chosen without labels, and the criterion's curve.
+    #[serde(default)]
+    pub threshold_choice: Option<ThresholdChoice>,
     /// The true class of every grasp (session order) and the class names.
     #[serde(default)]
     pub labels: Vec<usize>,
@@ -239,6 +252,7 @@ pub fn one_run(
             &DuParams {
                 ds: params.ds.clone(),
                 threshold,
+                min_grasps: params.du_min_grasps,
             },
         )?),
         UnsupervisedLearner::Gu => Learner::Gu(Gu::new(
@@ -287,7 +301,7 @@ pub fn one_run(
         nmi: sc.nmi,
         learn_step_us,
         assign_step_us,
-        assignment: (rep == 0).then_some(pred),
+        assignment: Some(pred),
     })
 }
 
@@ -499,6 +513,12 @@ pub fn assemble_clustering(
             }
         })
         .collect();
+    let threshold_choice = params
+        .choose_threshold
+        .and_then(|c| label_free_choice(c, &params.thresholds, &runs));
+    for r in runs.iter_mut().filter(|r| r.rep != 0) {
+        r.assignment = None;
+    }
     let by_eff = by_effective(runs.iter().map(|r| (r.effective, r.purity, r.ari, r.nmi)));
     let kmeans = by_effective(base.iter().map(|x| x.0));
     let som = by_effective(base.iter().map(|x| x.1));
@@ -514,8 +534,48 @@ pub fn assemble_clustering(
         som,
         som_setup: som_setup(10, params.seed),
         wall_seconds,
+        threshold_choice,
         labels: prep.labels,
         class_names: prep.class_names,
+    }
+}
+
+/// The threshold `criterion` chooses from the runs' clusterings (never their labels).
+fn label_free_choice(
+    criterion: ThresholdCriterion,
+    thresholds: &[f64],
+    runs: &[ClusteringRun],
+) -> Option<ThresholdChoice> {
+    let per_threshold: Vec<(f64, Vec<&[usize]>)> = thresholds
+        .iter()
+        .map(|&t| {
+            let c = runs
+                .iter()
+                .filter(|r| r.threshold == t)
+                .filter_map(|r| r.assignment.as_deref())
+                .collect();
+            (t, c)
+        })
+        .collect();
+    choose_threshold(criterion, &per_threshold)
+}
+
+impl ClusteringResult {
+    /// The sweep's summary at the label-free threshold.
+    pub fn at_choice(&self) -> Option<&ThresholdSummary> {
+        let t = self.threshold_choice.as_ref()?.threshold;
+        self.sweep.iter().find(|s| s.threshold == t)
+    }
+
+    /// The threshold with the best mean NMI, chosen with the labels: the yardstick of the
+    /// label-free choice, not a choice a user without labels could make.
+    pub fn best_by_labels(&self) -> Option<&ThresholdSummary> {
+        self.sweep
+            .iter()
+            .fold(None, |best: Option<&ThresholdSummary>, s| match best {
+                Some(b) if b.nmi.mean >= s.nmi.mean => Some(b),
+                _ => Some(s),
+            })
     }
 }
 

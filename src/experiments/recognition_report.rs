@@ -260,63 +260,89 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
         UnsupervisedLearner::Gu => "GU",
     };
     let mut label = format!("{learner}, {}", features_text(p.features));
-    if p.learner == UnsupervisedLearner::Gu {
-        label += &match p.gu_min_grasps {
+    let min_grasps = match p.learner {
+        UnsupervisedLearner::Du => p.du_min_grasps,
+        UnsupervisedLearner::Gu => p.gu_min_grasps,
+    };
+    if p.learner == UnsupervisedLearner::Gu || min_grasps > 1 {
+        label += &match min_grasps {
             1 => ", every cluster kept".to_string(),
             n => format!(", clusters kept from {n} grasps"),
         };
     }
     let th: Vec<f64> = r.sweep.iter().map(|s| s.threshold).collect();
     let reps = p.reps;
+    let mut score_series = vec![
+        with_band(
+            "purity",
+            th.clone(),
+            &r.sweep.iter().map(|s| &s.purity).collect::<Vec<_>>(),
+        ),
+        with_band(
+            "ARI",
+            th.clone(),
+            &r.sweep.iter().map(|s| &s.ari).collect::<Vec<_>>(),
+        ),
+        with_band(
+            "NMI",
+            th.clone(),
+            &r.sweep.iter().map(|s| &s.nmi).collect::<Vec<_>>(),
+        ),
+    ];
+    if let Some(c) = &r.threshold_choice {
+        let agreement: Vec<MeanSd> = c
+            .curve
+            .iter()
+            .map(|a| MeanSd {
+                mean: a.agreement,
+                sd: a.sd,
+            })
+            .collect();
+        score_series.push(with_band(
+            "agreement across orders (no labels)",
+            c.curve.iter().map(|a| a.threshold).collect(),
+            &agreement.iter().collect::<Vec<_>>(),
+        ));
+    }
     let mut figures = vec![
         (
             "scores-vs-threshold".to_string(),
-            Figure::chart(
-                "Purity, ARI and NMI against the novelty threshold",
-                Axis::new("novelty threshold", ""),
-                Axis::new("score", "").including(0.0, 1.0),
-                vec![
-                    with_band(
-                        "purity",
-                        th.clone(),
-                        &r.sweep.iter().map(|s| &s.purity).collect::<Vec<_>>(),
-                    ),
-                    with_band(
-                        "ARI",
-                        th.clone(),
-                        &r.sweep.iter().map(|s| &s.ari).collect::<Vec<_>>(),
-                    ),
-                    with_band(
-                        "NMI",
-                        th.clone(),
-                        &r.sweep.iter().map(|s| &s.nmi).collect::<Vec<_>>(),
-                    ),
-                ],
-            )
-            .subtitle(format!("{label}; mean ± sd over {reps} seeded orders")),
+            chosen_threshold(
+                Figure::chart(
+                    "Purity, ARI and NMI against the novelty threshold",
+                    Axis::new("novelty threshold", ""),
+                    Axis::new("score", "").including(0.0, 1.0),
+                    score_series,
+                )
+                .subtitle(format!("{label}; mean ± sd over {reps} seeded orders")),
+                r,
+            ),
         ),
         (
             "clusters-vs-threshold".to_string(),
-            Figure::chart(
-                "Clusters against the novelty threshold",
-                Axis::new("novelty threshold", ""),
-                Axis::new("number of clusters", ""),
-                vec![
-                    with_band(
-                        "clusters created",
-                        th.clone(),
-                        &r.sweep.iter().map(|s| &s.clusters).collect::<Vec<_>>(),
-                    ),
-                    with_band(
-                        "effective clusters",
-                        th.clone(),
-                        &r.sweep.iter().map(|s| &s.effective).collect::<Vec<_>>(),
-                    ),
-                ],
-            )
-            .subtitle(format!(
-                "{label}; effective = clusters used when every sample is re-assigned"
-            )),
+            chosen_threshold(
+                Figure::chart(
+                    "Clusters against the novelty threshold",
+                    Axis::new("novelty threshold", ""),
+                    Axis::new("number of clusters", ""),
+                    vec![
+                        with_band(
+                            "clusters created",
+                            th.clone(),
+                            &r.sweep.iter().map(|s| &s.clusters).collect::<Vec<_>>(),
+                        ),
+                        with_band(
+                            "effective clusters",
+                            th.clone(),
+                            &r.sweep.iter().map(|s| &s.effective).collect::<Vec<_>>(),
+                        ),
+                    ],
+                )
+                .subtitle(format!(
+                    "{label}; effective = clusters used when every sample is re-assigned"
+                )),
+                r,
+            ),
         ),
     ];
     let mut nmi = vec![effective_series(learner, &r.by_effective)];
@@ -381,6 +407,14 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
     let runs = r.runs.len().max(1) as f64;
     let mean_step_us = r.runs.iter().map(|x| x.learn_step_us).sum::<f64>() / runs;
     scores.push(("learning step (µs)".into(), mean_step_us));
+    if let (Some(c), Some(at)) = (&r.threshold_choice, r.at_choice()) {
+        scores.push(("threshold chosen without labels".into(), c.threshold));
+        scores.push((
+            "effective clusters at the label-free threshold".into(),
+            at.effective.mean,
+        ));
+        scores.push(("NMI at the label-free threshold".into(), at.nmi.mean));
+    }
     let mut parameters = common_parameters(learner, p.features, reps, p.seed);
     parameters.extend([(
         "thresholds".to_string(),
@@ -391,12 +425,7 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
             th.last().unwrap_or(&0.0)
         ),
     )]);
-    if p.learner == UnsupervisedLearner::Gu {
-        parameters.insert(
-            "grasps to keep a cluster".into(),
-            p.gu_min_grasps.to_string(),
-        );
-    }
+    parameters.insert("grasps to keep a cluster".into(), min_grasps.to_string());
     let (details, links) = clustering_details(r);
     AnalysisResult {
         kind: AnalysisKind::Clustering,
@@ -413,6 +442,22 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
         links,
         grasp_codes: Vec::new(),
         model_size: None,
+    }
+}
+
+/// `f` with the threshold chosen without labels marked, if one was chosen.
+fn chosen_threshold(f: Figure, r: &ClusteringResult) -> Figure {
+    match &r.threshold_choice {
+        Some(c) => f.ref_line(
+            Orientation::Vertical,
+            c.threshold,
+            format!(
+                "chosen without labels: {} ({})",
+                c.threshold,
+                c.criterion.text()
+            ),
+        ),
+        None => f,
     }
 }
 
@@ -690,6 +735,7 @@ mod tests {
             som_at_10: None,
             som_setup: Default::default(),
             wall_seconds: 0.0,
+            threshold_choice: None,
             labels: labels.clone(),
             class_names: vec!["a".into(), "b".into(), "c".into()],
         };

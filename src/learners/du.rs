@@ -5,8 +5,11 @@
 //! Where the paper is silent: the winner s is fixed per grasp (the DS decision, argmax of
 //! the mean p over the grasp), and a grasp is trained into its cluster with DS's rule (the
 //! most probable other cluster gets the negatives), also when it opens a new cluster.
+//! As GU's ([`super::GuParams::min_grasps`]), the final re-assignment can leave out the
+//! clusters trained on fewer than [`DuParams::min_grasps`] grasps (default 1: keep all, as
+//! the paper's DU).
 
-use ndarray::ArrayView2;
+use ndarray::{ArrayView2, Axis};
 use serde::{Deserialize, Serialize};
 
 use super::{Ds, DsParams, LearnerError, SequenceClassifier, argmax_of_mean};
@@ -16,6 +19,13 @@ pub struct DuParams {
     pub ds: DsParams,
     /// theta_D in [0, 1]: the lower, the more clusters.
     pub threshold: f64,
+    /// Clusters trained on fewer grasps take no part in the final re-assignment.
+    #[serde(default = "every_cluster")]
+    pub min_grasps: usize,
+}
+
+fn every_cluster() -> usize {
+    1
 }
 
 impl Default for DuParams {
@@ -23,6 +33,7 @@ impl Default for DuParams {
         DuParams {
             ds: DsParams::default(),
             threshold: 0.3,
+            min_grasps: every_cluster(),
         }
     }
 }
@@ -31,6 +42,9 @@ impl DuParams {
     pub fn validate(&self) -> Result<(), LearnerError> {
         if !(0.0..=1.0).contains(&self.threshold) {
             return Err(LearnerError::param("threshold", "must lie in [0, 1]"));
+        }
+        if self.min_grasps == 0 {
+            return Err(LearnerError::param("min_grasps", "must be at least 1"));
         }
         self.ds.validate()
     }
@@ -48,6 +62,9 @@ pub struct Assignment {
 pub struct Du {
     ds: Ds,
     threshold: f64,
+    min_grasps: usize,
+    /// Grasps trained into each cluster.
+    grasps: Vec<usize>,
 }
 
 /// nu_D of eq. 28 from the q of cluster s at every step.
@@ -65,6 +82,8 @@ impl Du {
         Ok(Du {
             ds: Ds::new(dim, &params.ds)?,
             threshold: params.threshold,
+            min_grasps: params.min_grasps,
+            grasps: Vec::new(),
         })
     }
 
@@ -81,6 +100,7 @@ impl Du {
         if self.ds.n_classes() == 0 {
             let c = self.ds.add_class()?;
             self.ds.train_sequence(seq, c);
+            self.grasps.push(1);
             return Ok(Assignment {
                 cluster: c,
                 novelty: 1.0,
@@ -91,10 +111,12 @@ impl Du {
         let s = argmax_of_mean(p.view());
         let novelty = du_novelty(q.column(s).iter().copied());
         let (cluster, created) = if novelty > self.threshold {
+            self.grasps.push(0);
             (self.ds.add_class()?, true)
         } else {
             (s, false)
         };
+        self.grasps[cluster] += 1;
         self.ds.train_sequence_predicted(seq, cluster, q.view());
         Ok(Assignment {
             cluster,
@@ -103,9 +125,27 @@ impl Du {
         })
     }
 
-    /// The cluster of a grasp under the learned models (no training).
+    /// The cluster of a grasp under the learned models (no training): the DS decision
+    /// among the clusters trained on at least `min_grasps` grasps (all if none is), with
+    /// p renormalised over them.
     pub fn assign(&mut self, seq: ArrayView2<f64>) -> usize {
-        let p = self.ds.predict_sequence(seq);
-        argmax_of_mean(p.view())
+        let confirmed: Vec<usize> = (0..self.grasps.len())
+            .filter(|&c| self.grasps[c] >= self.min_grasps)
+            .collect();
+        if confirmed.len() == self.grasps.len() || confirmed.is_empty() {
+            let p = self.ds.predict_sequence(seq);
+            return argmax_of_mean(p.view());
+        }
+        let (q, _) = self.ds.predict_q_and_p(seq);
+        let mut p = q.select(Axis(1), &confirmed);
+        for mut row in p.rows_mut() {
+            let sum = row.sum();
+            if sum > 0.0 {
+                row /= sum;
+            } else {
+                row.fill(1.0 / confirmed.len() as f64);
+            }
+        }
+        confirmed[argmax_of_mean(p.view())]
     }
 }

@@ -178,8 +178,13 @@ fn figure_pane(
     let chart = matches!(fig.kind, figures::FigureKind::Chart(_));
     let mut sel = cx.analyses.selected.get(&key).copied();
     if chart {
-        // A chart always carries its marker; a slider moves it too.
-        let mut k = sel.unwrap_or(0).min(details.items.len() - 1);
+        // A chart always carries its marker, first at the threshold chosen without labels
+        // when the result has one; a slider moves it too.
+        let chosen = || {
+            let t = cx.analyses.results[i].score("threshold chosen without labels")?;
+            details.nearest(t)
+        };
+        let mut k = sel.or_else(chosen).unwrap_or(0).min(details.items.len() - 1);
         let keys: Vec<f64> = details.items.iter().map(|x| x.0).collect();
         ui.add(
             egui::Slider::new(&mut k, 0..=details.items.len() - 1)
