@@ -4,7 +4,7 @@
 #![no_main]
 
 use std::path::Path;
-use std::sync::LazyLock;
+use std::sync::{LazyLock, Once};
 
 use libfuzzer_sys::fuzz_target;
 use tactile_workbench::session::{ImportSpec, ros2};
@@ -17,7 +17,15 @@ static SPEC: LazyLock<ImportSpec> = LazyLock::new(|| {
     ImportSpec::from_str(text, Path::new("zstd-events.spec.json")).expect("the fixture spec reads")
 });
 
+/// libfuzzer-sys installs a panic hook that aborts at once, before `catch_unwind` can act,
+/// so the bag reader's guard around the `mcap` crate (which panics on some damaged chunks)
+/// would stop the fuzzer. The default hook is put back: a panic the reader catches is then
+/// reported as a damaged bag, and any panic that escapes still aborts (libfuzzer-sys
+/// catches it around the target and aborts).
+static DEFAULT_PANIC_HOOK: Once = Once::new();
+
 fuzz_target!(|data: &[u8]| {
+    DEFAULT_PANIC_HOOK.call_once(|| drop(std::panic::take_hook()));
     // The bag reader takes files (a bag may be a folder of several), so the bytes go
     // through a scratch file, as a user's bag would.
     let path = common::scratch_file(data, "mcap");
