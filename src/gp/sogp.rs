@@ -525,8 +525,10 @@ impl Sogp {
     }
 
     /// q (into self.qv), r, ∂ln p/∂S and ln p for the current target (S the predictive
-    /// variance). None if not finite.
+    /// variance). None if not finite. The window is scaled here, as the gradient and the
+    /// update that follow these terms read it.
     fn likelihood_terms(&mut self) -> Option<(f64, f64, f64)> {
+        self.ensure_scaled();
         let s_tot = self.predictive_variance();
         let (r, ds, logp) = match self.likelihood {
             Likelihood::Regression => {
