@@ -136,3 +136,63 @@ fn wrong_likelihood_is_a_parameter_error() {
     p.gp.capacity = 0;
     assert!(Gs::new(2, &p).unwrap_err().to_string().contains("capacity"));
 }
+
+/// The step interface (what `bench-recognition` times) gives the distributions of the
+/// sequence methods, and training step by step leaves the learner where training by
+/// sequence does, bit for bit.
+#[test]
+fn steps_one_at_a_time_equal_the_sequence_methods() {
+    let (mut ds, mut gs) = (DsParams::default(), GsParams::default());
+    ds.gp = small(ds.gp);
+    gs.gp = small(gs.gp);
+    let learners: [Box<dyn SequenceClassifier>; 2] = [
+        Box::new(Ds::new(2, &ds).unwrap()),
+        Box::new(Gs::new(2, &gs).unwrap()),
+    ];
+    for mut by_seq in learners {
+        for _ in 0..3 {
+            by_seq.add_class().unwrap();
+        }
+        let mut rng = Rng::new(5);
+        let seqs: Vec<(usize, Array2<f64>)> = (0..24)
+            .map(|i| (i % 3, sequence(i % 3, &mut rng)))
+            .collect();
+        let mut by_step = clone_of(&*by_seq, &ds, &gs);
+        for (c, s) in &seqs {
+            let want = by_seq.predict_sequence(s.view());
+            by_step.start_sequence();
+            for (o, row) in s.rows().into_iter().zip(want.rows()) {
+                let mut dist = vec![0.0; 3];
+                by_step.predict_step(o.as_slice().unwrap(), &mut dist);
+                let got: Vec<u64> = dist.iter().map(|p| p.to_bits()).collect();
+                let want: Vec<u64> = row.iter().map(|p| p.to_bits()).collect();
+                assert_eq!(got, want);
+            }
+            by_seq.train_sequence(s.view(), *c);
+            by_step.start_sequence();
+            for o in s.rows() {
+                by_step.train_step(o.as_slice().unwrap(), *c);
+            }
+        }
+        for (a, b) in by_seq.models().iter().zip(by_step.models()) {
+            assert_eq!(a.basis(), b.basis());
+            assert_eq!(a.kernel_params(), b.kernel_params());
+        }
+    }
+}
+
+/// A fresh learner of the same kind with the same number of (untrained) classes.
+fn clone_of(
+    l: &dyn SequenceClassifier,
+    ds: &DsParams,
+    gs: &GsParams,
+) -> Box<dyn SequenceClassifier> {
+    let mut c: Box<dyn SequenceClassifier> = match l.models()[0].n_out() {
+        1 => Box::new(Ds::new(2, ds).unwrap()),
+        _ => Box::new(Gs::new(2, gs).unwrap()),
+    };
+    for _ in 0..l.n_classes() {
+        c.add_class().unwrap();
+    }
+    c
+}

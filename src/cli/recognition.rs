@@ -405,10 +405,20 @@ pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
     write_json(&r, args.json.as_deref())
 }
 
+/// The session timed when none is given: the iCub dataset beside the checkout, if present.
+const DEFAULT_BENCH_SESSION: &str = "../shared/datasets/icub-grasp";
+
 #[derive(Args, Debug)]
 pub struct BenchArgs {
-    /// Also time the whole Table II protocol on this session (native file or iCub folder).
+    /// Time the steps on this session (native file or iCub folder; default: the iCub
+    /// dataset at ../shared/datasets/icub-grasp when present).
     pub session: Option<PathBuf>,
+    /// Protocol orders over which the session's steps are timed.
+    #[arg(long, default_value_t = 3)]
+    pub session_reps: usize,
+    /// Also time the whole Table II protocol on the session.
+    #[arg(long)]
+    pub protocol: bool,
     /// Repetitions of the protocol timing.
     #[arg(long, default_value_t = 50)]
     pub reps: usize,
@@ -424,7 +434,7 @@ pub struct BenchArgs {
     /// Timed sequences per setting (20 steps each; more gives steadier figures).
     #[arg(long, default_value_t = 60)]
     pub sequences: usize,
-    /// Skip the per-step timings (time only the protocol of SESSION).
+    /// Skip the per-step timings on synthetic sequences.
     #[arg(long)]
     pub no_steps: bool,
     /// Write the measurements here as JSON.
@@ -435,6 +445,7 @@ pub struct BenchArgs {
 #[derive(serde::Serialize)]
 struct BenchReport {
     steps: Vec<crate::experiments::recognition::StepBench>,
+    session_steps: Vec<crate::experiments::recognition::SessionStepBench>,
     protocol: Vec<ProtocolTiming>,
     threads: usize,
 }
@@ -502,16 +513,62 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
             steps.push(b);
         }
     }
+    let path = args.session.clone().or_else(|| {
+        let p = PathBuf::from(DEFAULT_BENCH_SESSION);
+        p.exists().then_some(p)
+    });
+    let session = path.as_deref().map(open_session).transpose()?;
+    let shown = path.as_deref().map(|p| p.display().to_string());
+    let mut session_steps = Vec::new();
+    if let Some(session) = &session {
+        use crate::experiments::recognition::{SessionBenchParams, bench_session_steps};
+        println!(
+            "per step on {} once every expert is full (all features, capacity {}, tau {}, {} orders, one thread), µs median [p10, p90]:",
+            shown.unwrap_or_default(),
+            base.capacity,
+            base.tau,
+            args.session_reps
+        );
+        for adaptation in [true, false] {
+            for &learner in &learners {
+                let b = bench_session_steps(
+                    session,
+                    &SessionBenchParams {
+                        learner,
+                        capacity: base.capacity,
+                        tau: base.tau,
+                        adaptation,
+                        reps: args.session_reps,
+                        seed: 0,
+                    },
+                )?;
+                println!(
+                    "  {:?} adapt {:<5}: predict {:>6.1} [{:.1}, {:.1}], train {:>6.1} [{:.1}, {:.1}]  ({} steps; {} of {} experts adapting at the end)",
+                    learner,
+                    adaptation,
+                    b.predict.median,
+                    b.predict.p10,
+                    b.predict.p90,
+                    b.train.median,
+                    b.train.p10,
+                    b.train.p90,
+                    b.train.steps,
+                    b.adapting,
+                    b.experts
+                );
+                session_steps.push(b);
+            }
+        }
+    }
     let mut protocol = Vec::new();
-    if let Some(path) = &args.session {
-        let session = open_session(path)?;
+    if let Some(session) = session.as_ref().filter(|_| args.protocol) {
         for &learner in &learners {
             let p = RecognitionParams {
                 learner,
                 reps: args.reps,
                 ..RecognitionParams::default()
             };
-            let r = run_recognition(&session, &p, &Progress::new())?;
+            let r = run_recognition(session, &p, &Progress::new())?;
             println!(
                 "  Table II protocol {:?}/all, {} reps: {:.1} s wall, {:.1} s CPU ({} threads)",
                 learner,
@@ -534,6 +591,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
     write_json(
         &BenchReport {
             steps,
+            session_steps,
             protocol,
             threads: rayon::current_num_threads(),
         },

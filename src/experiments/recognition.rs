@@ -725,3 +725,119 @@ pub fn bench_steps(
         adapting,
     })
 }
+
+/// Per-step cost on a session's grasps (the Table II protocol's order, all features).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SessionBenchParams {
+    pub learner: SupervisedLearner,
+    pub capacity: usize,
+    pub tau: usize,
+    pub adaptation: bool,
+    /// Protocol repetitions (orders); steps are timed in all of them.
+    pub reps: usize,
+    pub seed: u64,
+}
+
+/// Median and 10th / 90th percentiles of per-step times, µs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StepTimes {
+    pub median: f64,
+    pub p10: f64,
+    pub p90: f64,
+    pub steps: usize,
+}
+
+impl StepTimes {
+    /// Nearest-rank percentiles of `us` (NaN when empty).
+    pub fn of(mut us: Vec<f64>) -> StepTimes {
+        us.sort_by(f64::total_cmp);
+        let at = |q: f64| match us.len() {
+            0 => f64::NAN,
+            n => us[((q * n as f64).ceil() as usize).clamp(1, n) - 1],
+        };
+        StepTimes {
+            median: at(0.5),
+            p10: at(0.1),
+            p90: at(0.9),
+            steps: us.len(),
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SessionStepBench {
+    pub params: SessionBenchParams,
+    /// A prediction step: every expert observes the step, the class distribution follows.
+    pub predict: StepTimes,
+    /// A training step (DS: every expert observes, the true class's expert and the most
+    /// probable wrong one are updated; GS: the true class's expert is updated).
+    pub train: StepTimes,
+    /// Experts still adapting their hyperparameters at the end (all repetitions).
+    pub adapting: usize,
+    pub experts: usize,
+}
+
+/// Time every step of the protocol on `session` (each grasp predicted, then trained) once
+/// every expert holds its full BV budget, on one thread.
+pub fn bench_session_steps(
+    session: &Session,
+    params: &SessionBenchParams,
+) -> Result<SessionStepBench, ExperimentError> {
+    let (labels, classes) = session_labels(session, "object")?;
+    let feats = feature_sequences(
+        session,
+        &SequenceParams {
+            features: FeatureSet::All,
+            taxel_noise_variance: 0.0,
+            seed: params.seed,
+        },
+    )?;
+    let mut ds = DsParams::default();
+    let mut gs = GsParams::default();
+    for gp in [&mut ds.gp, &mut gs.gp] {
+        gp.capacity = params.capacity;
+        gp.tau = params.tau;
+        if !params.adaptation {
+            gp.adaptation = None;
+        }
+    }
+    let dim = feats.dim();
+    let (mut predict_us, mut train_us) = (Vec::new(), Vec::new());
+    let (mut adapting, mut experts) = (0, 0);
+    for rep in 0..params.reps {
+        let mut l = new_learner(params.learner, dim, classes.len(), &ds, &gs)?;
+        let mut rng = Rng::stream(params.seed, rep as u64);
+        let (teach, order) = protocol_order(&labels, classes.len(), &mut rng);
+        let mut dist = vec![0.0; classes.len()];
+        for g in teach.into_iter().chain(order) {
+            let timed = l.models().iter().all(|m| m.n_basis() == params.capacity);
+            let seq = feats.sequences[g].as_standard_layout();
+            let steps = seq.as_slice().unwrap_or_default().chunks_exact(dim);
+            l.start_sequence();
+            for o in steps.clone() {
+                let t0 = Instant::now();
+                l.predict_step(o, &mut dist);
+                if timed {
+                    predict_us.push(1e6 * t0.elapsed().as_secs_f64());
+                }
+            }
+            l.start_sequence();
+            for o in steps {
+                let t0 = Instant::now();
+                l.train_step(o, labels[g]);
+                if timed {
+                    train_us.push(1e6 * t0.elapsed().as_secs_f64());
+                }
+            }
+        }
+        adapting += l.models().iter().filter(|m| m.adapting()).count();
+        experts += l.models().len();
+    }
+    Ok(SessionStepBench {
+        params: params.clone(),
+        predict: StepTimes::of(predict_us),
+        train: StepTimes::of(train_us),
+        adapting,
+        experts,
+    })
+}

@@ -255,6 +255,11 @@ impl LagMajor {
         }
     }
 
+    /// Squared norm of lag `lag` of BV `i` (its distance to a padding lag).
+    pub(super) fn norm(&self, lag: usize, i: usize) -> f64 {
+        self.norms[lag * self.stride + i]
+    }
+
     pub fn swap(&mut self, i: usize, j: usize) {
         let s = self.stride;
         for lag in 0..self.tau {
@@ -273,7 +278,7 @@ impl LagMajor {
     /// k mod 4, a sequential tail, (a0 + a1) + (a2 + a3) + tail. A padding lag (all zero)
     /// takes the stored norms.
     #[inline(always)]
-    fn lag_sq_dist(&self, lag: usize, xl: &[f64], m: usize, d: &mut [f64]) {
+    pub(super) fn lag_sq_dist(&self, lag: usize, xl: &[f64], m: usize, d: &mut [f64]) {
         let (dim, s) = (self.dim, self.stride);
         if xl.iter().all(|v| *v == 0.0) {
             d.copy_from_slice(&self.norms[lag * s..lag * s + m]);

@@ -2,6 +2,7 @@
 //! online GP (Csató & Opper) with a recursive ARD kernel over the input history and
 //! stochastic natural-gradient hyperparameter adaptation.
 
+mod inputs;
 pub mod kernel;
 pub mod normal;
 pub mod sngd;

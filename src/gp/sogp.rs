@@ -26,6 +26,7 @@ use ndarray::Array2;
 use serde::{Deserialize, Serialize};
 
 use super::GpError;
+use super::inputs::Inputs;
 use super::kernel::{KernelParams, LagMajor, RecursiveArd, dot};
 use super::normal::{log_norm_cdf, pdf_over_cdf};
 use super::sngd::{Sngd, SngdParams};
@@ -186,12 +187,16 @@ pub struct Sogp {
     bv_scaled: Vec<f64>,
     /// The scaled BVs again, lag-major for the many-BV kernels.
     basis: LagMajor,
+    /// The BVs' distinct inputs and the observed window's distances to them.
+    inputs: Inputs,
     bv_y: Vec<f64>,
     alpha: Vec<f64>,
     c: Vec<f64>,
     q: Vec<f64>,
     x_raw: Vec<f64>,
     x_scaled: Vec<f64>,
+    /// `x_scaled` holds `x_raw` scaled by the current kernel (it is scaled when needed).
+    x_scaled_current: bool,
     k: Vec<f64>,
     ck: Vec<f64>,
     ehat: Vec<f64>,
@@ -244,12 +249,14 @@ impl Sogp {
             bv_raw: vec![0.0; stride * wlen],
             bv_scaled: vec![0.0; stride * wlen],
             basis,
+            inputs: Inputs::new(dim, params.tau, stride, lanes),
             bv_y: vec![0.0; stride * n_out],
             alpha: vec![0.0; stride * n_out],
             c: vec![0.0; stride * stride],
             q: vec![0.0; stride * stride],
             x_raw: vec![0.0; wlen],
             x_scaled: vec![0.0; wlen],
+            x_scaled_current: false,
             k: vec![0.0; lanes],
             ck: vec![0.0; stride],
             ehat: vec![0.0; stride],
@@ -394,25 +401,42 @@ impl Sogp {
     /// Evaluate the kernel vector, C·k and the mean at `window` (tau·dim values, oldest
     /// lag first); the following [`Sogp::update`] reuses them.
     pub fn observe(&mut self, window: &[f64]) {
+        self.inputs.observe(&self.kernel, &self.x_raw, window);
         self.x_raw.copy_from_slice(window);
-        self.refresh();
+        self.x_scaled_current = false;
+        self.evaluate();
     }
 
+    /// Evaluate again at the same window (the model changed).
     fn refresh(&mut self) {
-        self.kernel.scale_into(&self.x_raw, &mut self.x_scaled);
+        self.inputs.observe(&self.kernel, &self.x_raw, &self.x_raw);
+        self.evaluate();
+    }
+
+    /// The kernel vector (from the inputs' distance rows), C·k and the mean.
+    fn evaluate(&mut self) {
         let sf2 = self.kernel.sigma_f2();
         let n = self.n;
-        self.kernel
-            .unit_many(&self.x_scaled, &self.basis, n, &mut self.lag_k, &mut self.k);
+        let inv_rho = 1.0 / self.kernel.params().sigma_rho;
+        self.inputs
+            .unit_many(inv_rho, n, &mut self.lag_k, &mut self.k);
         for k in &mut self.k[..n] {
             *k *= sf2;
         }
         self.refresh_posterior();
     }
 
+    /// Scale the observed window (a BV and the gradient need it).
+    fn ensure_scaled(&mut self) {
+        if !self.x_scaled_current {
+            self.kernel.scale_into(&self.x_raw, &mut self.x_scaled);
+            self.x_scaled_current = true;
+        }
+    }
+
     /// C·k and the mean from the kernel vector in `k`.
     fn refresh_posterior(&mut self) {
-        dispatch_wide!(["avx512f"] Sogp::refresh_posterior_portable, (this: &mut Sogp = self))
+        dispatch_wide!(["avx512f", "avx2"] Sogp::refresh_posterior_portable, (this: &mut Sogp = self))
     }
 
     #[inline(always)]
@@ -469,6 +493,7 @@ impl Sogp {
         if self.observed != Some(self.version) {
             self.refresh();
         }
+        self.ensure_scaled();
         self.y_tmp.copy_from_slice(&y[..self.n_out]);
         let Some((mut r, dlogp_ds, _)) = self.likelihood_terms() else {
             return;
@@ -476,6 +501,7 @@ impl Sogp {
         // The gradient is prequential: taken before the point is learnt (paper eq. 15).
         if self.adapt.is_some() && self.adaptation_step(dlogp_ds) {
             self.refresh();
+            self.ensure_scaled();
             match self.likelihood_terms() {
                 Some((r_new, _, _)) => r = r_new,
                 None => return,
@@ -499,8 +525,10 @@ impl Sogp {
     }
 
     /// q (into self.qv), r, ∂ln p/∂S and ln p for the current target (S the predictive
-    /// variance). None if not finite.
+    /// variance). None if not finite. The window is scaled here, as the gradient and the
+    /// update that follow these terms read it.
     fn likelihood_terms(&mut self) -> Option<(f64, f64, f64)> {
+        self.ensure_scaled();
         let s_tot = self.predictive_variance();
         let (r, ds, logp) = match self.likelihood {
             Likelihood::Regression => {
@@ -533,7 +561,7 @@ impl Sogp {
 
     fn posterior_update(&mut self, r: f64) {
         // The O(n²) updates, in wide vectors where available.
-        dispatch_wide!(["avx512f"] Sogp::posterior_update_portable, (
+        dispatch_wide!(["avx512f", "avx2"] Sogp::posterior_update_portable, (
             this: &mut Sogp = self,
             r: f64 = r,
         ))
@@ -583,6 +611,8 @@ impl Sogp {
             self.bv_raw[n * w..(n + 1) * w].copy_from_slice(&self.x_raw);
             self.bv_scaled[n * w..(n + 1) * w].copy_from_slice(&self.x_scaled);
             self.basis.set(n, &self.x_scaled);
+            let inv_rho = 1.0 / self.kernel.params().sigma_rho;
+            self.inputs.add_bv(n, &self.x_raw, &self.x_scaled, inv_rho);
             self.bv_y[n * no..(n + 1) * no].copy_from_slice(&self.y_tmp);
             if let Some(a) = self.adapt.as_mut() {
                 let (pk, lanes) = (a.buf.pk, a.buf.lanes);
@@ -641,7 +671,7 @@ impl Sogp {
         if i >= self.n {
             return;
         }
-        dispatch_wide!(["avx512f"] Sogp::delete_portable, (this: &mut Sogp = self, i: usize = i))
+        dispatch_wide!(["avx512f", "avx2"] Sogp::delete_portable, (this: &mut Sogp = self, i: usize = i))
     }
 
     #[inline(always)]
@@ -674,6 +704,7 @@ impl Sogp {
                 *q -= qj * qm / qs;
             }
         }
+        self.inputs.release_bv(l);
         self.n -= 1;
         self.version += 1;
     }
@@ -696,6 +727,7 @@ impl Sogp {
             self.bv_scaled.swap(i * w + t, j * w + t);
         }
         self.basis.swap(i, j);
+        self.inputs.swap_bv(i, j);
         for d in 0..no {
             self.bv_y.swap(i * no + d, j * no + d);
             self.alpha.swap(i * no + d, j * no + d);
@@ -847,6 +879,8 @@ impl Sogp {
             return;
         };
         self.kernel = kernel;
+        // The re-run below stores the BVs it keeps again.
+        self.inputs.clear();
         let mut ad = self.adapt.take();
         let m = self.n;
         let (w, no, s) = (self.wlen, self.n_out, self.stride);
@@ -880,7 +914,6 @@ impl Sogp {
             }
         }
         let saved_x = self.x_raw.clone();
-        let saved_xs = self.x_scaled.clone();
         let saved_y = self.y_tmp.clone();
         let sf2 = self.kernel.sigma_f2();
         self.n = 0;
@@ -905,7 +938,7 @@ impl Sogp {
             }
         }
         self.x_raw = saved_x;
-        self.x_scaled = saved_xs;
+        self.x_scaled_current = false;
         self.y_tmp = saved_y;
         if let Some(mut ad) = ad {
             if self.retained.len() < m {
@@ -929,6 +962,7 @@ impl Sogp {
     /// [`KernelParams::theta`] (for analysis and tests; training uses the cached form).
     pub fn log_predictive_gradient(&mut self, window: &[f64], y: &[f64]) -> (f64, Vec<f64>) {
         self.observe(window);
+        self.ensure_scaled();
         self.y_tmp.copy_from_slice(&y[..self.n_out]);
         let mut buf = GradBuffers::new(
             self.kernel.dim(),
@@ -1112,6 +1146,67 @@ mod tests {
             assert!(gp.hyper_updates() >= 20, "{}", gp.hyper_updates());
             assert!(checked > 300);
         }
+    }
+
+    /// The kernel vector and the per-lag K_t of an observation, looked up from the
+    /// distance rows of the distinct inputs, equal the direct evaluation of every pair bit
+    /// for bit: along sequences (shifted windows), at their starts (padding lags), on a
+    /// window observed twice, with inputs repeated across sequences, through deletions and
+    /// hyperparameter rebuilds.
+    #[test]
+    fn kernel_from_input_rows_equals_the_direct_evaluation() {
+        use crate::gp::Window;
+        let (dim, tau) = (3, 4);
+        let p = SogpParams {
+            capacity: 9,
+            tau,
+            adaptation: Some(SngdParams {
+                window: 4,
+                start_after: 12,
+                stop_count: 1000,
+                ..SngdParams::default()
+            }),
+            ..SogpParams::default()
+        };
+        let mut gp = Sogp::new(dim, 1, &p).unwrap();
+        let mut window = Window::new(dim, tau);
+        let mut checked = 0;
+        for t in 0..900 {
+            if t % 11 == 0 {
+                window.reset();
+            }
+            // Inputs on a coarse grid, so that sequences share inputs.
+            let x: Vec<f64> = (0..dim)
+                .map(|k| ((0.37 * t as f64 + 1.3 * k as f64).sin() * 2.0).round() / 2.0)
+                .collect();
+            window.push(&x);
+            for _ in 0..1 + usize::from(t % 7 == 0) {
+                gp.observe(window.as_slice());
+                let mut xs = vec![0.0; gp.wlen];
+                gp.kernel.scale_into(window.as_slice(), &mut xs);
+                let lanes = gp.basis.stride();
+                let (mut lag_k, mut k) = (vec![0.0; tau * lanes], vec![0.0; lanes]);
+                gp.kernel
+                    .unit_many(&xs, &gp.basis, gp.n, &mut lag_k, &mut k);
+                let sf2 = gp.kernel.sigma_f2();
+                for i in 0..gp.n {
+                    let direct = sf2 * gp.kernel.unit_scaled(&xs, gp.bv(i));
+                    assert_eq!(gp.k[i].to_bits(), direct.to_bits(), "step {t}, BV {i}");
+                    for lag in 0..tau {
+                        let at = lag * lanes + i;
+                        assert_eq!(gp.lag_k[at].to_bits(), lag_k[at].to_bits(), "step {t}");
+                    }
+                }
+                checked += gp.n;
+            }
+            gp.update(&[if (0.23 * t as f64).cos() > 0.0 {
+                1.0
+            } else {
+                -1.0
+            }]);
+        }
+        assert!(gp.n_basis() == p.capacity && gp.hyper_updates() >= 20);
+        assert!(checked > 5000, "{checked}");
     }
 
     #[test]

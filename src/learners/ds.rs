@@ -183,15 +183,35 @@ impl SequenceClassifier for Ds {
         let seq = seq.as_standard_layout();
         self.window.reset();
         for o in super::steps(&seq, self.dim).chunks_exact(self.dim) {
-            self.observe(o);
-            let wrong = (0..self.models.len())
-                .filter(|&c| c != class)
-                .max_by(|&a, &b| self.q[a].total_cmp(&self.q[b]));
-            // Both updates reuse the kernel vectors of this step's observation.
-            self.models[class].update(&[1.0]);
-            if let Some(w) = wrong {
-                self.models[w].update(&[-1.0]);
-            }
+            self.train_step(o, class);
+        }
+    }
+
+    fn start_sequence(&mut self) {
+        self.window.reset();
+    }
+
+    fn predict_step(&mut self, o: &[f64], dist: &mut [f64]) {
+        self.observe(o);
+        let sum: f64 = self.q.iter().sum();
+        let c = self.q.len();
+        for (p, q) in dist.iter_mut().zip(&self.q) {
+            *p = if sum > 0.0 { q / sum } else { 1.0 / c as f64 };
+        }
+    }
+
+    fn train_step(&mut self, o: &[f64], class: usize) {
+        if class >= self.models.len() {
+            return;
+        }
+        self.observe(o);
+        let wrong = (0..self.models.len())
+            .filter(|&c| c != class)
+            .max_by(|&a, &b| self.q[a].total_cmp(&self.q[b]));
+        // Both updates reuse the kernel vectors of this step's observation.
+        self.models[class].update(&[1.0]);
+        if let Some(w) = wrong {
+            self.models[w].update(&[-1.0]);
         }
     }
 

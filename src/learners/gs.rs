@@ -155,33 +155,9 @@ impl SequenceClassifier for Gs {
         let seq = seq.as_standard_layout();
         let steps = super::steps(&seq, self.dim);
         let mut out = Array2::zeros((steps.len() / self.dim, c));
-        self.window.reset();
-        self.log_post.fill(-(c as f64).ln());
-        for (t, o) in steps.chunks_exact(self.dim).enumerate() {
-            // The step's log-likelihoods go into `out` first: a step so far from every
-            // expert that all of them give −∞ (e.g. inputs of 1e200) carries no evidence
-            // and is skipped, since adding it would make −∞ − (−∞) = NaN below.
-            for (j, m) in self.models.iter_mut().enumerate() {
-                m.observe(self.window.as_slice());
-                out[[t, j]] = log_likelihood(o, m.mean(), m.predictive_variance());
-            }
-            if out.row(t).iter().any(|ll| *ll > f64::NEG_INFINITY) {
-                for (j, lp) in self.log_post.iter_mut().enumerate() {
-                    *lp += out[[t, j]];
-                }
-            }
-            let top = self
-                .log_post
-                .iter()
-                .cloned()
-                .fold(f64::NEG_INFINITY, f64::max);
-            let z: f64 = self.log_post.iter().map(|v| (v - top).exp()).sum();
-            let ln_z = top + z.ln();
-            for (j, lp) in self.log_post.iter_mut().enumerate() {
-                *lp -= ln_z;
-                out[[t, j]] = lp.exp();
-            }
-            self.window.push(o);
+        self.start_sequence();
+        for (o, mut row) in steps.chunks_exact(self.dim).zip(out.rows_mut()) {
+            self.predict_step(o, row.as_slice_mut().unwrap_or_default());
         }
         out
     }
@@ -193,11 +169,51 @@ impl SequenceClassifier for Gs {
         let seq = seq.as_standard_layout();
         self.window.reset();
         for o in super::steps(&seq, self.dim).chunks_exact(self.dim) {
-            let m = &mut self.models[class];
-            m.observe(self.window.as_slice());
-            m.update(o);
-            self.window.push(o);
+            self.train_step(o, class);
         }
+    }
+
+    fn start_sequence(&mut self) {
+        self.window.reset();
+        let c = self.models.len();
+        self.log_post.fill(-(c as f64).ln());
+    }
+
+    fn predict_step(&mut self, o: &[f64], dist: &mut [f64]) {
+        // The step's log-likelihoods go into `dist` first: a step so far from every
+        // expert that all of them give −∞ (e.g. inputs of 1e200) carries no evidence
+        // and is skipped, since adding it would make −∞ − (−∞) = NaN below.
+        for (m, ll) in self.models.iter_mut().zip(dist.iter_mut()) {
+            m.observe(self.window.as_slice());
+            *ll = log_likelihood(o, m.mean(), m.predictive_variance());
+        }
+        if dist.iter().any(|ll| *ll > f64::NEG_INFINITY) {
+            for (lp, ll) in self.log_post.iter_mut().zip(dist.iter()) {
+                *lp += ll;
+            }
+        }
+        let top = self
+            .log_post
+            .iter()
+            .cloned()
+            .fold(f64::NEG_INFINITY, f64::max);
+        let z: f64 = self.log_post.iter().map(|v| (v - top).exp()).sum();
+        let ln_z = top + z.ln();
+        for (lp, p) in self.log_post.iter_mut().zip(dist.iter_mut()) {
+            *lp -= ln_z;
+            *p = lp.exp();
+        }
+        self.window.push(o);
+    }
+
+    fn train_step(&mut self, o: &[f64], class: usize) {
+        if class >= self.models.len() {
+            return;
+        }
+        let m = &mut self.models[class];
+        m.observe(self.window.as_slice());
+        m.update(o);
+        self.window.push(o);
     }
 
     fn decide(&self, dist: ArrayView2<f64>) -> usize {

@@ -42,6 +42,14 @@ pub trait SequenceClassifier: Send {
     /// The class distribution after every step of the sequence (T × C).
     fn predict_sequence(&mut self, seq: ArrayView2<f64>) -> Array2<f64>;
     fn train_sequence(&mut self, seq: ArrayView2<f64>, class: usize);
+    /// The sequence methods one observation at a time (what a step costs): a new sequence
+    /// starts, ...
+    fn start_sequence(&mut self);
+    /// ... the class distribution after observing `o` (as a row of `predict_sequence`)
+    /// into `dist`, ...
+    fn predict_step(&mut self, o: &[f64], dist: &mut [f64]);
+    /// ... or a training step on `o` of class `class` (as in `train_sequence`).
+    fn train_step(&mut self, o: &[f64], class: usize);
     /// The class of a sequence (or of its first steps) from its per-step distributions.
     fn decide(&self, dist: ArrayView2<f64>) -> usize;
 }

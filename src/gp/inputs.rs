@@ -1,0 +1,268 @@
+//! The distinct inputs held by a model's BV windows, and the squared distances of the
+//! observed window's lags to them.
+//!
+//! Consecutive windows of a sequence share tau − 1 inputs: the BVs a model keeps from one
+//! grasp hold each of its inputs at up to tau lags, and the windows observed along a
+//! sequence shift by one input per step. The recursive kernel needs, at every lag, the
+//! distance between the window's input there and the BV's input there. Stored once per
+//! distinct input, with each BV lag pointing at its input, a step computes the distances
+//! of the one new input of the window to the distinct inputs, and each (BV, lag) only looks
+//! its distance up: a fraction of the tau·n distances of a direct evaluation. The
+//! distances are those [`super::kernel::sq_dist`] gives for the pair, so the kernel values
+//! are bit-identical to [`super::RecursiveArd::unit_many`].
+
+use std::collections::HashMap;
+
+use super::kernel::{LANES, LagMajor, RecursiveArd, exp_nonpos};
+use super::wide::dispatch_wide;
+
+/// The distinct inputs of the BV windows, the input at every (lag, BV), and the distance
+/// rows of the observed window.
+#[derive(Clone, Debug)]
+pub(crate) struct Inputs {
+    dim: usize,
+    tau: usize,
+    /// BV slots per lag in `index` (the models' lane stride).
+    lanes: usize,
+    /// Input slots: BV slots × tau, the most a model can hold at once.
+    slots: usize,
+    /// Scaled inputs (one lag each), blocked for the many-input distance.
+    data: LagMajor,
+    /// Raw input of every slot (`dim` values each), to tell equal inputs apart from a
+    /// collision of their hashes.
+    raw: Vec<f64>,
+    refs: Vec<u32>,
+    free: Vec<u32>,
+    /// Slots ever used (the rows cover 0..used).
+    used: usize,
+    /// Hash of a raw input → its slot.
+    lookup: HashMap<u64, u32>,
+    /// Input slot of BV i at lag l: `index[l * lanes + i]`.
+    index: Vec<u32>,
+    /// K_t of BV i after t = l + 1 padding lags (all-zero inputs, as at the start of a
+    /// sequence): `prefix[l * lanes + i]`. It depends on the BV alone.
+    prefix: Vec<f64>,
+    /// Leading padding lags of the observed window.
+    lead: usize,
+    /// Distances of the observed window's lags to every slot: tau rows of `slots`, lag l
+    /// in row (head + l) mod tau.
+    rows: Vec<f64>,
+    head: usize,
+    /// The rows belong to the window last given to [`Inputs::observe`] and the stored
+    /// inputs.
+    current: bool,
+    /// Scratch: one scaled lag.
+    scaled: Vec<f64>,
+}
+
+/// Hash of the bits of a raw input (FxHash's mix).
+fn hash_bits(x: &[f64]) -> u64 {
+    x.iter().fold(0u64, |h, v| {
+        (h.rotate_left(5) ^ v.to_bits()).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95)
+    })
+}
+
+fn same_bits(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
+impl Inputs {
+    /// Room for `bv_slots` BVs of `tau` lags of `dim` inputs; `lanes` is the BV stride of
+    /// the kernel buffers (a multiple of [`LANES`], at least `bv_slots`).
+    pub(crate) fn new(dim: usize, tau: usize, bv_slots: usize, lanes: usize) -> Inputs {
+        let data = LagMajor::new(dim, 1, bv_slots * tau);
+        let slots = data.stride();
+        Inputs {
+            dim,
+            tau,
+            lanes,
+            slots,
+            data,
+            raw: vec![0.0; slots * dim],
+            refs: vec![0; slots],
+            free: Vec::new(),
+            used: 0,
+            lookup: HashMap::new(),
+            index: vec![0; tau * lanes],
+            prefix: vec![0.0; tau * lanes],
+            lead: 0,
+            rows: vec![0.0; tau * slots],
+            head: 0,
+            current: false,
+            scaled: vec![0.0; dim],
+        }
+    }
+
+    /// Forget every input and the distance rows (the BVs are about to be stored again).
+    pub(crate) fn clear(&mut self) {
+        self.refs.fill(0);
+        self.free.clear();
+        self.used = 0;
+        self.lookup.clear();
+        self.current = false;
+    }
+
+    /// The slot of one raw input (scaled `scaled`), stored if new; one more reference.
+    fn acquire(&mut self, raw: &[f64], scaled: &[f64]) -> usize {
+        let h = hash_bits(raw);
+        if let Some(&j) = self.lookup.get(&h) {
+            let j = j as usize;
+            if same_bits(&self.raw[j * self.dim..(j + 1) * self.dim], raw) {
+                self.refs[j] += 1;
+                return j;
+            }
+        }
+        let j = match self.free.pop() {
+            Some(j) => j as usize,
+            None => {
+                self.used += 1;
+                self.used - 1
+            }
+        };
+        self.raw[j * self.dim..(j + 1) * self.dim].copy_from_slice(raw);
+        self.data.set(j, scaled);
+        self.refs[j] = 1;
+        // On a hash collision the earlier input keeps the entry; this one is only unshared.
+        self.lookup.entry(h).or_insert(j as u32);
+        j
+    }
+
+    /// Store BV `i` (raw and scaled window, oldest lag first) of a kernel with recursion
+    /// divisor 1/`inv_rho`. While the rows are current, the window must be the observed
+    /// one (a model stores the window it observed); a new input's distances to the
+    /// observed lags are then added to the rows.
+    pub(crate) fn add_bv(&mut self, i: usize, raw: &[f64], scaled: &[f64], inv_rho: f64) {
+        let d = self.dim;
+        let mut k = 1.0;
+        for lag in 0..self.tau {
+            let (r, s) = (
+                &raw[lag * d..(lag + 1) * d],
+                &scaled[lag * d..(lag + 1) * d],
+            );
+            let j = self.acquire(r, s);
+            self.index[lag * self.lanes + i] = j as u32;
+            // As the recursion runs at a padding lag: the distance is the input's norm.
+            k = exp_nonpos(-0.5 * self.data.norm(0, j) + (k - 1.0) * inv_rho);
+            self.prefix[lag * self.lanes + i] = k;
+            if self.current && self.refs[j] == 1 {
+                for l in 0..self.tau {
+                    let row = (self.head + l) % self.tau * self.slots;
+                    self.rows[row + j] = super::kernel::sq_dist(&scaled[l * d..(l + 1) * d], s);
+                }
+            }
+        }
+    }
+
+    /// Drop BV `i`'s references; inputs no BV holds any more are freed.
+    pub(crate) fn release_bv(&mut self, i: usize) {
+        for lag in 0..self.tau {
+            let j = self.index[lag * self.lanes + i] as usize;
+            self.refs[j] -= 1;
+            if self.refs[j] == 0 {
+                let h = hash_bits(&self.raw[j * self.dim..(j + 1) * self.dim]);
+                if self.lookup.get(&h) == Some(&(j as u32)) {
+                    self.lookup.remove(&h);
+                }
+                self.free.push(j as u32);
+            }
+        }
+    }
+
+    pub(crate) fn swap_bv(&mut self, i: usize, j: usize) {
+        for lag in 0..self.tau {
+            self.index.swap(lag * self.lanes + i, lag * self.lanes + j);
+            self.prefix.swap(lag * self.lanes + i, lag * self.lanes + j);
+        }
+    }
+
+    /// Make the rows those of `window` (raw, oldest lag first), given the window they were
+    /// computed for (`previous`): nothing if it is the same window, one new row if it is
+    /// that window shifted by one input, else every row.
+    pub(crate) fn observe(&mut self, kernel: &RecursiveArd, previous: &[f64], window: &[f64]) {
+        let (d, tau) = (self.dim, self.tau);
+        // Equal as numbers is enough: ±0 give the same distances, and NaN recomputes.
+        if self.current {
+            if previous == window {
+                return;
+            }
+            if previous[d..] == window[..(tau - 1) * d] {
+                self.head = (self.head + 1) % tau;
+                let newest = &window[(tau - 1) * d..];
+                self.fill_row(kernel, tau - 1, newest);
+                self.lead = match self.lead {
+                    l if l == tau => tau - 1 + usize::from(newest.iter().all(|v| *v == 0.0)),
+                    l => l.saturating_sub(1),
+                };
+                return;
+            }
+        }
+        for lag in 0..tau {
+            self.fill_row(kernel, lag, &window[lag * d..(lag + 1) * d]);
+        }
+        self.lead = window
+            .chunks_exact(d)
+            .take_while(|l| l.iter().all(|v| *v == 0.0))
+            .count();
+        self.current = true;
+    }
+
+    /// Row of lag `lag`: the distances of the raw input `x` to every used slot.
+    fn fill_row(&mut self, kernel: &RecursiveArd, lag: usize, x: &[f64]) {
+        dispatch_wide!(["avx512f", "avx2"] Inputs::fill_row_portable, (
+            this: &mut Inputs = self,
+            kernel: &RecursiveArd = kernel,
+            lag: usize = lag,
+            x: &[f64] = x,
+        ))
+    }
+
+    #[inline(always)]
+    fn fill_row_portable(&mut self, kernel: &RecursiveArd, lag: usize, x: &[f64]) {
+        kernel.scale_into(x, &mut self.scaled);
+        let m = self.used.div_ceil(LANES) * LANES;
+        let at = (self.head + lag) % self.tau * self.slots;
+        self.data
+            .lag_sq_dist(0, &self.scaled, m, &mut self.rows[at..at + m]);
+    }
+
+    /// Unit K_tau between the observed window and BVs 0..n, as
+    /// [`RecursiveArd::unit_many`] gives it (bit for bit), from the distance rows: K_t
+    /// per lag into `lag_k` (tau rows of `lanes`), K_tau into `out`. Lanes past n hold
+    /// values of stale slots.
+    pub(crate) fn unit_many(&self, inv_rho: f64, n: usize, lag_k: &mut [f64], out: &mut [f64]) {
+        dispatch_wide!(["avx512f", "avx2"] Inputs::unit_many_portable, (
+            this: &Inputs = self,
+            inv_rho: f64 = inv_rho,
+            n: usize = n,
+            lag_k: &mut [f64] = lag_k,
+            out: &mut [f64] = out,
+        ))
+    }
+
+    #[inline(always)]
+    fn unit_many_portable(&self, inv_rho: f64, n: usize, lag_k: &mut [f64], out: &mut [f64]) {
+        let (s, m) = (self.lanes, n.div_ceil(LANES) * LANES);
+        // The leading padding lags: K_t from the BVs' prefixes.
+        let p = self.lead;
+        for lag in 0..p {
+            let row = &self.prefix[lag * s..lag * s + m];
+            lag_k[lag * s..lag * s + m].copy_from_slice(row);
+        }
+        match p {
+            0 => out[..m].fill(1.0),
+            p => out[..m].copy_from_slice(&self.prefix[(p - 1) * s..(p - 1) * s + m]),
+        }
+        for lag in p..self.tau {
+            let at = (self.head + lag) % self.tau * self.slots;
+            let row = &self.rows[at..at + self.slots];
+            let kt = &mut lag_k[lag * s..lag * s + m];
+            for (d, &j) in kt.iter_mut().zip(&self.index[lag * s..lag * s + m]) {
+                *d = row[j as usize];
+            }
+            for (k, r) in out[..m].iter_mut().zip(kt.iter_mut()) {
+                *k = exp_nonpos(-0.5 * *r + (*k - 1.0) * inv_rho);
+                *r = *k;
+            }
+        }
+    }
+}
