@@ -184,7 +184,10 @@ fn figure_pane(
             let t = cx.analyses.results[i].score("threshold chosen without labels")?;
             details.nearest(t)
         };
-        let mut k = sel.or_else(chosen).unwrap_or(0).min(details.items.len() - 1);
+        let mut k = sel
+            .or_else(chosen)
+            .unwrap_or(0)
+            .min(details.items.len() - 1);
         let keys: Vec<f64> = details.items.iter().map(|x| x.0).collect();
         ui.add(
             egui::Slider::new(&mut k, 0..=details.items.len() - 1)
