@@ -5,7 +5,7 @@
 
 mod common;
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
@@ -19,15 +19,7 @@ fn harness() -> Harness<'static, WorkbenchApp> {
     h
 }
 
-/// Step until no job runs (bounded), sleeping so the worker gets the CPU.
-fn wait_for_jobs(h: &mut Harness<'static, WorkbenchApp>, limit: Duration) {
-    let t = Instant::now();
-    while h.state().analyses.busy() && t.elapsed() < limit {
-        h.step();
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    h.run_ok();
-}
+use common::gui::wait_for_jobs;
 
 /// Press Run, see the job running in the background, and wait for it (bounded).
 fn run_job(h: &mut Harness<'static, WorkbenchApp>) {

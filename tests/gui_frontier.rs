@@ -5,7 +5,7 @@
 
 mod common;
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
@@ -16,12 +16,7 @@ use tactile_workbench::experiments::report::SizeReason;
 use tactile_workbench::figures::FigureKind;
 
 fn wait_for_jobs(h: &mut Harness<'static, WorkbenchApp>) {
-    let t = Instant::now();
-    while h.state().analyses.busy() && t.elapsed() < Duration::from_secs(300) {
-        h.step();
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    h.run_ok();
+    common::gui::wait_for_jobs(h, Duration::from_secs(300));
 }
 
 /// Click the marker of size `k` of the only frontier on the prediction-time chart, where

@@ -103,16 +103,7 @@ fn a_dropped_bag_is_imported_with_the_spec_beside_it_and_replays() {
 fn a_csv_on_the_command_line_waits_for_its_spec_and_a_bad_spec_is_refused() {
     let csv = fixtures().join("long/grasps.csv");
     let app = WorkbenchApp::new(&egui::Context::default(), None, vec![csv]);
-    let mut h = Harness::builder()
-        .with_size(egui::Vec2::new(1400.0, 900.0))
-        .with_step_dt(1.0 / 60.0)
-        .build_ui_state(
-            |ui, app: &mut WorkbenchApp| {
-                app.tick(ui.ctx());
-                app.show(ui);
-            },
-            app,
-        );
+    let mut h = common::gui::harness_now(app, 1400.0, 900.0);
     h.run_ok();
     h.get_by_label_contains("grasps.csv needs an import spec");
 

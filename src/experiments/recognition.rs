@@ -669,20 +669,27 @@ fn synthetic_sequence(dim: usize, steps: usize, class: usize, rng: &mut Rng) -> 
     x
 }
 
+/// DS and GS settings of a benchmark: experts of `capacity` and `tau`, with or without
+/// hyperparameter adaptation.
+fn bench_learners(capacity: usize, tau: usize, adaptation: bool) -> (DsParams, GsParams) {
+    let mut ds = DsParams::default();
+    let mut gs = GsParams::default();
+    for gp in [&mut ds.gp, &mut gs.gp] {
+        gp.capacity = capacity;
+        gp.tau = tau;
+        if !adaptation {
+            gp.adaptation = None;
+        }
+    }
+    (ds, gs)
+}
+
 /// Time per-observation prediction and training on one thread.
 pub fn bench_steps(
     learner: SupervisedLearner,
     params: &StepBenchParams,
 ) -> Result<StepBench, ExperimentError> {
-    let mut ds = DsParams::default();
-    let mut gs = GsParams::default();
-    for gp in [&mut ds.gp, &mut gs.gp] {
-        gp.capacity = params.capacity;
-        gp.tau = params.tau;
-        if !params.adaptation {
-            gp.adaptation = None;
-        }
-    }
+    let (ds, gs) = bench_learners(params.capacity, params.tau, params.adaptation);
     let mut l = new_learner(learner, params.dim, params.classes, &ds, &gs)?;
     let mut rng = Rng::new(params.seed);
     for _ in 0..params.warmup_sequences {
@@ -792,15 +799,7 @@ pub fn bench_session_steps(
             seed: params.seed,
         },
     )?;
-    let mut ds = DsParams::default();
-    let mut gs = GsParams::default();
-    for gp in [&mut ds.gp, &mut gs.gp] {
-        gp.capacity = params.capacity;
-        gp.tau = params.tau;
-        if !params.adaptation {
-            gp.adaptation = None;
-        }
-    }
+    let (ds, gs) = bench_learners(params.capacity, params.tau, params.adaptation);
     let dim = feats.dim();
     let (mut predict_us, mut train_us) = (Vec::new(), Vec::new());
     let (mut adapting, mut experts) = (0, 0);

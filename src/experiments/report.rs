@@ -90,6 +90,18 @@ pub enum SizeReason {
 }
 
 impl SizeReason {
+    /// Why a model has `size`: it is the recommended one, else the paper's, else the user's
+    /// (a size is named by what it is, whoever set it).
+    pub fn of<T: PartialEq>(size: &T, recommended: Option<&T>, paper: &T) -> SizeReason {
+        if recommended == Some(size) {
+            SizeReason::Recommended
+        } else if size == paper {
+            SizeReason::PaperDefault
+        } else {
+            SizeReason::User
+        }
+    }
+
     pub fn text(self) -> &'static str {
         match self {
             SizeReason::Recommended => "recommended",

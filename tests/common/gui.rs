@@ -22,9 +22,9 @@ pub fn workbench_opening(
     harness_of(app, width, height)
 }
 
-/// A harness on `app`, returned once two sessions have loaded.
-pub fn harness_of(app: WorkbenchApp, width: f32, height: f32) -> Harness<'static, WorkbenchApp> {
-    let mut h = Harness::builder()
+/// A harness on `app` at 60 frames per second, returned at once.
+pub fn harness_now(app: WorkbenchApp, width: f32, height: f32) -> Harness<'static, WorkbenchApp> {
+    Harness::builder()
         .with_size(egui::Vec2::new(width, height))
         .with_step_dt(1.0 / 60.0)
         .build_ui_state(
@@ -33,7 +33,23 @@ pub fn harness_of(app: WorkbenchApp, width: f32, height: f32) -> Harness<'static
                 app.show(ui);
             },
             app,
-        );
+        )
+}
+
+/// Step until no job runs (bounded by `limit`, a guard against hangs), sleeping so the
+/// workers get the CPU.
+pub fn wait_for_jobs(h: &mut Harness<'static, WorkbenchApp>, limit: Duration) {
+    let t = Instant::now();
+    while h.state().analyses.busy() && t.elapsed() < limit {
+        h.step();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    h.run_ok();
+}
+
+/// A harness on `app`, returned once two sessions have loaded.
+pub fn harness_of(app: WorkbenchApp, width: f32, height: f32) -> Harness<'static, WorkbenchApp> {
+    let mut h = harness_now(app, width, height);
     let t = Instant::now();
     while (h.state().is_loading() || h.state().sessions.len() < 2)
         && t.elapsed() < Duration::from_secs(30)

@@ -77,13 +77,7 @@ impl RecognitionForm {
             (false, Some(r)) => r,
             (false, None) => paper_size(),
         };
-        let reason = if Some(size) == recommended {
-            SizeReason::Recommended
-        } else if size == paper_size() {
-            SizeReason::PaperDefault
-        } else {
-            SizeReason::User
-        };
+        let reason = SizeReason::of(&size, recommended.as_ref(), &paper_size());
         (size.0, size.1, reason)
     }
 }

@@ -75,14 +75,7 @@ impl StabilityForm {
             (false, Some(r)) => r,
             (false, None) => paper,
         };
-        let reason = if Some(size) == recommended {
-            SizeReason::Recommended
-        } else if size == paper {
-            SizeReason::PaperDefault
-        } else {
-            SizeReason::User
-        };
-        (size, reason)
+        (size, SizeReason::of(&size, recommended.as_ref(), &paper))
     }
 
     /// The options the form runs with on `session`.
