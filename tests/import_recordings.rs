@@ -244,6 +244,42 @@ fn truncated_bag() {
         &error_of(&damaged, &events_bag().1),
         &["damaged-chunk.mcap: the bag is damaged"],
     );
+    // Fuzzing found a bag on which the MCAP library asks for a 116 TB buffer, an abort.
+    let fuzzed = fixtures().join("ros2/bad/fuzzed-huge-buffer.mcap");
+    assert_has(
+        &error_of(&fuzzed, &events_bag().1),
+        &["fuzzed-huge-buffer.mcap: the bag is damaged"],
+    );
+}
+
+/// A zstd chunk whose claimed uncompressed size is raised to 2⁶⁰ bytes, everything else
+/// intact: the MCAP library reserves that size before decompressing, so without the
+/// importer's check the test process aborts.
+#[test]
+fn chunk_claiming_an_impossible_size() {
+    let first = events_bag().0.join("zstd-events_0.mcap");
+    let mut bytes = std::fs::read(&first).unwrap();
+    // Records after the 8 magic bytes: opcode (1 byte), length (u64), body.
+    let mut at = 8;
+    let chunk = loop {
+        let len = u64::from_le_bytes(bytes[at + 1..at + 9].try_into().unwrap()) as usize;
+        if bytes[at] == 0x06 {
+            break at + 9;
+        }
+        at += 9 + len;
+    };
+    // Chunk body: start time, end time, then the uncompressed size.
+    bytes[chunk + 16..chunk + 24].copy_from_slice(&(1u64 << 60).to_le_bytes());
+    let dir = common::temp_dir("huge-chunk");
+    let bag = dir.join("huge-chunk.mcap");
+    std::fs::write(&bag, &bytes).unwrap();
+    assert_has(
+        &error_of(&bag, &events_bag().1),
+        &[
+            "huge-chunk.mcap: the bag is damaged: a chunk of",
+            "(zstd) claims 1152921504606846976 bytes uncompressed",
+        ],
+    );
 }
 
 #[test]

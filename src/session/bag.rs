@@ -186,6 +186,52 @@ fn metadata_files(text: &str, meta: &Path) -> Result<Vec<(usize, String)>, Sessi
     Ok(files)
 }
 
+/// The most a chunk may expand: zstd's densest block (run-length, 4 bytes for 128 KiB) is
+/// 32 768 : 1, and LZ4 cannot reach it.
+const MAX_CHUNK_EXPANSION: u64 = 1 << 15;
+
+/// The MCAP library (0.26) reserves the uncompressed size a chunk claims before decompressing
+/// it, unchecked, so a damaged size aborts the process on a failed allocation, which no
+/// `catch_unwind` can turn into an error (fuzzing found a chunk claiming 116 TB,
+/// `fuzz/findings/mcap-abort-huge-buffer.mcap`). The library's top-level reader bounds
+/// records by the file's size and leaves chunks compressed, so every chunk's claim is
+/// checked with it first.
+fn check_chunk_sizes(file: &Path, bytes: &[u8]) -> Result<(), SessionError> {
+    let mut records = mcap::read::LinearReader::new(bytes).map_err(|e| mcap_error(file, &e))?;
+    loop {
+        let next = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| records.next()))
+            .map_err(|_| SessionError::file(file, "the bag is damaged: a record does not fit"))?;
+        let Some(record) = next else {
+            return Ok(());
+        };
+        if let mcap::records::Record::Chunk { header, data } =
+            record.map_err(|e| mcap_error(file, &e))?
+        {
+            let compressed = data.len() as u64;
+            let most = if header.compression.is_empty() {
+                compressed
+            } else {
+                compressed.saturating_mul(MAX_CHUNK_EXPANSION)
+            };
+            if header.uncompressed_size > most {
+                return Err(SessionError::file(
+                    file,
+                    format!(
+                        "the bag is damaged: a chunk of {compressed} bytes ({}) claims {} \
+                         bytes uncompressed, more than it can hold",
+                        if header.compression.is_empty() {
+                            "uncompressed"
+                        } else {
+                            header.compression.as_str()
+                        },
+                        header.uncompressed_size
+                    ),
+                ));
+            }
+        }
+    }
+}
+
 /// The MCAP library's error, in words about the file.
 fn mcap_error(file: &Path, e: &mcap::McapError) -> SessionError {
     use mcap::McapError as E;
@@ -342,6 +388,7 @@ fn read_file(
     seen: &mut Vec<(String, String)>,
 ) -> Result<(), SessionError> {
     let bytes = std::fs::read(file).map_err(|e| SessionError::io(file, &e))?;
+    check_chunk_sizes(file, &bytes)?;
     let mut stream = mcap::read::RawMessageStream::new(&bytes).map_err(|e| mcap_error(file, &e))?;
     // Channel ids are per file.
     let mut channels: HashMap<u16, Option<Checked>> = HashMap::new();
