@@ -244,41 +244,107 @@ fn truncated_bag() {
         &error_of(&damaged, &events_bag().1),
         &["damaged-chunk.mcap: the bag is damaged"],
     );
-    // Fuzzing found a bag on which the MCAP library asks for a 116 TB buffer, an abort.
+    // Fuzzing found a bag on which the MCAP library asks for a 116 TB buffer, an abort. It
+    // has no end magic, which the library checks last; with it, its records are read.
     let fuzzed = fixtures().join("ros2/bad/fuzzed-huge-buffer.mcap");
+    let e = error_of(&fuzzed, &events_bag().1);
+    assert_has(&e, &["fuzzed-huge-buffer.mcap: the bag is truncated"]);
+    let mut bytes = std::fs::read(&fuzzed).unwrap();
+    bytes.extend_from_slice(b"\x89MCAP0\r\n");
+    let ended = dir.join("fuzzed-huge-buffer.mcap");
+    std::fs::write(&ended, &bytes).unwrap();
     assert_has(
-        &error_of(&fuzzed, &events_bag().1),
+        &error_of(&ended, &events_bag().1),
         &["fuzzed-huge-buffer.mcap: the bag is damaged"],
     );
 }
 
-/// A zstd chunk whose claimed uncompressed size is raised to 2⁶⁰ bytes, everything else
-/// intact: the MCAP library reserves that size before decompressing, so without the
-/// importer's check the test process aborts.
+/// The first zstd chunk of the split bag's first file, as (record start, body start).
+fn first_chunk(bytes: &[u8]) -> (usize, usize) {
+    // Records after the 8 magic bytes: opcode (1 byte), length (u64), body.
+    let mut at = 8;
+    loop {
+        let len = u64::from_le_bytes(bytes[at + 1..at + 9].try_into().unwrap()) as usize;
+        if bytes[at] == 0x06 {
+            return (at, at + 9);
+        }
+        at += 9 + len;
+    }
+}
+
+fn u64_at(bytes: &[u8], at: usize) -> u64 {
+    u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap())
+}
+
+/// Sizes a damaged bag claims are not trusted: the MCAP library reserves them before
+/// decompressing, so without the importer's own reading of chunks the process aborts (or
+/// the library panics).
 #[test]
 fn chunk_claiming_an_impossible_size() {
     let first = events_bag().0.join("zstd-events_0.mcap");
-    let mut bytes = std::fs::read(&first).unwrap();
-    // Records after the 8 magic bytes: opcode (1 byte), length (u64), body.
-    let mut at = 8;
-    let chunk = loop {
-        let len = u64::from_le_bytes(bytes[at + 1..at + 9].try_into().unwrap()) as usize;
-        if bytes[at] == 0x06 {
-            break at + 9;
-        }
-        at += 9 + len;
-    };
-    // Chunk body: start time, end time, then the uncompressed size.
-    bytes[chunk + 16..chunk + 24].copy_from_slice(&(1u64 << 60).to_le_bytes());
+    let bytes = std::fs::read(&first).unwrap();
+    let (_, body) = first_chunk(&bytes);
     let dir = common::temp_dir("huge-chunk");
+
+    // The chunk's uncompressed size (after its start and end times) raised to 2⁶⁰ bytes.
+    let mut huge = bytes.clone();
+    huge[body + 16..body + 24].copy_from_slice(&(1u64 << 60).to_le_bytes());
     let bag = dir.join("huge-chunk.mcap");
-    std::fs::write(&bag, &bytes).unwrap();
+    std::fs::write(&bag, &huge).unwrap();
     assert_has(
         &error_of(&bag, &events_bag().1),
         &[
-            "huge-chunk.mcap: the bag is damaged: a chunk of",
-            "(zstd) claims 1152921504606846976 bytes uncompressed",
+            "huge-chunk.mcap: the bag is damaged: a zstd chunk of",
+            "claims 1152921504606846976 bytes uncompressed but holds",
         ],
+    );
+
+    // The first record inside the chunk claims 2⁴⁵ bytes, the chunk itself intact: the
+    // chunk is recompressed and its sizes and CRC kept consistent.
+    let compression_len = u32::from_le_bytes(bytes[body + 28..body + 32].try_into().unwrap());
+    let sizes = body + 32 + compression_len as usize;
+    let data_start = sizes + 8;
+    let data_end = data_start + u64_at(&bytes, sizes) as usize;
+    let mut records = zstd::decode_all(&bytes[data_start..data_end]).unwrap();
+    assert_eq!(records.len() as u64, u64_at(&bytes, body + 16));
+    records[1..9].copy_from_slice(&(1u64 << 45).to_le_bytes());
+    let data = zstd::encode_all(&records[..], 3).unwrap();
+    let mut inner = bytes[..sizes].to_vec();
+    inner.extend_from_slice(&(data.len() as u64).to_le_bytes());
+    inner.extend_from_slice(&data);
+    inner.extend_from_slice(&bytes[data_end..]);
+    let chunk_len = u64_at(&bytes, body - 8) - (data_end - data_start) as u64 + data.len() as u64;
+    inner[body - 8..body].copy_from_slice(&chunk_len.to_le_bytes());
+    // A CRC of 0 means none was computed.
+    inner[body + 24..body + 28].copy_from_slice(&0u32.to_le_bytes());
+    let bag = dir.join("huge-record.mcap");
+    std::fs::write(&bag, &inner).unwrap();
+    assert_has(
+        &error_of(&bag, &events_bag().1),
+        &["huge-record.mcap: the bag is damaged", "35184372088832"],
+    );
+
+    // In the uncompressed bag's chunk, the first schema's name claims 2.4 GB (fuzzing found
+    // the library reserving such a string before reading it).
+    let (bag, spec) = windows_bag();
+    let mut plain = std::fs::read(&bag).unwrap();
+    let (_, body) = first_chunk(&plain);
+    assert_eq!(
+        &plain[body + 28..body + 32],
+        &0u32.to_le_bytes(),
+        "uncompressed"
+    );
+    let mut at = body + 32 + 8;
+    while plain[at] != 0x03 {
+        at += 9 + u64_at(&plain, at + 1) as usize;
+    }
+    // After the opcode and length: the schema id (u16), then the name's length.
+    plain[at + 11..at + 15].copy_from_slice(&2_400_000_000u32.to_le_bytes());
+    let bag = dir.join("huge-string.mcap");
+    std::fs::write(&bag, &plain).unwrap();
+    assert_has(
+        &error_of(&bag, &spec),
+        &["huge-string.mcap: the bag is damaged: a string or data does not fit in its record"],
     );
 }
 

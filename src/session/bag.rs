@@ -186,52 +186,6 @@ fn metadata_files(text: &str, meta: &Path) -> Result<Vec<(usize, String)>, Sessi
     Ok(files)
 }
 
-/// The most a chunk may expand: zstd's densest block (run-length, 4 bytes for 128 KiB) is
-/// 32 768 : 1, and LZ4 cannot reach it.
-const MAX_CHUNK_EXPANSION: u64 = 1 << 15;
-
-/// The MCAP library (0.26) reserves the uncompressed size a chunk claims before decompressing
-/// it, unchecked, so a damaged size aborts the process on a failed allocation, which no
-/// `catch_unwind` can turn into an error (fuzzing found a chunk claiming 116 TB,
-/// `fuzz/findings/mcap-abort-huge-buffer.mcap`). The library's top-level reader bounds
-/// records by the file's size and leaves chunks compressed, so every chunk's claim is
-/// checked with it first.
-fn check_chunk_sizes(file: &Path, bytes: &[u8]) -> Result<(), SessionError> {
-    let mut records = mcap::read::LinearReader::new(bytes).map_err(|e| mcap_error(file, &e))?;
-    loop {
-        let next = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| records.next()))
-            .map_err(|_| SessionError::file(file, "the bag is damaged: a record does not fit"))?;
-        let Some(record) = next else {
-            return Ok(());
-        };
-        if let mcap::records::Record::Chunk { header, data } =
-            record.map_err(|e| mcap_error(file, &e))?
-        {
-            let compressed = data.len() as u64;
-            let most = if header.compression.is_empty() {
-                compressed
-            } else {
-                compressed.saturating_mul(MAX_CHUNK_EXPANSION)
-            };
-            if header.uncompressed_size > most {
-                return Err(SessionError::file(
-                    file,
-                    format!(
-                        "the bag is damaged: a chunk of {compressed} bytes ({}) claims {} \
-                         bytes uncompressed, more than it can hold",
-                        if header.compression.is_empty() {
-                            "uncompressed"
-                        } else {
-                            header.compression.as_str()
-                        },
-                        header.uncompressed_size
-                    ),
-                ));
-            }
-        }
-    }
-}
-
 /// The MCAP library's error, in words about the file.
 fn mcap_error(file: &Path, e: &mcap::McapError) -> SessionError {
     use mcap::McapError as E;
@@ -380,6 +334,15 @@ pub fn read(path: &Path, spec: &ImportSpec, events: Option<&str>) -> Result<Bag,
     Ok(bag)
 }
 
+/// Reads one MCAP file of the bag.
+///
+/// The MCAP library (0.26) reserves the sizes a damaged file claims before checking them (a
+/// chunk's uncompressed size, a record's length inside a chunk, a string's length): a
+/// failed allocation aborts the process, which no `catch_unwind` can turn into an error
+/// (fuzzing found a chunk claiming 116 TB and a 2.4 GB string). So the records are framed
+/// here, every length checked against the bytes that hold it, chunks are decompressed
+/// growing with what they really hold, and the library parses only records whose fields
+/// are known to fit.
 fn read_file(
     file: &Path,
     spec: &ImportSpec,
@@ -388,50 +351,135 @@ fn read_file(
     seen: &mut Vec<(String, String)>,
 ) -> Result<(), SessionError> {
     let bytes = std::fs::read(file).map_err(|e| SessionError::io(file, &e))?;
-    check_chunk_sizes(file, &bytes)?;
-    let mut stream = mcap::read::RawMessageStream::new(&bytes).map_err(|e| mcap_error(file, &e))?;
-    // Channel ids are per file.
-    let mut channels: HashMap<u16, Option<Checked>> = HashMap::new();
-    let mut scratch: Vec<f64> = Vec::new();
-    let joint_names = spec.encoder_names();
-    loop {
-        // The MCAP library (0.26) panics on some damaged chunks — it reserves an inner
-        // record's length before checking it (found by fuzzing, tests/fixtures/ros2/bad/
-        // damaged-chunk.mcap): a damaged bag is an error, never a crash. Only the
-        // library's step is guarded, so a fault of our own still shows.
-        let next = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| stream.next()))
-            .map_err(|_| {
+    let magic = mcap::MAGIC;
+    if !bytes.starts_with(magic) {
+        return Err(mcap_error(file, &mcap::McapError::BadMagic));
+    }
+    if bytes.len() < 2 * magic.len() || !bytes.ends_with(magic) {
+        return Err(SessionError::file(
+            file,
+            "the bag is truncated (its end magic bytes are missing)",
+        ));
+    }
+    let mut reader = FileReader {
+        file,
+        spec,
+        roles,
+        bag,
+        seen,
+        links: mcap::read::ChannelAccumulator::default(),
+        checked: HashMap::new(),
+        scratch: Vec::new(),
+        joint_names: spec.encoder_names(),
+    };
+    reader.records(&bytes[magic.len()..bytes.len() - magic.len()], false)
+}
+
+/// The state of reading one file: channel ids are per file.
+struct FileReader<'r> {
+    file: &'r Path,
+    spec: &'r ImportSpec,
+    roles: &'r [(String, Role)],
+    bag: &'r mut Bag,
+    seen: &'r mut Vec<(String, String)>,
+    /// Schemas and channels as defined so far, linked and checked by the library.
+    links: mcap::read::ChannelAccumulator<'static>,
+    /// Per channel id: what the importer does with its messages (`None`: skipped).
+    checked: HashMap<u16, Option<Checked>>,
+    scratch: Vec<f64>,
+    joint_names: Vec<String>,
+}
+
+impl FileReader<'_> {
+    /// Reads the records of the file's data section, or of one chunk (`in_chunk`), up to the
+    /// data end record. The summary section after it repeats what the data section defines.
+    fn records(&mut self, mut rest: &[u8], in_chunk: bool) -> Result<(), SessionError> {
+        use mcap::records::Record;
+        let file = self.file;
+        let damaged = |e: mcap::McapError| mcap_error(file, &e);
+        let where_ = if in_chunk { "a chunk" } else { "the file" };
+        while !rest.is_empty() {
+            // A record: opcode (1 byte), body length (u64), body.
+            let (opcode, after) = (rest[0], &rest[1..]);
+            let Some((len, after)) = after.split_first_chunk::<8>() else {
+                return Err(truncated(file, where_, "a record's length", after.len()));
+            };
+            let len = u64::from_le_bytes(*len);
+            if len > after.len() as u64 {
+                return Err(truncated(
+                    file,
+                    where_,
+                    &format!("a record (opcode {opcode:#04x}) of {len} bytes"),
+                    after.len(),
+                ));
+            }
+            let (body, after) = after.split_at(len as usize);
+            rest = after;
+            if !FIELDS.iter().any(|(op, _)| *op == opcode) {
+                if opcode == DATA_END {
+                    break;
+                }
+                continue;
+            }
+            fields_fit(opcode, body).map_err(|what| {
                 SessionError::file(
                     file,
-                    "the bag is damaged: a chunk's records do not fit in it",
+                    format!("the bag is damaged: {what} does not fit in its record (opcode {opcode:#04x})"),
                 )
             })?;
-        let Some(next) = next else {
-            break;
-        };
-        let msg = next.map_err(|e| mcap_error(file, &e))?;
-        let id = msg.header.channel_id;
-        let t = msg.header.log_time;
+            match mcap::parse_record(opcode, body).map_err(damaged)? {
+                Record::Schema { header, data } => self
+                    .links
+                    .add_schema(header, std::borrow::Cow::Owned(data.into_owned()))
+                    .map_err(damaged)?,
+                Record::Channel(channel) => self.links.add_channel(channel).map_err(damaged)?,
+                Record::Message { header, data } => self.message(&header, &data)?,
+                Record::Chunk { .. } if in_chunk => {
+                    return Err(SessionError::file(
+                        file,
+                        "the bag is damaged: a chunk inside a chunk",
+                    ));
+                }
+                Record::Chunk { header, data } => {
+                    let inner = chunk_records(file, &header, &data)?;
+                    self.records(&inner, true)?;
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    fn message(
+        &mut self,
+        header: &mcap::records::MessageHeader,
+        data: &[u8],
+    ) -> Result<(), SessionError> {
+        let (file, spec, roles) = (self.file, self.spec, self.roles);
+        let bag = &mut *self.bag;
+        let scratch = &mut self.scratch;
+        let id = header.channel_id;
+        let t = header.log_time;
         bag.span = Some(match bag.span {
             Some((a, b)) => (a.min(t), b.max(t)),
             None => (t, t),
         });
-        let checked = match channels.get(&id) {
+        let checked = match self.checked.get(&id) {
             Some(c) => *c,
             None => {
-                let Some(channel) = stream.get_channel(id) else {
+                let Some(channel) = self.links.get(id) else {
                     return Err(SessionError::file(
                         file,
                         format!("a message refers to channel {id}, which the bag never defines"),
                     ));
                 };
-                let c = check_channel(file, &channel, roles, seen)?;
-                channels.insert(id, c);
+                let c = check_channel(file, &channel, roles, self.seen)?;
+                self.checked.insert(id, c);
                 c
             }
         };
         let Some(Checked { role, kind }) = checked else {
-            continue;
+            return Ok(());
         };
         let topic = roles
             .iter()
@@ -441,7 +489,7 @@ fn read_file(
         match role {
             Role::Tactile(i) => {
                 let kind = kind.unwrap_or(ArrayKind::F64);
-                cdr::decode_multiarray(&msg.data, kind, &mut scratch).map_err(at)?;
+                cdr::decode_multiarray(data, kind, scratch).map_err(at)?;
                 let tt = &mut bag.tactile[i];
                 if tt.stamps.last().is_some_and(|&last| t < last) {
                     return Err(backwards(file, topic, t, tt.stamps[tt.stamps.len() - 1]));
@@ -472,10 +520,10 @@ fn read_file(
                     }
                 }
                 tt.stamps.push(t);
-                tt.values.extend_from_slice(&scratch);
+                tt.values.extend_from_slice(scratch);
             }
             Role::Joints => {
-                let js = cdr::decode_joint_state(&msg.data).map_err(at)?;
+                let js = cdr::decode_joint_state(data).map_err(at)?;
                 if js.positions.len() != js.names.len() {
                     return Err(at(format!(
                         "{} joint names but {} positions",
@@ -484,12 +532,12 @@ fn read_file(
                     )));
                 }
                 let Some(jt) = bag.joints.as_mut() else {
-                    continue;
+                    return Ok(());
                 };
                 if jt.stamps.last().is_some_and(|&last| t < last) {
                     return Err(backwards(file, topic, t, jt.stamps[jt.stamps.len() - 1]));
                 }
-                for name in &joint_names {
+                for name in &self.joint_names {
                     let Some(k) = js.names.iter().position(|n| n == name) else {
                         return Err(at(format!(
                             "joint `{name}` is not in the message (it has: {})",
@@ -505,7 +553,7 @@ fn read_file(
                 jt.stamps.push(t);
             }
             Role::Events => {
-                let text = cdr::decode_string(&msg.data).map_err(at)?;
+                let text = cdr::decode_string(data).map_err(at)?;
                 if bag.events.last().is_some_and(|&(last, _)| t < last) {
                     let last = bag.events[bag.events.len() - 1].0;
                     return Err(backwards(file, topic, t, last));
@@ -513,8 +561,134 @@ fn read_file(
                 bag.events.push((t, text.to_string()));
             }
         }
+        Ok(())
+    }
+}
+
+/// The data end record's opcode: the data section ends there.
+const DATA_END: u8 = 0x0F;
+
+/// A record field, for checking that a body holds what its lengths claim.
+#[derive(Clone, Copy)]
+enum Field {
+    Fixed(usize),
+    /// u32 length, then bytes (a string, or a schema's data).
+    Bytes,
+    /// u32 length, then string pairs filling it.
+    Map,
+    /// The rest of the body.
+    Rest,
+}
+
+/// The records the importer reads, with their fields up to the last length-prefixed one.
+const FIELDS: [(u8, &[Field]); 4] = [
+    // Schema: id, name, encoding, data.
+    (
+        0x03,
+        &[Field::Fixed(2), Field::Bytes, Field::Bytes, Field::Bytes],
+    ),
+    // Channel: id, schema id, topic, message encoding, metadata.
+    (
+        0x04,
+        &[Field::Fixed(4), Field::Bytes, Field::Bytes, Field::Map],
+    ),
+    // Message: channel id, sequence, log time, publish time, data.
+    (0x05, &[Field::Fixed(22), Field::Rest]),
+    // Chunk: start and end time, uncompressed size and CRC, compression, compressed size.
+    (
+        0x06,
+        &[Field::Fixed(28), Field::Bytes, Field::Fixed(8), Field::Rest],
+    ),
+];
+
+/// Checks that every length-prefixed field of a record lies inside its body, so the library
+/// never reserves a length the body cannot hold; names the first that does not.
+fn fields_fit(opcode: u8, body: &[u8]) -> Result<(), &'static str> {
+    fn bytes(rest: &mut &[u8]) -> Result<(), &'static str> {
+        let (len, after) = rest.split_first_chunk::<4>().ok_or("a length")?;
+        let len = u32::from_le_bytes(*len) as usize;
+        *rest = after.get(len..).ok_or("a string or data")?;
+        Ok(())
+    }
+    let fields = FIELDS
+        .iter()
+        .find(|(op, _)| *op == opcode)
+        .map_or(&[][..], |(_, f)| f);
+    let mut rest = body;
+    for field in fields {
+        match *field {
+            Field::Fixed(n) => rest = rest.get(n..).ok_or("a fixed-size field")?,
+            Field::Bytes => bytes(&mut rest)?,
+            Field::Map => {
+                let (len, after) = rest.split_first_chunk::<4>().ok_or("a map's length")?;
+                let len = u32::from_le_bytes(*len) as usize;
+                let mut map = after.get(..len).ok_or("a map")?;
+                while !map.is_empty() {
+                    bytes(&mut map)?;
+                    bytes(&mut map)?;
+                }
+                rest = &after[len..];
+            }
+            Field::Rest => rest = &[],
+        }
     }
     Ok(())
+}
+
+/// A record or its length running past the end of the file or chunk (`left` bytes left).
+fn truncated(file: &Path, where_: &str, what: &str, left: usize) -> SessionError {
+    let kind = if where_ == "the file" {
+        "truncated"
+    } else {
+        "damaged"
+    };
+    SessionError::file(
+        file,
+        format!("the bag is {kind}: {what} runs past the end of {where_} ({left} bytes left)"),
+    )
+}
+
+/// What a chunk may hold before the first bytes are out: its claimed size is not trusted.
+const CHUNK_RESERVE: u64 = 1 << 24;
+
+/// A chunk's records, decompressed: the output grows with what the data holds and must end
+/// at exactly the size the chunk claims.
+fn chunk_records<'c>(
+    file: &Path,
+    header: &mcap::records::ChunkHeader,
+    data: &'c [u8],
+) -> Result<std::borrow::Cow<'c, [u8]>, SessionError> {
+    use std::io::Read;
+    let claim = header.uncompressed_size;
+    let damaged = |what: String| SessionError::file(file, format!("the bag is damaged: {what}"));
+    match header.compression.as_str() {
+        "" => Ok(std::borrow::Cow::Borrowed(data)),
+        "zstd" => {
+            let mut out = Vec::with_capacity(claim.min(CHUNK_RESERVE) as usize);
+            zstd::stream::read::Decoder::with_buffer(data)
+                .and_then(|d| d.take(claim.saturating_add(1)).read_to_end(&mut out))
+                .map_err(|e| damaged(format!("a zstd chunk does not decompress ({e})")))?;
+            if out.len() as u64 != claim {
+                return Err(damaged(format!(
+                    "a zstd chunk of {} bytes claims {claim} bytes uncompressed but holds {}",
+                    data.len(),
+                    if out.len() as u64 > claim {
+                        "more".to_string()
+                    } else {
+                        out.len().to_string()
+                    }
+                )));
+            }
+            Ok(std::borrow::Cow::Owned(out))
+        }
+        other => Err(SessionError::file(
+            file,
+            format!(
+                "a chunk is compressed with `{}`; the importer reads zstd and uncompressed chunks",
+                shorten(other)
+            ),
+        )),
+    }
 }
 
 fn backwards(file: &Path, topic: &str, t: u64, last: u64) -> SessionError {
