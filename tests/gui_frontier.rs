@@ -19,12 +19,18 @@ fn wait_for_jobs(h: &mut Harness<'static, WorkbenchApp>) {
     common::gui::wait_for_jobs(h, Duration::from_secs(300));
 }
 
-/// Click the marker of size `k` of the only frontier on the prediction-time chart, where
-/// the frontier pane drew it in the last frame.
-fn click_size(h: &mut Harness<'static, WorkbenchApp>, frontier: &Frontier, k: usize) {
+/// Click the marker of size `k` of frontier `f` of `frontiers` (the active session's, in
+/// order) on the prediction-time chart, where the frontier pane drew it in the last frame.
+fn click_size(
+    h: &mut Harness<'static, WorkbenchApp>,
+    frontiers: &[Frontier],
+    f: usize,
+    k: usize,
+    says: &str,
+) {
     h.get_by_label("prediction time per step or sample").click();
     h.run_ok();
-    let figs = frontier_figures(std::slice::from_ref(frontier));
+    let figs = frontier_figures(frontiers);
     let (_, fig) = figs
         .iter()
         .find(|(name, _)| name == "frontier-prediction")
@@ -32,17 +38,44 @@ fn click_size(h: &mut Harness<'static, WorkbenchApp>, frontier: &Frontier, k: us
     let FigureKind::Chart(chart) = &fig.kind else {
         panic!("the frontier is a chart");
     };
-    assert_eq!(chart.series[0].name, frontier.short_label());
-    let pos = figure_view::marker_position(&h.ctx, "frontier", chart, 0, k)
+    let series = chart
+        .series
+        .iter()
+        .position(|s| s.name == frontiers[f].short_label())
+        .expect("the frontier's line");
+    let pos = figure_view::marker_position(&h.ctx, "frontier", chart, series, k)
         .expect("the frontier chart was drawn");
     h.hover_at(pos);
     h.run_ok();
     // The pane tells what is under the pointer before it is clicked.
-    h.get_by_label_contains("click to open or train");
+    h.get_by_label_contains(says);
     h.drag_at(pos);
     h.step();
     h.drop_at(pos);
     h.run_ok();
+}
+
+/// Set the frontier form to `method` with `knobs` in the field `field`, two repetitions,
+/// and compute it.
+fn compute_frontier(
+    h: &mut Harness<'static, WorkbenchApp>,
+    method: &str,
+    field: &str,
+    knobs: &str,
+) {
+    h.get_by_role_and_label(egui::accesskit::Role::ComboBox, "Frontier method")
+        .click();
+    h.run_ok();
+    h.get_by_label(method).click();
+    h.run_ok();
+    h.get_by_label(field).set_text_value_accesskit(knobs);
+    h.run_ok();
+    h.get_by_label("frontier repetitions")
+        .set_value_accesskit(2.0);
+    h.run_ok();
+    h.get_by_label("Compute frontier").click();
+    h.step();
+    wait_for_jobs(h);
 }
 
 #[test]
@@ -82,6 +115,9 @@ fn a_frontier_sets_the_default_size_and_its_points_train_and_open_models() {
     h.get_by_label("Recognition").click();
     h.run_ok();
     h.get_by_label("Model size (recommended):");
+    h.get_by_label_contains(&format!(
+        "Run: DS on all features, capacity {capacity}, tau {tau} (recommended)"
+    ));
     assert_eq!(
         h.get_by_label("capacity").value().as_deref(),
         Some(format!("capacity {capacity}").as_str())
@@ -103,7 +139,13 @@ fn a_frontier_sets_the_default_size_and_its_points_train_and_open_models() {
     );
     h.get_by_label("Speed vs accuracy").click();
     h.run_ok();
-    click_size(&mut h, &frontier, other);
+    click_size(
+        &mut h,
+        std::slice::from_ref(&frontier),
+        0,
+        other,
+        "click to open or train",
+    );
     assert_eq!(h.state().view, View::Recognition);
     wait_for_jobs(&mut h);
     let results = &h.state().analyses.results;
@@ -121,8 +163,115 @@ fn a_frontier_sets_the_default_size_and_its_points_train_and_open_models() {
     // Clicking that size again opens the model rather than training it twice.
     h.get_by_label("Speed vs accuracy").click();
     h.run_ok();
-    click_size(&mut h, &frontier, other);
+    click_size(
+        &mut h,
+        std::slice::from_ref(&frontier),
+        0,
+        other,
+        "click to open or train",
+    );
     wait_for_jobs(&mut h);
     assert_eq!(h.state().view, View::Recognition);
     assert_eq!(h.state().analyses.results.len(), 1);
+}
+
+/// A clusterer's size (a GU novelty threshold) clicked on its frontier is trained in the
+/// Clustering view at that threshold; once a sweep holds it, a click opens the sweep with
+/// the marker at that threshold. A k-means size is run by the Baselines view with that k.
+#[test]
+fn clusterer_sizes_train_in_their_views() {
+    let mut h = common::gui::workbench(1400.0, 1000.0);
+    h.get_by_label("Simulated object recognition").click();
+    h.run_ok();
+    h.get_by_label("Speed vs accuracy").click();
+    h.run_ok();
+    compute_frontier(&mut h, "GU", "novelty thresholds", "0.05, 0.1");
+    let frontiers = h.state().analyses.frontiers.clone();
+    assert_eq!(
+        frontiers.len(),
+        1,
+        "messages: {:?}",
+        h.state().analyses.notes.texts()
+    );
+    let threshold = frontiers[0].points[1].knob("threshold").unwrap();
+    assert_eq!(threshold, 0.1);
+
+    click_size(&mut h, &frontiers, 0, 1, "click to open or train");
+    assert_eq!(h.state().view, View::Clustering);
+    wait_for_jobs(&mut h);
+    let results = &h.state().analyses.results;
+    assert_eq!(
+        results.len(),
+        1,
+        "messages: {:?}",
+        h.state().analyses.notes.texts()
+    );
+    assert_eq!(results[0].parameters["learner"], "GU");
+    let details = &results[0].details;
+    assert!(!details.is_empty());
+    for d in details {
+        let keys: Vec<f64> = d.items.iter().map(|(t, _)| *t).collect();
+        assert_eq!(
+            keys,
+            [0.1],
+            "{} is trained at the threshold clicked alone",
+            d.figure
+        );
+    }
+
+    // A sweep over both thresholds in the Clustering view; a size clicked then opens it,
+    // with the marker at that threshold rather than at the one chosen without labels.
+    h.get_by_label("from").set_value_accesskit(0.05);
+    h.run_ok();
+    h.get_by_label("to").set_value_accesskit(0.1);
+    h.run_ok();
+    h.get_by_label("step").set_value_accesskit(0.05);
+    h.run_ok();
+    h.get_by_label("Run").click();
+    h.step();
+    wait_for_jobs(&mut h);
+    assert_eq!(h.state().analyses.results.len(), 2);
+    let chosen = h.state().analyses.results[1]
+        .score("threshold chosen without labels")
+        .expect("a label-free choice");
+    let k = frontiers[0]
+        .points
+        .iter()
+        .position(|p| p.knob("threshold") != Some(chosen))
+        .unwrap();
+    h.get_by_label("Speed vs accuracy").click();
+    h.run_ok();
+    click_size(&mut h, &frontiers, 0, k, "click to open or train");
+    wait_for_jobs(&mut h);
+    assert_eq!(h.state().view, View::Clustering);
+    assert_eq!(
+        h.state().analyses.results.len(),
+        2,
+        "opened, not trained again"
+    );
+    let marked = &h.state().analyses.selected;
+    for d in &h.state().analyses.results[1].details {
+        assert_eq!(marked.get(&(1, d.figure.clone())), Some(&k), "{}", d.figure);
+    }
+
+    // k-means sizes: the Baselines view runs the one clicked (its SVM left out here).
+    h.get_by_label("Baselines").click();
+    h.run_ok();
+    h.get_by_label("RBF SVM (5-fold)").click();
+    h.run_ok();
+    h.get_by_label("Speed vs accuracy").click();
+    h.run_ok();
+    compute_frontier(&mut h, "k-means", "numbers of clusters k", "4, 7");
+    let frontiers = h.state().analyses.frontiers.clone();
+    assert_eq!(frontiers.len(), 2);
+    let kmeans = frontiers
+        .iter()
+        .position(|f| f.short_label().starts_with("k-means"))
+        .expect("the k-means frontier");
+    click_size(&mut h, &frontiers, kmeans, 1, "click to open or train");
+    assert_eq!(h.state().view, View::Baselines);
+    wait_for_jobs(&mut h);
+    let results = &h.state().analyses.results;
+    assert_eq!(results.len(), 3);
+    assert_eq!(results[2].parameters["k"], "7");
 }

@@ -379,26 +379,49 @@ impl WorkbenchApp {
         let (kind, view) = match &spec {
             ModelSpec::Recognition { .. } => (AnalysisKind::Recognition, View::Recognition),
             ModelSpec::Stability(_) => (AnalysisKind::Stability, View::Stability),
+            ModelSpec::Clustering { .. } => (AnalysisKind::Clustering, View::Clustering),
+            ModelSpec::Baselines { .. } => (AnalysisKind::Baselines, View::Baselines),
         };
         let same = |r: &crate::experiments::report::AnalysisResult| {
             let of = |key: &str| r.parameters.get(key).map(String::as_str);
+            let sized = || r.model_size.as_ref().map(|m| m.knobs.as_str()) == Some(&spec.knobs());
             r.kind == kind
                 && r.session == name
-                && r.model_size.as_ref().map(|m| m.knobs.as_str()) == Some(&spec.knobs())
                 && match &spec {
                     ModelSpec::Recognition {
                         learner, features, ..
                     } => {
-                        of("learner") == Some(&format!("{learner:?}").to_uppercase())
+                        sized()
+                            && of("learner") == Some(&format!("{learner:?}").to_uppercase())
                             && of("features")
                                 == Some(crate::experiments::recognition_report::features_text(
                                     *features,
                                 ))
                     }
-                    ModelSpec::Stability(_) => true,
+                    ModelSpec::Stability(_) => sized(),
+                    ModelSpec::Clustering { learner, threshold } => {
+                        of("learner") == Some(&format!("{learner:?}").to_uppercase())
+                            && r.details
+                                .iter()
+                                .any(|d| d.items.iter().any(|(t, _)| (t - threshold).abs() < 1e-9))
+                    }
+                    ModelSpec::Baselines { k: Some(k) } => of("k") == Some(&k.to_string()),
+                    ModelSpec::Baselines { k: None } => r.score("SVM accuracy").is_some(),
                 }
         };
         if let Some(i) = self.analyses.results.iter().rposition(same) {
+            if let ModelSpec::Clustering { threshold, .. } = spec {
+                // The clustering charts' markers go to the threshold clicked.
+                for d in &self.analyses.results[i].details {
+                    if let Some(k) = d
+                        .items
+                        .iter()
+                        .position(|(t, _)| (t - threshold).abs() < 1e-9)
+                    {
+                        self.analyses.selected.insert((i, d.figure.clone()), k);
+                    }
+                }
+            }
             self.commands.push(Command::OpenResult(i));
             return;
         }
@@ -418,6 +441,18 @@ impl WorkbenchApp {
                 f.grid = false;
                 (f.num_bases, f.beta, f.gamma) = (c.num_bases, c.beta, c.gamma);
                 f.user_size = true;
+            }
+            ModelSpec::Clustering { learner, threshold } => {
+                let f = &mut self.rooms.clustering.form;
+                f.learner = learner;
+                f.thresholds = [threshold, threshold, f.thresholds[2]];
+            }
+            ModelSpec::Baselines { k } => {
+                let f = &mut self.rooms.baselines.form;
+                match k {
+                    Some(k) => f.k = k,
+                    None => f.with_svm = true,
+                }
             }
         }
         self.view = view;

@@ -3,6 +3,7 @@
 //! the queue between frames, so every view of a frame sees the same selection.
 
 use super::View;
+use crate::experiments::clustering::UnsupervisedLearner;
 use crate::experiments::recognition::SupervisedLearner;
 use crate::experiments::stability::Config;
 use crate::features::FeatureSet;
@@ -90,6 +91,16 @@ pub enum ModelSpec {
         tau: usize,
     },
     Stability(Config),
+    /// DU or GU at one novelty threshold (the Clustering view).
+    Clustering {
+        learner: UnsupervisedLearner,
+        threshold: f64,
+    },
+    /// The Baselines view: k-means and the SOM with `k` centres (units), or (`k` None) the
+    /// RBF SVM, whose C × gamma grid that view searches.
+    Baselines {
+        k: Option<usize>,
+    },
 }
 
 impl ModelSpec {
@@ -103,6 +114,9 @@ impl ModelSpec {
                 "num_bases {}, beta {}, gamma {}",
                 c.num_bases, c.beta, c.gamma
             ),
+            ModelSpec::Clustering { threshold, .. } => format!("novelty threshold {threshold}"),
+            ModelSpec::Baselines { k: Some(k) } => format!("k {k}"),
+            ModelSpec::Baselines { k: None } => "C × gamma grid".to_string(),
         }
     }
 }

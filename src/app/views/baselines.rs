@@ -4,6 +4,7 @@ use super::tiles::Pane;
 use super::{Cx, Room, duration_text, run_button};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
+use crate::app::results::Analyses;
 use crate::app::results::{JobOutput, recognition_ready};
 use crate::cluster::baselines::{BaselinesParams, run_baselines};
 use crate::cluster::grasp_features::session_features;
@@ -64,7 +65,7 @@ impl Room for BaselinesRoom {
         ]
     }
 
-    fn run_text(&self, s: &LoadedSession) -> Option<String> {
+    fn run_text(&self, s: &LoadedSession, _analyses: &Analyses) -> Option<String> {
         if !recognition_ready(s) {
             return None;
         }

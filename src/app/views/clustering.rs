@@ -6,6 +6,7 @@ use super::tiles::Pane;
 use super::{Cx, Room, duration_text, run_button};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
+use crate::app::results::Analyses;
 use crate::app::results::{JobOutput, experiment_error, recognition_ready};
 use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_clustering};
 use crate::experiments::recognition_report::clustering_report;
@@ -116,7 +117,7 @@ impl Room for ClusteringRoom {
         ]
     }
 
-    fn run_text(&self, s: &LoadedSession) -> Option<String> {
+    fn run_text(&self, s: &LoadedSession, _analyses: &Analyses) -> Option<String> {
         if !recognition_ready(s) {
             return None;
         }

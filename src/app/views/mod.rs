@@ -77,9 +77,10 @@ pub trait Room {
     /// The form (parameters and Run) in the side panel; nothing for rooms without one.
     fn form_ui(&mut self, _ui: &mut egui::Ui, _cx: &mut Cx) {}
 
-    /// What Run does with the form as it is, with the time it is expected to take on
-    /// `session`; None when the session cannot run it.
-    fn run_text(&self, _session: &LoadedSession) -> Option<String> {
+    /// What Run does with the form as it is (with the model size it trains, which a frontier
+    /// among `analyses` may recommend), with the time it is expected to take on `session`;
+    /// None when the session cannot run it.
+    fn run_text(&self, _session: &LoadedSession, _analyses: &Analyses) -> Option<String> {
         None
     }
 
@@ -197,7 +198,7 @@ pub fn central_ui(
     };
     let Some(i) = cx.shown(kind) else {
         let name = session.session.meta.name.clone();
-        let text = room.run_text(session);
+        let text = room.run_text(session, cx.analyses);
         let running = cx.analyses.is_running(kind);
         ui.add_space(24.0);
         ui.vertical_centered(|ui| {

@@ -133,15 +133,17 @@ impl Room for RecognitionRoom {
         ]
     }
 
-    fn run_text(&self, s: &LoadedSession) -> Option<String> {
+    fn run_text(&self, s: &LoadedSession, analyses: &Analyses) -> Option<String> {
         if !recognition_ready(s) {
             return None;
         }
         let f = &self.form;
+        let (capacity, tau, reason) = f.size(analyses, &s.session.meta.name);
         Some(format!(
-            "Run: {} on {}, {} repetition{} over {} grasps; {}.",
+            "Run: {} on {}, capacity {capacity}, tau {tau} ({}), {} repetition{} over {} grasps; {}.",
             format!("{:?}", f.learner).to_uppercase(),
             features_text(f.features),
+            reason.text(),
             f.reps,
             if f.reps == 1 { "" } else { "s" },
             s.session.grasps.len(),

@@ -3,6 +3,7 @@
 //! session: grasp stability for a session with a two-class outcome, object recognition for one
 //! with objects and encoders.
 
+use crate::app::results::Analyses;
 use egui::RichText;
 
 use super::tiles::Pane;
@@ -137,7 +138,7 @@ impl Room for RobustnessRoom {
         vec![vec![Pane::Scores]]
     }
 
-    fn run_text(&self, s: &LoadedSession) -> Option<String> {
+    fn run_text(&self, s: &LoadedSession, _analyses: &Analyses) -> Option<String> {
         let family = family_of(s)?;
         let p = self.form.params(family);
         p.validate().ok()?;

@@ -10,6 +10,7 @@ use crate::app::View;
 use crate::app::figure_view::{self, Selection as FigureSelection};
 use crate::app::results::{FRONTIER_JOB, JobOutput, experiment_error, recognition_ready};
 use crate::app::selection::{Command, ModelSpec};
+use crate::experiments::clustering::UnsupervisedLearner;
 use crate::experiments::frontier::{CostAxis, Frontier, FrontierMethod, FrontierParams};
 use crate::experiments::frontier_report::frontier_figures;
 use crate::experiments::recognition::SupervisedLearner;
@@ -305,8 +306,7 @@ fn charted(chart: &figures::Chart, frontiers: &[Frontier], models: &[usize]) -> 
 
 const TRAINED: &str = "trained models";
 
-/// The model a frontier's size stands for; None for the clusterers and the RBF SVM, whose
-/// views sweep their sizes rather than train one.
+/// The model a frontier's size stands for.
 fn spec_of(f: &Frontier, k: usize) -> Option<ModelSpec> {
     let p = &f.points[k];
     Some(match f.params.method {
@@ -324,7 +324,17 @@ fn spec_of(f: &Frontier, k: usize) -> Option<ModelSpec> {
             beta: p.knob("beta")?,
             gamma: p.knob("gamma")?,
         }),
-        _ => return None,
+        FrontierMethod::Du | FrontierMethod::Gu => ModelSpec::Clustering {
+            learner: match f.params.method {
+                FrontierMethod::Du => UnsupervisedLearner::Du,
+                _ => UnsupervisedLearner::Gu,
+            },
+            threshold: p.knob("threshold")?,
+        },
+        FrontierMethod::Kmeans | FrontierMethod::Som => ModelSpec::Baselines {
+            k: Some(p.knob("k")? as usize),
+        },
+        FrontierMethod::RbfSvm => ModelSpec::Baselines { k: None },
     })
 }
 
@@ -441,10 +451,12 @@ impl SpeedRoom {
             Some(Charted::Size(i, k)) => {
                 let f = &frontiers[i];
                 let p = &f.points[k];
-                let click = if spec_of(f, k).is_some() {
-                    "click to open or train"
-                } else {
-                    "its view sweeps this size (Clustering or Baselines)"
+                let click = match spec_of(f, k) {
+                    Some(ModelSpec::Baselines { k: None }) => {
+                        "click to open or run the Baselines, whose SVM searches this grid"
+                    }
+                    Some(_) => "click to open or train",
+                    None => "",
                 };
                 ui.label(format!(
                     "{}: {} · {} {:.3} ± {:.3} · training {:.1} µs, prediction {:.1} µs per {} · {click}",

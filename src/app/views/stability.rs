@@ -143,7 +143,7 @@ impl Room for StabilityRoom {
         ]
     }
 
-    fn run_text(&self, s: &LoadedSession) -> Option<String> {
+    fn run_text(&self, s: &LoadedSession, analyses: &Analyses) -> Option<String> {
         if !ready(s) {
             return None;
         }
@@ -154,10 +154,16 @@ impl Room for StabilityRoom {
                 g.num_bases.len(),
                 g.num_bases.len() * 9
             ),
-            None => format!(
-                "{} bases, β = {}, γ = {}, with 10-fold and leave-objects-out validation",
-                f.num_bases, f.beta, f.gamma
-            ),
+            None => {
+                let (c, reason) = f.size(analyses, &s.session.meta.name);
+                format!(
+                    "{} bases, β = {}, γ = {} ({}), with 10-fold and leave-objects-out validation",
+                    c.num_bases,
+                    c.beta,
+                    c.gamma,
+                    reason.text()
+                )
+            }
         };
         Some(format!(
             "Run: sparse coding + linear SVM on {} grasps, {what}; {}.",
