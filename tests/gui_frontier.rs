@@ -12,7 +12,7 @@ use egui_kittest::kittest::Queryable;
 use tactile_workbench::app::{View, WorkbenchApp, figure_view};
 use tactile_workbench::experiments::frontier::Frontier;
 use tactile_workbench::experiments::frontier_report::frontier_figures;
-use tactile_workbench::experiments::report::SizeReason;
+use tactile_workbench::experiments::report::{AnalysisResult, SizeReason};
 use tactile_workbench::figures::FigureKind;
 
 fn wait_for_jobs(h: &mut Harness<'static, WorkbenchApp>) {
@@ -55,27 +55,42 @@ fn click_size(
     h.run_ok();
 }
 
-/// Set the frontier form to `method` with `knobs` in the field `field`, two repetitions,
-/// and compute it.
+/// Set the frontier form to `method` (its first method: DS) with the knob lists `knobs`
+/// (field label, text), two repetitions, and compute it.
 fn compute_frontier(
     h: &mut Harness<'static, WorkbenchApp>,
-    method: &str,
-    field: &str,
-    knobs: &str,
+    method: Option<&str>,
+    knobs: &[(&str, &str)],
 ) {
-    h.get_by_role_and_label(egui::accesskit::Role::ComboBox, "Frontier method")
-        .click();
-    h.run_ok();
-    h.get_by_label(method).click();
-    h.run_ok();
-    h.get_by_label(field).set_text_value_accesskit(knobs);
-    h.run_ok();
+    if let Some(method) = method {
+        h.get_by_role_and_label(egui::accesskit::Role::ComboBox, "Frontier method")
+            .click();
+        h.run_ok();
+        h.get_by_label(method).click();
+        h.run_ok();
+    }
+    for (field, text) in knobs {
+        h.get_by_label(field).set_text_value_accesskit(text);
+        h.run_ok();
+    }
     h.get_by_label("frontier repetitions")
         .set_value_accesskit(2.0);
     h.run_ok();
     h.get_by_label("Compute frontier").click();
     h.step();
     wait_for_jobs(h);
+}
+
+/// The results so far, asserting there are `n` of them (the app's messages say why not).
+fn results_now<'h>(h: &'h Harness<'static, WorkbenchApp>, n: usize) -> &'h [AnalysisResult] {
+    let results = &h.state().analyses.results;
+    assert_eq!(
+        results.len(),
+        n,
+        "messages: {:?}",
+        h.state().analyses.notes.texts()
+    );
+    results
 }
 
 #[test]
@@ -89,16 +104,7 @@ fn a_frontier_sets_the_default_size_and_its_points_train_and_open_models() {
     h.get_by_label_contains("No frontier for «Simulated object recognition» yet");
 
     // DS on all features (the form's default method), four sizes, two repetitions.
-    h.get_by_label("capacities")
-        .set_text_value_accesskit("5, 20");
-    h.get_by_label("taus").set_text_value_accesskit("1, 5");
-    h.run_ok();
-    h.get_by_label("frontier repetitions")
-        .set_value_accesskit(2.0);
-    h.run_ok();
-    h.get_by_label("Compute frontier").click();
-    h.step();
-    wait_for_jobs(&mut h);
+    compute_frontier(&mut h, None, &[("capacities", "5, 20"), ("taus", "1, 5")]);
     let frontier = h
         .state()
         .analyses
@@ -148,13 +154,7 @@ fn a_frontier_sets_the_default_size_and_its_points_train_and_open_models() {
     );
     assert_eq!(h.state().view, View::Recognition);
     wait_for_jobs(&mut h);
-    let results = &h.state().analyses.results;
-    assert_eq!(
-        results.len(),
-        1,
-        "messages: {:?}",
-        h.state().analyses.notes.texts()
-    );
+    let results = results_now(&h, 1);
     let size = results[0].model_size.clone().expect("a recognition size");
     assert_eq!(size.knobs, knobs);
     assert_eq!(size.reason, SizeReason::User);
@@ -185,7 +185,7 @@ fn clusterer_sizes_train_in_their_views() {
     h.run_ok();
     h.get_by_label("Speed vs accuracy").click();
     h.run_ok();
-    compute_frontier(&mut h, "GU", "novelty thresholds", "0.05, 0.1");
+    compute_frontier(&mut h, Some("GU"), &[("novelty thresholds", "0.05, 0.1")]);
     let frontiers = h.state().analyses.frontiers.clone();
     assert_eq!(
         frontiers.len(),
@@ -199,13 +199,7 @@ fn clusterer_sizes_train_in_their_views() {
     click_size(&mut h, &frontiers, 0, 1, "click to open or train");
     assert_eq!(h.state().view, View::Clustering);
     wait_for_jobs(&mut h);
-    let results = &h.state().analyses.results;
-    assert_eq!(
-        results.len(),
-        1,
-        "messages: {:?}",
-        h.state().analyses.notes.texts()
-    );
+    let results = results_now(&h, 1);
     assert_eq!(results[0].parameters["learner"], "GU");
     let details = &results[0].details;
     assert!(!details.is_empty());
@@ -230,7 +224,7 @@ fn clusterer_sizes_train_in_their_views() {
     h.get_by_label("Run").click();
     h.step();
     wait_for_jobs(&mut h);
-    assert_eq!(h.state().analyses.results.len(), 2);
+    results_now(&h, 2);
     let chosen = h.state().analyses.results[1]
         .score("threshold chosen without labels")
         .expect("a label-free choice");
@@ -261,7 +255,11 @@ fn clusterer_sizes_train_in_their_views() {
     h.run_ok();
     h.get_by_label("Speed vs accuracy").click();
     h.run_ok();
-    compute_frontier(&mut h, "k-means", "numbers of clusters k", "4, 7");
+    compute_frontier(
+        &mut h,
+        Some("k-means"),
+        &[("numbers of clusters k", "4, 7")],
+    );
     let frontiers = h.state().analyses.frontiers.clone();
     assert_eq!(frontiers.len(), 2);
     let kmeans = frontiers
@@ -271,7 +269,6 @@ fn clusterer_sizes_train_in_their_views() {
     click_size(&mut h, &frontiers, kmeans, 1, "click to open or train");
     assert_eq!(h.state().view, View::Baselines);
     wait_for_jobs(&mut h);
-    let results = &h.state().analyses.results;
-    assert_eq!(results.len(), 3);
+    let results = results_now(&h, 3);
     assert_eq!(results[2].parameters["k"], "7");
 }
