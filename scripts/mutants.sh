@@ -74,7 +74,16 @@ tests_in() {
 scope() {
     case $1 in
     scores) run scores --file src/cluster/scores.rs -C --lib -- cluster::scores ;;
+    scores-indices)
+        # The indices and their contingency table: the file but for `pairs` and `entropy`.
+        run scores-indices --file src/cluster/scores.rs --exclude-re '(replace|in) (pairs|entropy)\b' \
+            -C --lib -- cluster::scores ;;
     svm-eval) run svm-eval --file src/svm/eval.rs -C --test=svm_eval ;;
+    svm-eval-confusion)
+        # The confusion counts and their rates (eq. 4), the folds' index lists and `gather`:
+        # the file but for the folds' construction, `cross_validate` and `mean_se`.
+        run svm-eval-confusion --file src/svm/eval.rs --re 'Confusion::|Folds::|gather' \
+            -C --test=svm_eval ;;
     stability-selection)
         # The grid's selection and parsimony rule.
         run stability-selection --file src/experiments/stability.rs \

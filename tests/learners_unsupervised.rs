@@ -227,6 +227,26 @@ fn du_leaves_an_unconfirmed_cluster_out_of_the_reassignment() {
     }
 }
 
+/// A cluster opens when nu_D exceeds theta_D (eq. 28), so theta_D = 1 never opens one.
+/// Far from every grasp learned (1e3 away, lengthscale 0.15) the expert's GP predicts its
+/// prior mean 0, so q = Φ(0) = 1/2 at every step, max(0, 2q − 1) = 0 and nu_D = 1 exactly:
+/// the most novel grasp there is equals the threshold without exceeding it.
+#[test]
+fn du_novelty_equal_to_the_threshold_opens_no_cluster() {
+    let (seqs, _) = data(3);
+    let mut p = DuParams::default();
+    p.ds.gp = small(p.ds.gp);
+    p.threshold = 1.0;
+    let mut du = Du::new(2, &p).unwrap();
+    for s in &seqs {
+        du.learn(s.view()).unwrap();
+    }
+    let far = Array2::from_elem((10, 2), 1e3);
+    let a = du.learn(far.view()).unwrap();
+    assert_eq!((a.novelty, a.created), (1.0, false), "{a:?}");
+    assert_eq!(du.n_clusters(), 1);
+}
+
 #[test]
 fn a_du_min_grasps_of_zero_is_an_error() {
     let p = DuParams {

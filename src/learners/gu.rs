@@ -527,6 +527,43 @@ mod tests {
             assert!(gu.grasps[cluster] >= 3);
             assert_eq!(gu.assign(odd.view()), cluster);
         }
+        // The one-off grasp too goes to a confirmed cluster, not back to its own.
+        let one_off = gu.assign(grasps[5].view());
+        assert!(gu.grasps[one_off] >= 3, "{one_off}: {:?}", gu.grasps);
+    }
+
+    /// Expert 0 learns 10 grasps around (0.3, 0.3), expert 1 10 around (0.4, 0.35), all with
+    /// noise of sd 0.1 in feature 0 and 0.01 in feature 1, and both count (min_grasps 1).
+    /// A grasp at (0.4, 0.3) is 0.1 from expert 0 in the noisy feature (one sd) and 0.05
+    /// from expert 1 in the quiet one (five sd): the per-dimension Σ of the filter gives it
+    /// to expert 0, the shared sigma_n², which sees only that expert 1 is nearer, to
+    /// expert 1.
+    #[test]
+    fn the_per_dimension_filter_weighs_each_feature_by_its_noise() {
+        let ramp = |base: [f64; 2], sd: [f64; 2], rng: &mut Rng| {
+            Array2::from_shape_fn((12, 2), |(t, d)| {
+                base[d] + 0.02 * t as f64 + sd[d] * rng.normal()
+            })
+        };
+        let winner = |noise: GuNoise| {
+            let mut rng = Rng::new(5);
+            let p = GuParams {
+                noise,
+                min_grasps: 1,
+                ..GuParams::default()
+            };
+            let mut gu = Gu::new(2, &p).unwrap();
+            for base in [[0.3, 0.3], [0.4, 0.35]] {
+                let c = gu.gs.add_class().unwrap();
+                for _ in 0..10 {
+                    gu.train(ramp(base, [0.1, 0.01], &mut rng).view(), c);
+                }
+            }
+            let probe = ramp([0.4, 0.3], [0.0, 0.0], &mut rng);
+            gu.assign(probe.view())
+        };
+        assert_eq!(winner(GuNoise::Shared), 1);
+        assert_eq!(winner(GuNoise::PerDimensionFilter), 0);
     }
 
     #[test]
