@@ -96,6 +96,14 @@ scope() {
             --re 'du_novelty|Du::learn|Gu::step_novelty|Gu::joint_novelty|Gu::winner_among' \
             -C --lib -C --test=learners_unsupervised \
             -- -- learners:: $(tests_in tests/learners_unsupervised.rs) ;;
+    learners-du-gu-rest)
+        # The rest of DU's and GU's assignment: the parameters' validation, DU's and GU's
+        # final re-assignment, GU's learning step and its grasp counts (`--re 'Gu::learn'`
+        # also takes in the accessor `Gu::learner`). Disjoint from learners-novelty.
+        run learners-du-gu-rest --file src/learners/du.rs --file src/learners/gu.rs \
+            --re 'DuParams::validate|Du::assign|confirmed_decision|GuParams::validate|Gu::learn|Gu::assign|Gu::winner |Gu::grasps_drawn|Gu::trained' \
+            -C --lib -C --test=learners_unsupervised \
+            -- -- learners:: $(tests_in tests/learners_unsupervised.rs) ;;
     learners)
         run learners --file 'src/learners/*.rs' \
             -C --lib -C --test=learners_supervised -C --test=learners_unsupervised \

@@ -260,3 +260,47 @@ fn a_du_min_grasps_of_zero_is_an_error() {
             .contains("min_grasps")
     );
 }
+
+/// GU's counterpart of the test above: a cluster opens when nu_G exceeds theta_U (the
+/// paper's GU, as eq. 28 for DU). 1e3 away from every grasp learned the expert predicts its
+/// prior, the squared Mahalanobis radius of each step is of order 1e6 against the few
+/// units of c_m's, so (f(o)/c_m)^α_m underflows to 0 and each step's novelty
+/// exp(−(f(o)/c_m)^α_m) is exactly 1, as is their mean: the most novel grasp there is
+/// equals theta_U = 1 without exceeding it.
+#[test]
+fn gu_novelty_equal_to_the_threshold_opens_no_cluster() {
+    let (seqs, _) = data(3);
+    let mut p = GuParams::default();
+    p.gs.gp = small(p.gs.gp);
+    p.threshold = 1.0;
+    let mut gu = Gu::new(2, &p).unwrap();
+    for s in &seqs {
+        gu.learn(s.view()).unwrap();
+    }
+    let far = Array2::from_elem((10, 2), 1e3);
+    let a = gu.learn(far.view()).unwrap();
+    assert_eq!((a.novelty, a.created), (1.0, false), "{a:?}");
+    assert_eq!(gu.n_clusters(), 1);
+}
+
+/// Before any cluster is confirmed (`min_grasps` 3, two grasps learned), DU's
+/// re-assignment takes every cluster into account ("all if none is"): grasps of two objects
+/// 0.4 apart, each in a cluster of its own, go back to their own.
+#[test]
+fn du_with_no_confirmed_cluster_assigns_among_all() {
+    let (seqs, labels) = data(3);
+    assert_ne!(labels[0], labels[1]);
+    let mut p = DuParams::default();
+    p.ds.gp = small(p.ds.gp);
+    p.threshold = 0.5;
+    p.min_grasps = 3;
+    let mut du = Du::new(2, &p).unwrap();
+    let learned: Vec<usize> = seqs[..2]
+        .iter()
+        .map(|s| du.learn(s.view()).unwrap().cluster)
+        .collect();
+    assert_eq!(learned, [0, 1]);
+    for (s, c) in seqs.iter().zip(learned) {
+        assert_eq!(du.assign(s.view()), c);
+    }
+}

@@ -137,15 +137,40 @@ impl Du {
             return argmax_of_mean(p.view());
         }
         let (q, _) = self.ds.predict_q_and_p(seq);
-        let mut p = q.select(Axis(1), &confirmed);
-        for mut row in p.rows_mut() {
-            let sum = row.sum();
-            if sum > 0.0 {
-                row /= sum;
-            } else {
-                row.fill(1.0 / confirmed.len() as f64);
-            }
+        confirmed_decision(q.view(), &confirmed)
+    }
+}
+
+/// The DS decision among the `confirmed` clusters from every cluster's q at each step: each
+/// step's q renormalised over them (uniform where all of them are 0), then the argmax of
+/// the mean.
+fn confirmed_decision(q: ArrayView2<f64>, confirmed: &[usize]) -> usize {
+    let mut p = q.select(Axis(1), confirmed);
+    for mut row in p.rows_mut() {
+        let sum = row.sum();
+        if sum > 0.0 {
+            row /= sum;
+        } else {
+            row.fill(1.0 / confirmed.len() as f64);
         }
-        confirmed[argmax_of_mean(p.view())]
+    }
+    confirmed[argmax_of_mean(p.view())]
+}
+
+#[cfg(test)]
+mod tests {
+    use ndarray::array;
+
+    use super::*;
+
+    /// Worked by hand: clusters 0 and 1 are confirmed, 2 is not. Renormalised over 0 and 1
+    /// the steps' q are (0.1, 0.9), (0.6, 0.4) and, where both are 0, (0.5, 0.5): means
+    /// 0.4 and 0.6, so cluster 1. The raw q (means 0.203 and 0.163), or q weighted by its
+    /// sum over the confirmed clusters, would give cluster 0, and so would a uniform p
+    /// everywhere (a tie goes to the first).
+    #[test]
+    fn each_step_is_renormalised_over_the_confirmed_clusters() {
+        let q = array![[0.01, 0.09, 0.9], [0.6, 0.4, 0.0], [0.0, 0.0, 1.0]];
+        assert_eq!(confirmed_decision(q.view(), &[0, 1]), 1);
     }
 }
