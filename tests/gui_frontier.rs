@@ -143,15 +143,10 @@ fn a_frontier_sets_the_default_size_and_its_points_train_and_open_models() {
         p.knob("capacity").unwrap(),
         p.knob("tau").unwrap()
     );
+    let frontiers = std::slice::from_ref(&frontier);
     h.get_by_label("Speed vs accuracy").click();
     h.run_ok();
-    click_size(
-        &mut h,
-        std::slice::from_ref(&frontier),
-        0,
-        other,
-        "click to open or train",
-    );
+    click_size(&mut h, frontiers, 0, other, "click to open or train");
     assert_eq!(h.state().view, View::Recognition);
     wait_for_jobs(&mut h);
     let results = results_now(&h, 1);
@@ -163,13 +158,7 @@ fn a_frontier_sets_the_default_size_and_its_points_train_and_open_models() {
     // Clicking that size again opens the model rather than training it twice.
     h.get_by_label("Speed vs accuracy").click();
     h.run_ok();
-    click_size(
-        &mut h,
-        std::slice::from_ref(&frontier),
-        0,
-        other,
-        "click to open or train",
-    );
+    click_size(&mut h, frontiers, 0, other, "click to open or train");
     wait_for_jobs(&mut h);
     assert_eq!(h.state().view, View::Recognition);
     assert_eq!(h.state().analyses.results.len(), 1);

@@ -401,9 +401,7 @@ impl WorkbenchApp {
                     ModelSpec::Stability(_) => sized(),
                     ModelSpec::Clustering { learner, threshold } => {
                         of("learner") == Some(&format!("{learner:?}").to_uppercase())
-                            && r.details
-                                .iter()
-                                .any(|d| d.items.iter().any(|(t, _)| (t - threshold).abs() < 1e-9))
+                            && r.details.iter().any(|d| d.at(*threshold).is_some())
                     }
                     ModelSpec::Baselines { k: Some(k) } => of("k") == Some(&k.to_string()),
                     ModelSpec::Baselines { k: None } => r.score("SVM accuracy").is_some(),
@@ -413,11 +411,7 @@ impl WorkbenchApp {
             if let ModelSpec::Clustering { threshold, .. } = spec {
                 // The clustering charts' markers go to the threshold clicked.
                 for d in &self.analyses.results[i].details {
-                    if let Some(k) = d
-                        .items
-                        .iter()
-                        .position(|(t, _)| (t - threshold).abs() < 1e-9)
-                    {
+                    if let Some(k) = d.at(threshold) {
                         self.analyses.selected.insert((i, d.figure.clone()), k);
                     }
                 }

@@ -138,6 +138,11 @@ pub struct FigureDetails {
 }
 
 impl FigureDetails {
+    /// Index of the item whose key is `key` (up to rounding of the key's decimal text).
+    pub fn at(&self, key: f64) -> Option<usize> {
+        self.items.iter().position(|(k, _)| (k - key).abs() < 1e-9)
+    }
+
     /// Index of the item whose key is nearest to `key`.
     pub fn nearest(&self, key: f64) -> Option<usize> {
         (0..self.items.len()).min_by(|&a, &b| {

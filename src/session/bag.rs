@@ -6,6 +6,7 @@
 //! Time is the bag time of a message (its MCAP log time, ns since the epoch): every topic
 //! then shares one clock, which is also the clock of a windows CSV.
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -397,31 +398,30 @@ impl FileReader<'_> {
         use mcap::records::Record;
         let file = self.file;
         let damaged = |e: mcap::McapError| mcap_error(file, &e);
-        let where_ = if in_chunk { "a chunk" } else { "the file" };
         while !rest.is_empty() {
             // A record: opcode (1 byte), body length (u64), body.
             let (opcode, after) = (rest[0], &rest[1..]);
             let Some((len, after)) = after.split_first_chunk::<8>() else {
-                return Err(truncated(file, where_, "a record's length", after.len()));
+                return Err(truncated(file, in_chunk, "a record's length", after.len()));
             };
             let len = u64::from_le_bytes(*len);
             if len > after.len() as u64 {
                 return Err(truncated(
                     file,
-                    where_,
+                    in_chunk,
                     &format!("a record (opcode {opcode:#04x}) of {len} bytes"),
                     after.len(),
                 ));
             }
             let (body, after) = after.split_at(len as usize);
             rest = after;
-            if !FIELDS.iter().any(|(op, _)| *op == opcode) {
+            let Some(&(_, fields)) = FIELDS.iter().find(|(op, _)| *op == opcode) else {
                 if opcode == DATA_END {
                     break;
                 }
                 continue;
-            }
-            fields_fit(opcode, body).map_err(|what| {
+            };
+            fields_fit(fields, body).map_err(|what| {
                 SessionError::file(
                     file,
                     format!("the bag is damaged: {what} does not fit in its record (opcode {opcode:#04x})"),
@@ -430,7 +430,7 @@ impl FileReader<'_> {
             match mcap::parse_record(opcode, body).map_err(damaged)? {
                 Record::Schema { header, data } => self
                     .links
-                    .add_schema(header, std::borrow::Cow::Owned(data.into_owned()))
+                    .add_schema(header, Cow::Owned(data.into_owned()))
                     .map_err(damaged)?,
                 Record::Channel(channel) => self.links.add_channel(channel).map_err(damaged)?,
                 Record::Message { header, data } => self.message(&header, &data)?,
@@ -576,11 +576,10 @@ enum Field {
     Bytes,
     /// u32 length, then string pairs filling it.
     Map,
-    /// The rest of the body.
-    Rest,
 }
 
-/// The records the importer reads, with their fields up to the last length-prefixed one.
+/// The records the importer reads, with their fields up to the last length-prefixed one
+/// (what follows it, a message's or chunk's data, is the rest of the body).
 const FIELDS: [(u8, &[Field]); 4] = [
     // Schema: id, name, encoding, data.
     (
@@ -593,27 +592,20 @@ const FIELDS: [(u8, &[Field]); 4] = [
         &[Field::Fixed(4), Field::Bytes, Field::Bytes, Field::Map],
     ),
     // Message: channel id, sequence, log time, publish time, data.
-    (0x05, &[Field::Fixed(22), Field::Rest]),
+    (0x05, &[Field::Fixed(22)]),
     // Chunk: start and end time, uncompressed size and CRC, compression, compressed size.
-    (
-        0x06,
-        &[Field::Fixed(28), Field::Bytes, Field::Fixed(8), Field::Rest],
-    ),
+    (0x06, &[Field::Fixed(28), Field::Bytes, Field::Fixed(8)]),
 ];
 
 /// Checks that every length-prefixed field of a record lies inside its body, so the library
 /// never reserves a length the body cannot hold; names the first that does not.
-fn fields_fit(opcode: u8, body: &[u8]) -> Result<(), &'static str> {
+fn fields_fit(fields: &[Field], body: &[u8]) -> Result<(), &'static str> {
     fn bytes(rest: &mut &[u8]) -> Result<(), &'static str> {
         let (len, after) = rest.split_first_chunk::<4>().ok_or("a length")?;
         let len = u32::from_le_bytes(*len) as usize;
         *rest = after.get(len..).ok_or("a string or data")?;
         Ok(())
     }
-    let fields = FIELDS
-        .iter()
-        .find(|(op, _)| *op == opcode)
-        .map_or(&[][..], |(_, f)| f);
     let mut rest = body;
     for field in fields {
         match *field {
@@ -629,18 +621,18 @@ fn fields_fit(opcode: u8, body: &[u8]) -> Result<(), &'static str> {
                 }
                 rest = &after[len..];
             }
-            Field::Rest => rest = &[],
         }
     }
     Ok(())
 }
 
-/// A record or its length running past the end of the file or chunk (`left` bytes left).
-fn truncated(file: &Path, where_: &str, what: &str, left: usize) -> SessionError {
-    let kind = if where_ == "the file" {
-        "truncated"
+/// A record or its length running past the end of the file or of a chunk (`left` bytes
+/// left).
+fn truncated(file: &Path, in_chunk: bool, what: &str, left: usize) -> SessionError {
+    let (kind, where_) = if in_chunk {
+        ("damaged", "a chunk")
     } else {
-        "damaged"
+        ("truncated", "the file")
     };
     SessionError::file(
         file,
@@ -657,12 +649,12 @@ fn chunk_records<'c>(
     file: &Path,
     header: &mcap::records::ChunkHeader,
     data: &'c [u8],
-) -> Result<std::borrow::Cow<'c, [u8]>, SessionError> {
+) -> Result<Cow<'c, [u8]>, SessionError> {
     use std::io::Read;
     let claim = header.uncompressed_size;
     let damaged = |what: String| SessionError::file(file, format!("the bag is damaged: {what}"));
     match header.compression.as_str() {
-        "" => Ok(std::borrow::Cow::Borrowed(data)),
+        "" => Ok(Cow::Borrowed(data)),
         "zstd" => {
             let mut out = Vec::with_capacity(claim.min(CHUNK_RESERVE) as usize);
             zstd::stream::read::Decoder::with_buffer(data)
@@ -679,7 +671,7 @@ fn chunk_records<'c>(
                     }
                 )));
             }
-            Ok(std::borrow::Cow::Owned(out))
+            Ok(Cow::Owned(out))
         }
         other => Err(SessionError::file(
             file,
