@@ -3,6 +3,7 @@
 mod common;
 
 use tactile_workbench::cli::paper_figures::{Experiment, PaperFiguresArgs, run};
+use tactile_workbench::experiments::frontier::FrontierMethod;
 
 #[test]
 fn baselines_figures_are_written_with_an_index() {
@@ -72,5 +73,29 @@ fn stability_figures_and_project_regenerate_the_first_paper() {
         bases.items.len(),
         r.parameters["num_bases"].parse::<usize>().unwrap()
     );
+    let _ = std::fs::remove_dir_all(out);
+}
+
+#[test]
+fn a_frontier_project_carries_its_frontiers() {
+    let out = common::temp_dir("paper-figures-frontier");
+    let project = out.join("project.json");
+    run(PaperFiguresArgs {
+        session: common::sample("grasp-stability.json"),
+        experiment: Experiment::Frontier,
+        out_dir: out.clone(),
+        reps: 2,
+        seed: 0,
+        width: 640,
+        height: 420,
+        dpi: 96.0,
+        project: Some(project.clone()),
+        quiet: true,
+    })
+    .expect("paper-figures");
+    // The workbench shows a project's frontiers in its speed view: they must be in it.
+    let p = tactile_workbench::experiments::report::Project::load(&project).unwrap();
+    assert_eq!(p.frontiers.len(), 1);
+    assert_eq!(p.frontiers[0].params.method, FrontierMethod::SparseSvm);
     let _ = std::fs::remove_dir_all(out);
 }

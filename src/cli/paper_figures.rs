@@ -84,7 +84,9 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
     let name = session.meta.name.clone();
     let (results, frontiers) = with_progress(a.quiet, |p| experiment_results(&a, &session, p))?;
     if let Some(path) = &a.project {
-        Project::new(vec![a.session.display().to_string()], results.clone()).save(path)?;
+        Project::new(vec![a.session.display().to_string()], results.clone())
+            .with_frontiers(frontiers.clone())
+            .save(path)?;
         println!("wrote {}", path.display());
     }
     let mut set = figure_set(&results);
