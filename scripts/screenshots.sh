@@ -30,6 +30,10 @@ done
 [ -f "$work/robustness.json" ] ||
     $bin paper-figures sample-sessions/grasp-stability.json --experiment robustness-stability \
         --reps 2 -o "$work/fig-robustness" --project "$work/robustness.json"
+# The speed view's frontiers, on the recognition sample (every method, 2 repetitions).
+[ -f "$work/frontier.json" ] ||
+    $bin paper-figures sample-sessions/object-recognition.json --experiment frontier --reps 2 \
+        -o "$work/fig-frontier" --project "$work/frontier.json"
 projects=("$work"/stability.json "$work"/recognition.json "$work"/clustering.json \
     "$work"/baselines.json "$work"/robustness.json)
 
@@ -57,7 +61,12 @@ shot stability stability
 shot recognition recognition
 shot clustering clustering
 shot baselines baselines
+# The recognition sample first, so the frontiers of its session are the ones shown.
+projects=("$work"/frontier.json "$work"/recognition.json "$work"/clustering.json \
+    "$work"/baselines.json "$work"/stability.json)
 shot speed-accuracy speed-accuracy
+projects=("$work"/stability.json "$work"/recognition.json "$work"/clustering.json \
+    "$work"/baselines.json "$work"/robustness.json)
 shot robustness robustness
 # Replay: select the first grasp in the browser.
 shot replay replay mousemove 120 190 click 1
