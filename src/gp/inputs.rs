@@ -55,6 +55,29 @@ pub(crate) struct Inputs {
     scaled: Vec<f64>,
 }
 
+/// How an observed window stands to the one observed before it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Shift {
+    Same,
+    /// The earlier window shifted by one input.
+    ByOne,
+    Other,
+}
+
+impl Shift {
+    /// The shift between two windows of `dim` inputs per lag, found by comparing them.
+    /// Equal as numbers is enough: ±0 give the same distances, and NaN recomputes.
+    pub(crate) fn between(previous: &[f64], window: &[f64], dim: usize) -> Shift {
+        if previous == window {
+            Shift::Same
+        } else if previous[dim..] == window[..window.len() - dim] {
+            Shift::ByOne
+        } else {
+            Shift::Other
+        }
+    }
+}
+
 /// Hash of the bits of a raw input (FxHash's mix).
 fn hash_bits(x: &[f64]) -> u64 {
     x.iter().fold(0u64, |h, v| {
@@ -175,25 +198,25 @@ impl Inputs {
         }
     }
 
-    /// Make the rows those of `window` (raw, oldest lag first), given the window they were
-    /// computed for (`previous`): nothing if it is the same window, one new row if it is
+    /// Make the rows those of `window` (raw, oldest lag first), which stands to the window
+    /// they were computed for as `shift` says: nothing for the same window, one new row for
     /// that window shifted by one input, else every row.
-    pub(crate) fn observe(&mut self, kernel: &RecursiveArd, previous: &[f64], window: &[f64]) {
+    pub(crate) fn observe(&mut self, kernel: &RecursiveArd, shift: Shift, window: &[f64]) {
         let (d, tau) = (self.dim, self.tau);
-        // Equal as numbers is enough: ±0 give the same distances, and NaN recomputes.
         if self.current {
-            if previous == window {
-                return;
-            }
-            if previous[d..] == window[..(tau - 1) * d] {
-                self.head = (self.head + 1) % tau;
-                let newest = &window[(tau - 1) * d..];
-                self.fill_row(kernel, tau - 1, newest);
-                self.lead = match self.lead {
-                    l if l == tau => tau - 1 + usize::from(newest.iter().all(|v| *v == 0.0)),
-                    l => l.saturating_sub(1),
-                };
-                return;
+            match shift {
+                Shift::Same => return,
+                Shift::ByOne => {
+                    self.head = (self.head + 1) % tau;
+                    let newest = &window[(tau - 1) * d..];
+                    self.fill_row(kernel, tau - 1, newest);
+                    self.lead = match self.lead {
+                        l if l == tau => tau - 1 + usize::from(newest.iter().all(|v| *v == 0.0)),
+                        l => l.saturating_sub(1),
+                    };
+                    return;
+                }
+                Shift::Other => {}
             }
         }
         for lag in 0..tau {

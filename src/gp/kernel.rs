@@ -547,11 +547,50 @@ impl RecursiveArd {
     }
 }
 
+/// Where a [`Window`] stands: its sequence (unique to the window and the sequence it
+/// holds) and the inputs pushed since the sequence began. A model that observed stamp
+/// (s, t) knows, without comparing the windows, that (s, t + 1) is that window shifted by
+/// one input.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Stamp {
+    sequence: u64,
+    step: u64,
+}
+
+impl Stamp {
+    /// A sequence no other window holds.
+    fn fresh() -> Stamp {
+        static SEQUENCES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        Stamp {
+            sequence: SEQUENCES.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+            step: 0,
+        }
+    }
+
+    /// True if `self` is `earlier` with one more input pushed.
+    pub fn follows(self, earlier: Stamp) -> bool {
+        self.sequence == earlier.sequence && self.step == earlier.step + 1
+    }
+}
+
 /// The last `tau` inputs, oldest first, zero padded at the start of a sequence.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct Window {
     dim: usize,
     data: Vec<f64>,
+    stamp: Stamp,
+}
+
+impl Clone for Window {
+    /// A copy starts a sequence of its own: pushes to the copy and to the original would
+    /// otherwise give different windows the same stamp.
+    fn clone(&self) -> Window {
+        Window {
+            dim: self.dim,
+            data: self.data.clone(),
+            stamp: Stamp::fresh(),
+        }
+    }
 }
 
 impl Window {
@@ -559,12 +598,14 @@ impl Window {
         Window {
             dim,
             data: vec![0.0; dim * tau],
+            stamp: Stamp::fresh(),
         }
     }
 
     /// Back to all-zero padding (a new sequence starts).
     pub fn reset(&mut self) {
         self.data.fill(0.0);
+        self.stamp = Stamp::fresh();
     }
 
     /// Shift in x as the newest lag. Extra entries of `x` are ignored, missing ones are 0.
@@ -576,9 +617,14 @@ impl Window {
         for (o, v) in newest.iter_mut().zip(x) {
             *o = *v;
         }
+        self.stamp.step += 1;
     }
 
     pub fn as_slice(&self) -> &[f64] {
         &self.data
+    }
+
+    pub fn stamp(&self) -> Stamp {
+        self.stamp
     }
 }

@@ -26,8 +26,8 @@ use ndarray::Array2;
 use serde::{Deserialize, Serialize};
 
 use super::GpError;
-use super::inputs::Inputs;
-use super::kernel::{KernelParams, LagMajor, RecursiveArd, dot};
+use super::inputs::{Inputs, Shift};
+use super::kernel::{KernelParams, LagMajor, RecursiveArd, Stamp, Window, dot};
 use super::normal::{log_norm_cdf, pdf_over_cdf};
 use super::sngd::{Sngd, SngdParams};
 use crate::linalg::Cholesky;
@@ -194,6 +194,8 @@ pub struct Sogp {
     c: Vec<f64>,
     q: Vec<f64>,
     x_raw: Vec<f64>,
+    /// The stamp of the window in `x_raw` when it came from a [`Window`].
+    x_stamp: Option<Stamp>,
     x_scaled: Vec<f64>,
     /// `x_scaled` holds `x_raw` scaled by the current kernel (it is scaled when needed).
     x_scaled_current: bool,
@@ -255,6 +257,7 @@ impl Sogp {
             c: vec![0.0; stride * stride],
             q: vec![0.0; stride * stride],
             x_raw: vec![0.0; wlen],
+            x_stamp: None,
             x_scaled: vec![0.0; wlen],
             x_scaled_current: false,
             k: vec![0.0; lanes],
@@ -401,15 +404,36 @@ impl Sogp {
     /// Evaluate the kernel vector, C·k and the mean at `window` (tau·dim values, oldest
     /// lag first); the following [`Sogp::update`] reuses them.
     pub fn observe(&mut self, window: &[f64]) {
-        self.inputs.observe(&self.kernel, &self.x_raw, window);
+        let shift = Shift::between(&self.x_raw, window, self.kernel.dim());
+        self.inputs.observe(&self.kernel, shift, window);
+        // Copied even when equal as numbers: a BV keeps the window's bits.
         self.x_raw.copy_from_slice(window);
+        self.x_stamp = None;
         self.x_scaled_current = false;
+        self.evaluate();
+    }
+
+    /// [`Sogp::observe`] at a window of a sequence: its stamp tells whether it is the
+    /// window observed last, or that one shifted by one input, without comparing them.
+    pub fn observe_window(&mut self, window: &Window) {
+        let stamp = window.stamp();
+        let shift = match self.x_stamp {
+            Some(s) if s == stamp => Shift::Same,
+            Some(s) if stamp.follows(s) => Shift::ByOne,
+            _ => Shift::Other,
+        };
+        self.inputs.observe(&self.kernel, shift, window.as_slice());
+        if shift != Shift::Same {
+            self.x_raw.copy_from_slice(window.as_slice());
+            self.x_stamp = Some(stamp);
+            self.x_scaled_current = false;
+        }
         self.evaluate();
     }
 
     /// Evaluate again at the same window (the model changed).
     fn refresh(&mut self) {
-        self.inputs.observe(&self.kernel, &self.x_raw, &self.x_raw);
+        self.inputs.observe(&self.kernel, Shift::Same, &self.x_raw);
         self.evaluate();
     }
 
@@ -1207,6 +1231,67 @@ mod tests {
         }
         assert!(gp.n_basis() == p.capacity && gp.hyper_updates() >= 20);
         assert!(checked > 5000, "{checked}");
+    }
+
+    /// Observing a window by its stamp computes what comparing the windows computes, bit
+    /// for bit: along sequences, at a window observed twice, after steps the model sat out
+    /// (not a shift by one), after a reset, and from a copy of the window that went on with
+    /// other inputs (its stamp must not pass for the original's).
+    #[test]
+    fn stamped_windows_observe_what_compared_windows_do() {
+        use crate::gp::Window;
+        let (dim, tau) = (2, 3);
+        let p = SogpParams {
+            capacity: 6,
+            tau,
+            adaptation: Some(SngdParams {
+                window: 4,
+                start_after: 8,
+                stop_count: 1000,
+                ..SngdParams::default()
+            }),
+            ..SogpParams::default()
+        };
+        let mut by_slice = Sogp::new(dim, 1, &p).unwrap();
+        let mut by_stamp = by_slice.clone();
+        let mut window = Window::new(dim, tau);
+        let mut copy = window.clone();
+        let mut compared = 0;
+        for t in 0..600 {
+            let f = t as f64;
+            if t % 13 == 0 {
+                window.reset();
+            }
+            let x = [(0.37 * f).sin(), (0.11 * f).cos()];
+            window.push(&x);
+            copy.push(&[x[1], x[0]]);
+            if t % 17 == 4 {
+                copy = window.clone();
+            }
+            // The model sits out some steps.
+            if t % 7 == 3 {
+                continue;
+            }
+            let w = if t % 17 == 5 { &copy } else { &window };
+            for _ in 0..1 + usize::from(t % 5 == 0) {
+                by_slice.observe(w.as_slice());
+                by_stamp.observe_window(w);
+                let n = by_slice.n;
+                assert_eq!(n, by_stamp.n);
+                for (a, b) in by_slice.k[..n].iter().zip(&by_stamp.k[..n]) {
+                    assert_eq!(a.to_bits(), b.to_bits(), "step {t}");
+                }
+                assert_eq!(by_slice.mean[0].to_bits(), by_stamp.mean[0].to_bits());
+                compared += n;
+            }
+            let y = if (0.23 * f).cos() > 0.0 { 1.0 } else { -1.0 };
+            by_slice.update(&[y]);
+            by_stamp.update(&[y]);
+        }
+        assert!(
+            by_stamp.hyper_updates() >= 20 && compared > 2000,
+            "{compared}"
+        );
     }
 
     #[test]

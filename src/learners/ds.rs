@@ -73,7 +73,7 @@ impl Ds {
     fn observe(&mut self, o: &[f64]) {
         self.window.push(o);
         for (m, q) in self.models.iter_mut().zip(self.q.iter_mut()) {
-            m.observe(self.window.as_slice());
+            m.observe_window(&self.window);
             *q = m.probability();
         }
     }
@@ -132,7 +132,7 @@ impl Ds {
             self.window.push(o);
             for (j, (m, q)) in self.models.iter_mut().zip(self.q.iter_mut()).enumerate() {
                 if touched[j] || j >= q_pred.ncols() || t >= q_pred.nrows() {
-                    m.observe(self.window.as_slice());
+                    m.observe_window(&self.window);
                     *q = m.probability();
                 } else {
                     *q = q_pred[[t, j]];
@@ -144,7 +144,7 @@ impl Ds {
             self.models[class].update(&[1.0]);
             if let Some(w) = wrong {
                 if !touched[w] {
-                    self.models[w].observe(self.window.as_slice());
+                    self.models[w].observe_window(&self.window);
                     touched[w] = true;
                 }
                 self.models[w].update(&[-1.0]);

@@ -88,7 +88,7 @@ impl Gs {
         self.window.reset();
         for (t, o) in steps.chunks_exact(self.dim).enumerate() {
             let m = &mut self.models[c];
-            m.observe(self.window.as_slice());
+            m.observe_window(&self.window);
             for (d, v) in m.mean().iter().enumerate() {
                 means[[t, d]] = *v;
             }
@@ -116,7 +116,7 @@ impl Gs {
         for o in super::steps(&seq, self.dim).chunks_exact(self.dim) {
             for (j, &c) in experts.iter().enumerate() {
                 let m = &mut self.models[c];
-                m.observe(self.window.as_slice());
+                m.observe_window(&self.window);
                 step[j] = ll(j, o, m.mean(), m.predictive_variance());
             }
             if step.iter().any(|l| *l > f64::NEG_INFINITY) {
@@ -184,7 +184,7 @@ impl SequenceClassifier for Gs {
         // expert that all of them give −∞ (e.g. inputs of 1e200) carries no evidence
         // and is skipped, since adding it would make −∞ − (−∞) = NaN below.
         for (m, ll) in self.models.iter_mut().zip(dist.iter_mut()) {
-            m.observe(self.window.as_slice());
+            m.observe_window(&self.window);
             *ll = log_likelihood(o, m.mean(), m.predictive_variance());
         }
         if dist.iter().any(|ll| *ll > f64::NEG_INFINITY) {
@@ -211,7 +211,7 @@ impl SequenceClassifier for Gs {
             return;
         }
         let m = &mut self.models[class];
-        m.observe(self.window.as_slice());
+        m.observe_window(&self.window);
         m.update(o);
         self.window.push(o);
     }
