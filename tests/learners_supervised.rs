@@ -196,3 +196,39 @@ fn clone_of(
     }
     c
 }
+
+/// A sequence predicted expert by expert (`predict_sequence`) gives, bit for bit, what the
+/// step-by-step interface gives, every expert observing each step in turn; and training
+/// in between (adaptation on) keeps them equal.
+#[test]
+fn whole_sequence_prediction_equals_the_steps() {
+    for gs in [false, true] {
+        let mut rng = Rng::new(4);
+        let mut learner: Box<dyn SequenceClassifier> = if gs {
+            let mut p = GsParams::default();
+            p.gp = small(p.gp);
+            Box::new(Gs::new(2, &p).unwrap())
+        } else {
+            let mut p = DsParams::default();
+            p.gp = small(p.gp);
+            Box::new(Ds::new(2, &p).unwrap())
+        };
+        for _ in 0..3 {
+            learner.add_class().unwrap();
+        }
+        for i in 0..24 {
+            let c = i % 3;
+            let s = sequence(c, &mut rng);
+            let whole = learner.predict_sequence(s.view());
+            learner.start_sequence();
+            let mut dist = [0.0; 3];
+            for (t, o) in s.rows().into_iter().enumerate() {
+                learner.predict_step(o.as_slice().unwrap(), &mut dist);
+                for (a, b) in whole.row(t).iter().zip(&dist) {
+                    assert_eq!(a.to_bits(), b.to_bits(), "sequence {i}, step {t}");
+                }
+            }
+            learner.train_sequence(s.view(), c);
+        }
+    }
+}

@@ -628,3 +628,51 @@ impl Window {
         self.stamp
     }
 }
+
+/// Every window of one sequence, each a slice of its zero-padded inputs (nothing is copied
+/// per step), stamped as a [`Window`] fed the same inputs would be: an expert can go over
+/// the whole sequence on its own, with its state hot in the cache, and observe exactly
+/// what it would have observed step by step among the other experts.
+#[derive(Debug)]
+pub struct SequenceWindows {
+    dim: usize,
+    tau: usize,
+    padded: Vec<f64>,
+    sequence: u64,
+}
+
+impl SequenceWindows {
+    /// The windows of `steps` (rows of `dim` inputs, one after the other).
+    pub fn new(dim: usize, tau: usize, steps: &[f64]) -> SequenceWindows {
+        let mut padded = vec![0.0; tau * dim];
+        padded.extend_from_slice(&steps[..steps.len() / dim * dim]);
+        SequenceWindows {
+            dim,
+            tau,
+            padded,
+            sequence: Stamp::fresh().sequence,
+        }
+    }
+
+    /// Inputs in the sequence.
+    pub fn len(&self) -> usize {
+        self.padded.len() / self.dim - self.tau
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The window after the first `n` inputs (n = 0 ..= len: all padding at 0) and its
+    /// stamp.
+    pub fn after(&self, n: usize) -> (&[f64], Stamp) {
+        let d = self.dim;
+        (
+            &self.padded[n * d..(n + self.tau) * d],
+            Stamp {
+                sequence: self.sequence,
+                step: n as u64,
+            },
+        )
+    }
+}

@@ -9,7 +9,7 @@ pub mod sngd;
 pub mod sogp;
 mod wide;
 
-pub use kernel::{KernelParams, LagMajor, RecursiveArd, Stamp, Window};
+pub use kernel::{KernelParams, LagMajor, RecursiveArd, SequenceWindows, Stamp, Window};
 pub use sngd::{Sngd, SngdParams};
 pub use sogp::{Likelihood, Sogp, SogpParams};
 

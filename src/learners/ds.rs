@@ -13,7 +13,7 @@ use ndarray::{Array2, ArrayView2};
 use serde::{Deserialize, Serialize};
 
 use super::{LearnerError, SequenceClassifier};
-use crate::gp::{Likelihood, Sogp, SogpParams, Window};
+use crate::gp::{Likelihood, SequenceWindows, Sogp, SogpParams, Window};
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DsParams {
@@ -78,29 +78,34 @@ impl Ds {
         }
     }
 
-    /// The un-normalised q_c of the last step (for DU's novelty).
+    /// The un-normalised q_c of the last step taken one at a time (a training step or
+    /// [`SequenceClassifier::predict_step`]).
     pub fn q(&self) -> &[f64] {
         &self.q
     }
 
-    /// q (T × C) and p (T × C) over a sequence.
+    /// q (T × C) and p (T × C) over a sequence. Each expert goes over the whole sequence
+    /// in turn (its state stays in the cache; experts do not depend on each other while
+    /// predicting), then p follows step by step.
     pub fn predict_q_and_p(&mut self, seq: ArrayView2<f64>) -> (Array2<f64>, Array2<f64>) {
         let c = self.models.len();
         let seq = seq.as_standard_layout();
         let steps = super::steps(&seq, self.dim);
-        let mut qs = Array2::zeros((steps.len() / self.dim, c));
-        let mut ps = Array2::zeros((steps.len() / self.dim, c));
-        self.window.reset();
-        for (t, o) in steps.chunks_exact(self.dim).enumerate() {
-            self.observe(o);
-            let sum: f64 = self.q.iter().sum();
-            for j in 0..c {
-                qs[[t, j]] = self.q[j];
-                ps[[t, j]] = if sum > 0.0 {
-                    self.q[j] / sum
-                } else {
-                    1.0 / c as f64
-                };
+        let windows = SequenceWindows::new(self.dim, self.params.gp.tau, steps);
+        let t_len = windows.len();
+        let mut qs = Array2::zeros((t_len, c));
+        let mut ps = Array2::zeros((t_len, c));
+        for (j, m) in self.models.iter_mut().enumerate() {
+            for t in 0..t_len {
+                let (w, stamp) = windows.after(t + 1);
+                m.observe_stamped(w, stamp);
+                qs[[t, j]] = m.probability();
+            }
+        }
+        for (q, mut p) in qs.rows().into_iter().zip(ps.rows_mut()) {
+            let sum: f64 = q.iter().sum();
+            for (p, q) in p.iter_mut().zip(q) {
+                *p = if sum > 0.0 { q / sum } else { 1.0 / c as f64 };
             }
         }
         (qs, ps)
