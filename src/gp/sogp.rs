@@ -27,7 +27,7 @@ use serde::{Deserialize, Serialize};
 
 use super::GpError;
 use super::inputs::{Inputs, Shift};
-use super::kernel::{KernelParams, LagMajor, RecursiveArd, Stamp, Window, dot};
+use super::kernel::{KernelParams, LagMajor, RecursiveArd, SequenceWindows, Stamp, Window, dot};
 use super::normal::{log_norm_cdf, pdf_over_cdf};
 use super::sngd::{Sngd, SngdParams};
 use crate::linalg::Cholesky;
@@ -419,14 +419,9 @@ impl Sogp {
         self.observe_stamped(window.as_slice(), window.stamp());
     }
 
-    /// [`Sogp::observe_window`] at a window given by its inputs and its stamp (a window of
-    /// [`super::SequenceWindows`]).
-    pub fn observe_stamped(&mut self, window: &[f64], stamp: Stamp) {
-        let shift = match self.x_stamp {
-            Some(s) if s == stamp => Shift::Same,
-            Some(s) if stamp.follows(s) => Shift::ByOne,
-            _ => Shift::Other,
-        };
+    /// [`Sogp::observe_window`] at a window given by its inputs and its stamp.
+    fn observe_stamped(&mut self, window: &[f64], stamp: Stamp) {
+        let shift = self.shift_to(stamp);
         self.inputs.observe(&self.kernel, shift, window);
         if shift != Shift::Same {
             self.x_raw.copy_from_slice(window);
@@ -434,6 +429,40 @@ impl Sogp {
             self.x_scaled_current = false;
         }
         self.evaluate();
+    }
+
+    /// How the window stamped `stamp` stands to the one observed last.
+    fn shift_to(&self, stamp: Stamp) -> Shift {
+        match self.x_stamp {
+            Some(s) if s == stamp => Shift::Same,
+            Some(s) if stamp.follows(s) => Shift::ByOne,
+            _ => Shift::Other,
+        }
+    }
+
+    /// Observe every window of a sequence in turn (as [`Sogp::observe_window`] each),
+    /// calling `each(t, self)` after the window of the first t + 1 inputs. The raw window
+    /// an update would learn is kept only once, at the end: nothing updates the model in
+    /// between.
+    pub fn observe_sequence(
+        &mut self,
+        windows: &SequenceWindows,
+        mut each: impl FnMut(usize, &Sogp),
+    ) {
+        for t in 0..windows.len() {
+            let (window, stamp) = windows.after(t + 1);
+            let shift = self.shift_to(stamp);
+            self.inputs.observe(&self.kernel, shift, window);
+            if shift != Shift::Same {
+                self.x_stamp = Some(stamp);
+                self.x_scaled_current = false;
+            }
+            self.evaluate();
+            each(t, self);
+        }
+        if !windows.is_empty() {
+            self.x_raw.copy_from_slice(windows.after(windows.len()).0);
+        }
     }
 
     /// Evaluate again at the same window (the model changed).
@@ -1297,6 +1326,44 @@ mod tests {
             by_stamp.hyper_updates() >= 20 && compared > 2000,
             "{compared}"
         );
+    }
+
+    /// A model that observed a whole sequence at once, then learns at its last window,
+    /// ends as one that observed the windows step by step: the window it learns is the
+    /// sequence's last.
+    #[test]
+    fn a_sequence_observed_at_once_learns_its_last_window() {
+        use crate::gp::{SequenceWindows, Window};
+        let (dim, tau) = (2, 3);
+        let p = SogpParams {
+            capacity: 8,
+            tau,
+            ..SogpParams::default()
+        };
+        let mut at_once = Sogp::new(dim, 1, &p).unwrap();
+        let mut by_step = at_once.clone();
+        for g in 0..40 {
+            let f = g as f64;
+            let steps: Vec<f64> = (0..2 * (4 + g % 5))
+                .map(|i| (0.37 * f + 0.9 * i as f64).sin())
+                .collect();
+            let y = if g % 3 == 0 { 1.0 } else { -1.0 };
+            let mut seen = Vec::new();
+            at_once.observe_sequence(&SequenceWindows::new(dim, tau, &steps), |_, m| {
+                seen.push(m.probability())
+            });
+            at_once.update(&[y]);
+            let mut window = Window::new(dim, tau);
+            for (o, q) in steps.chunks_exact(dim).zip(&seen) {
+                window.push(o);
+                by_step.observe_window(&window);
+                assert_eq!(by_step.probability().to_bits(), q.to_bits(), "grasp {g}");
+            }
+            by_step.update(&[y]);
+            assert_eq!(at_once.basis(), by_step.basis(), "grasp {g}");
+            assert_eq!(at_once.alpha, by_step.alpha, "grasp {g}");
+        }
+        assert_eq!(at_once.n_basis(), p.capacity);
     }
 
     #[test]

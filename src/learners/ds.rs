@@ -96,11 +96,7 @@ impl Ds {
         let mut qs = Array2::zeros((t_len, c));
         let mut ps = Array2::zeros((t_len, c));
         for (j, m) in self.models.iter_mut().enumerate() {
-            for t in 0..t_len {
-                let (w, stamp) = windows.after(t + 1);
-                m.observe_stamped(w, stamp);
-                qs[[t, j]] = m.probability();
-            }
+            m.observe_sequence(&windows, |t, m| qs[[t, j]] = m.probability());
         }
         for (q, mut p) in qs.rows().into_iter().zip(ps.rows_mut()) {
             let sum: f64 = q.iter().sum();
