@@ -440,17 +440,18 @@ impl Sogp {
         }
     }
 
-    /// Observe every window of a sequence in turn (as [`Sogp::observe_window`] each),
-    /// calling `each(t, self)` after the window of the first t + 1 inputs. The raw window
-    /// an update would learn is kept only once, at the end: nothing updates the model in
-    /// between.
+    /// Observe the windows of a sequence after `from`, `from` + 1, … and all of its
+    /// inputs in turn (as [`Sogp::observe_window`] each), calling `each(t, self)` after the
+    /// window of the first `from` + t inputs. The raw window an update would learn is kept
+    /// only once, at the end: nothing updates the model in between.
     pub fn observe_sequence(
         &mut self,
         windows: &SequenceWindows,
+        from: usize,
         mut each: impl FnMut(usize, &Sogp),
     ) {
-        for t in 0..windows.len() {
-            let (window, stamp) = windows.after(t + 1);
+        for (t, n) in (from..=windows.len()).enumerate() {
+            let (window, stamp) = windows.after(n);
             let shift = self.shift_to(stamp);
             self.inputs.observe(&self.kernel, shift, window);
             if shift != Shift::Same {
@@ -460,7 +461,7 @@ impl Sogp {
             self.evaluate();
             each(t, self);
         }
-        if !windows.is_empty() {
+        if from <= windows.len() {
             self.x_raw.copy_from_slice(windows.after(windows.len()).0);
         }
     }
@@ -1349,7 +1350,7 @@ mod tests {
                 .collect();
             let y = if g % 3 == 0 { 1.0 } else { -1.0 };
             let mut seen = Vec::new();
-            at_once.observe_sequence(&SequenceWindows::new(dim, tau, &steps), |_, m| {
+            at_once.observe_sequence(&SequenceWindows::new(dim, tau, &steps), 1, |_, m| {
                 seen.push(m.probability())
             });
             at_once.update(&[y]);

@@ -96,7 +96,7 @@ impl Ds {
         let mut qs = Array2::zeros((t_len, c));
         let mut ps = Array2::zeros((t_len, c));
         for (j, m) in self.models.iter_mut().enumerate() {
-            m.observe_sequence(&windows, |t, m| qs[[t, j]] = m.probability());
+            m.observe_sequence(&windows, 1, |t, m| qs[[t, j]] = m.probability());
         }
         for (q, mut p) in qs.rows().into_iter().zip(ps.rows_mut()) {
             let sum: f64 = q.iter().sum();

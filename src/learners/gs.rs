@@ -14,7 +14,7 @@ use ndarray::{Array2, ArrayView2};
 use serde::{Deserialize, Serialize};
 
 use super::{LearnerError, SequenceClassifier};
-use crate::gp::{Likelihood, Sogp, SogpParams, Window};
+use crate::gp::{Likelihood, SequenceWindows, Sogp, SogpParams, Window};
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GsParams {
@@ -75,6 +75,12 @@ impl Gs {
         })
     }
 
+    /// The windows each step of `seq` is predicted from: the window of the inputs before it.
+    fn prediction_windows(&self, steps: &[f64]) -> SequenceWindows {
+        let before_last = steps.len().saturating_sub(self.dim);
+        SequenceWindows::new(self.dim, self.params.gp.tau, &steps[..before_last])
+    }
+
     /// Expert `c`'s prediction of every step of `seq` (means T × D, predictive variances T).
     pub fn expert_predictions(
         &mut self,
@@ -83,19 +89,44 @@ impl Gs {
     ) -> (Array2<f64>, Vec<f64>) {
         let seq = seq.as_standard_layout();
         let steps = super::steps(&seq, self.dim);
-        let mut means = Array2::zeros((steps.len() / self.dim, self.dim));
-        let mut vars = Vec::with_capacity(steps.len() / self.dim);
-        self.window.reset();
-        for (t, o) in steps.chunks_exact(self.dim).enumerate() {
-            let m = &mut self.models[c];
-            m.observe_window(&self.window);
-            for (d, v) in m.mean().iter().enumerate() {
-                means[[t, d]] = *v;
-            }
-            vars.push(m.predictive_variance());
-            self.window.push(o);
+        let t_len = steps.len() / self.dim;
+        let mut means = Array2::zeros((t_len, self.dim));
+        let mut vars = Vec::with_capacity(t_len);
+        if t_len > 0 {
+            let windows = self.prediction_windows(steps);
+            self.models[c].observe_sequence(&windows, 0, |t, m| {
+                for (d, v) in m.mean().iter().enumerate() {
+                    means[[t, d]] = *v;
+                }
+                vars.push(m.predictive_variance());
+            });
         }
         (means, vars)
+    }
+
+    /// ln p(o_t | expert) of every step of a sequence (`steps`, T × D) for each of
+    /// `experts` (T × experts), with `ll(j, o_t, mean, predictive variance)`. Each expert
+    /// goes over the whole sequence in turn, its state in the cache.
+    fn step_log_likelihoods(
+        &mut self,
+        steps: &[f64],
+        experts: &[usize],
+        mut ll: impl FnMut(usize, &[f64], &[f64], f64) -> f64,
+    ) -> Array2<f64> {
+        let t_len = steps.len() / self.dim;
+        let mut out = Array2::zeros((t_len, experts.len()));
+        if t_len == 0 {
+            return out;
+        }
+        let windows = self.prediction_windows(steps);
+        let dim = self.dim;
+        for (j, &c) in experts.iter().enumerate() {
+            self.models[c].observe_sequence(&windows, 0, |t, m| {
+                let o = &steps[t * dim..(t + 1) * dim];
+                out[[t, j]] = ll(j, o, m.mean(), m.predictive_variance());
+            });
+        }
+        out
     }
 
     /// For each of `experts`, ln p(o_1 … o_T | expert) summed over the steps of `seq`, with
@@ -107,26 +138,44 @@ impl Gs {
         &mut self,
         seq: ArrayView2<f64>,
         experts: &[usize],
-        mut ll: impl FnMut(usize, &[f64], &[f64], f64) -> f64,
+        ll: impl FnMut(usize, &[f64], &[f64], f64) -> f64,
     ) -> Vec<f64> {
         let seq = seq.as_standard_layout();
+        let steps = super::steps(&seq, self.dim);
+        let lls = self.step_log_likelihoods(steps, experts, ll);
         let mut totals = vec![0.0; experts.len()];
-        let mut step = vec![0.0; experts.len()];
-        self.window.reset();
-        for o in super::steps(&seq, self.dim).chunks_exact(self.dim) {
-            for (j, &c) in experts.iter().enumerate() {
-                let m = &mut self.models[c];
-                m.observe_window(&self.window);
-                step[j] = ll(j, o, m.mean(), m.predictive_variance());
-            }
+        for step in lls.rows() {
             if step.iter().any(|l| *l > f64::NEG_INFINITY) {
-                for (total, l) in totals.iter_mut().zip(&step) {
+                for (total, l) in totals.iter_mut().zip(step) {
                     *total += l;
                 }
             }
-            self.window.push(o);
         }
         totals
+    }
+
+    /// The filter of [`SequenceClassifier::predict_step`] over one step's log-likelihoods
+    /// (in `dist`, replaced by the posterior).
+    fn filter_step(&mut self, dist: &mut [f64]) {
+        // A step so far from every expert that all of them give −∞ (e.g. inputs of 1e200)
+        // carries no evidence and is skipped, since adding it would make −∞ − (−∞) = NaN
+        // below.
+        if dist.iter().any(|ll| *ll > f64::NEG_INFINITY) {
+            for (lp, ll) in self.log_post.iter_mut().zip(dist.iter()) {
+                *lp += ll;
+            }
+        }
+        let top = self
+            .log_post
+            .iter()
+            .cloned()
+            .fold(f64::NEG_INFINITY, f64::max);
+        let z: f64 = self.log_post.iter().map(|v| (v - top).exp()).sum();
+        let ln_z = top + z.ln();
+        for (lp, p) in self.log_post.iter_mut().zip(dist.iter_mut()) {
+            *lp -= ln_z;
+            *p = lp.exp();
+        }
     }
 }
 
@@ -151,13 +200,15 @@ impl SequenceClassifier for Gs {
     }
 
     fn predict_sequence(&mut self, seq: ArrayView2<f64>) -> Array2<f64> {
-        let c = self.models.len();
         let seq = seq.as_standard_layout();
         let steps = super::steps(&seq, self.dim);
-        let mut out = Array2::zeros((steps.len() / self.dim, c));
+        let experts: Vec<usize> = (0..self.models.len()).collect();
+        let mut out = self.step_log_likelihoods(steps, &experts, |_, o, mean, var| {
+            log_likelihood(o, mean, var)
+        });
         self.start_sequence();
-        for (o, mut row) in steps.chunks_exact(self.dim).zip(out.rows_mut()) {
-            self.predict_step(o, row.as_slice_mut().unwrap_or_default());
+        for mut row in out.rows_mut() {
+            self.filter_step(row.as_slice_mut().unwrap_or_default());
         }
         out
     }
@@ -180,29 +231,11 @@ impl SequenceClassifier for Gs {
     }
 
     fn predict_step(&mut self, o: &[f64], dist: &mut [f64]) {
-        // The step's log-likelihoods go into `dist` first: a step so far from every
-        // expert that all of them give −∞ (e.g. inputs of 1e200) carries no evidence
-        // and is skipped, since adding it would make −∞ − (−∞) = NaN below.
         for (m, ll) in self.models.iter_mut().zip(dist.iter_mut()) {
             m.observe_window(&self.window);
             *ll = log_likelihood(o, m.mean(), m.predictive_variance());
         }
-        if dist.iter().any(|ll| *ll > f64::NEG_INFINITY) {
-            for (lp, ll) in self.log_post.iter_mut().zip(dist.iter()) {
-                *lp += ll;
-            }
-        }
-        let top = self
-            .log_post
-            .iter()
-            .cloned()
-            .fold(f64::NEG_INFINITY, f64::max);
-        let z: f64 = self.log_post.iter().map(|v| (v - top).exp()).sum();
-        let ln_z = top + z.ln();
-        for (lp, p) in self.log_post.iter_mut().zip(dist.iter_mut()) {
-            *lp -= ln_z;
-            *p = lp.exp();
-        }
+        self.filter_step(dist);
         self.window.push(o);
     }
 
