@@ -416,15 +416,11 @@ impl Sogp {
     /// [`Sogp::observe`] at a window of a sequence: its stamp tells whether it is the
     /// window observed last, or that one shifted by one input, without comparing them.
     pub fn observe_window(&mut self, window: &Window) {
-        self.observe_stamped(window.as_slice(), window.stamp());
-    }
-
-    /// [`Sogp::observe_window`] at a window given by its inputs and its stamp.
-    fn observe_stamped(&mut self, window: &[f64], stamp: Stamp) {
+        let stamp = window.stamp();
         let shift = self.shift_to(stamp);
-        self.inputs.observe(&self.kernel, shift, window);
+        self.inputs.observe(&self.kernel, shift, window.as_slice());
         if shift != Shift::Same {
-            self.x_raw.copy_from_slice(window);
+            self.x_raw.copy_from_slice(window.as_slice());
             self.x_stamp = Some(stamp);
             self.x_scaled_current = false;
         }
