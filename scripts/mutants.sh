@@ -71,6 +71,9 @@ tests_in() {
     grep -h -A1 '#\[test\]' "$@" | grep -o 'fn [a-z0-9_]*' | cut -c4-
 }
 
+sparse_tests=(-C --lib -C --test=sparse_dictionary -C --test=sparse_feature_sign
+    -- -- sparse:: $(tests_in tests/sparse_*.rs))
+
 scope() {
     case $1 in
     scores) run scores --file src/cluster/scores.rs -C --lib -- cluster::scores ;;
@@ -109,9 +112,11 @@ scope() {
             -C --lib -C --test=learners_supervised -C --test=learners_unsupervised \
             -- -- learners:: $(tests_in tests/learners_*.rs) ;;
     sparse)
-        run sparse --file 'src/sparse/*.rs' \
-            -C --lib -C --test=sparse_dictionary -C --test=sparse_feature_sign \
-            -- -- sparse:: $(tests_in tests/sparse_*.rs) ;;
+        run sparse --file 'src/sparse/*.rs' "${sparse_tests[@]}" ;;
+    sparse-feature-sign | sparse-dual | sparse-dictionary | sparse-init | sparse-eps-l1 | sparse-dense | sparse-mod)
+        # One file of `sparse` each (together the `sparse` scope), with its tests.
+        local file=${1#sparse-}
+        run "$1" --file "src/sparse/${file//-/_}.rs" "${sparse_tests[@]}" ;;
     *)
         echo "unknown scope $1" >&2
         exit 2
