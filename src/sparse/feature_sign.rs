@@ -22,7 +22,7 @@ use super::dense::{chol_solve, cholesky};
 /// Outcome of one solve.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FsStats {
-    /// Feature-sign steps plus activations.
+    /// Feature-sign steps plus checks of the optimality conditions.
     pub iterations: usize,
     /// The optimality conditions hold (false only if `max_iter` was reached).
     pub converged: bool,
