@@ -125,7 +125,9 @@ scope() {
     # One file of `sparse` each (together the `sparse` scope), with the tests that guard
     # it. Feature-sign search has its own test target: the dictionary tests use it too,
     # but a broken solver runs to its iteration cap on every patch there, 40–90 s a mutant.
-    sparse-feature-sign) run "$1" --file src/sparse/feature_sign.rs -C --test=sparse_feature_sign ;;
+    sparse-feature-sign)
+        run "$1" --file src/sparse/feature_sign.rs -C --lib -C --test=sparse_feature_sign \
+            -- -- sparse::feature_sign $(tests_in tests/sparse_feature_sign.rs) ;;
     sparse-dual) run "$1" --file src/sparse/dual.rs -C --test=sparse_dictionary ;;
     sparse-dictionary) run "$1" --file src/sparse/dictionary.rs -C --test=sparse_dictionary ;;
     sparse-eps-l1) run "$1" --file src/sparse/eps_l1.rs -C --test=sparse_dictionary ;;

@@ -294,6 +294,8 @@ fn a_zero_coefficient_is_activated_only_beyond_the_documented_tolerance() {
         (4.0, [8.0, 4.0 + 1e-12], [4.0, 0.0]),
         (1.0, [2.0, 1.0 + 1e-14], [1.0, 0.0]),
         (0.0, [2.0, 1e-301], [2.0, 0.0]),
+        // Exactly at the tolerance (the rule is ≤).
+        (4.0, [8.0, 4.0 + (1e-12 * 4.0 + 1e-300)], [4.0, 0.0]),
     ] {
         let mut a = [0.0; 2];
         assert!(fs.solve(&g, &c, gamma, &mut a).converged);
@@ -307,4 +309,18 @@ fn a_zero_coefficient_is_activated_only_beyond_the_documented_tolerance() {
     );
     assert_eq!(a[0], 4.0);
     assert!(a[1] > 0.0 && (a[1] - 4e-9).abs() < 1e-15, "{a:?}");
+}
+
+#[test]
+fn a_duplicated_atom_gives_its_code_to_the_first_copy() {
+    // Two copies of one unit atom and x = 3 times it: every split of the weight 2 between
+    // them is optimal; the most violating zero coefficient is the first of equal ones.
+    let g = [1.0, 1.0, 1.0, 1.0];
+    let mut a = [0.0; 2];
+    assert!(
+        FeatureSign::new(2)
+            .solve(&g, &[3.0, 3.0], 1.0, &mut a)
+            .converged
+    );
+    assert_eq!(a, [2.0, 0.0]);
 }
