@@ -423,4 +423,18 @@ fn bases_always_used_together_still_get_the_optimal_dictionary() {
         let (f, f_ref) = (fit(&d), fit(&reference));
         assert!((f - f_ref).abs() <= 1e-8 * f_ref, "c = {c}: {f} vs {f_ref}");
     }
+    // Codes that are multiples of one column, one of them negative (u, u, −3u): AᵀA has
+    // rank 1 and negative entries off its diagonal.
+    let u = a.column(0).to_owned();
+    let mut b = a.clone();
+    b.column_mut(1).assign(&u);
+    b.column_mut(2).assign(&(&u * -3.0));
+    let fit_b = |d: &Array2<f64>| (&x - &b.dot(d)).iter().map(|v| v * v).sum::<f64>();
+    let c = 0.05;
+    let mut lambda = vec![0.0; k];
+    let (d, stats) = basis_step_dual(b.t().dot(&b).view(), b.t().dot(&x).view(), c, &mut lambda);
+    assert!(stats.converged, "{stats:?}");
+    let reference = projected_gradient(x.view(), b.view(), c);
+    let (f, f_ref) = (fit_b(&d), fit_b(&reference));
+    assert!((f - f_ref).abs() <= 1e-8 * f_ref, "rank 1: {f} vs {f_ref}");
 }
