@@ -7,6 +7,7 @@
 #   scripts/mutants.sh                 # every scope
 #   scripts/mutants.sh scores svm-eval # some
 #   scripts/mutants.sh --list learners # only count a scope's mutants
+#   scripts/mutants.sh --iterate scores # re-test only the mutants its last run missed
 #
 # Each scope mutates one module (--file, narrowed to functions where noted) and builds and
 # runs only the test targets that guard it: the targets go to every cargo call (-C), so
@@ -27,10 +28,18 @@ cd "$(dirname "$0")/.."
 export CARGO_PROFILE_DEV_OPT_LEVEL=1 CARGO_PROFILE_DEV_DEBUG=false
 
 list=
-if [ "${1:-}" = --list ]; then
+iterate=()
+case ${1:-} in
+--list)
     list=--list
     shift
-fi
+    ;;
+--iterate)
+    # Re-test only what the scope's last run did not catch (after adding tests).
+    iterate=(--iterate)
+    shift
+    ;;
+esac
 
 run() {
     local scope=$1
@@ -41,7 +50,7 @@ run() {
     fi
     mkdir -p "target/mutants/$scope"
     nice -n 10 cargo mutants --no-default-features --in-place --minimum-test-timeout 120 \
-        --output "target/mutants/$scope" "$@" || true
+        "${iterate[@]}" --output "target/mutants/$scope" "$@" || true
     for outcome in caught missed unviable timeout; do
         local f="target/mutants/$scope/mutants.out/$outcome.txt"
         printf '%s %s: %s\n' "$scope" "$outcome" "$( [ -f "$f" ] && wc -l <"$f" || echo 0)"
@@ -70,6 +79,9 @@ function_diff() {
 tests_in() {
     grep -h -A1 '#\[test\]' "$@" | grep -o 'fn [a-z0-9_]*' | cut -c4-
 }
+
+sparse_tests=(-C --lib -C --test=sparse_dictionary -C --test=sparse_feature_sign
+    -- -- sparse:: $(tests_in tests/sparse_*.rs))
 
 scope() {
     case $1 in
@@ -109,9 +121,22 @@ scope() {
             -C --lib -C --test=learners_supervised -C --test=learners_unsupervised \
             -- -- learners:: $(tests_in tests/learners_*.rs) ;;
     sparse)
-        run sparse --file 'src/sparse/*.rs' \
-            -C --lib -C --test=sparse_dictionary -C --test=sparse_feature_sign \
-            -- -- sparse:: $(tests_in tests/sparse_*.rs) ;;
+        run sparse --file 'src/sparse/*.rs' "${sparse_tests[@]}" ;;
+    # One file of `sparse` each (together the `sparse` scope), with the tests that guard
+    # it. Feature-sign search has its own test target: the dictionary tests use it too,
+    # but a broken solver runs to its iteration cap on every patch there, 40–90 s a mutant.
+    sparse-feature-sign)
+        run "$1" --file src/sparse/feature_sign.rs -C --lib -C --test=sparse_feature_sign \
+            -- -- sparse::feature_sign $(tests_in tests/sparse_feature_sign.rs) ;;
+    sparse-dual) run "$1" --file src/sparse/dual.rs -C --test=sparse_dictionary ;;
+    sparse-dictionary) run "$1" --file src/sparse/dictionary.rs -C --test=sparse_dictionary ;;
+    sparse-eps-l1) run "$1" --file src/sparse/eps_l1.rs -C --test=sparse_dictionary ;;
+    sparse-init)
+        run "$1" --file src/sparse/init.rs -C --lib -C --test=sparse_dictionary \
+            -- -- sparse:: $(tests_in tests/sparse_dictionary.rs) ;;
+    sparse-dense | sparse-mod)
+        local file=${1#sparse-}
+        run "$1" --file "src/sparse/$file.rs" "${sparse_tests[@]}" ;;
     *)
         echo "unknown scope $1" >&2
         exit 2

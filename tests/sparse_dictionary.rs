@@ -320,3 +320,121 @@ fn unused_bases_are_reseeded_without_raising_the_objective() {
         last = h.objective_after_basis;
     }
 }
+
+/// The largest projected-gradient entry of the dual at (D, λ): |c − ‖d_j‖²| where λ_j > 0,
+/// max(0, ‖d_j‖² − c) where λ_j = 0 (the bound violated), over the bases some code uses.
+fn projected_gradient_of_dual(d: &Array2<f64>, lambda: &[f64], c: f64, used: &[bool]) -> f64 {
+    let mut worst = 0.0f64;
+    for (j, row) in d.rows().into_iter().enumerate() {
+        if !used[j] {
+            continue;
+        }
+        let n2 = row.dot(&row);
+        let pg = if lambda[j] > 0.0 {
+            (c - n2).abs()
+        } else {
+            (n2 - c).max(0.0)
+        };
+        worst = worst.max(pg);
+    }
+    worst
+}
+
+#[test]
+fn unused_bases_get_zero_rows_and_multipliers_and_the_kkt_violation_is_reported() {
+    let mut rng = Rng::new(21);
+    let (n, dim, k) = (50, 4, 4);
+    let x = Array2::from_shape_fn((n, dim), |_| rng.normal());
+    // Basis 2 is used by no patch; the others' codes are of different scales, so some
+    // bounds are active and some not.
+    let scales = [0.3, 3.0, 0.0, 1.0];
+    let a = Array2::from_shape_fn((n, k), |(_, j)| scales[j] * rng.normal());
+    let (ata, atx) = (a.t().dot(&a), a.t().dot(&x));
+    let used = [true, true, false, true];
+    for c in [0.05, 4.0] {
+        // A stale multiplier on the unused basis.
+        let mut lambda = vec![0.0, 0.0, 7.0, 0.0];
+        let (d, stats) = basis_step_dual(ata.view(), atx.view(), c, &mut lambda);
+        assert!(stats.converged, "{stats:?}");
+        assert_eq!(lambda[2], 0.0);
+        assert!(d.row(2).iter().all(|v| *v == 0.0));
+        let reference = projected_gradient(x.view(), a.view(), c);
+        let diff = (&d - &reference).iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(diff < 1e-6, "c = {c}: {diff}");
+        let pg = projected_gradient_of_dual(&d, &lambda, c, &used);
+        assert!(stats.kkt_violation <= 1e-9 * c, "{stats:?}");
+        assert!(
+            (stats.kkt_violation - pg).abs() <= 1e-9 * c,
+            "{stats:?} vs {pg}"
+        );
+        if c == 0.05 {
+            // Some bound is active (basis 0, with the smallest codes) and some not, so
+            // the start λ = 0 was not optimal; at c = 4 none is, and λ = 0 is.
+            assert!(lambda[0] > 0.0 && lambda[1] == 0.0, "{lambda:?}");
+            assert!(stats.newton_steps > 0);
+        } else {
+            assert!(lambda.iter().all(|l| *l == 0.0), "{lambda:?}");
+            assert_eq!(stats.newton_steps, 0);
+        }
+        // From the optimal multipliers the KKT conditions hold at once: no Newton step.
+        let (d2, stats2) = basis_step_dual(ata.view(), atx.view(), c, &mut lambda);
+        assert_eq!(
+            (stats2.newton_steps, stats2.converged),
+            (0, true),
+            "{stats2:?}"
+        );
+        assert!((&d2 - &d).iter().all(|v| v.abs() < 1e-9));
+    }
+    // No basis used at all: zero rows, zero multipliers, nothing to do.
+    let mut lambda = vec![1.0; k];
+    let zero = Array2::<f64>::zeros((k, k));
+    let (d, stats) = basis_step_dual(
+        zero.view(),
+        Array2::<f64>::zeros((k, dim)).view(),
+        1.0,
+        &mut lambda,
+    );
+    assert!(d.iter().all(|v| *v == 0.0) && lambda.iter().all(|l| *l == 0.0));
+    assert_eq!((stats.newton_steps, stats.converged), (0, true));
+}
+
+#[test]
+fn bases_always_used_together_still_get_the_optimal_dictionary() {
+    // The codes of bases 0 and 1 are equal in every patch, so AᵀA is singular at λ = 0
+    // and the dual starts from small positive multipliers. D itself is then not unique
+    // (only d₀ + d₁ is fixed), so compare the objective ‖X − A D‖² with the projected
+    // gradient's.
+    let mut rng = Rng::new(23);
+    let (n, dim, k) = (40, 5, 3);
+    let x = Array2::from_shape_fn((n, dim), |_| rng.normal());
+    let mut a = Array2::from_shape_fn((n, k), |_| rng.normal());
+    let first = a.column(0).to_owned();
+    a.column_mut(1).assign(&first);
+    let fit = |d: &Array2<f64>| (&x - &a.dot(d)).iter().map(|v| v * v).sum::<f64>();
+    for c in [0.05, 0.3] {
+        let mut lambda = vec![0.0; k];
+        let (d, stats) =
+            basis_step_dual(a.t().dot(&a).view(), a.t().dot(&x).view(), c, &mut lambda);
+        assert!(stats.converged, "{stats:?}");
+        for row in d.rows() {
+            assert!(row.dot(&row) <= c * (1.0 + 1e-9));
+        }
+        let reference = projected_gradient(x.view(), a.view(), c);
+        let (f, f_ref) = (fit(&d), fit(&reference));
+        assert!((f - f_ref).abs() <= 1e-8 * f_ref, "c = {c}: {f} vs {f_ref}");
+    }
+    // Codes that are multiples of one column, one of them negative (u, u, −3u): AᵀA has
+    // rank 1 and negative entries off its diagonal.
+    let u = a.column(0).to_owned();
+    let mut b = a.clone();
+    b.column_mut(1).assign(&u);
+    b.column_mut(2).assign(&(&u * -3.0));
+    let fit_b = |d: &Array2<f64>| (&x - &b.dot(d)).iter().map(|v| v * v).sum::<f64>();
+    let c = 0.05;
+    let mut lambda = vec![0.0; k];
+    let (d, stats) = basis_step_dual(b.t().dot(&b).view(), b.t().dot(&x).view(), c, &mut lambda);
+    assert!(stats.converged, "{stats:?}");
+    let reference = projected_gradient(x.view(), b.view(), c);
+    let (f, f_ref) = (fit_b(&d), fit_b(&reference));
+    assert!((f - f_ref).abs() <= 1e-8 * f_ref, "rank 1: {f} vs {f_ref}");
+}

@@ -22,7 +22,7 @@ use super::dense::{chol_solve, cholesky};
 /// Outcome of one solve.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FsStats {
-    /// Feature-sign steps plus activations.
+    /// Feature-sign steps plus checks of the optimality conditions.
     pub iterations: usize,
     /// The optimality conditions hold (false only if `max_iter` was reached).
     pub converged: bool,
@@ -446,4 +446,99 @@ pub fn l1_optimality_violation(g: &[f64], c: &[f64], gamma: f64, a: &[f64]) -> f
         worst = worst.max(v);
     }
     worst
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One feature-sign step from the warm start `a` (its non-zero entries active, with
+    /// their signs), as `solve` sets it up: the step's outcome, the new code, the active
+    /// set and its signs.
+    fn one_step(
+        g: &[f64],
+        c: &[f64],
+        gamma: f64,
+        a: &[f64],
+    ) -> (bool, Vec<f64>, Vec<usize>, Vec<f64>) {
+        let mut fs = FeatureSign::new(c.len());
+        for (j, &v) in a.iter().enumerate() {
+            if v != 0.0 {
+                fs.active.push(j);
+                fs.theta.push(v.signum());
+            }
+        }
+        let mut a = a.to_vec();
+        let partial = matches!(fs.step(g, c, gamma, &mut a), Step::Partial);
+        (partial, a, fs.active.clone(), fs.theta.clone())
+    }
+
+    #[test]
+    fn the_line_search_keeps_the_best_of_the_segments_breakpoints_and_its_end() {
+        // G = I and γ = 1, so the objective is separable, Σ_j h_j(a_j) with
+        // h_j(a) = a²/2 − c_j a + |a|, and the sign-restricted minimiser z is c − θ.
+        let g = [1.0, 0.0, 0.0, 1.0];
+        // c = (3, −1), warm start (1, 1): z = (2, −2) leaves the second sign, so the step
+        // searches the segment (1, 1) → (2, −2). F at the start: (0.5 − 3 + 1) + (0.5 + 1 +
+        // 1) = 1; at the zero crossing t = 1/3, (4/3, 0): 8/9 − 4 + 4/3 = −16/9; at z:
+        // (2 − 6 + 2) + (2 − 2 + 2) = 0. The crossing is best: the second basis leaves.
+        let (partial, a, active, theta) = one_step(&g, &[3.0, -1.0], 1.0, &[1.0, 1.0]);
+        assert!(partial);
+        assert!((a[0] - 4.0 / 3.0).abs() < 1e-15 && a[1] == 0.0, "{a:?}");
+        assert_eq!((active, theta), (vec![0], vec![1.0]));
+        // c = (3, 0), warm start (10, 1): z = (2, −1), the crossing is at t = 1/2, (6, 0).
+        // F at the start: (50 − 30 + 10) + (0.5 + 1) = 31.5; at the crossing 6; at z,
+        // (2 − 6 + 2) + (0.5 + 1) = −0.5. The end of the segment is best: both stay, the
+        // second with its new sign.
+        let (partial, a, active, theta) = one_step(&g, &[3.0, 0.0], 1.0, &[10.0, 1.0]);
+        assert!(partial);
+        assert_eq!(a, vec![2.0, -1.0]);
+        assert_eq!((active, theta), (vec![0, 1], vec![1.0, -1.0]));
+    }
+
+    #[test]
+    fn a_singular_active_set_moves_along_its_null_direction_to_the_best_crossing() {
+        // Atoms e₃, e₁, e₂ and e₁ + e₂ and x = (3, 2, 1): G = [[1, 0, 0, 0], [0, 1, 0, 1],
+        // [0, 0, 1, 1], [0, 1, 1, 2]], c = D x = (1, 3, 2, 5). The fourth basis is the sum
+        // of the second and third, so the Cholesky factor fails at it and the step moves
+        // along v = (0, 1, 1, −1), which keeps a D (and with it the smooth part of F). From
+        // (1, 2, 3, 1) (‖a‖₁ = 7) the zero crossings are (1, 3, 4, 0) (t = 1, ‖a‖₁ = 8),
+        // (1, 0, 1, 3) (t = −2, 5) and (1, −1, 0, 4) (t = −3, 6): the second is taken. The
+        // first basis, which v does not move, stays as it is.
+        let g = [
+            1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 1.0, 1.0, 2.0,
+        ];
+        let c = [1.0, 3.0, 2.0, 5.0];
+        let (partial, a, active, theta) = one_step(&g, &c, 1.0, &[1.0, 2.0, 3.0, 1.0]);
+        assert!(partial);
+        assert_eq!(a, vec![1.0, 0.0, 1.0, 3.0]);
+        assert_eq!((active, theta), (vec![0, 2, 3], vec![1.0; 3]));
+    }
+
+    #[test]
+    fn the_coordinate_pass_minimises_each_coefficient_exactly_in_turn() {
+        // G = [[2, 1, 0], [1, 2, 0], [0, 0, 1]], c = (4, −3, 0.5), γ = 1, from (1, 1, 0):
+        // a₀ = S(4 − 1 · 1) / 2 = 1, then a₁ = S(−3 − 1 · 1) / 2 = −1.5, then a₂ = S(0.5) / 1
+        // = 0, with S the soft threshold at γ.
+        let g = [2.0, 1.0, 0.0, 1.0, 2.0, 0.0, 0.0, 0.0, 1.0];
+        let mut fs = FeatureSign::new(3);
+        let mut a = [1.0, 1.0, 0.0];
+        fs.coordinate_pass(&g, &[4.0, -3.0, 0.5], 1.0, &mut a);
+        assert_eq!(a, [1.0, -1.5, 0.0]);
+        assert_eq!((fs.active, fs.theta), (vec![0, 1], vec![1.0, -1.0]));
+    }
+
+    #[test]
+    fn soft_threshold_shrinks_towards_zero_by_t() {
+        for (x, want) in [
+            (3.0, 2.0),
+            (-3.0, -2.0),
+            (0.5, 0.0),
+            (-0.5, 0.0),
+            (1.0, 0.0),
+            (-1.0, 0.0),
+        ] {
+            assert_eq!(soft_threshold(x, 1.0), want, "S({x})");
+        }
+    }
 }
