@@ -135,6 +135,12 @@ fn wrong_likelihood_is_a_parameter_error() {
     let mut p = GsParams::default();
     p.gp.capacity = 0;
     assert!(Gs::new(2, &p).unwrap_err().to_string().contains("capacity"));
+    // One input dimension, so that a probit expert (one output) would build: GS itself
+    // must refuse the likelihood.
+    let mut p = GsParams::default();
+    p.gp.likelihood = tactile_workbench::gp::Likelihood::Probit;
+    let e = Gs::new(1, &p).unwrap_err().to_string();
+    assert!(e.contains("gp.likelihood"), "{e}");
 }
 
 /// The step interface (what `bench-recognition` times) gives the distributions of the

@@ -230,7 +230,8 @@ mod tests {
     /// Eq. 26 is 0/0 at a step where every expert's q is 0: p is then uniform. DS's own
     /// training does not get there (a probit expert's μ/σ grows only slowly with targets of
     /// ±1), so the two experts here are regression models trained on a target of −1e3 at
-    /// the all-zero window: there μ ≈ −990 against σ ≈ 0.15, and Φ(μ/σ) underflows to 0.
+    /// the all-zero window: there μ is near −1e3 against σ near 0.1, and Φ(μ/σ) underflows
+    /// to 0.
     #[test]
     fn a_step_where_every_q_is_zero_gets_the_uniform_p() {
         let mut ds = Ds::new(1, &DsParams::default()).unwrap();
