@@ -120,6 +120,20 @@ scope() {
         run learners --file 'src/learners/*.rs' \
             -C --lib -C --test=learners_supervised -C --test=learners_unsupervised \
             -- -- learners:: $(tests_in tests/learners_*.rs) ;;
+    learners-ds | learners-gs | learners-mod | learners-evt)
+        # One file of `learners` each (ds.rs, gs.rs, mod.rs, evt.rs), with the `learners`
+        # scope's tests: DU and GU are built on DS and GS and use mod.rs and evt.rs.
+        run "$1" --file "src/learners/${1#learners-}.rs" \
+            -C --lib -C --test=learners_supervised -C --test=learners_unsupervised \
+            -- -- learners:: $(tests_in tests/learners_*.rs) ;;
+    learners-du-gu-other)
+        # The rest of du.rs and gu.rs: what learners-novelty and learners-du-gu-rest leave
+        # out (their --re, excluded here), so the three scopes cover the two files once.
+        run learners-du-gu-other --file src/learners/du.rs --file src/learners/gu.rs \
+            --exclude-re 'du_novelty|Du::learn|Gu::step_novelty|Gu::joint_novelty|Gu::winner_among' \
+            --exclude-re 'DuParams::validate|Du::assign|confirmed_decision|GuParams::validate|Gu::learn|Gu::assign|Gu::winner |Gu::grasps_drawn|Gu::trained' \
+            -C --lib -C --test=learners_supervised -C --test=learners_unsupervised \
+            -- -- learners:: $(tests_in tests/learners_*.rs) ;;
     sparse)
         run sparse --file 'src/sparse/*.rs' "${sparse_tests[@]}" ;;
     # One file of `sparse` each (together the `sparse` scope), with the tests that guard

@@ -1,6 +1,6 @@
 use ndarray::Array2;
 use tactile_workbench::gp::SngdParams;
-use tactile_workbench::learners::{Ds, DsParams, Gs, GsParams, SequenceClassifier};
+use tactile_workbench::learners::{Ds, DsParams, Gs, GsParams, SequenceClassifier, lengthscales};
 use tactile_workbench::rng::Rng;
 
 /// Three classes of 2-D sequences: noisy ramps with class-specific slopes and offsets.
@@ -135,6 +135,12 @@ fn wrong_likelihood_is_a_parameter_error() {
     let mut p = GsParams::default();
     p.gp.capacity = 0;
     assert!(Gs::new(2, &p).unwrap_err().to_string().contains("capacity"));
+    // One input dimension, so that a probit expert (one output) would build: GS itself
+    // must refuse the likelihood.
+    let mut p = GsParams::default();
+    p.gp.likelihood = tactile_workbench::gp::Likelihood::Probit;
+    let e = Gs::new(1, &p).unwrap_err().to_string();
+    assert!(e.contains("gp.likelihood"), "{e}");
 }
 
 /// The step interface (what `bench-recognition` times) gives the distributions of the
@@ -229,6 +235,57 @@ fn whole_sequence_prediction_equals_the_steps() {
                 }
             }
             learner.train_sequence(s.view(), c);
+        }
+    }
+}
+
+/// `q` is eq. 24's q_c = Φ(μ_c/σ_c) of every expert at the last step taken one at a time,
+/// and the step's distribution is q normalised (eq. 26).
+#[test]
+fn ds_q_is_every_experts_probit_at_the_last_step() {
+    let mut p = DsParams::default();
+    p.gp = small(p.gp);
+    let mut ds = Ds::new(2, &p).unwrap();
+    for _ in 0..3 {
+        ds.add_class().unwrap();
+    }
+    let mut rng = Rng::new(6);
+    for i in 0..6 {
+        let s = sequence(i % 3, &mut rng);
+        ds.train_sequence(s.view(), i % 3);
+    }
+    let s = sequence(1, &mut rng);
+    ds.start_sequence();
+    let mut dist = [0.0; 3];
+    for o in s.rows() {
+        ds.predict_step(o.as_slice().unwrap(), &mut dist);
+    }
+    let want: Vec<f64> = ds.models().iter().map(|m| m.probability()).collect();
+    assert_eq!(ds.q(), want);
+    assert!(want.iter().all(|&q| q > 0.0 && q < 1.0), "{want:?}");
+    let sum: f64 = want.iter().sum();
+    for (p, q) in dist.iter().zip(&want) {
+        assert!((p - q / sum).abs() < 1e-15, "{dist:?} against {want:?}");
+    }
+}
+
+/// `lengthscales` has a row per expert and a column per input dimension, each row the
+/// expert's (adapted) lengthscales.
+#[test]
+fn lengthscales_are_one_row_per_expert_and_one_column_per_input() {
+    let (mut ds, mut gs) = (DsParams::default(), GsParams::default());
+    ds.gp = small(ds.gp);
+    gs.gp = small(gs.gp);
+    let learners: [Box<dyn SequenceClassifier>; 2] = [
+        Box::new(Ds::new(2, &ds).unwrap()),
+        Box::new(Gs::new(2, &gs).unwrap()),
+    ];
+    for mut l in learners {
+        run(&mut *l, 3);
+        let ls = lengthscales(&*l);
+        assert_eq!(ls.dim(), (3, 2));
+        for (row, m) in ls.rows().into_iter().zip(l.models()) {
+            assert_eq!(row.to_vec(), m.kernel_params().lengthscales.to_vec());
         }
     }
 }

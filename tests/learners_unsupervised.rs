@@ -304,3 +304,36 @@ fn du_with_no_confirmed_cluster_assigns_among_all() {
         assert_eq!(du.assign(s.view()), c);
     }
 }
+
+/// A predicted q of the wrong shape (a cluster added, or steps missing, since it was
+/// predicted) is read only where it exists: the experts and steps it does not cover are
+/// observed again, and training ends where training from scratch does.
+#[test]
+fn training_from_a_partial_predicted_q_changes_nothing() {
+    use ndarray::s;
+    use tactile_workbench::learners::{Ds, DsParams, SequenceClassifier};
+    let (seqs, labels) = data(6);
+    let mut p = DsParams::default();
+    p.gp = small(p.gp);
+    // (rows, columns) of the predicted q kept: one expert fewer, or the first 4 steps.
+    for (rows, cols) in [(10, 2), (4, 3)] {
+        let mut full = Ds::new(2, &p).unwrap();
+        for _ in 0..3 {
+            full.add_class().unwrap();
+        }
+        let mut fast = full.clone();
+        for (s, &c) in seqs.iter().zip(&labels) {
+            full.predict_q_and_p(s.view());
+            full.train_sequence(s.view(), c);
+            let (q, _) = fast.predict_q_and_p(s.view());
+            fast.train_sequence_predicted(s.view(), c, q.slice(s![..rows, ..cols]));
+            assert_eq!(full.q(), fast.q(), "q kept {rows} × {cols}");
+        }
+        let probe = sequence(1, &mut Rng::new(9));
+        assert_eq!(
+            full.predict_sequence(probe.view()),
+            fast.predict_sequence(probe.view()),
+            "q kept {rows} × {cols}: the experts differ after training"
+        );
+    }
+}

@@ -220,3 +220,41 @@ impl SequenceClassifier for Ds {
         super::argmax_of_mean(dist)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use ndarray::Array2;
+
+    use super::*;
+
+    /// Eq. 26 is 0/0 at a step where every expert's q is 0: p is then uniform. DS's own
+    /// training does not get there (a probit expert's μ/σ grows only slowly with targets of
+    /// ±1), so the two experts here are regression models trained on a target of −1e3 at
+    /// the all-zero window: there μ is near −1e3 against σ near 0.1, and Φ(μ/σ) underflows
+    /// to 0.
+    #[test]
+    fn a_step_where_every_q_is_zero_gets_the_uniform_p() {
+        let mut ds = Ds::new(1, &DsParams::default()).unwrap();
+        let gp = SogpParams {
+            likelihood: Likelihood::Regression,
+            adaptation: None,
+            ..ds.params.gp.clone()
+        };
+        let zeros = Window::new(1, gp.tau);
+        for _ in 0..2 {
+            let mut m = Sogp::new(1, 1, &gp).unwrap();
+            m.observe_window(&zeros);
+            m.update(&[-1e3]);
+            ds.models.push(m);
+            ds.q.push(0.5);
+        }
+        let seq = Array2::zeros((3, 1));
+        let (q, p) = ds.predict_q_and_p(seq.view());
+        assert!(q.iter().all(|&q| q == 0.0), "{q}");
+        assert!(p.iter().all(|&p| p == 0.5), "{p}");
+        ds.start_sequence();
+        let mut dist = [0.0; 2];
+        ds.predict_step(&[0.0], &mut dist);
+        assert_eq!((ds.q(), dist), (&[0.0, 0.0][..], [0.5, 0.5]));
+    }
+}

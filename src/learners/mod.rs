@@ -94,3 +94,22 @@ pub fn lengthscales(learner: &dyn SequenceClassifier) -> Array2<f64> {
         models[c].kernel_params().lengthscales[j]
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use ndarray::array;
+
+    use super::*;
+
+    /// A tie goes to the first class, so that a decision does not depend on how many
+    /// classes tie after it (an untrained learner's uniform distribution decides class 0).
+    #[test]
+    fn a_tie_goes_to_the_first_class() {
+        let uniform = array![[0.25, 0.25, 0.25, 0.25], [0.25, 0.25, 0.25, 0.25]];
+        assert_eq!(argmax_of_mean(uniform.view()), 0);
+        assert_eq!(argmax_of_last(uniform.view()), 0);
+        let tied = array![[0.1, 0.45, 0.45]];
+        assert_eq!(argmax_of_mean(tied.view()), 1);
+        assert_eq!(argmax_of_last(tied.view()), 1);
+    }
+}
