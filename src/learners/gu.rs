@@ -398,6 +398,30 @@ mod tests {
     use super::*;
     use crate::rng::Rng;
 
+    /// ln N(o | μ, diag(v)) against the density written out, a product of 1-D normals
+    /// (1/√(2π v_k)) exp(−(o_k − μ_k)²/(2 v_k)), at values worked by hand: with o = μ in
+    /// one dimension and v = 1/(2π) there, that factor is exactly 1.
+    #[test]
+    fn the_diagonal_log_likelihood_is_the_normal_density() {
+        let two_pi = 2.0 * std::f64::consts::PI;
+        let (o, mean, var) = ([0.5, -1.0, 2.0], [0.5, 0.0, 1.5], [1.0 / two_pi, 0.25, 4.0]);
+        let density: f64 = (0..3)
+            .map(|k| {
+                let e = o[k] - mean[k];
+                (-e * e / (2.0 * var[k])).exp() / (two_pi * var[k]).sqrt()
+            })
+            .product();
+        let ll = log_likelihood_diag(&o, &mean, &var);
+        assert!(
+            (ll - density.ln()).abs() < 1e-12,
+            "{ll} vs {}",
+            density.ln()
+        );
+        // The first dimension contributes ln 1 = 0.
+        let rest = log_likelihood_diag(&o[1..], &mean[1..], &var[1..]);
+        assert!((ll - rest).abs() < 1e-12);
+    }
+
     /// A slow ramp in both features with noise of sd 0.01 (variance 1e-4, a hundredth of
     /// sigma_n² = 0.01).
     fn grasp(offset: f64, rng: &mut Rng) -> Array2<f64> {
