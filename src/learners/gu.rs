@@ -422,6 +422,69 @@ mod tests {
         assert!((ll - rest).abs() < 1e-12);
     }
 
+    /// Σ of a step under the per-dimension noise, worked by hand: the latent part of the
+    /// predictive variance (v − sigma_n², not below 0) plus each dimension's noise; the
+    /// shared noise keeps v in every dimension.
+    #[test]
+    fn the_per_dimension_variance_is_the_latent_part_plus_each_noise() {
+        let noise = (vec![0.002, 0.03], 0.01);
+        let mut variance = [0.0; 2];
+        Gu::fill_variance(&mut variance, 0.05, Some(&noise));
+        assert!((variance[0] - 0.042).abs() < 1e-15 && (variance[1] - 0.07).abs() < 1e-15);
+        // A predictive variance below sigma_n² (rounding) leaves the noise alone.
+        Gu::fill_variance(&mut variance, 0.008, Some(&noise));
+        assert_eq!(variance, [0.002, 0.03]);
+        Gu::fill_variance(&mut variance, 0.05, None);
+        assert_eq!(variance, [0.05, 0.05]);
+    }
+
+    /// The per-dimension noise is the mean squared residual of each grasp re-predicted right
+    /// after training on it (the definition of [`GuNoise::PerDimension`], written out), and
+    /// lies near the variance of the noise planted in the grasps: 0.05² = 0.0025 in the first
+    /// feature, 0.02² = 0.0004 in the second.
+    #[test]
+    fn the_per_dimension_noise_is_the_mean_squared_residual_after_training() {
+        let mut rng = Rng::new(5);
+        let mut noisy_grasp = || {
+            Array2::from_shape_fn((20, 2), |(t, d)| {
+                0.4 + 0.01 * t as f64 + [0.05, 0.02][d] * rng.normal()
+            })
+        };
+        let p = GuParams {
+            noise: GuNoise::PerDimension,
+            ..GuParams::default()
+        };
+        let mut gu = Gu::new(2, &p).unwrap();
+        let mut sums = [0.0; 2];
+        let mut steps = 0;
+        for first in [true, false] {
+            let g = noisy_grasp();
+            if first {
+                assert!(gu.learn(g.view()).unwrap().created);
+            } else {
+                gu.train(g.view(), 0);
+            }
+            let (means, _) = gu.gs.expert_predictions(0, g.view());
+            for (o, mu) in g.rows().into_iter().zip(means.rows()) {
+                for d in 0..2 {
+                    sums[d] += (o[d] - mu[d]).powi(2);
+                }
+                steps += 1;
+            }
+        }
+        assert_eq!(steps, 40);
+        let (noise, _) = gu.noise_variances(0).unwrap();
+        for d in 0..2 {
+            let expected = sums[d] / steps as f64;
+            assert!((noise[d] - expected).abs() < 1e-12 * expected, "{noise:?}");
+            let planted = [0.0025, 0.0004][d];
+            assert!(
+                noise[d] > planted / 3.0 && noise[d] < planted * 3.0,
+                "{noise:?}"
+            );
+        }
+    }
+
     /// A slow ramp in both features with noise of sd 0.01 (variance 1e-4, a hundredth of
     /// sigma_n² = 0.01).
     fn grasp(offset: f64, rng: &mut Rng) -> Array2<f64> {
