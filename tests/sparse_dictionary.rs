@@ -515,6 +515,9 @@ fn warm_starts_from_stale_multipliers_reach_the_worked_optimum() {
     // gradient is positive is held).
     let atx = ndarray::arr2(&[[0.3, 0.4], [0.4, -0.3]]);
     check_independent_bases(&[1.0, 1.0], &atx, 0.5, &[0.002, 0.002], &[0.0, 0.0]);
+    // The same at s = 0.1 (AᵀX / 10) from 0.001, above its ε̄ of 1e-4: ε̄ scales with AᵀA.
+    let atx = ndarray::arr2(&[[0.03, 0.04], [0.04, -0.03]]);
+    check_independent_bases(&[0.1, 0.1], &atx, 0.5, &[0.001, 0.001], &[0.0, 0.0]);
     // s = 1, p = (60, 80), c = 1: λ* = 99, d = (0.6, 0.8). From a stale 200 the full Newton
     // step goes below 0, to λ = 0, where φ = ‖p‖² / s = 1e4 exceeds φ(200) ≈ 250: the step
     // must backtrack (to t = 1/4).
