@@ -150,11 +150,14 @@ fn lagrange_dual_basis_step_matches_projected_gradient() {
             0.0
         }
     });
-    for c in [1.0, 0.3, 10.0] {
+    // c = 1e-4: every bound active, and a tolerance on the dual's gradient c − ‖d_j‖² that
+    // is not relative to c would be loose.
+    for c in [1.0, 0.3, 10.0, 1e-4] {
         let mut lambda = vec![0.0; k];
         let (d, stats) =
             basis_step_dual(a.t().dot(&a).view(), a.t().dot(&x).view(), c, &mut lambda);
         assert!(stats.converged, "{stats:?}");
+        assert!(stats.kkt_violation <= 1e-6 * c, "c = {c}: {stats:?}");
         let reference = projected_gradient(x.view(), a.view(), c);
         let diff = (&d - &reference).iter().fold(0.0f64, |m, v| m.max(v.abs()));
         assert!(
@@ -437,4 +440,99 @@ fn bases_always_used_together_still_get_the_optimal_dictionary() {
     let reference = projected_gradient(x.view(), b.view(), c);
     let (f, f_ref) = (fit_b(&d), fit_b(&reference));
     assert!((f - f_ref).abs() <= 1e-8 * f_ref, "rank 1: {f} vs {f_ref}");
+}
+
+#[test]
+fn copies_of_one_code_column_get_the_least_squares_sum_of_their_bases() {
+    // Three bases whose codes are one integer column u in every patch: AᵀA = s 11ᵀ (s =
+    // uᵀu) is singular at λ = 0 and its diagonal sums to 3s, a multiple of 3. Only e = d₀ +
+    // d₁ + d₂ is fixed (A D = u eᵀ); with every bound slack it is the least-squares Xᵀu / s.
+    // The dual cannot reach λ = 0 here: it starts from a ridge of 1e-6 of the mean diagonal
+    // (so its start scales with the codes), which shrinks e by 1 / (1 + 1e-6/3).
+    let mut rng = Rng::new(29);
+    let (n, dim, k) = (40, 5, 3);
+    let x = Array2::from_shape_fn((n, dim), |_| rng.normal());
+    let u: Vec<f64> = (0..n).map(|_| rng.below(11) as f64 - 5.0).collect();
+    let a = Array2::from_shape_fn((n, k), |(i, _)| u[i]);
+    let s: f64 = u.iter().map(|v| v * v).sum();
+    let want: Vec<f64> = (0..dim)
+        .map(|t| (0..n).map(|i| u[i] * x[[i, t]]).sum::<f64>() / s)
+        .collect();
+    let c = 1.0;
+    assert!(
+        want.iter().map(|v| v * v).sum::<f64>() < c,
+        "a bound is active"
+    );
+    let mut lambda = vec![0.0; k];
+    let (d, stats) = basis_step_dual(a.t().dot(&a).view(), a.t().dot(&x).view(), c, &mut lambda);
+    assert!(stats.converged, "{stats:?}");
+    let scale = want.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for (t, w) in want.iter().enumerate() {
+        let e = d.column(t).sum();
+        assert!((e - w).abs() <= 1e-6 * scale, "e[{t}] = {e}, want {w}");
+    }
+}
+
+/// The dual from the multipliers `start` for codes with AᵀA diagonal, where the bases are
+/// independent: d_j = p_j / (s_j + λ_j), so the bound of basis j is active when ‖p_j‖ >
+/// s_j √c, and then λ_j = ‖p_j‖ / √c − s_j; otherwise λ_j = 0. `want` holds those λ_j.
+fn check_independent_bases(ata: &[f64], atx: &Array2<f64>, c: f64, start: &[f64], want: &[f64]) {
+    let ata_m = Array2::from_diag(&ndarray::Array1::from(ata.to_vec()));
+    let mut lambda = start.to_vec();
+    let (d, stats) = basis_step_dual(ata_m.view(), atx.view(), c, &mut lambda);
+    assert!(stats.converged, "from {start:?}: {stats:?}");
+    for (j, (l, w)) in lambda.iter().zip(want).enumerate() {
+        assert!(
+            (l - w).abs() <= 1e-6 * (1.0 + w),
+            "from {start:?}: λ_{j} = {l}, want {w}"
+        );
+        let want_row = atx.row(j).mapv(|v| v / (ata[j] + w));
+        let diff = (&d.row(j) - &want_row)
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(
+            diff < 1e-9,
+            "from {start:?}: d_{j} = {}, want {want_row}",
+            d.row(j)
+        );
+    }
+}
+
+#[test]
+fn warm_starts_from_stale_multipliers_reach_the_worked_optimum() {
+    // s = 1000, c = 1: basis 0 with p₀ = (60, 80) is slack; basis 1 with p₁ = 1000.5 (0.6,
+    // 0.8) is active at λ₁ = 0.5 (d₁ = (0.6, 0.8)). From λ = 0, and from a stale λ₁ = 0.9
+    // above its optimum, where its gradient c − ‖d₁‖² is small and positive.
+    let atx = ndarray::arr2(&[[60.0, 80.0], [600.3, 800.4]]);
+    for start in [[0.0, 0.0], [0.0, 0.9]] {
+        check_independent_bases(&[1000.0, 1000.0], &atx, 1.0, &start, &[0.0, 0.5]);
+    }
+    // Basis 1 slack too (p₁ = (360, 480)): the stale 0.9 goes back to 0.
+    let atx = ndarray::arr2(&[[60.0, 80.0], [360.0, 480.0]]);
+    check_independent_bases(&[1000.0, 1000.0], &atx, 1.0, &[0.0, 0.9], &[0.0, 0.0]);
+    // s = 1, both bounds slack (‖p_j‖² = 0.25 < c = 0.5), stale multipliers of 0.002, above
+    // Bertsekas' ε̄ (1e-3 of the mean diagonal of AᵀA, below which a multiplier whose
+    // gradient is positive is held).
+    let atx = ndarray::arr2(&[[0.3, 0.4], [0.4, -0.3]]);
+    check_independent_bases(&[1.0, 1.0], &atx, 0.5, &[0.002, 0.002], &[0.0, 0.0]);
+    // The same at s = 0.1 (AᵀX / 10) from 0.001, above its ε̄ of 1e-4: ε̄ scales with AᵀA.
+    let atx = ndarray::arr2(&[[0.03, 0.04], [0.04, -0.03]]);
+    check_independent_bases(&[0.1, 0.1], &atx, 0.5, &[0.001, 0.001], &[0.0, 0.0]);
+    // s = 1, p = (60, 80), c = 1: λ* = 99, d = (0.6, 0.8). From a stale 200 the full Newton
+    // step goes below 0, to λ = 0, where φ = ‖p‖² / s = 1e4 exceeds φ(200) ≈ 250: the step
+    // must backtrack (to t = 1/4).
+    let atx = ndarray::arr2(&[[60.0, 80.0]]);
+    for start in [0.0, 200.0] {
+        check_independent_bases(&[1.0], &atx, 1.0, &[start], &[99.0]);
+    }
+}
+
+#[test]
+fn a_used_basis_whose_codes_miss_the_data_gets_a_zero_row() {
+    // AᵀA = I, and basis 2's codes are orthogonal to every patch (its row of AᵀX is 0), so
+    // d₂ = 0 and its row of the dual's Hessian 2 (D Dᵀ)_ij (M⁻¹)_ij is 0: from stale
+    // multipliers of 0.7 all three are free, and the Newton system needs its ridge. Every
+    // bound is slack (‖p_j‖² ≤ 0.25 < c = 0.5): λ = 0 and D = AᵀX.
+    let atx = ndarray::arr2(&[[0.3, 0.4], [0.4, -0.3], [0.0, 0.0]]);
+    check_independent_bases(&[1.0, 1.0, 1.0], &atx, 0.5, &[0.7, 0.7, 0.7], &[0.0; 3]);
 }

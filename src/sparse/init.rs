@@ -193,7 +193,14 @@ mod tests {
         let mut rng = Rng::new(7);
         let b = Array2::from_shape_fn((6, 4), |_| rng.normal());
         let large = b.dot(&b.t());
-        for a in [small, large] {
+        // A 12 × 12 one (a rotation angle that does not annihilate its entry still converges
+        // on 3 × 3 matrices), the small one at 1e-20 (the stopping test is relative), and one
+        // with a zero entry between equal diagonal entries (0/0 in the rotation angle).
+        let c = Array2::from_shape_fn((14, 12), |_| rng.normal());
+        let larger = c.t().dot(&c);
+        let tiny = &small * 1e-20;
+        let zero_entry = array![[2.0, 0.0, 1.0], [0.0, 2.0, 1.0], [1.0, 1.0, 3.0]];
+        for a in [small, large, larger, tiny, zero_entry] {
             let n = a.nrows();
             let (vals, vecs) = symmetric_eigen(a.view());
             let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -225,5 +232,165 @@ mod tests {
             symmetric_eigen(array![[4.0, 1.0, 0.5], [1.0, 3.0, 0.2], [0.5, 0.2, 1.0]].view());
         let det = 4.0 * (3.0 - 0.04) - (1.0 - 0.1) + 0.5 * (0.2 - 1.5);
         assert!((vals.iter().product::<f64>() - det).abs() < 1e-12);
+    }
+
+    /// Four patches X = Z Q: Z has orthogonal columns of norms (1, 3, σ₃) and Q is the
+    /// rotation with rows q₁ = (0.6, 0.8, 0), q₂ = (−0.8, 0.6, 0), q₃ = (0, 0, 1), so XᵀX =
+    /// Qᵀ diag(1, 9, σ₃²) Q has the eigenvectors q_i.
+    fn rotated_patches(sigma3: f64) -> Array2<f64> {
+        let z = array![
+            [1.0, 1.0, 1.0],
+            [1.0, -1.0, 1.0],
+            [1.0, 1.0, -1.0],
+            [1.0, -1.0, -1.0]
+        ];
+        let z = &z * &array![[0.5, 1.5, 0.5 * sigma3]];
+        let q = array![[0.6, 0.8, 0.0], [-0.8, 0.6, 0.0], [0.0, 0.0, 1.0]];
+        z.dot(&q)
+    }
+
+    fn assert_rows(d: &Array2<f64>, want: &[[f64; 3]]) {
+        for (j, w) in want.iter().enumerate() {
+            for (t, &v) in w.iter().enumerate() {
+                assert!(
+                    (d[[j, t]] - v).abs() < 1e-10,
+                    "atom {j}: {}, want {w:?}",
+                    d.row(j)
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn svd_atoms_are_the_principal_directions_largest_first_with_a_positive_largest_entry() {
+        // σ₃ = 2: the eigenvalues 9, 4, 1 order the atoms q₂, q₃, q₁, q₂ with its sign
+        // flipped (its largest entry is −0.8). Every atom has norm √c.
+        let c: f64 = 2.0;
+        let want =
+            [[0.8, -0.6, 0.0], [0.0, 0.0, 1.0], [0.6, 0.8, 0.0]].map(|r| r.map(|v| v * c.sqrt()));
+        let x = rotated_patches(2.0);
+        for k in [2, 3] {
+            let d = initial_dictionary(DictInit::Svd, x.view(), k, c, 1);
+            assert_eq!(d.dim(), (k, 3));
+            assert_rows(&d, &want[..k]);
+        }
+        // σ₃ = 0 and patches of norm about 1e-4: rank 2 (the rank test is relative to the
+        // largest eigenvalue, here 9e-8): the atoms are q₂ and q₁ (eigenvalues 9e-8 and
+        // 1e-8), then not the null direction q₃ but patches, as beyond the dimension.
+        let x = rotated_patches(0.0) * 1e-4;
+        for k in [3, 5] {
+            let d = initial_dictionary(DictInit::Svd, x.view(), k, c, 1);
+            assert_rows(&d, &[want[0], want[2]]);
+            for j in 2..k {
+                assert!(
+                    scaled_patch(d.row(j), &x, c).is_some(),
+                    "atom {j}: {}",
+                    d.row(j)
+                );
+            }
+        }
+        // Integer patches (XᵀX exact) whose eigenvectors from the rotations include two
+        // with a negative largest entry: each atom / √c is a unit eigenvector of XᵀX, their
+        // eigenvalues (Rayleigh quotients) decrease, and each largest entry is positive.
+        let x = array![
+            [3.0, 3.0, 2.0, 2.0],
+            [1.0, -1.0, -2.0, 0.0],
+            [-1.0, 0.0, -2.0, 3.0],
+            [-2.0, -3.0, -1.0, -1.0],
+            [-3.0, 0.0, -2.0, 0.0],
+            [-3.0, 1.0, 1.0, 0.0]
+        ];
+        let xtx = x.t().dot(&x);
+        let d = initial_dictionary(DictInit::Svd, x.view(), 4, c, 1);
+        let mut last = f64::INFINITY;
+        for row in d.rows() {
+            let v = &row / c.sqrt();
+            let q = v.dot(&xtx.dot(&v));
+            assert!(
+                (&xtx.dot(&v) - &(&v * q)).iter().all(|e| e.abs() < 1e-9),
+                "{v}"
+            );
+            assert!(q < last, "eigenvalue {q} after {last}");
+            last = q;
+            let big = v
+                .iter()
+                .fold(0.0f64, |m, &e| if e.abs() > m.abs() { e } else { m });
+            assert!(big > 0.0, "{v}");
+        }
+    }
+
+    /// The row of `x` that `atom` is, scaled to norm √c.
+    fn scaled_patch(atom: ndarray::ArrayView1<f64>, x: &Array2<f64>, c: f64) -> Option<usize> {
+        x.rows().into_iter().position(|r| {
+            let n = r.dot(&r).sqrt();
+            n > 0.0
+                && r.iter()
+                    .zip(atom)
+                    .all(|(a, b)| (a * c.sqrt() / n - b).abs() < 1e-12)
+        })
+    }
+
+    #[test]
+    fn random_atoms_are_zero_mean_with_norm_sqrt_c() {
+        let x = rotated_patches(2.0);
+        let d = initial_dictionary(DictInit::Random, x.view(), 6, 3.0, 4);
+        for row in d.rows() {
+            assert!(row.sum().abs() < 1e-12, "{row}");
+            assert!((row.dot(&row) - 3.0).abs() < 1e-12, "{row}");
+        }
+        assert_ne!(d.row(0), d.row(1));
+    }
+
+    #[test]
+    fn patch_atoms_are_distinct_non_zero_patches_drawn_by_squared_norm() {
+        // Five patches, two of them zero: three atoms are the three others, each once.
+        let x = array![
+            [0.0, 0.0, 0.0],
+            [1.0, 2.0, 2.0],
+            [0.0, 0.0, 0.0],
+            [4.0, 0.0, 3.0],
+            [0.0, -1.0, 0.0]
+        ];
+        for seed in 0..20 {
+            let d = initial_dictionary(DictInit::Patches, x.view(), 3, 1.0, seed);
+            let mut picked: Vec<usize> = d
+                .rows()
+                .into_iter()
+                .map(|a| scaled_patch(a, &x, 1.0).expect("an atom that is no patch"))
+                .collect();
+            picked.sort();
+            assert_eq!(picked, vec![1, 3, 4], "seed {seed}");
+        }
+        // One atom from patches of squared norms 1 and 99: the second is drawn with
+        // probability 0.99, so in 200 seeds at least 180 times (the binomial's mean is 198,
+        // its sd 1.4); a uniform draw would give about 100.
+        let x = array![[1.0, 0.0, 0.0], [0.0, 0.0, 99f64.sqrt()]];
+        let heavy = (0..200)
+            .filter(|&seed| {
+                initial_dictionary(DictInit::Patches, x.view(), 1, 1.0, seed)[[0, 2]] > 0.5
+            })
+            .count();
+        assert!(heavy >= 180, "{heavy} of 200");
+        // No patch with any energy: the atoms are seeded random directions of norm √c.
+        let zero = Array2::<f64>::zeros((4, 3));
+        let d = initial_dictionary(DictInit::Patches, zero.view(), 2, 2.0, 5);
+        for row in d.rows() {
+            assert!((row.dot(&row) - 2.0).abs() < 1e-12, "{row}");
+        }
+        assert_ne!(d.row(0), d.row(1));
+    }
+
+    #[test]
+    fn normalising_gives_norm_sqrt_c_and_a_random_direction_to_a_zero_or_nan_row() {
+        let mut d = array![[3.0, 4.0, 0.0], [0.0, 0.0, 0.0], [f64::NAN, 1.0, 0.0]];
+        normalise_rows(&mut d, 4.0, &mut Rng::new(3));
+        assert!(
+            (&d.row(0) - &ndarray::arr1(&[1.2, 1.6, 0.0]))
+                .iter()
+                .all(|v| v.abs() < 1e-15)
+        );
+        for row in d.rows() {
+            assert!((row.dot(&row) - 4.0).abs() < 1e-12, "{row}");
+        }
     }
 }
