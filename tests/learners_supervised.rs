@@ -1,5 +1,5 @@
 use ndarray::Array2;
-use tactile_workbench::gp::SngdParams;
+use tactile_workbench::gp::{SngdParams, Window};
 use tactile_workbench::learners::{Ds, DsParams, Gs, GsParams, SequenceClassifier, lengthscales};
 use tactile_workbench::rng::Rng;
 
@@ -49,6 +49,16 @@ fn run(learner: &mut dyn SequenceClassifier, seed: u64) -> (f64, Vec<Vec<f64>>) 
     (correct as f64 / 30.0, first)
 }
 
+/// ln N(o | mean, var·I), eq. 30 written out as a sum of 1-D normal log-densities.
+fn gaussian(_: usize, o: &[f64], mean: &[f64], var: f64) -> f64 {
+    o.iter()
+        .zip(mean)
+        .map(|(x, m)| {
+            -0.5 * (2.0 * std::f64::consts::PI * var).ln() - (x - m).powi(2) / (2.0 * var)
+        })
+        .sum()
+}
+
 fn small(mut p: tactile_workbench::gp::SogpParams) -> tactile_workbench::gp::SogpParams {
     p.tau = 4;
     p.capacity = 20;
@@ -82,14 +92,6 @@ fn gs_learns_three_classes_and_its_filter_sharpens() {
     // Eq. 29 from a uniform prior: the posterior after step t is the normalised product of
     // the steps' likelihoods (eq. 30: independent Gaussians of the noisy predictive
     // variance), so it sharpens as steps agree; a filter that forgot its past would not.
-    let gaussian = |_: usize, o: &[f64], mean: &[f64], var: f64| -> f64 {
-        o.iter()
-            .zip(mean)
-            .map(|(x, m)| {
-                -0.5 * (2.0 * std::f64::consts::PI * var).ln() - (x - m).powi(2) / (2.0 * var)
-            })
-            .sum()
-    };
     let mut rng = Rng::new(9);
     for c in 0..3 {
         let s = sequence(c, &mut rng);
@@ -287,5 +289,81 @@ fn lengthscales_are_one_row_per_expert_and_one_column_per_input() {
         for (row, m) in ls.rows().into_iter().zip(l.models()) {
             assert_eq!(row.to_vec(), m.kernel_params().lengthscales.to_vec());
         }
+    }
+}
+
+/// GS trained on three classes of `sequence`.
+fn trained_gs(seed: u64) -> Gs {
+    let mut p = GsParams::default();
+    p.gp = small(p.gp);
+    let mut gs = Gs::new(2, &p).unwrap();
+    for _ in 0..3 {
+        gs.add_class().unwrap();
+    }
+    let mut rng = Rng::new(seed);
+    for i in 0..9 {
+        let s = sequence(i % 3, &mut rng);
+        gs.train_sequence(s.view(), i % 3);
+    }
+    gs
+}
+
+/// An expert's predictions are one row of means and one predictive variance per step, each
+/// the expert's prediction from the window of the steps before it (the module's rule, the
+/// first window all padding), taken here one window at a time; an empty sequence, or one
+/// whose width is not the learner's, gives none.
+#[test]
+fn expert_predictions_are_one_per_step_from_the_window_before_it() {
+    let mut gs = trained_gs(7);
+    let s = sequence(2, &mut Rng::new(17));
+    let (means, vars) = gs.expert_predictions(1, s.view());
+    assert_eq!(means.dim(), (s.nrows(), 2));
+    assert_eq!(vars.len(), s.nrows());
+    let mut expert = gs.models()[1].clone();
+    let mut window = Window::new(2, expert.kernel().tau());
+    for (t, o) in s.rows().into_iter().enumerate() {
+        expert.observe_window(&window);
+        for (got, want) in means.row(t).iter().zip(expert.mean()) {
+            assert!(
+                (got - want).abs() < 1e-12,
+                "step {t}: mean {got} against {want}"
+            );
+        }
+        let want = expert.predictive_variance();
+        assert!(
+            (vars[t] - want).abs() < 1e-12,
+            "step {t}: variance {} against {want}",
+            vars[t]
+        );
+        window.push(o.as_slice().unwrap());
+    }
+    for none in [Array2::zeros((0, 2)), Array2::zeros((4, 3))] {
+        let (means, vars) = gs.expert_predictions(1, none.view());
+        assert_eq!((means.nrows(), vars.len()), (0, 0));
+    }
+}
+
+/// A step so far from every expert that each gives it likelihood 0 (inputs of 1e200: ln p
+/// = −∞) carries no evidence. The filter (eq. 29) keeps the posterior of the step before
+/// instead of forming 0/0, and the summed log-likelihoods are those of the steps before.
+#[test]
+fn gs_skips_a_step_that_no_expert_explains() {
+    let mut gs = trained_gs(8);
+    let mut s = sequence(1, &mut Rng::new(18));
+    let t_len = s.nrows();
+    s.row_mut(t_len - 1).fill(1e200);
+    let post = gs.predict_sequence(s.view());
+    for (got, want) in post.row(t_len - 1).iter().zip(post.row(t_len - 2)) {
+        assert!((got - want).abs() < 1e-12, "{got} against {want}");
+    }
+    assert!((post.row(t_len - 1).sum() - 1.0).abs() < 1e-12);
+    let all = gs.summed_log_likelihoods(s.view(), &[0, 1, 2], gaussian);
+    let before =
+        gs.summed_log_likelihoods(s.slice(ndarray::s![..t_len - 1, ..]), &[0, 1, 2], gaussian);
+    for (got, want) in all.iter().zip(&before) {
+        assert!(
+            want.is_finite() && (got - want).abs() < 1e-9 * want.abs(),
+            "{got} against {want}"
+        );
     }
 }

@@ -121,7 +121,7 @@ fn ln_chi2_pdf_with(n: usize, t: f64, ln_gamma_half_n: f64) -> f64 {
 
 /// G_n(y) = P[N(X | μ, Σ) ≤ y] for X ~ N(μ, Σ) in n ≥ 1 dimensions, from ln y and
 /// ln C_n (see [`ln_normaliser`]). 1 for y ≥ 1/C_n (every density is at most the mode's),
-/// 0 for y = 0.
+/// 0 for y = 0; 0 also for n = 0 (no Gaussian) or a NaN argument.
 pub fn density_cdf(n: usize, ln_c_n: f64, ln_y: f64) -> f64 {
     if n == 0 || ln_y.is_nan() || ln_c_n.is_nan() {
         return 0.0;
@@ -350,7 +350,8 @@ mod tests {
     /// a change of variable s = t + u², which removes the n = 1 singularity at 0).
     #[test]
     fn density_cdf_matches_quadrature() {
-        // n = 400, 401 at t ≥ 40 take the log-space branch
+        // n = 400, 401 at t ≥ 40 take the log-space branch; so do n = 1000, 1001, and at t
+        // = 1600 there a term x^k/k! of the linear-space sum (x = 800, k = 499) overflows
         let cases = [1usize, 2, 3, 4, 5, 10, 33, 34]
             .iter()
             .flat_map(|&n| [0.01, 0.5, 2.0, 7.0, 30.0, 80.0].map(|t| (n, t)))
@@ -358,6 +359,11 @@ mod tests {
                 [400usize, 401]
                     .iter()
                     .flat_map(|&n| [10.0, 300.0, 400.0, 450.0].map(|t| (n, t))),
+            )
+            .chain(
+                [1000usize, 1001]
+                    .iter()
+                    .flat_map(|&n| [1000.0, 1600.0].map(|t| (n, t))),
             );
         for (n, t) in cases {
             let f = |u: f64| 2.0 * u * ln_chi2_pdf(n, t + u * u).exp();
@@ -373,6 +379,23 @@ mod tests {
                 (got - want).abs() <= 1e-9 * want.max(1e-300) + 1e-300,
                 "n {n}, t {t}: {got} vs {want}"
             );
+        }
+    }
+
+    /// Far in the tail (x = t/2 = 800), where erfc(√x) and exp(−x) underflow, ln G_n against
+    /// the closed forms G_1 = erfc(√x) and G_3 = erfc(√x) + 2 √(x/π) exp(−x), with erfc from
+    /// its asymptotic series (Abramowitz & Stegun 7.1.23): erfc(z) exp(z²) = (1 − 1/(2z²) +
+    /// 3/(4z⁴) − 15/(8z⁶) + …)/(z √π), whose next term is below 2e-11 here.
+    #[test]
+    fn the_far_tail_is_the_asymptotic_erfc_series() {
+        let x: f64 = 800.0;
+        let series = 1.0 - 1.0 / (2.0 * x) + 3.0 / (4.0 * x * x) - 15.0 / (8.0 * x.powi(3));
+        let erfc_scaled = series / (x.sqrt() * std::f64::consts::PI.sqrt());
+        let want1 = erfc_scaled.ln() - x;
+        let want3 = (erfc_scaled + 2.0 * (x / std::f64::consts::PI).sqrt()).ln() - x;
+        for (n, want) in [(1, want1), (3, want3)] {
+            let got = ln_tail(n, 2.0 * x);
+            assert!((got - want).abs() < 1e-9, "n {n}: {got} vs {want}");
         }
     }
 
@@ -410,6 +433,10 @@ mod tests {
             assert_eq!(density_cdf(n, ln_c, -ln_c + 1.0), 1.0);
             assert_eq!(density_cdf(n, ln_c, f64::NEG_INFINITY), 0.0);
         }
+        // no dimensions, or a NaN argument: 0, also at the mode (t = 0)
+        assert_eq!(density_cdf(0, 0.0, 0.0), 0.0);
+        assert_eq!(density_cdf(2, f64::NAN, 0.0), 0.0);
+        assert_eq!(density_cdf(2, 0.0, f64::NAN), 0.0);
     }
 
     /// c_m solves G_n(c_m) = 1/m; exact for n = 2 (t_c = 2 ln m, α_m = 1).
