@@ -515,6 +515,11 @@ fn warm_starts_from_stale_multipliers_reach_the_worked_optimum() {
     // gradient is positive is held).
     let atx = ndarray::arr2(&[[0.3, 0.4], [0.4, -0.3]]);
     check_independent_bases(&[1.0, 1.0], &atx, 0.5, &[0.002, 0.002], &[0.0, 0.0]);
+    // From 0.0005, below ε̄: both multipliers are held out of the Newton step (their
+    // gradients are positive) and must still reach 0, not stay where the empty free set's
+    // decrement of 0 would stop the step; and one held, one free.
+    check_independent_bases(&[1.0, 1.0], &atx, 0.5, &[0.0005, 0.0005], &[0.0, 0.0]);
+    check_independent_bases(&[1.0, 1.0], &atx, 0.5, &[0.0005, 0.002], &[0.0, 0.0]);
     // The same at s = 0.1 (AᵀX / 10) from 0.001, above its ε̄ of 1e-4: ε̄ scales with AᵀA.
     let atx = ndarray::arr2(&[[0.03, 0.04], [0.04, -0.03]]);
     check_independent_bases(&[0.1, 0.1], &atx, 0.5, &[0.001, 0.001], &[0.0, 0.0]);

@@ -10,9 +10,10 @@
 //!
 //! (`D Dᵀ = M⁻¹ P Pᵀ M⁻¹`), after which the dictionary is the closed form `D = M⁻¹ P`.
 //! We minimise φ by projected Newton (Bertsekas 1982: Newton on the multipliers that are
-//! positive or have a negative gradient, the others held at 0; Armijo backtracking along
-//! the projected arc), warm-started from the previous multipliers. It needs only the
-//! K × K and K × n sufficient statistics `AᵀA`, `AᵀX`, so its cost does not depend on N.
+//! above their bound or have a negative gradient, the others moved to their bound, 0 or,
+//! where AᵀA is singular, a small ridge; Armijo backtracking along the projected arc),
+//! warm-started from the previous multipliers. It needs only the K × K and K × n
+//! sufficient statistics `AᵀA`, `AᵀX`, so its cost does not depend on N.
 //! Bases whose codes are all zero have no say in the objective; they are excluded here
 //! (the learner re-seeds them).
 
@@ -115,16 +116,15 @@ pub fn basis_step_dual(
         minv: vec![0.0; k * k],
         d: vec![0.0; k * n],
     };
-    // A singular AᵀA at λ = 0 (e.g. two bases always used together) makes φ infinite
-    // there; start from a small positive λ in that case.
-    let mut phi = match w.eval(&ata_u, &p, n, c, &lam) {
-        Some(v) => v,
-        None => {
-            let mean_diag = (0..k).map(|j| ata_u[j * k + j]).sum::<f64>() / k as f64;
-            lam.iter_mut().for_each(|v| *v = v.max(1e-6 * mean_diag));
-            w.eval(&ata_u, &p, n, c, &lam).unwrap_or(f64::INFINITY)
-        }
+    // A singular AᵀA (e.g. two bases always used together) makes φ infinite at λ = 0:
+    // the multipliers' bound is then a small ridge λ_min instead of 0.
+    let lam_min = if cholesky(k, &ata_u, &mut w.l).is_ok() {
+        0.0
+    } else {
+        1e-6 * (0..k).map(|j| ata_u[j * k + j]).sum::<f64>() / k as f64
     };
+    lam.iter_mut().for_each(|v| *v = v.max(lam_min));
+    let mut phi = w.eval(&ata_u, &p, n, c, &lam).unwrap_or(f64::INFINITY);
     let tol = 1e-10 * c;
     let eps0 = 1e-3 * (0..k).map(|j| ata_u[j * k + j]).sum::<f64>() / k as f64;
     let mut grad = vec![0.0; k];
@@ -140,7 +140,7 @@ pub fn basis_step_dual(
         for j in 0..k {
             let nrm: f64 = w.d[j * n..(j + 1) * n].iter().map(|v| v * v).sum();
             grad[j] = c - nrm;
-            let pg = if lam[j] > 0.0 {
+            let pg = if lam[j] > lam_min {
                 grad[j].abs()
             } else {
                 (-grad[j]).max(0.0)
@@ -153,19 +153,23 @@ pub fn basis_step_dual(
             break;
         }
         stats.newton_steps += 1;
-        // Free set (Bertsekas' ε-active rule): a multiplier within ε of 0 whose gradient
-        // pushes it down is held at its bound; ε = min(ε0, ||λ − [λ − ∇φ]₊||).
+        // Free set (Bertsekas' ε-active rule): a multiplier within ε of its bound whose
+        // gradient pushes it down is held out of the Newton step and moved to the bound;
+        // ε = min(ε0, ||λ − [λ − ∇φ]₊||).
         let wk: f64 = (0..k)
             .map(|j| {
-                let r = lam[j] - (lam[j] - grad[j]).max(0.0);
+                let r = lam[j] - (lam[j] - grad[j]).max(lam_min);
                 r * r
             })
             .sum::<f64>()
             .sqrt();
         let eps = wk.min(eps0);
         free.clear();
+        let mut held_above_bound = false;
         for j in 0..k {
-            if !(lam[j] <= eps && grad[j] > 0.0) {
+            if lam[j] - lam_min <= eps && grad[j] > 0.0 {
+                held_above_bound |= lam[j] > lam_min;
+            } else {
                 free.push(j);
             }
         }
@@ -194,13 +198,18 @@ pub fn basis_step_dual(
         let mut sol = vec![0.0; f];
         chol_solve(f, f, &hl, &rhs, &mut sol);
         // Newton decrement on the free set: below rounding of φ, λ is optimal to
-        // machine precision (the gradient test above can sit at its rounding floor).
+        // machine precision (the gradient test above can sit at its rounding floor) once
+        // the held multipliers are at their bound.
         let dec: f64 = (0..f).map(|a| rhs[a] * sol[a]).sum();
-        if 0.5 * dec <= 1e-14 * (1.0 + phi.abs()) {
+        if 0.5 * dec <= 1e-14 * (1.0 + phi.abs()) && !held_above_bound {
             stats.converged = true;
             break;
         }
-        dir.iter_mut().for_each(|v| *v = 0.0);
+        // A held multiplier takes Bertsekas' scaled gradient step with the scale
+        // (λ_j − λ_min) / ∂φ/∂λ_j, which reaches the bound at t = 1.
+        for (d, l) in dir.iter_mut().zip(&lam) {
+            *d = lam_min - l;
+        }
         for (a, &j) in free.iter().enumerate() {
             dir[j] = -sol[a];
         }
@@ -211,7 +220,7 @@ pub fn basis_step_dual(
         for _ in 0..40 {
             let mut pred = 0.0;
             for j in 0..k {
-                trial[j] = (lam[j] + t * dir[j]).max(0.0);
+                trial[j] = (lam[j] + t * dir[j]).max(lam_min);
                 pred += grad[j] * (trial[j] - lam[j]);
             }
             if let Some(ft) = w.eval(&ata_u, &p, n, c, &trial)
