@@ -473,6 +473,33 @@ fn copies_of_one_code_column_get_the_least_squares_sum_of_their_bases() {
     }
 }
 
+#[test]
+fn an_ill_conditioned_dual_stops_as_close_to_the_optimum_at_every_scale_of_the_codes() {
+    // Two nearly collinear code columns: AᵀA = s [[1, 1], [1, 1 + δ²]], δ = 1e-6 (condition
+    // about 4e12), AᵀX = s P. Scaling the codes' statistics by s scales φ and λ by s and
+    // leaves D and the gradient c − ‖d_j‖² as they are, so the solve must end as close to
+    // the KKT conditions at every s. Here the gradient test sits at its rounding floor and
+    // the Newton-decrement stop ends the solve: at s = 1e-3 and c = 1 a stop absolute
+    // below φ ≈ 6e-4 came one step early, with a violation of 7e-6.
+    let delta: f64 = 1e-6;
+    let ata = Array2::from_shape_vec((2, 2), vec![1.0, 1.0, 1.0, 1.0 + delta * delta]).unwrap();
+    let atx = Array2::from_shape_vec((2, 3), vec![0.3, 0.4, 0.5, 0.31, 0.38, 0.52]).unwrap();
+    for s in [1e-3, 1.0, 1e3] {
+        for c in [0.01, 1.0, 100.0] {
+            let mut lambda = vec![0.0; 2];
+            let (d, stats) = basis_step_dual((&ata * s).view(), (&atx * s).view(), c, &mut lambda);
+            assert!(stats.converged, "s = {s}, c = {c}: {stats:?}");
+            assert!(
+                stats.kkt_violation <= 1e-6 * c,
+                "s = {s}, c = {c}: {stats:?}"
+            );
+            for row in d.rows() {
+                assert!(row.dot(&row) <= c * (1.0 + 1e-9));
+            }
+        }
+    }
+}
+
 /// The dual from the multipliers `start` for codes with AᵀA diagonal, where the bases are
 /// independent: d_j = p_j / (s_j + λ_j), so the bound of basis j is active when ‖p_j‖ >
 /// s_j √c, and then λ_j = ‖p_j‖ / √c − s_j; otherwise λ_j = 0. `want` holds those λ_j.

@@ -199,9 +199,10 @@ pub fn basis_step_dual(
         chol_solve(f, f, &hl, &rhs, &mut sol);
         // Newton decrement on the free set: below rounding of φ, λ is optimal to
         // machine precision (the gradient test above can sit at its rounding floor) once
-        // the held multipliers are at their bound.
+        // the held multipliers are at their bound. Relative to φ (≥ 0), as the gradient
+        // test is to c: scaling the codes scales φ, and must not change where it stops.
         let dec: f64 = (0..f).map(|a| rhs[a] * sol[a]).sum();
-        if 0.5 * dec <= 1e-14 * (1.0 + phi.abs()) && !held_above_bound {
+        if 0.5 * dec <= 1e-14 * phi && !held_above_bound {
             stats.converged = true;
             break;
         }
