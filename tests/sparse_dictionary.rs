@@ -447,8 +447,9 @@ fn copies_of_one_code_column_get_the_least_squares_sum_of_their_bases() {
     // Three bases whose codes are one integer column u in every patch: AᵀA = s 11ᵀ (s =
     // uᵀu) is singular at λ = 0 and its diagonal sums to 3s, a multiple of 3. Only e = d₀ +
     // d₁ + d₂ is fixed (A D = u eᵀ); with every bound slack it is the least-squares Xᵀu / s.
-    // The dual cannot reach λ = 0 here: it starts from a ridge of 1e-6 of the mean diagonal
-    // (so its start scales with the codes), which shrinks e by 1 / (1 + 1e-6/3).
+    // The dual cannot reach λ = 0 here: the multipliers' bound is a ridge of 1e-6 of the
+    // mean diagonal s (so it scales with the codes). The bounds being slack, every λ_j ends
+    // at it, and M = s 11ᵀ + λ I gives e = 3 Xᵀu / (3s + λ), Xᵀu / s shrunk by 1 + 1e-6/3.
     let mut rng = Rng::new(29);
     let (n, dim, k) = (40, 5, 3);
     let x = Array2::from_shape_fn((n, dim), |_| rng.normal());
@@ -466,10 +467,21 @@ fn copies_of_one_code_column_get_the_least_squares_sum_of_their_bases() {
     let mut lambda = vec![0.0; k];
     let (d, stats) = basis_step_dual(a.t().dot(&a).view(), a.t().dot(&x).view(), c, &mut lambda);
     assert!(stats.converged, "{stats:?}");
+    for (j, l) in lambda.iter().enumerate() {
+        assert!(
+            (l - 1e-6 * s).abs() <= 1e-12 * s,
+            "λ_{j} = {l}, want {}",
+            1e-6 * s
+        );
+    }
     let scale = want.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     for (t, w) in want.iter().enumerate() {
         let e = d.column(t).sum();
-        assert!((e - w).abs() <= 1e-6 * scale, "e[{t}] = {e}, want {w}");
+        let ridged = w / (1.0 + 1e-6 / 3.0);
+        assert!(
+            (e - ridged).abs() <= 1e-10 * scale,
+            "e[{t}] = {e}, want {ridged}"
+        );
     }
 }
 
