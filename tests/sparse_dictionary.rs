@@ -210,6 +210,161 @@ fn epsilon_l1_newton_reaches_a_stationary_point() {
     }
 }
 
+// One basis, G = 1, c = 8, β = 5, ε = 9: f(a) = a²/2 − 8a + 5 √(a² + 9), whose gradient
+// a − 8 + 5a / √(a² + 9) vanishes at a = 4 (√25 = 5), where f = 8 − 32 + 25 = 1 and
+// f'' = 1 + β ε / (a² + ε)^{3/2} = 1 + 45/125 = 1.36.
+const ONE: ([f64; 1], [f64; 1], f64, f64) = ([1.0], [8.0], 5.0, 9.0);
+
+#[test]
+fn epsilon_l1_objective_and_newton_steps_are_the_worked_ones() {
+    // G = [[2, 1], [1, 3]], c = (1, −2), β = 0.5, ε = 9 at a = (4, −4):
+    // aᵀGa/2 = (32 − 32 + 48)/2 = 24, cᵀa = 12, β (5 + 5) = 5.
+    let g2 = [2.0, 1.0, 1.0, 3.0];
+    assert_eq!(
+        eps_l1_objective(&g2, &[1.0, -2.0], 0.5, 9.0, &[4.0, -4.0]),
+        17.0
+    );
+    let (g, c, beta, eps) = ONE;
+    assert_eq!(eps_l1_objective(&g, &c, beta, eps, &[4.0]), 1.0);
+
+    // From 0: gradient −8, f'' = 1 + 45/27 = 8/3, so Newton's point is 3, accepted at
+    // once (f(3) = 4.5 − 24 + 5 √18 ≈ 1.71 against f(0) = 15).
+    let mut nw = EpsL1Newton::new(1);
+    nw.max_iter = 1;
+    let mut a = [0.0];
+    assert_eq!(nw.solve(&g, &c, beta, eps, &mut a), (1, false));
+    assert!((a[0] - 3.0).abs() < 1e-12, "{a:?}");
+    let mut nw = EpsL1Newton::new(1);
+    let mut a = [0.0];
+    assert!(nw.solve(&g, &c, beta, eps, &mut a).1);
+    assert!((a[0] - 4.0).abs() < 1e-12, "{a:?}");
+
+    // G = I₂, c = 0, β = 20, ε = 9 from (4, 0): gradient (4 + 20·4/5, 0) = (20, 0),
+    // Hessian diag(1 + 180/125, 1 + 180/27) = diag(2.44, 23/3), Newton step (500/61, 0).
+    // The full step to (−256/61, 0) raises f from 8 + 100 + 60 = 168 to about 172, so
+    // Armijo halves it: (−6/61, 0), where f ≈ 120. The decrement 20·500/61 ≈ 164 is
+    // below 1 + |f| = 169, so only its factor 1e-12 keeps the step out of the full-step
+    // branch.
+    let mut nw = EpsL1Newton::new(2);
+    nw.max_iter = 1;
+    let mut a = [4.0, 0.0];
+    assert_eq!(
+        nw.solve(&[1.0, 0.0, 0.0, 1.0], &[0.0, 0.0], 20.0, 9.0, &mut a),
+        (1, false)
+    );
+    assert!((a[0] + 6.0 / 61.0).abs() < 1e-12 && a[1] == 0.0, "{a:?}");
+}
+
+#[test]
+fn epsilon_l1_newton_stops_at_the_documented_gradient_tolerance() {
+    // Near a = 4 the gradient is 1.36 (a − 4); the tolerance is 1e-10 (1 + max |c|) = 9e-10.
+    let (g, c, beta, eps) = ONE;
+    let mut nw = EpsL1Newton::new(1);
+    // 1.36 · 6.25e-10 = 8.5e-10: already converged, no step, a untouched.
+    let start = 4.0 + 6.25e-10;
+    let mut a = [start];
+    assert_eq!(nw.solve(&g, &c, beta, eps, &mut a), (0, true));
+    assert_eq!(a[0], start);
+    // 1.36 · 7e-10 ≈ 9.5e-10 and 1.36 · 1e-6: one step. Its Newton decrement, 1.36 δ²,
+    // is below 1e-12 (1 + f) ≈ 2e-12, so it is taken in full, and it lands within
+    // f''' δ² / (2 f'') ≈ 0.064 δ² of 4 (f''' = −3 β ε a / (a² + ε)^{5/2} = −0.1728).
+    for delta in [7e-10, 1e-6] {
+        let mut a = [4.0 + delta];
+        assert_eq!(
+            nw.solve(&g, &c, beta, eps, &mut a),
+            (1, true),
+            "δ = {delta}"
+        );
+        assert!((a[0] - 4.0).abs() < 1e-13, "δ = {delta}: {a:?}");
+    }
+}
+
+#[test]
+fn epsilon_l1_newton_converges_when_g_is_singular_and_the_codes_large() {
+    // Copies of one atom of norm 10 (G singular: more bases than dimensions) with
+    // c = 10x on each: by symmetry the optimum gives each copy s with
+    // 100 m s − 10x + β s / √(s² + ε) = 0 (m copies). For s = 1e4 the Hessian's ε-term,
+    // β ε / s³ = 1e-14, is far below the Cholesky pivot tolerance (1e-10 of the diagonal
+    // 100), so the factor of G + diag(β ε / (a² + ε)^{3/2}) fails at the second copy.
+    // Newton converges quadratically, so a handful of steps (the module's 3–8) must do.
+    let (beta, eps) = (1.0f64, 0.01);
+    let x_for = |m: f64, s: f64| (100.0 * m * s + beta * s / (s * s + eps).sqrt()) / 10.0;
+    // Two copies.
+    let mut nw = EpsL1Newton::new(2);
+    for s in [1.0, 1e2, 1e4] {
+        let c = [10.0 * x_for(2.0, s); 2];
+        let mut a = [0.0, 0.0];
+        let (steps, ok) = nw.solve(&[100.0; 4], &c, beta, eps, &mut a);
+        assert!(ok && steps <= 10, "s = {s}: {steps} steps, {a:?}");
+        // Only a₁ + a₂ is pinned by the data term; along (1, −1) the gradient is below
+        // the stopping tolerance already.
+        assert!(
+            ((a[0] + a[1]) / (2.0 * s) - 1.0).abs() < 1e-9,
+            "s = {s}: {a:?}"
+        );
+    }
+    // Two unit atoms without data (codes 0) and the two copies at s = 1e4 as bases 2
+    // and 3: the failing pivot is the last one.
+    #[rustfmt::skip]
+    let g4 = [
+        1.0, 0.0, 0.0, 0.0,
+        0.0, 1.0, 0.0, 0.0,
+        0.0, 0.0, 100.0, 100.0,
+        0.0, 0.0, 100.0, 100.0,
+    ];
+    let xs = 10.0 * x_for(2.0, 1e4);
+    let mut nw = EpsL1Newton::new(4);
+    let mut a = [0.0; 4];
+    let (steps, ok) = nw.solve(&g4, &[0.0, 0.0, xs, xs], beta, eps, &mut a);
+    assert!(ok && steps <= 10, "{steps} steps, {a:?}");
+    assert!(a[0].abs() < 1e-12 && a[1].abs() < 1e-12, "{a:?}");
+    assert!(((a[2] + a[3]) / 2e4 - 1.0).abs() < 1e-9, "{a:?}");
+    // A zero atom at β = 0: its row of the Hessian is exactly 0 and its code is free;
+    // the other basis (G = 1, c = 3) has the least-squares code 3.
+    let mut nw = EpsL1Newton::new(2);
+    let mut a = [0.0, 0.0];
+    let (steps, ok) = nw.solve(&[1.0, 0.0, 0.0, 0.0], &[3.0, 0.0], 0.0, eps, &mut a);
+    assert!(ok && steps <= 10, "{steps} steps, {a:?}");
+    assert!((a[0] - 3.0).abs() < 1e-12 && a[1] == 0.0, "{a:?}");
+}
+
+#[test]
+fn epsilon_l1_armijo_rejects_a_full_step_to_the_mirror_point() {
+    // G = 7, c = 0, β = 125, ε = 9: f(a) = 3.5 a² + 125 √(a² + 9) is even. From a = 4 the
+    // gradient is 28 + 125·4/5 = 128 and f'' = 7 + 125·9/125 = 16, so Newton's full step
+    // of 8 lands on −4, where f is 681 as at 4: no decrease, so Armijo halves it, to the
+    // optimum 0 (f = 375).
+    let mut nw = EpsL1Newton::new(1);
+    nw.max_iter = 1;
+    let mut a = [4.0];
+    assert_eq!(nw.solve(&[7.0], &[0.0], 125.0, 9.0, &mut a), (1, false));
+    assert_eq!(a[0], 0.0);
+    assert_eq!(eps_l1_objective(&[7.0], &[0.0], 125.0, 9.0, &[-4.0]), 681.0);
+}
+
+#[test]
+fn epsilon_l1_newton_takes_the_full_step_where_rounding_hides_the_decrease() {
+    // The one-basis case scaled by s = 100 (a, c, β by s, ε by s²): optimum 400,
+    // f'' = 1.36 as before and f scaled to 1e4. From 400 + 2e-6 the gradient 2.7e-6
+    // exceeds the tolerance 1e-10 (1 + 800) and the decrement 1.36 · (2e-6)² = 5.4e-12
+    // is below 1e-12 (1 + |f|) ≈ 1e-8: one full step, to 400 within 0.064 δ² / s.
+    let mut nw = EpsL1Newton::new(1);
+    let mut a = [400.0 + 2e-6];
+    assert_eq!(nw.solve(&[1.0], &[800.0], 500.0, 9e4, &mut a), (1, true));
+    assert!((a[0] - 400.0).abs() < 1e-12, "{a:?}");
+    // With β = 40000/9 and c = 4000 + 0.8 β the optimum is still 4000 (f'' = 1 + β ε /
+    // 5000³ = 1.32), and f there is 8e6 − 4000 c + 5000 β = −8e6 + 1800 β = 0 up to
+    // rounding: the threshold is then 1e-12 (1 + |f|) ≈ 1e-12, against terms of 3e7.
+    // From 4000 + 7e-7 the gradient 1.32 · 7e-7 ≈ 9.2e-7 exceeds the tolerance 1e-10
+    // (1 + c) ≈ 7.6e-7, and the decrement 1.32 · (7e-7)² ≈ 6.5e-13 is below 1e-12:
+    // again one full step.
+    let beta = 40000.0 / 9.0;
+    let c = 4000.0 + 0.8 * beta;
+    let mut a = [4000.0 + 7e-7];
+    assert_eq!(nw.solve(&[1.0], &[c], beta, 9e6, &mut a), (1, true));
+    assert!((a[0] - 4000.0).abs() < 1e-9, "{a:?}");
+}
+
 #[test]
 fn same_seed_same_dictionary_and_thread_count_does_not_matter() {
     let x = synthetic(300, 10, 6, 3);

@@ -96,3 +96,153 @@ pub fn chol_solve_rows(r: usize, l: &[f64], b: &mut [f64], m: usize) {
         bi.iter_mut().for_each(|x| *x *= inv);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A lower-triangular L with integer entries and positive diagonal (s × s, row-major).
+    /// A = L Lᵀ has integer entries, and every step of its Cholesky factor (products,
+    /// sums, divisions by a diagonal entry that divide exactly, square roots of squares)
+    /// and of the triangular solves of an integer right-hand side A x is exact, so the
+    /// results must equal L and x to the bit.
+    #[rustfmt::skip]
+    const L: [f64; 36] = [
+         2.0,  0.0,  0.0,  0.0, 0.0, 0.0,
+         1.0,  3.0,  0.0,  0.0, 0.0, 0.0,
+        -1.0,  2.0,  4.0,  0.0, 0.0, 0.0,
+         3.0, -1.0,  1.0,  2.0, 0.0, 0.0,
+         0.0,  2.0, -2.0,  1.0, 5.0, 0.0,
+         1.0,  1.0,  3.0, -1.0, 2.0, 3.0,
+    ];
+
+    /// M Mᵀ for the s × s matrix M (row-major).
+    fn gram(s: usize, m: &[f64]) -> Vec<f64> {
+        let mut a = vec![0.0; s * s];
+        for i in 0..s {
+            for j in 0..s {
+                a[i * s + j] = (0..s).map(|q| m[i * s + q] * m[j * s + q]).sum();
+            }
+        }
+        a
+    }
+
+    /// The lower triangle (with the diagonal) of an s × s matrix.
+    fn lower(s: usize, m: &[f64]) -> Vec<f64> {
+        (0..s)
+            .flat_map(|i| (0..=i).map(move |j| (i, j)))
+            .map(|(i, j)| m[i * s + j])
+            .collect()
+    }
+
+    #[test]
+    fn dot_sums_the_products_of_the_shorter_length() {
+        let a: Vec<f64> = (1..=11).map(|v| v as f64).collect();
+        let b: Vec<f64> = (1..=11).map(|v| (3 * v % 7) as f64 - 3.0).collect();
+        for n in 0..=11 {
+            let want: f64 = (0..n).map(|i| a[i] * b[i]).sum();
+            assert_eq!(dot(&a[..n], &b[..n]), want, "n = {n}");
+            // A longer second (or first) argument is cut to the shorter one.
+            assert_eq!(dot(&a[..n], &b), want, "n = {n}");
+            assert_eq!(dot(&a, &b[..n]), want, "n = {n}");
+        }
+    }
+
+    #[test]
+    fn the_factor_of_an_integer_product_is_the_integer_factor_and_solves_exactly() {
+        let a = gram(6, &L);
+        // The strict upper triangle of the output is not the factor's: NaN there shows
+        // that neither the solves nor the factorisation read it.
+        let mut l = vec![f64::NAN; 36];
+        assert_eq!(cholesky(6, &a, &mut l), Ok(()));
+        assert_eq!(lower(6, &l), lower(6, &L));
+
+        let x = [1.0, -2.0, 3.0, 0.0, 5.0, -1.0];
+        let b: Vec<f64> = (0..6).map(|i| dot(&a[i * 6..i * 6 + 6], &x)).collect();
+        let mut got = [f64::NAN; 6];
+        chol_solve(6, 6, &l, &b, &mut got);
+        assert_eq!(got, x);
+        // The leading 4 × 4 block of the factor (stride 6) is the factor of A's leading
+        // block.
+        let b4: Vec<f64> = (0..4).map(|i| dot(&a[i * 6..i * 6 + 4], &x[..4])).collect();
+        let mut got4 = [f64::NAN; 4];
+        chol_solve(4, 6, &l, &b4, &mut got4);
+        assert_eq!(got4, x[..4]);
+
+        // Three right-hand sides at once, B = A X (6 × 3).
+        #[rustfmt::skip]
+        let xs = [
+             1.0,  0.0, 2.0,
+            -2.0,  1.0, 0.0,
+             3.0,  0.0, -1.0,
+             0.0,  4.0, 1.0,
+             5.0, -1.0, 0.0,
+            -1.0,  2.0, 3.0,
+        ];
+        let mut bs = vec![0.0; 18];
+        for i in 0..6 {
+            for m in 0..3 {
+                bs[i * 3 + m] = (0..6).map(|q| a[i * 6 + q] * xs[q * 3 + m]).sum();
+            }
+        }
+        chol_solve_rows(6, &l, &mut bs, 3);
+        assert_eq!(bs, xs);
+    }
+
+    #[test]
+    fn a_singular_matrix_fails_at_its_first_dependent_row_with_the_rows_before_valid() {
+        // L with a zero at (3, 3): row 3 of A = L Lᵀ depends on rows 0–2, so the pivot
+        // there is exactly 0.
+        let mut m = L;
+        m[3 * 6 + 3] = 0.0;
+        let a = gram(6, &m);
+        let mut l = vec![f64::NAN; 36];
+        assert_eq!(cholesky(6, &a, &mut l), Err(3));
+        assert_eq!(lower(3, &l_block(&l, 3)), lower(3, &l_block(&L, 3)));
+        // Those rows solve the leading 3 × 3 system (stride 6).
+        let x = [2.0, -1.0, 1.0];
+        let b: Vec<f64> = (0..3).map(|i| dot(&a[i * 6..i * 6 + 3], &x)).collect();
+        let mut got = [f64::NAN; 3];
+        chol_solve(3, 6, &l, &b, &mut got);
+        assert_eq!(got, x);
+    }
+
+    /// The leading r × r block of a 6 × 6 matrix, with stride r.
+    fn l_block(m: &[f64], r: usize) -> Vec<f64> {
+        (0..r).flat_map(|i| m[i * 6..i * 6 + r].to_vec()).collect()
+    }
+
+    #[test]
+    fn the_pivot_tolerance_is_relative_to_the_diagonal() {
+        // [[1, 1], [1, 1 + e]] has the last pivot e: below 1e-10 for e = 2⁻⁴⁰ ≈ 9.1e-13,
+        // above for e = 2⁻³⁰ ≈ 9.3e-10; scaling the matrix by 2⁻⁷⁰ or 2⁷⁰ (exact)
+        // changes neither.
+        let mut l = [0.0; 4];
+        for scale in [1.0, 2f64.powi(-70), 2f64.powi(70)] {
+            for (e, want) in [(2f64.powi(-40), Err(1)), (2f64.powi(-30), Ok(()))] {
+                let a = [scale, scale, scale, scale * (1.0 + e)];
+                assert_eq!(cholesky(2, &a, &mut l), want, "e = {e}, scale = {scale}");
+            }
+            // A 1 × 1 matrix passes whatever its (positive) size, and 0 fails.
+            assert_eq!(cholesky(1, &[scale], &mut l), Ok(()));
+            assert_eq!(l[0], scale.sqrt());
+        }
+        // Relative to the row's own diagonal entry: [[2⁻²⁰, 1], [1, 2²⁰ + p]] has the
+        // last pivot p (exactly), against 1e-10 · (2²⁰ + p) ≈ 1.05e-4.
+        for (p, want) in [(2f64.powi(-16), Err(1)), (2f64.powi(-10), Ok(()))] {
+            let a = [2f64.powi(-20), 1.0, 1.0, 2f64.powi(20) + p];
+            assert_eq!(cholesky(2, &a, &mut l), want, "p = {p}");
+        }
+        assert_eq!(cholesky(1, &[0.0], &mut l), Err(0));
+        assert_eq!(cholesky(1, &[-1.0], &mut l), Err(0));
+        // Not a number or infinite is a failed pivot, not a factor of NaN.
+        assert_eq!(cholesky(1, &[f64::NAN], &mut l), Err(0));
+        assert_eq!(cholesky(1, &[f64::INFINITY], &mut l), Err(0));
+        assert_eq!(cholesky(2, &[4.0, f64::NAN, f64::NAN, 9.0], &mut l), Err(1));
+        assert_eq!(cholesky(2, &[4.0, 2.0, 2.0, f64::NAN], &mut l), Err(1));
+        assert_eq!(
+            cholesky(2, &[4.0, f64::INFINITY, f64::INFINITY, 9.0], &mut l),
+            Err(1)
+        );
+    }
+}

@@ -75,9 +75,13 @@ impl EpsL1Newton {
                 self.h[i * k + i] += beta * epsilon / (r2 * r2.sqrt());
             }
             if cholesky(k, &self.h, &mut self.l).is_err() {
-                // Cannot happen for ε > 0 except through overflow: add a ridge and retry.
+                // With more bases than dimensions G is singular, and where the codes on
+                // its null directions are so large that β ε / (a² + ε)^{3/2} falls below
+                // the pivot tolerance (1e-10 of the diagonal) the factor fails. A ridge
+                // above that tolerance makes it pass (each pivot grows by at least its
+                // row's ridge) and keeps the step a descent direction.
                 for i in 0..k {
-                    self.h[i * k + i] += 1e-12 * (1.0 + self.h[i * k + i]);
+                    self.h[i * k + i] += 1e-9 * (1.0 + self.h[i * k + i]);
                 }
                 if cholesky(k, &self.h, &mut self.l).is_err() {
                     return (it, false);
