@@ -143,7 +143,10 @@ scope() {
         run "$1" --file src/sparse/feature_sign.rs -C --lib -C --test=sparse_feature_sign \
             -- -- sparse::feature_sign $(tests_in tests/sparse_feature_sign.rs) ;;
     sparse-dual) run "$1" --file src/sparse/dual.rs -C --test=sparse_dictionary ;;
-    sparse-dictionary) run "$1" --file src/sparse/dictionary.rs -C --test=sparse_dictionary ;;
+    sparse-dictionary)
+        # With the module's unit tests (the re-seeding of unused bases is tested there).
+        run "$1" --file src/sparse/dictionary.rs -C --lib -C --test=sparse_dictionary \
+            -- -- sparse::dictionary $(tests_in tests/sparse_dictionary.rs) ;;
     sparse-eps-l1) run "$1" --file src/sparse/eps_l1.rs -C --test=sparse_dictionary ;;
     sparse-init)
         run "$1" --file src/sparse/init.rs -C --lib -C --test=sparse_dictionary \

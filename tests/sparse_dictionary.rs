@@ -72,6 +72,13 @@ fn learning_decreases_the_objective_monotonically_and_respects_the_norm_bound() 
                     );
                     last = h.objective_after_basis;
                 }
+                // The returned dictionary is no worse than the last basis step's: the
+                // last iteration's dictionary is not extrapolated untested.
+                assert!(
+                    fit.learning_objective <= last + 1e-9 * (1.0 + last.abs()),
+                    "{init:?} {penalty:?} K={k}: F {} after the last basis step's {last}",
+                    fit.learning_objective
+                );
                 // The reported F is the L1 objective at the final codes.
                 let f = objective(
                     x.view(),
@@ -420,6 +427,14 @@ fn bad_parameters_and_data_are_errors_and_cancel_stops() {
             penalty: CodePenalty::EpsilonL1 { epsilon: 0.0 },
             ..Default::default()
         },
+        DictionaryParams {
+            tol: -1e-3,
+            ..Default::default()
+        },
+        DictionaryParams {
+            tol: f64::NAN,
+            ..Default::default()
+        },
     ];
     for p in bad {
         assert!(
@@ -734,4 +749,175 @@ fn a_used_basis_whose_codes_miss_the_data_gets_a_zero_row() {
     // bound is slack (‖p_j‖² ≤ 0.25 < c = 0.5): λ = 0 and D = AᵀX.
     let atx = ndarray::arr2(&[[0.3, 0.4], [0.4, -0.3], [0.0, 0.0]]);
     check_independent_bases(&[1.0, 1.0, 1.0], &atx, 0.5, &[0.7, 0.7, 0.7], &[0.0; 3]);
+}
+
+/// The outer loop of learning worked in closed form: one basis, β = 0 and the norm bound
+/// c = 1 on the four patches (±1, ±b), so S = XᵀX = diag(4, 4b²). The exact code of a patch
+/// x for the dictionary w is the least-squares x·w / ‖w‖², which gives F(w) = (tr S − wᵀSw /
+/// ‖w‖²) / 8; the codes of the unit u with the dictionary v give (tr S − 2 uᵀSv + uᵀSu) / 8.
+/// The basis step from the codes of the unit u is the unit S u / ‖S u‖ (the least-squares
+/// S u / uᵀSu has norm ≥ 1 by Cauchy–Schwarz, so the bound is active): power iteration.
+/// The rest is the module's rule: from the second iteration on, the next dictionary is
+/// extrapolated, v + ω (v − v_prev) projected onto the unit ball, and kept if its F is no
+/// higher than the basis step's, else v is restored and ω halves; ω starts at 1/2 and
+/// grows by 1.5 up to 2; learning stops when F after the code step fell by at most `tol`
+/// of itself, and the last iteration is not extrapolated.
+struct OneBasis {
+    iterations: usize,
+    converged: bool,
+    rejected: usize,
+    /// (F after the code step, F after the basis step) of each iteration.
+    history: Vec<(f64, f64)>,
+    objective: f64,
+    atom: [f64; 2],
+}
+
+fn one_basis_reference(b: f64, max_iter: usize, tol: f64, extrapolate: bool) -> OneBasis {
+    let s = [4.0, 4.0 * b * b];
+    let quad = |u: [f64; 2], v: [f64; 2]| s[0] * u[0] * v[0] + s[1] * u[1] * v[1];
+    let f = |w: [f64; 2]| (s[0] + s[1] - quad(w, w) / (w[0] * w[0] + w[1] * w[1])) / 8.0;
+    let unit = |w: [f64; 2]| {
+        let n = w[0].hypot(w[1]);
+        [w[0] / n, w[1] / n]
+    };
+    // The start: a patch scaled to norm √c (which of the four does not matter: the
+    // others are its mirror images, with the same objectives).
+    let mut w = unit([1.0, b]);
+    let mut omega = if extrapolate { 0.5 } else { 0.0 };
+    let (mut plain, mut v_prev): (Option<[f64; 2]>, Option<[f64; 2]>) = (None, None);
+    let (mut f_basis_prev, mut f_prev) = (f64::INFINITY, f64::INFINITY);
+    let (mut converged, mut rejected, mut iterations) = (false, 0, 0);
+    let mut history = Vec::new();
+    for it in 1..=max_iter {
+        iterations = it;
+        let mut f_codes = f(w);
+        if let Some(p) = plain.take() {
+            if f_codes > f_basis_prev {
+                w = p;
+                f_codes = f(w);
+                omega *= 0.5;
+                rejected += 1;
+            } else {
+                omega = (omega * 1.5f64).min(2.0);
+            }
+        }
+        let v = unit([s[0] * w[0], s[1] * w[1]]);
+        let f_basis = (s[0] + s[1] - 2.0 * quad(w, v) + quad(w, w)) / 8.0;
+        f_basis_prev = f_basis;
+        history.push((f_codes, f_basis));
+        if f_prev.is_finite() && f_prev - f_codes <= tol * f_codes {
+            w = v;
+            converged = true;
+            break;
+        }
+        f_prev = f_codes;
+        w = match v_prev {
+            Some(vp) if omega > 0.0 && it < max_iter => {
+                plain = Some(v);
+                let e = [v[0] + omega * (v[0] - vp[0]), v[1] + omega * (v[1] - vp[1])];
+                if e[0] * e[0] + e[1] * e[1] > 1.0 {
+                    unit(e)
+                } else {
+                    e
+                }
+            }
+            _ => v,
+        };
+        v_prev = Some(v);
+    }
+    OneBasis {
+        iterations,
+        converged,
+        rejected,
+        history,
+        objective: f(w),
+        atom: w,
+    }
+}
+
+#[test]
+fn the_outer_loop_follows_its_rule_on_one_basis_worked_in_closed_form() {
+    // b = 0.9: power iteration converges slowly (ratio 0.81), extrapolation is both kept
+    // and undone within 11 iterations, and every comparison of the rule is decided by at
+    // least 5e-6 of F (far above rounding).
+    let b = 0.9;
+    let x = ndarray::arr2(&[[1.0, b], [1.0, -b], [-1.0, b], [-1.0, -b]]);
+    // (max_iter, tol, extrapolate): to the cap (two extrapolations undone, the last one
+    // of them, at iteration 12, would have raised F), stopping at iteration 6 and 2, and
+    // without extrapolation to the cap and stopping at iteration 8.
+    for (max_iter, tol, extrapolate) in [
+        (11, 0.0, true),
+        (11, 1e-3, true),
+        (11, 0.025, true),
+        (11, 0.0, false),
+        (11, 5e-3, false),
+    ] {
+        let want = one_basis_reference(b, max_iter, tol, extrapolate);
+        let p = DictionaryParams {
+            num_bases: 1,
+            beta: 0.0,
+            norm_bound: 1.0,
+            max_iter,
+            tol,
+            init: DictInit::Patches,
+            extrapolate,
+            ..Default::default()
+        };
+        let case = format!("max_iter {max_iter}, tol {tol}, extrapolate {extrapolate}");
+        let progress = Progress::new();
+        let fit = p.fit(x.view(), &progress).unwrap();
+        assert_eq!(
+            (fit.iterations, fit.converged, fit.rejected_extrapolations),
+            (want.iterations, want.converged, want.rejected),
+            "{case}"
+        );
+        assert_eq!(fit.history.len(), want.iterations, "{case}");
+        for (i, (h, (fc, fb))) in fit.history.iter().zip(&want.history).enumerate() {
+            assert_eq!(h.iteration, i + 1, "{case}");
+            assert!(
+                (h.objective_after_codes - fc).abs() <= 1e-9 * fc
+                    && (h.objective_after_basis - fb).abs() <= 1e-9 * fb,
+                "{case}, iteration {}: F {} and {}, want {fc} and {fb}",
+                i + 1,
+                h.objective_after_codes,
+                h.objective_after_basis
+            );
+        }
+        assert!(
+            (fit.objective - want.objective).abs() <= 1e-9 * want.objective,
+            "{case}: F {}, want {}",
+            fit.objective,
+            want.objective
+        );
+        // The atom, up to the mirror image of the start drawn.
+        let atom = fit.dictionary.atoms.row(0);
+        for t in 0..2 {
+            assert!(
+                (atom[t].abs() - want.atom[t].abs()).abs() <= 1e-7,
+                "{case}: atom {atom}, want ±{:?}",
+                want.atom
+            );
+        }
+        // `fit` reports the fraction of `max_iter` done; `fit_within` reports nothing.
+        assert_eq!(
+            progress.fraction(),
+            want.iterations as f64 / max_iter as f64,
+            "{case}"
+        );
+        let quiet = Progress::new();
+        p.fit_within(x.view(), &quiet).unwrap();
+        assert_eq!(quiet.fraction(), 0.0, "{case}");
+    }
+}
+
+#[test]
+fn a_code_reconstructs_as_its_combination_of_the_bases() {
+    let d = Dictionary {
+        atoms: ndarray::arr2(&[[1.0, 2.0], [3.0, 4.0], [5.0, 6.0]]),
+        norm_bound: 100.0,
+    };
+    assert_eq!((d.num_bases(), d.dim()), (3, 2));
+    // 1 (1, 2) + 0 (3, 4) − 2 (5, 6) = (−9, −10).
+    let code = ndarray::arr1(&[1.0, 0.0, -2.0]);
+    assert_eq!(d.reconstruct(code.view()), ndarray::arr1(&[-9.0, -10.0]));
 }

@@ -208,8 +208,10 @@ impl DictionaryParams {
                 break;
             }
             prev = f_codes;
+            // No extrapolation after the last iteration: no code step would test it, and
+            // the fit must return a dictionary no worse than the last basis step's.
             match d_prev_dual.as_ref() {
-                Some(dp) if omega > 0.0 => {
+                Some(dp) if omega > 0.0 && iterations < self.max_iter => {
                     let mut ext = &d_new + &((&d_new - dp) * omega);
                     for mut row in ext.rows_mut() {
                         let n2 = row.dot(&row);
@@ -273,7 +275,9 @@ pub struct DictionaryFit {
     pub codes: Array2<f64>,
     /// F = (1/N) Σ min_a [0.5 ||x − aD||² + beta ||a||₁] for the final dictionary.
     pub objective: f64,
-    /// The learning objective (equals `objective` for the L1 penalty).
+    /// The learning objective (equals `objective` for the L1 penalty), never above the
+    /// last recorded `objective_after_basis`: the final dictionary is the last basis
+    /// step's solution or an extrapolation that did not raise F.
     pub learning_objective: f64,
     pub history: Vec<IterationRecord>,
     pub iterations: usize,
@@ -516,4 +520,37 @@ fn reseed_unused(
         }
     }
     count
+}
+
+#[cfg(test)]
+mod tests {
+    use ndarray::arr2;
+
+    use super::*;
+
+    #[test]
+    fn unused_bases_take_the_worst_residuals_in_turn_and_a_zero_residual_none() {
+        // Patches (3, 4), (1, 0), (0, 0.5), coded 3 e₁, 0 and 0.5 e₂ with bases 0 and 1 of
+        // the old dictionary (e₁, e₂, …), leave the residuals (0, 4), (1, 0) and exactly 0.
+        // Bases 2, 3 and 4 are unused (zero diagonal of AᵀA): the first two take the
+        // residuals of squared norms 16 and 1, scaled to norm √c = 2, and the third, with
+        // only a zero residual left, keeps its old row; the used bases keep their new rows.
+        let x = arr2(&[[3.0, 4.0], [1.0, 0.0], [0.0, 0.5]]);
+        let d_old = arr2(&[[1.0, 0.0], [0.0, 1.0], [0.6, 0.8], [-0.8, 0.6], [0.0, -1.0]]);
+        let codes = arr2(&[
+            [3.0, 0.0, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0, 0.0, 0.0],
+            [0.0, 0.5, 0.0, 0.0, 0.0],
+        ]);
+        let ata = codes.t().dot(&codes);
+        let mut d_new = Array2::from_elem((5, 2), 7.0);
+        let count = reseed_unused(&mut d_new, &d_old, &ata, x.view(), &codes, 4.0);
+        let want = arr2(&[[7.0, 7.0], [7.0, 7.0], [0.0, 2.0], [2.0, 0.0], [0.0, -1.0]]);
+        assert_eq!((count, d_new), (2, want));
+        // Every basis used (only the diagonal of AᵀA is read): nothing changes.
+        let mut d_new = Array2::from_elem((5, 2), 7.0);
+        let all_used = Array2::<f64>::eye(5);
+        let count = reseed_unused(&mut d_new, &d_old, &all_used, x.view(), &codes, 4.0);
+        assert_eq!((count, d_new), (0, Array2::from_elem((5, 2), 7.0)));
+    }
 }
