@@ -100,6 +100,7 @@ pub fn chol_solve_rows(r: usize, l: &[f64], b: &mut [f64], m: usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use ndarray::ArrayView2;
 
     /// A lower-triangular L with integer entries and positive diagonal (s × s, row-major).
     /// A = L Lᵀ has integer entries, and every step of its Cholesky factor (products,
@@ -116,22 +117,17 @@ mod tests {
          1.0,  1.0,  3.0, -1.0, 2.0, 3.0,
     ];
 
-    /// M Mᵀ for the s × s matrix M (row-major).
-    fn gram(s: usize, m: &[f64]) -> Vec<f64> {
-        let mut a = vec![0.0; s * s];
-        for i in 0..s {
-            for j in 0..s {
-                a[i * s + j] = (0..s).map(|q| m[i * s + q] * m[j * s + q]).sum();
-            }
-        }
-        a
+    /// M Mᵀ for the 6 × 6 matrix M (row-major).
+    fn gram(m: &[f64]) -> Vec<f64> {
+        let m = ArrayView2::from_shape((6, 6), m).unwrap();
+        m.dot(&m.t()).into_iter().collect()
     }
 
-    /// The lower triangle (with the diagonal) of an s × s matrix.
-    fn lower(s: usize, m: &[f64]) -> Vec<f64> {
-        (0..s)
-            .flat_map(|i| (0..=i).map(move |j| (i, j)))
-            .map(|(i, j)| m[i * s + j])
+    /// The lower triangle (with the diagonal) of the leading r × r block of a row-major
+    /// matrix with row stride `stride`.
+    fn lower(r: usize, stride: usize, m: &[f64]) -> Vec<f64> {
+        (0..r)
+            .flat_map(|i| (0..=i).map(move |j| m[i * stride + j]))
             .collect()
     }
 
@@ -150,12 +146,12 @@ mod tests {
 
     #[test]
     fn the_factor_of_an_integer_product_is_the_integer_factor_and_solves_exactly() {
-        let a = gram(6, &L);
+        let a = gram(&L);
         // The strict upper triangle of the output is not the factor's: NaN there shows
         // that neither the solves nor the factorisation read it.
         let mut l = vec![f64::NAN; 36];
         assert_eq!(cholesky(6, &a, &mut l), Ok(()));
-        assert_eq!(lower(6, &l), lower(6, &L));
+        assert_eq!(lower(6, 6, &l), lower(6, 6, &L));
 
         let x = [1.0, -2.0, 3.0, 0.0, 5.0, -1.0];
         let b: Vec<f64> = (0..6).map(|i| dot(&a[i * 6..i * 6 + 6], &x)).collect();
@@ -179,12 +175,10 @@ mod tests {
              5.0, -1.0, 0.0,
             -1.0,  2.0, 3.0,
         ];
-        let mut bs = vec![0.0; 18];
-        for i in 0..6 {
-            for m in 0..3 {
-                bs[i * 3 + m] = (0..6).map(|q| a[i * 6 + q] * xs[q * 3 + m]).sum();
-            }
-        }
+        let a_x = ArrayView2::from_shape((6, 6), &a)
+            .unwrap()
+            .dot(&ArrayView2::from_shape((6, 3), &xs).unwrap());
+        let mut bs: Vec<f64> = a_x.into_iter().collect();
         chol_solve_rows(6, &l, &mut bs, 3);
         assert_eq!(bs, xs);
     }
@@ -195,21 +189,16 @@ mod tests {
         // there is exactly 0.
         let mut m = L;
         m[3 * 6 + 3] = 0.0;
-        let a = gram(6, &m);
+        let a = gram(&m);
         let mut l = vec![f64::NAN; 36];
         assert_eq!(cholesky(6, &a, &mut l), Err(3));
-        assert_eq!(lower(3, &l_block(&l, 3)), lower(3, &l_block(&L, 3)));
+        assert_eq!(lower(3, 6, &l), lower(3, 6, &L));
         // Those rows solve the leading 3 × 3 system (stride 6).
         let x = [2.0, -1.0, 1.0];
         let b: Vec<f64> = (0..3).map(|i| dot(&a[i * 6..i * 6 + 3], &x)).collect();
         let mut got = [f64::NAN; 3];
         chol_solve(3, 6, &l, &b, &mut got);
         assert_eq!(got, x);
-    }
-
-    /// The leading r × r block of a 6 × 6 matrix, with stride r.
-    fn l_block(m: &[f64], r: usize) -> Vec<f64> {
-        (0..r).flat_map(|i| m[i * 6..i * 6 + r].to_vec()).collect()
     }
 
     #[test]
