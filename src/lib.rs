@@ -4,6 +4,7 @@
 //! `cluster`) → `experiments` → `figures` and the `app`. Engine modules never import the
 //! app or egui; the `gui` feature (on by default) adds the window.
 
+pub mod catalogue;
 pub mod cli;
 pub mod cluster;
 pub mod experiments;

@@ -2,8 +2,8 @@
 
 mod common;
 
+use tactile_workbench::catalogue::MethodId;
 use tactile_workbench::cli::paper_figures::{Experiment, PaperFiguresArgs, run};
-use tactile_workbench::experiments::frontier::FrontierMethod;
 
 #[test]
 fn baselines_figures_are_written_with_an_index() {
@@ -66,7 +66,7 @@ fn stability_figures_and_project_regenerate_the_first_paper() {
         assert!(index.contains(title), "index lacks {title}");
     }
     // The project re-opens with the figures and the per-basis details.
-    let p = tactile_workbench::experiments::report::Project::load(&project).unwrap();
+    let p = tactile_workbench::experiments::project::Project::load(&project).unwrap();
     let r = &p.results[0];
     let bases = r.details_of("bases-raw").expect("basis details");
     assert_eq!(
@@ -94,8 +94,8 @@ fn a_frontier_project_carries_its_frontiers() {
     })
     .expect("paper-figures");
     // The workbench shows a project's frontiers in its speed view: they must be in it.
-    let p = tactile_workbench::experiments::report::Project::load(&project).unwrap();
+    let p = tactile_workbench::experiments::project::Project::load(&project).unwrap();
     assert_eq!(p.frontiers.len(), 1);
-    assert_eq!(p.frontiers[0].params.method, FrontierMethod::SparseSvm);
+    assert_eq!(p.frontiers[0].params.method, MethodId::SparseSvm);
     let _ = std::fs::remove_dir_all(out);
 }

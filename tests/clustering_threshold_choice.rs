@@ -4,10 +4,10 @@
 mod common;
 
 use tactile_workbench::cluster::normalized_mutual_info;
+use tactile_workbench::experiments::clustering::report::clustering_report;
 use tactile_workbench::experiments::clustering::{
     ClusteringParams, ClusteringResult, UnsupervisedLearner, run_clustering,
 };
-use tactile_workbench::experiments::recognition_report::clustering_report;
 use tactile_workbench::figures::{FigureKind, Orientation};
 use tactile_workbench::jobs::Progress;
 use tactile_workbench::rng::Rng;

@@ -8,10 +8,9 @@ mod common;
 
 use std::process::Command;
 
-use tactile_workbench::experiments::frontier::{
-    CostAxis, Frontier, FrontierMethod, FrontierParams, run_frontier,
-};
-use tactile_workbench::experiments::frontier_report::frontier_figures;
+use tactile_workbench::catalogue::MethodId;
+use tactile_workbench::experiments::frontier::report::frontier_figures;
+use tactile_workbench::experiments::frontier::{CostAxis, Frontier, FrontierParams, run_frontier};
 use tactile_workbench::jobs::Progress;
 use tactile_workbench::session;
 
@@ -80,7 +79,7 @@ fn gs_frontier_on_the_recognition_sample_recommends_by_the_one_se_rule() {
         reps: 3,
         capacities: vec![2, 10, 50],
         taus: vec![1, 15],
-        ..FrontierParams::for_method(FrontierMethod::Gs)
+        ..FrontierParams::for_method(MethodId::Gs)
     };
     let f = run_frontier(&s, &params, &Progress::new()).unwrap();
     assert_eq!(f.points.len(), 6);
@@ -107,7 +106,7 @@ fn sparse_coding_frontier_keeps_the_best_beta_gamma_per_num_bases() {
         num_bases: vec![2, 6, 29],
         beta: vec![1.0],
         gamma: vec![0.5, 1.0],
-        ..FrontierParams::for_method(FrontierMethod::SparseSvm)
+        ..FrontierParams::for_method(MethodId::SparseSvm)
     };
     let f = run_frontier(&s, &params, &Progress::new()).unwrap();
     assert_eq!(f.unit, "grasp");
@@ -232,8 +231,8 @@ fn du_and_gu_frontiers_score_nmi_against_threshold_and_effective_clusters() {
     let s = session::load(&common::sample("object-recognition.json")).unwrap();
     // GU at seed 2: 0.12 scores within one SE of the best 0.11 and predicts faster.
     for (method, seed, thresholds) in [
-        (FrontierMethod::Du, 1, vec![0.1, 0.3, 0.6]),
-        (FrontierMethod::Gu, 2, vec![0.05, 0.11, 0.12, 0.3]),
+        (MethodId::Du, 1, vec![0.1, 0.3, 0.6]),
+        (MethodId::Gu, 2, vec![0.05, 0.11, 0.12, 0.3]),
     ] {
         // Small experts keep the test short; the knob is the threshold.
         let params = FrontierParams {
@@ -285,7 +284,7 @@ fn kmeans_som_and_rbf_svm_frontiers_follow_the_rule() {
     let s = session::load(&common::sample("object-recognition.json")).unwrap();
     let classes = s.label_sets[s.label_set("object").unwrap()].classes.len();
     // The SOM's 2 × 3 units score within one SE of the best 2 × 5 and assign faster.
-    for method in [FrontierMethod::Kmeans, FrontierMethod::Som] {
+    for method in [MethodId::KMeans, MethodId::Som] {
         let params = FrontierParams {
             reps: 3,
             ks: vec![2, 6, 10],
@@ -304,7 +303,7 @@ fn kmeans_som_and_rbf_svm_frontiers_follow_the_rule() {
         reps: 3,
         svm_c: vec![1.0, 100.0],
         svm_gamma: vec![0.001, 0.1],
-        ..FrontierParams::for_method(FrontierMethod::RbfSvm)
+        ..FrontierParams::for_method(MethodId::RbfSvm)
     };
     let f = run_frontier(&s, &params, &Progress::new()).unwrap();
     assert_eq!(f.points.len(), 4);
@@ -318,7 +317,7 @@ fn kmeans_som_and_rbf_svm_frontiers_follow_the_rule() {
     );
     // The point's score is the cross validation's mean over the fold seeds, as the
     // `baselines` grid search computes it.
-    use tactile_workbench::cluster::grasp_features::session_features;
+    use tactile_workbench::features::table_one::session_features;
     use tactile_workbench::rng::Rng;
     use tactile_workbench::svm::kernel_svm::{KernelSvmParams, cross_validate};
     let x = session_features(&s).unwrap();

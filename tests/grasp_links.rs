@@ -7,18 +7,22 @@
 
 mod common;
 
+use tactile_workbench::experiments::clustering::report::clustering_report;
 use tactile_workbench::experiments::clustering::{
     ClusteringParams, UnsupervisedLearner, run_clustering,
 };
+use tactile_workbench::experiments::recognition::report::recognition_report;
 use tactile_workbench::experiments::recognition::{
     RecognitionParams, SupervisedLearner, run_recognition,
 };
-use tactile_workbench::experiments::recognition_report::{clustering_report, recognition_report};
-use tactile_workbench::experiments::report::{AnalysisResult, GraspLinks, Project};
+use tactile_workbench::experiments::stability::report::stability_report;
 use tactile_workbench::experiments::stability::{
     self, Config, DataOptions, PipelineSettings, StabilityData, StabilityOptions, StabilityReport,
 };
-use tactile_workbench::experiments::stability_report::stability_report;
+use tactile_workbench::experiments::{
+    project::Project,
+    result::{AnalysisResult, GraspLinks},
+};
 use tactile_workbench::features::FeatureSet;
 use tactile_workbench::figures::{FigureKind, Heatmap, ImageGrid};
 use tactile_workbench::jobs::Progress;

@@ -10,6 +10,7 @@ use std::time::Duration;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use tactile_workbench::app::{View, WorkbenchApp};
+use tactile_workbench::catalogue::MethodId;
 use tactile_workbench::figures::FigureKind;
 
 fn harness() -> Harness<'static, WorkbenchApp> {
@@ -426,7 +427,10 @@ fn stability_view_shows_the_first_papers_figures() {
 
 #[test]
 fn a_project_on_the_command_line_reopens_its_sessions_and_shows_its_results() {
-    use tactile_workbench::experiments::report::{AnalysisKind, AnalysisResult, Project};
+    use tactile_workbench::experiments::{
+        project::Project,
+        result::{AnalysisKind, AnalysisResult},
+    };
     use tactile_workbench::figures::{Axis, Figure, Series};
     let session = tactile_workbench::session::open(&common::sample("grasp-stability.json"))
         .unwrap()
@@ -481,7 +485,7 @@ fn a_project_on_the_command_line_reopens_its_sessions_and_shows_its_results() {
 
 #[test]
 fn robustness_view_sweeps_a_perturbation_and_charts_it() {
-    use tactile_workbench::experiments::robustness::{Method, Perturbation};
+    use tactile_workbench::experiments::robustness::Perturbation;
     let mut h = harness();
     h.get_by_label("Simulated grasp stability").click();
     h.run_ok();
@@ -493,12 +497,11 @@ fn robustness_view_sweeps_a_perturbation_and_charts_it() {
     h.get_by_label("new-objects");
     // Only the raw SVM, under noise and truncation, once: ticked and unticked by label.
     let form = h.state().rooms.robustness.form.clone();
-    let methods: Vec<Method> = Method::ALL
-        .into_iter()
+    let methods: Vec<MethodId> = MethodId::all()
         .filter(|m| h.query_by_label(m.title()).is_some())
         .collect();
     for &m in &methods {
-        if form.methods.contains(&m) != (m == Method::RawSvm) {
+        if form.methods.contains(&m) != (m == MethodId::RawSvm) {
             h.get_by_label(m.title()).click();
             h.run_ok();
         }
@@ -518,7 +521,7 @@ fn robustness_view_sweeps_a_perturbation_and_charts_it() {
     h.run_ok();
     let form = &h.state().rooms.robustness.form;
     for m in methods {
-        assert_eq!(form.methods.contains(&m), m == Method::RawSvm, "{m:?}");
+        assert_eq!(form.methods.contains(&m), m == MethodId::RawSvm, "{m:?}");
     }
     for p in shown {
         assert_eq!(

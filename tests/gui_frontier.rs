@@ -11,8 +11,8 @@ use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use tactile_workbench::app::{View, WorkbenchApp, figure_view};
 use tactile_workbench::experiments::frontier::Frontier;
-use tactile_workbench::experiments::frontier_report::frontier_figures;
-use tactile_workbench::experiments::report::{AnalysisResult, SizeReason};
+use tactile_workbench::experiments::frontier::report::frontier_figures;
+use tactile_workbench::experiments::result::{AnalysisResult, SizeReason};
 use tactile_workbench::figures::FigureKind;
 
 fn wait_for_jobs(h: &mut Harness<'static, WorkbenchApp>) {

@@ -513,7 +513,7 @@ fn extreme_beta_and_gamma_stay_finite() {
 
 #[test]
 fn normalisers_scale_values_near_the_float_limit() {
-    use tactile_workbench::cluster::grasp_features::{Normalisation, Normaliser};
+    use tactile_workbench::features::{Normalisation, Normaliser};
     let data = array![
         [1e300, -1.7e308, 1.0],
         [-1e300, 1.7e308, 1.0],

@@ -4,14 +4,15 @@
 
 use std::path::Path;
 
+use tactile_workbench::catalogue::MethodId;
 use tactile_workbench::experiments::ExperimentError;
 use tactile_workbench::experiments::recognition::{
     RecognitionParams, SupervisedLearner, run_recognition,
 };
+use tactile_workbench::experiments::robustness::report::robustness_report;
 use tactile_workbench::experiments::robustness::{
-    Family, Method, Perturbation, RobustnessParams, Sweep, break_point, run_robustness,
+    Family, Perturbation, RobustnessParams, Sweep, break_point, run_robustness,
 };
-use tactile_workbench::experiments::robustness_report::robustness_report;
 use tactile_workbench::features::FeatureSet;
 use tactile_workbench::jobs::Progress;
 use tactile_workbench::perturb::{
@@ -331,7 +332,7 @@ fn bad_strengths_are_refused_by_name() {
     );
     assert_eq!(
         param_name(RobustnessParams {
-            methods: vec![Method::Gs],
+            methods: vec![MethodId::Gs],
             ..base.clone()
         }),
         "methods"
@@ -434,7 +435,7 @@ fn stability_sweep_on_the_sample_breaks_under_strong_faults() {
         },
     ];
     let r = run_robustness(&s, &p, &Progress::new()).unwrap();
-    for m in [Method::SparseSvm, Method::RawSvm] {
+    for m in [MethodId::SparseSvm, MethodId::RawSvm] {
         let clean = r.clean_score(m).unwrap();
         // docs/grasp-stability.md: 0.69–0.76 on this session.
         assert!(clean > 0.64 && clean < 0.85, "{m:?}: clean {clean}");
@@ -459,7 +460,7 @@ fn recognition_clean_score_is_the_protocols_and_dead_fingers_break_it() {
         return;
     };
     let mut p = RobustnessParams::defaults(Family::Recognition);
-    p.methods = vec![Method::Ds];
+    p.methods = vec![MethodId::Ds];
     p.reps = 1;
     p.seed = 3;
     p.recognition.features = FeatureSet::Tactile;
@@ -480,11 +481,11 @@ fn recognition_clean_score_is_the_protocols_and_dead_fingers_break_it() {
         &Progress::new(),
     )
     .unwrap();
-    let clean = r.clean_score(Method::Ds).unwrap();
+    let clean = r.clean_score(MethodId::Ds).unwrap();
     assert_eq!(clean, direct.summary.final_20.mean);
     assert!(clean > 0.5, "clean {clean}");
     let dead = &r
-        .curve(Method::Ds, Perturbation::DeadSensor)
+        .curve(MethodId::Ds, Perturbation::DeadSensor)
         .unwrap()
         .points[0];
     // Every finger dead: the tactile features are constant, at best one class right.
@@ -497,7 +498,7 @@ fn recognition_baselines_score_the_sample_and_lose_to_noise() {
         return;
     };
     let mut p = RobustnessParams::defaults(Family::Recognition);
-    p.methods = vec![Method::KMeans, Method::RbfSvm];
+    p.methods = vec![MethodId::KMeans, MethodId::RbfSvm];
     p.reps = 1;
     p.sweeps = vec![Sweep {
         perturbation: Perturbation::Noise,
@@ -505,10 +506,10 @@ fn recognition_baselines_score_the_sample_and_lose_to_noise() {
     }];
     let r = run_robustness(&s, &p, &Progress::new()).unwrap();
     // The sample's objects separate well on the Table I features.
-    let km = r.clean_score(Method::KMeans).unwrap();
-    let svm = r.clean_score(Method::RbfSvm).unwrap();
+    let km = r.clean_score(MethodId::KMeans).unwrap();
+    let svm = r.clean_score(MethodId::RbfSvm).unwrap();
     assert!(km > 0.5 && km <= 1.0, "k-means NMI {km}");
     assert!(svm > 0.8 && svm <= 1.0, "RBF SVM accuracy {svm}");
-    let noisy = r.curve(Method::RbfSvm, Perturbation::Noise).unwrap();
+    let noisy = r.curve(MethodId::RbfSvm, Perturbation::Noise).unwrap();
     assert!(noisy.points[0].score.mean < svm - 0.1, "{noisy:?}");
 }

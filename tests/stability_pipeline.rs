@@ -462,7 +462,7 @@ fn the_trained_model_scales_new_grasps_like_the_session() {
     let settings = PipelineSettings::default();
     let model = StabilityModel::train(&d, cfg, dict.clone(), &settings.svm).unwrap();
     let codes = dict.encode(d.x.view(), 0.5).unwrap();
-    let features = stability::grasp_features(codes, 2);
+    let features = stability::concatenated_codes(codes, 2);
     let mut correct = 0;
     for g in 0..d.grasp_count() {
         let pressures = d.patches.pressures.row(g);

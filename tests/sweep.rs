@@ -9,10 +9,9 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 use serde_json::Value;
+use tactile_workbench::catalogue::MethodId;
 use tactile_workbench::experiments::clustering::{ClusteringParams, run_clustering};
-use tactile_workbench::experiments::frontier::{
-    Frontier, FrontierMethod, FrontierParams, run_frontier,
-};
+use tactile_workbench::experiments::frontier::{Frontier, FrontierParams, run_frontier};
 use tactile_workbench::experiments::recognition::{RecognitionParams, run_recognition};
 use tactile_workbench::experiments::robustness::{
     Family, Perturbation, RobustnessParams, Sweep, run_robustness,
@@ -205,7 +204,7 @@ fn merged_frontiers_equal_the_local_runs() {
             seed: 5,
             capacities: vec![2, 5],
             taus: vec![1],
-            ..FrontierParams::for_method(FrontierMethod::Ds)
+            ..FrontierParams::for_method(MethodId::Ds)
         },
         FrontierParams {
             reps: 2,
@@ -213,26 +212,26 @@ fn merged_frontiers_equal_the_local_runs() {
             thresholds: vec![0.3, 0.6],
             expert_capacity: Some(15),
             expert_tau: Some(4),
-            ..FrontierParams::for_method(FrontierMethod::Du)
+            ..FrontierParams::for_method(MethodId::Du)
         },
         FrontierParams {
             reps: 3,
             seed: 5,
             ks: vec![2, 4],
-            ..FrontierParams::for_method(FrontierMethod::Kmeans)
+            ..FrontierParams::for_method(MethodId::KMeans)
         },
         FrontierParams {
             reps: 3,
             seed: 5,
             ks: vec![4],
-            ..FrontierParams::for_method(FrontierMethod::Som)
+            ..FrontierParams::for_method(MethodId::Som)
         },
         FrontierParams {
             reps: 2,
             seed: 5,
             svm_c: vec![1.0, 10.0],
             svm_gamma: vec![0.01],
-            ..FrontierParams::for_method(FrontierMethod::RbfSvm)
+            ..FrontierParams::for_method(MethodId::RbfSvm)
         },
     ];
     let local: Vec<Frontier> = frontiers
@@ -253,7 +252,7 @@ fn merged_frontiers_equal_the_local_runs() {
         num_bases: vec![2, 4],
         beta: vec![1.0],
         gamma: vec![0.5, 1.0],
-        ..FrontierParams::for_method(FrontierMethod::SparseSvm)
+        ..FrontierParams::for_method(MethodId::SparseSvm)
     }];
     let local = vec![run_frontier(&s, &sparse[0], &Progress::new()).unwrap()];
     let (_, merged) = sharded(

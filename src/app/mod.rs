@@ -21,7 +21,7 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::experiments::report::AnalysisKind;
+use crate::experiments::result::AnalysisKind;
 use browser::{Browser, BrowserAction};
 use loader::{LoadedSession, Loader, Source};
 use replay::Replay;
@@ -212,7 +212,7 @@ impl WorkbenchApp {
     /// Open a session file, or a project file (which reopens its sessions); a recording
     /// that needs an import spec waits in the import dialog.
     pub fn open_path(&mut self, path: PathBuf, ctx: &egui::Context) {
-        if crate::experiments::report::is_project(&path) {
+        if crate::experiments::project::is_project(&path) {
             self.analyses.open_project(ctx, path);
         } else if crate::session::needs_spec(&path) {
             self.import.push(path);
@@ -382,7 +382,7 @@ impl WorkbenchApp {
             ModelSpec::Clustering { .. } => (AnalysisKind::Clustering, View::Clustering),
             ModelSpec::Baselines { .. } => (AnalysisKind::Baselines, View::Baselines),
         };
-        let same = |r: &crate::experiments::report::AnalysisResult| {
+        let same = |r: &crate::experiments::result::AnalysisResult| {
             let of = |key: &str| r.parameters.get(key).map(String::as_str);
             let sized = || r.model_size.as_ref().map(|m| m.knobs.as_str()) == Some(&spec.knobs());
             r.kind == kind
@@ -394,9 +394,7 @@ impl WorkbenchApp {
                         sized()
                             && of("learner") == Some(&format!("{learner:?}").to_uppercase())
                             && of("features")
-                                == Some(crate::experiments::recognition_report::features_text(
-                                    *features,
-                                ))
+                                == Some(crate::experiments::result::features_text(*features))
                     }
                     ModelSpec::Stability(_) => sized(),
                     ModelSpec::Clustering { learner, threshold } => {

@@ -7,14 +7,15 @@ use egui::ProgressBar;
 
 use super::loader::LoadedSession;
 use super::notify::Notifications;
+use crate::catalogue::MethodId;
 use crate::experiments::ExperimentError;
-use crate::experiments::frontier::{Frontier, FrontierMethod};
-use crate::experiments::frontier_report::frontier_figures;
+use crate::experiments::frontier::Frontier;
+use crate::experiments::frontier::report::frontier_figures;
+use crate::experiments::recognition::report::comparison_figures;
 use crate::experiments::recognition::{
     GraspTrace, RecognitionParams, SupervisedLearner, grasp_trace,
 };
-use crate::experiments::recognition_report::comparison_figures;
-use crate::experiments::report::{self, AnalysisKind, AnalysisResult, date_text};
+use crate::experiments::result::{self, AnalysisKind, AnalysisResult, date_text};
 use crate::features::FeatureSet;
 use crate::figures::{self, Format, RenderOptions};
 use crate::jobs::{Job, JobError, Outcome};
@@ -33,7 +34,7 @@ pub enum JobOutput {
     Result(Box<AnalysisResult>),
     Frontier(Box<Frontier>),
     Message(String),
-    Project(report::Project),
+    Project(crate::experiments::project::Project),
     Trace(Box<ReplayTrace>),
 }
 
@@ -240,13 +241,13 @@ impl Analyses {
     pub fn frontier(
         &self,
         session: &str,
-        method: FrontierMethod,
+        method: MethodId,
         features: FeatureSet,
     ) -> Option<&Frontier> {
         self.frontiers.iter().find(|f| {
             f.session == session
                 && f.params.method == method
-                && (method == FrontierMethod::SparseSvm || f.params.features == features)
+                && (method == MethodId::SparseSvm || f.params.features == features)
         })
     }
 
@@ -292,9 +293,9 @@ impl Analyses {
 
     /// Export every figure of every result in the background.
     pub fn export_all(&mut self, ctx: &egui::Context) {
-        let set = report::figure_set(&self.results);
+        let set = result::figure_set(&self.results);
         let mut set_all = set;
-        let extra = report::speed_accuracy_figures(&self.results)
+        let extra = result::speed_accuracy_figures(&self.results)
             .into_iter()
             .chain(comparison_figures(&self.results));
         for (name, f) in extra {
@@ -303,7 +304,7 @@ impl Analyses {
                 figure: f,
                 parameters: Default::default(),
                 session: "all".into(),
-                date: date_text(report::now_unix()),
+                date: date_text(result::now_unix()),
             });
         }
         // Each session's frontiers on one chart per time axis.
@@ -318,11 +319,11 @@ impl Analyses {
                 .collect();
             for (name, f) in frontier_figures(&of) {
                 set_all.entries.push(figures::FigureEntry {
-                    name: format!("{name}-{}", report::slug(session)),
+                    name: format!("{name}-{}", result::slug(session)),
                     figure: f,
                     parameters: Default::default(),
                     session: session.to_string(),
-                    date: date_text(report::now_unix()),
+                    date: date_text(result::now_unix()),
                 });
             }
         }
@@ -349,7 +350,7 @@ impl Analyses {
 
     /// Save the results and the sessions they came from as a project file (in the background).
     pub fn save_project(&mut self, ctx: &egui::Context, path: PathBuf, sessions: Vec<String>) {
-        let project = report::Project::new(sessions, self.results.clone())
+        let project = crate::experiments::project::Project::new(sessions, self.results.clone())
             .with_frontiers(self.frontiers.clone());
         self.spawn(
             ctx,
@@ -372,7 +373,8 @@ impl Analyses {
             None,
             format!("Open project {}", path.display()),
             move |_| {
-                let project = report::Project::load(&path).map_err(JobError::failed)?;
+                let project =
+                    crate::experiments::project::Project::load(&path).map_err(JobError::failed)?;
                 Ok(JobOutput::Project(project))
             },
         );

@@ -7,8 +7,8 @@ use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 
 use crate::cluster::baselines::{BaselinesParams, BaselinesResult, ScoreSummary, run_baselines};
-use crate::cluster::grasp_features::{Normalisation, session_features};
 use crate::cluster::{Schedule, SomParams};
+use crate::features::{Normalisation, table_one::session_features};
 use crate::jobs::Progress;
 
 #[derive(Clone, Copy, Debug, ValueEnum)]

@@ -8,8 +8,9 @@ use clap::Args;
 
 use super::progress::with_progress;
 use super::recognition::{open_session, write_json};
+use crate::catalogue::MethodId;
 use crate::experiments::frontier::{
-    CostAxis, Frontier, FrontierMethod, FrontierParams, RecognitionScore, run_frontier,
+    CostAxis, Frontier, FrontierParams, RecognitionScore, run_frontier,
 };
 use crate::features::FeatureSet;
 
@@ -97,7 +98,7 @@ impl FrontierArgs {
             .collect::<Result<Vec<_>, _>>()?;
         let mut out = Vec::new();
         for m in &self.method {
-            let method: FrontierMethod = m.parse()?;
+            let method: MethodId = m.parse().map_err(|e| anyhow::anyhow!("--method: {e}"))?;
             let sets = if method.uses_features() {
                 &features[..]
             } else {

@@ -7,24 +7,25 @@ use clap::{Args, ValueEnum};
 
 use super::progress::with_progress;
 use super::recognition::open_session;
+use crate::catalogue::MethodId;
 use crate::cluster::baselines::{BaselinesParams, grid_for, run_baselines};
-use crate::cluster::grasp_features::session_features;
-use crate::experiments::baselines_report::baselines_report;
+use crate::experiments::baselines::baselines_report;
+use crate::experiments::clustering::report::clustering_report;
 use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_clustering};
-use crate::experiments::frontier::{Frontier, FrontierMethod, FrontierParams, run_frontier};
-use crate::experiments::frontier_report::frontier_figures;
+use crate::experiments::frontier::report::frontier_figures;
+use crate::experiments::frontier::{Frontier, FrontierParams, run_frontier};
+use crate::experiments::project::Project;
+use crate::experiments::recognition::report::{comparison_figures, recognition_report};
 use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
-use crate::experiments::recognition_report::{
-    clustering_report, comparison_figures, recognition_report,
-};
-use crate::experiments::report::{AnalysisResult, Project, figure_set, speed_accuracy_figures};
+use crate::experiments::result::{AnalysisResult, figure_set, speed_accuracy_figures};
+use crate::experiments::robustness::report::robustness_report;
 use crate::experiments::robustness::{Family, RobustnessParams, run_robustness};
-use crate::experiments::robustness_report::robustness_report;
+use crate::experiments::stability::report::stability_report;
 use crate::experiments::stability::{
     self, DataOptions, GridSpec, PipelineSettings, StabilityData, StabilityOptions,
 };
-use crate::experiments::stability_report::stability_report;
 use crate::features::FeatureSet;
+use crate::features::table_one::session_features;
 use crate::figures::{FigureEntry, Format, RenderOptions, export_all};
 use crate::jobs::Progress;
 use crate::session::Session;
@@ -100,7 +101,7 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
             figure: f,
             parameters: Default::default(),
             session: name.clone(),
-            date: crate::experiments::report::date_text(crate::experiments::report::now_unix()),
+            date: crate::experiments::result::date_text(crate::experiments::result::now_unix()),
         });
     }
     let opts = RenderOptions {
@@ -265,21 +266,20 @@ fn experiment_results(
             results.push(robustness_report(&name, &r));
         }
         Experiment::Frontier => {
-            let methods: &[(FrontierMethod, FeatureSet)] = if session.label_set("object").is_some()
-            {
+            let methods: &[(MethodId, FeatureSet)] = if session.label_set("object").is_some() {
                 &[
-                    (FrontierMethod::Ds, FeatureSet::All),
-                    (FrontierMethod::Ds, FeatureSet::Encoder),
-                    (FrontierMethod::Gs, FeatureSet::All),
-                    (FrontierMethod::Gs, FeatureSet::Encoder),
-                    (FrontierMethod::Du, FeatureSet::All),
-                    (FrontierMethod::Gu, FeatureSet::All),
-                    (FrontierMethod::Kmeans, FeatureSet::All),
-                    (FrontierMethod::Som, FeatureSet::All),
-                    (FrontierMethod::RbfSvm, FeatureSet::All),
+                    (MethodId::Ds, FeatureSet::All),
+                    (MethodId::Ds, FeatureSet::Encoder),
+                    (MethodId::Gs, FeatureSet::All),
+                    (MethodId::Gs, FeatureSet::Encoder),
+                    (MethodId::Du, FeatureSet::All),
+                    (MethodId::Gu, FeatureSet::All),
+                    (MethodId::KMeans, FeatureSet::All),
+                    (MethodId::Som, FeatureSet::All),
+                    (MethodId::RbfSvm, FeatureSet::All),
                 ]
             } else {
-                &[(FrontierMethod::SparseSvm, FeatureSet::All)]
+                &[(MethodId::SparseSvm, FeatureSet::All)]
             };
             for &(method, features) in methods {
                 let params = FrontierParams {

@@ -7,12 +7,13 @@ use anyhow::Context;
 use clap::Args;
 
 use super::progress::with_progress;
+use crate::catalogue::MethodId;
 use crate::experiments::clustering::{ClusteringParams, run_clustering};
-use crate::experiments::frontier::{Frontier, FrontierMethod};
+use crate::experiments::frontier::Frontier;
 use crate::experiments::recognition::{
     RecognitionParams, RecognitionResult, SupervisedLearner, run_recognition,
 };
-use crate::experiments::report::SizeReason;
+use crate::experiments::result::SizeReason;
 use crate::features::FeatureSet;
 use crate::jobs::Progress;
 use crate::session::{self, Session};
@@ -118,8 +119,8 @@ fn recommended_size(
     let frontiers: Vec<Frontier> = serde_json::from_str(&text)
         .with_context(|| format!("{} is not a `frontier --json` file", path.display()))?;
     let method = match learner {
-        SupervisedLearner::Ds => FrontierMethod::Ds,
-        SupervisedLearner::Gs => FrontierMethod::Gs,
+        SupervisedLearner::Ds => MethodId::Ds,
+        SupervisedLearner::Gs => MethodId::Gs,
     };
     let f = frontiers
         .iter()
@@ -128,7 +129,7 @@ fn recommended_size(
             anyhow::anyhow!(
                 "{} holds no {} frontier on {} features",
                 path.display(),
-                method.name(),
+                method.title(),
                 features.name()
             )
         })?;

@@ -7,8 +7,9 @@ use clap::Args;
 
 use super::progress::with_progress;
 use super::recognition::open_session;
+use crate::catalogue::MethodId;
 use crate::experiments::robustness::{
-    Family, Method, Perturbation, RobustnessParams, RobustnessResult, Sweep, run_robustness,
+    Family, Perturbation, RobustnessParams, RobustnessResult, Sweep, run_robustness,
 };
 
 #[derive(Args, Debug)]
@@ -156,7 +157,7 @@ pub fn run(a: RobustnessArgs) -> anyhow::Result<()> {
 
 /// The break points, one row per perturbation and a column per method.
 pub fn table(r: &RobustnessResult) -> String {
-    let methods: Vec<Method> = r.clean.iter().map(|c| c.method).collect();
+    let methods: Vec<MethodId> = r.clean.iter().map(|c| c.method).collect();
     let mut out = format!(
         "{} on {}: {} reps, break = mean score < {} × clean ({:.1} s wall, {} threads)\n",
         match r.params.family {

@@ -547,7 +547,7 @@ fn scaling_point(
     let (fit, dictionary) = timed(|| params.fit(data.x.view(), &Progress::new()));
     let fit = fit?;
     let (codes, coding) = timed(|| fit.dictionary.encode(data.x.view(), 1.0));
-    let features = stability::grasp_features(codes?, data.sensor_count());
+    let features = stability::concatenated_codes(codes?, data.sensor_count());
     let folds = stratified_k_fold(&data.labels, 10, 0)?;
     let (cv, cv_t) = timed(|| cross_validate(features.view(), &data.labels, &folds, &settings.svm));
     cv?;
@@ -605,7 +605,7 @@ pub fn bench(a: &BenchStabilityArgs) -> anyhow::Result<BenchReport> {
         codes = Some(c?);
         coding.push(t);
     }
-    let features = stability::grasp_features(codes.expect("coded"), data.sensor_count());
+    let features = stability::concatenated_codes(codes.expect("coded"), data.sensor_count());
     // One 10-fold CV.
     let folds = stratified_k_fold(&data.labels, 10, 0)?;
     let mut cvs = Vec::new();

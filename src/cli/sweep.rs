@@ -11,7 +11,7 @@ use super::progress::with_progress;
 use super::recognition::{ClusteringArgs, RecognitionArgs, open_session};
 use super::robustness::{RobustnessArgs, params_of};
 use super::stability::{StabilityArgs, data_options, in_pool, options_from};
-use crate::experiments::report::Project;
+use crate::experiments::project::Project;
 use crate::experiments::stability::StabilityData;
 use crate::session::Session;
 use crate::sweep::{

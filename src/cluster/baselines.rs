@@ -10,9 +10,9 @@ use ndarray::{Array2, ArrayView2};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::grasp_features::{Normalisation, Normaliser};
 use super::scores::{ClusterScores, scores};
 use super::{ClusterError, SequentialKMeansParams, SomParams};
+use crate::features::{Normalisation, Normaliser};
 use crate::jobs::{Cancelled, Progress};
 use crate::rng::Rng;
 use crate::svm::kernel_svm::{KernelSvmError, KernelSvmParams, cross_validate};
@@ -21,6 +21,8 @@ use crate::svm::kernel_svm::{KernelSvmError, KernelSvmParams, cross_validate};
 pub enum BaselinesError {
     #[error(transparent)]
     Cluster(#[from] ClusterError),
+    #[error(transparent)]
+    Features(#[from] crate::features::FeatureError),
     #[error(transparent)]
     Svm(#[from] KernelSvmError),
     #[error(transparent)]
@@ -374,7 +376,7 @@ fn svm_grid(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cluster::grasp_features::session_features;
+    use crate::features::table_one::session_features;
 
     #[test]
     fn grids_are_as_square_as_possible() {

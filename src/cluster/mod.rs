@@ -3,7 +3,6 @@
 //! scores purity / ARI / NMI against true labels.
 
 pub mod baselines;
-pub mod grasp_features;
 pub mod kmeans;
 pub mod order_agreement;
 pub mod scores;
@@ -25,6 +24,14 @@ pub enum ClusterError {
     InvalidData(String),
 }
 
+impl From<crate::features::FeatureError> for ClusterError {
+    fn from(e: crate::features::FeatureError) -> Self {
+        match e {
+            crate::features::FeatureError::InvalidData(m) => ClusterError::InvalidData(m),
+        }
+    }
+}
+
 impl ClusterError {
     fn invalid(name: &'static str, reason: impl Into<String>) -> Self {
         ClusterError::InvalidParameter {
@@ -36,31 +43,12 @@ impl ClusterError {
 
 /// Samples to cluster must exist and be finite.
 fn check_data(data: ArrayView2<f64>) -> Result<(), ClusterError> {
-    if data.nrows() == 0 || data.ncols() == 0 {
-        return Err(ClusterError::InvalidData(format!(
-            "needs samples and features, got {} × {}",
-            data.nrows(),
-            data.ncols()
-        )));
-    }
-    if let Some(((r, c), _)) = data.indexed_iter().find(|(_, v)| !v.is_finite()) {
-        return Err(ClusterError::InvalidData(format!(
-            "sample {r}, feature {c} is not finite"
-        )));
-    }
-    Ok(())
+    Ok(crate::features::normalise::check_data(data)?)
 }
 
 /// Samples to assign must be finite and have the model's width.
 fn check_width(data: ArrayView2<f64>, width: usize) -> Result<(), ClusterError> {
-    check_data(data)?;
-    if data.ncols() != width {
-        return Err(ClusterError::InvalidData(format!(
-            "the model has {width} features, the data {}",
-            data.ncols()
-        )));
-    }
-    Ok(())
+    Ok(crate::features::normalise::check_width(data, width)?)
 }
 
 /// Row of `rows` nearest to `x` in squared Euclidean distance (ties to the lower index).

@@ -1,7 +1,7 @@
 //! From the numbers of a result to the grasps behind them: which of the session's grasps
 //! stand behind each cell of a confusion map or contingency table and each basis image,
 //! and how a grasp-stability model sees every grasp (its codes, reconstruction and SVM
-//! decision). Plain data inside an [`AnalysisResult`](super::report::AnalysisResult), so
+//! decision). Plain data inside an [`AnalysisResult`](super::result::AnalysisResult), so
 //! a saved project keeps them.
 
 use std::collections::BTreeMap;

@@ -1,18 +1,17 @@
 //! Experiments: the papers' protocols as engine functions returning plain, serialisable
 //! results (for the CLI, the views and the figures), and what they leave behind.
 
-pub mod baselines_report;
+pub mod baselines;
 pub mod clustering;
+pub mod experiment;
 pub mod frontier;
-pub mod frontier_report;
+pub mod labels;
 pub mod links;
+pub mod project;
 pub mod recognition;
-pub mod recognition_report;
-pub mod report;
+pub mod result;
 pub mod robustness;
-pub mod robustness_report;
 pub mod stability;
-pub mod stability_report;
 
 use crate::features::sequence::SequenceError;
 use crate::jobs::Cancelled;
@@ -56,5 +55,11 @@ impl ExperimentError {
             name,
             reason: reason.into(),
         }
+    }
+}
+
+impl From<crate::features::FeatureError> for ExperimentError {
+    fn from(e: crate::features::FeatureError) -> Self {
+        ExperimentError::Data(e.to_string())
     }
 }

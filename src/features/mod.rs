@@ -2,9 +2,19 @@
 //! patches, normalisation.
 
 mod moments;
+pub mod normalise;
 mod patches;
 pub mod sequence;
+pub mod table_one;
 
 pub use moments::FingerStats;
-pub use patches::{KeyFramePatches, PatchError, PatchScaling, Standardizer};
+pub use normalise::{Normalisation, Normaliser, Standardizer};
+pub use patches::{KeyFramePatches, PatchError, PatchScaling};
 pub use sequence::{FeatureSequences, FeatureSet, SequenceParams, feature_sequences};
+
+/// Features that cannot be computed or scaled from the data given.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FeatureError {
+    #[error("invalid data: {0}")]
+    InvalidData(String),
+}

@@ -8,75 +8,11 @@
 //! all. Scaling is fitted on the session's images, per taxel (column of the image), and
 //! the same [`Standardizer`] is applied to any grasp coded later.
 
-use ndarray::{Array2, ArrayView1, ArrayView2};
+use ndarray::{Array2, ArrayView1};
 use serde::{Deserialize, Serialize};
 
+use super::normalise::Standardizer;
 use crate::session::Session;
-
-/// Per-column z-scoring: `(v − mean) / sd`, with sd = 1 for constant columns.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Standardizer {
-    pub mean: Vec<f64>,
-    /// Population standard deviation (divides by n); 1 where a column is constant.
-    pub sd: Vec<f64>,
-}
-
-impl Standardizer {
-    /// Fit on every row of `x`.
-    pub fn fit(x: ArrayView2<f64>) -> Self {
-        let (n, d) = x.dim();
-        let mut mean = vec![0.0; d];
-        let mut m2 = vec![0.0; d];
-        for row in x.rows() {
-            for (j, v) in row.iter().enumerate() {
-                mean[j] += v;
-            }
-        }
-        let nf = n.max(1) as f64;
-        mean.iter_mut().for_each(|m| *m /= nf);
-        for row in x.rows() {
-            for (j, v) in row.iter().enumerate() {
-                let e = v - mean[j];
-                m2[j] += e * e;
-            }
-        }
-        let sd = m2
-            .iter()
-            .zip(&mean)
-            .map(|(s, m)| {
-                let sd = (s / nf).sqrt();
-                if sd > 1e-12 * (1.0 + m.abs()) {
-                    sd
-                } else {
-                    1.0
-                }
-            })
-            .collect();
-        Standardizer { mean, sd }
-    }
-
-    pub fn dim(&self) -> usize {
-        self.mean.len()
-    }
-
-    /// Scale one row into `out`.
-    #[inline]
-    pub fn transform_into(&self, row: ArrayView1<f64>, out: &mut [f64]) {
-        for (j, (o, v)) in out.iter_mut().zip(row.iter()).enumerate() {
-            *o = (v - self.mean[j]) / self.sd[j];
-        }
-    }
-
-    pub fn transform(&self, x: ArrayView2<f64>) -> Array2<f64> {
-        let mut out = x.to_owned();
-        for mut row in out.rows_mut() {
-            for (j, v) in row.iter_mut().enumerate() {
-                *v = (*v - self.mean[j]) / self.sd[j];
-            }
-        }
-        out
-    }
-}
 
 /// How patches are scaled before sparse coding.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]

@@ -12,7 +12,7 @@
 use ndarray::{Array2, ArrayView1, ArrayView2};
 use serde::{Deserialize, Serialize};
 
-use crate::cluster::grasp_features::{Normalisation, Normaliser};
+use crate::features::{Normalisation, Normaliser};
 use crate::rng::Rng;
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -596,7 +596,7 @@ mod tests {
             return;
         };
         let session = crate::session::import_icub(&dir).unwrap();
-        let x = crate::cluster::grasp_features::session_features(&session).unwrap();
+        let x = crate::features::table_one::session_features(&session).unwrap();
         let set = session.label_set("object").unwrap();
         let y = session.labels_of(set);
         // a cell of the grid the `baselines` command searches

@@ -9,24 +9,24 @@
 //! Content hashes are SHA-256 (the `sha2` crate) of the files' bytes.
 
 mod sbatch;
-mod work;
 
 use std::fs;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use sha2::{Digest, Sha256};
 
+use crate::experiments::experiment::{Experiment as Sweepable, compute_items};
+pub use crate::experiments::experiment::{
+    FrontierSweep, FrontierSweepItem, StabilitySweep, WorkTime,
+};
 pub use sbatch::{Resources, sbatch_script};
-pub use work::{FrontierSweep, FrontierSweepItem, StabilitySweep, Sweepable, WorkTime};
 
 use crate::experiments::clustering::ClusteringParams;
 use crate::experiments::recognition::RecognitionParams;
-use crate::experiments::report::AnalysisResult;
+use crate::experiments::result::AnalysisResult;
 use crate::experiments::robustness::RobustnessParams;
 use crate::fsutil;
 use crate::jobs::Progress;
@@ -231,7 +231,9 @@ struct Split {
 }
 
 fn plan_items<E: Sweepable>(e: &E, session: &Session, shards: usize) -> Result<Split, SweepError> {
-    let items = e.items(session).map_err(SweepError::Experiment)?;
+    let items = e
+        .items(session)
+        .map_err(|e| SweepError::Experiment(e.to_string()))?;
     if items.is_empty() {
         return Err(SweepError::Param("the experiment has no work items".into()));
     }
@@ -461,24 +463,13 @@ fn compute_shard<E: Sweepable>(
     progress.set(0.0, format!("{}: preparing", e.name()));
     let prep = e
         .prepare(session, progress)
-        .map_err(SweepError::Experiment)?;
-    let total = items.len();
-    let done = AtomicUsize::new(0);
-    progress.set(0.0, format!("{}: 0/{total} items", e.name()));
-    items
-        .par_iter()
-        .map(|item| {
-            let out = e
-                .compute(session, &prep, item, progress)
-                .map_err(SweepError::Experiment)?;
-            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-            progress.set(
-                d as f64 / total as f64,
-                format!("{}: {d}/{total} items", e.name()),
-            );
-            to_value(&out)
-        })
-        .collect()
+        .map_err(|e| SweepError::Experiment(e.to_string()))?;
+    progress.set(0.0, format!("{}: 0/{} items", e.name(), items.len()));
+    let outputs = compute_items(&items, progress, e.name(), "items", |item| {
+        e.compute(session, &prep, item, progress)
+    })
+    .map_err(|e| SweepError::Experiment(e.to_string()))?;
+    outputs.iter().map(to_value).collect()
 }
 
 /// Run shard `shard` of the plan in `dir` and write `shards/I.json` atomically. A shard
@@ -662,7 +653,7 @@ fn merge_with<E: Sweepable>(
     progress.set(0.0, format!("{}: merging", e.name()));
     let result = e
         .assemble(session, &items, outputs, time, progress)
-        .map_err(SweepError::Experiment)?;
+        .map_err(|e| SweepError::Experiment(e.to_string()))?;
     let analysis = e.analysis(session, &result);
     Ok((to_value(&result)?, analysis))
 }

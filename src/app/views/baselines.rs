@@ -7,9 +7,9 @@ use crate::app::loader::LoadedSession;
 use crate::app::results::Analyses;
 use crate::app::results::{JobOutput, recognition_ready};
 use crate::cluster::baselines::{BaselinesParams, run_baselines};
-use crate::cluster::grasp_features::session_features;
-use crate::experiments::baselines_report::baselines_report;
-use crate::experiments::report::AnalysisKind;
+use crate::experiments::baselines::baselines_report;
+use crate::experiments::result::AnalysisKind;
+use crate::features::table_one::session_features;
 use crate::jobs::JobError;
 
 /// Baselines form: few orders by default so the view answers in seconds.

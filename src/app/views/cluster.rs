@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use super::{Cx, Room};
 use crate::app::results::JobOutput;
-use crate::experiments::report::slug;
+use crate::experiments::result::slug;
 use crate::jobs::JobError;
 use crate::sweep::{self, PlanRequest, SBATCH_FILE};
 

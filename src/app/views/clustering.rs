@@ -8,9 +8,9 @@ use crate::app::View;
 use crate::app::loader::LoadedSession;
 use crate::app::results::Analyses;
 use crate::app::results::{JobOutput, experiment_error, recognition_ready};
+use crate::experiments::clustering::report::clustering_report;
 use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_clustering};
-use crate::experiments::recognition_report::clustering_report;
-use crate::experiments::report::AnalysisKind;
+use crate::experiments::result::AnalysisKind;
 use crate::sweep::Experiment;
 
 /// Unsupervised clustering form.

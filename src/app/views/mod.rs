@@ -18,7 +18,7 @@ use super::loader::LoadedSession;
 use super::replay::Replay;
 use super::results::Analyses;
 use super::selection::{Command, Selection};
-use crate::experiments::report::AnalysisKind;
+use crate::experiments::result::AnalysisKind;
 pub use tiles::{Layout, Pane};
 
 /// What a room may read and ask for while it draws.

@@ -11,7 +11,7 @@ use crate::app::figure_view::{self, Selection as FigureSelection};
 use crate::app::heatmap;
 use crate::app::replay::ReplayAction;
 use crate::app::selection::Command;
-use crate::experiments::report::{AnalysisKind, AnalysisResult, date_text};
+use crate::experiments::result::{AnalysisKind, AnalysisResult, date_text};
 use crate::figures::{self, ColorMap, Figure, FigureKind};
 
 /// The file name a figure of result `r` exports under.

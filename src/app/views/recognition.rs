@@ -8,12 +8,11 @@ use crate::app::View;
 use crate::app::figure_view::{self, Selection as FigureSelection};
 use crate::app::loader::LoadedSession;
 use crate::app::results::{Analyses, JobOutput, experiment_error, recognition_ready};
-use crate::experiments::frontier::FrontierMethod;
+use crate::catalogue::MethodId;
+use crate::experiments::recognition::report::{accuracy_comparison, recognition_report};
 use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
-use crate::experiments::recognition_report::{
-    accuracy_comparison, features_text, recognition_report,
-};
-use crate::experiments::report::{AnalysisKind, SizeReason};
+use crate::experiments::result::features_text;
+use crate::experiments::result::{AnalysisKind, SizeReason};
 use crate::features::sequence::FeatureSet;
 use crate::sweep::Experiment;
 
@@ -55,10 +54,10 @@ fn paper_size() -> (usize, usize) {
 }
 
 impl RecognitionForm {
-    fn method(&self) -> FrontierMethod {
+    fn method(&self) -> MethodId {
         match self.learner {
-            SupervisedLearner::Ds => FrontierMethod::Ds,
-            SupervisedLearner::Gs => FrontierMethod::Gs,
+            SupervisedLearner::Ds => MethodId::Ds,
+            SupervisedLearner::Gs => MethodId::Gs,
         }
     }
 

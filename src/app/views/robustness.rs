@@ -4,6 +4,7 @@
 //! with objects and encoders.
 
 use crate::app::results::Analyses;
+use crate::catalogue::MethodId;
 use egui::RichText;
 
 use super::tiles::Pane;
@@ -11,18 +12,18 @@ use super::{Cx, Room, duration_text};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
 use crate::app::results::{JobOutput, experiment_error, recognition_ready};
-use crate::experiments::report::AnalysisKind;
+use crate::experiments::result::AnalysisKind;
+use crate::experiments::robustness::report::robustness_report;
 use crate::experiments::robustness::{
-    Family, Method, Perturbation, RobustnessParams, Sweep, run_robustness,
+    Family, Perturbation, RobustnessParams, Sweep, run_robustness,
 };
-use crate::experiments::robustness_report::robustness_report;
 use crate::sweep::Experiment;
 
 /// The form: which methods and perturbations, with few repetitions by default so the view
 /// answers in minutes; the CLI runs the full sweeps.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct RobustnessForm {
-    pub methods: Vec<Method>,
+    pub methods: Vec<MethodId>,
     pub perturbations: Vec<Perturbation>,
     pub reps: usize,
     /// The break point is where the score falls below this share of the clean score.
@@ -35,13 +36,13 @@ impl Default for RobustnessForm {
         RobustnessForm {
             // DU and GU on request: each of their clusters is a GP to score every step against.
             methods: vec![
-                Method::SparseSvm,
-                Method::RawSvm,
-                Method::Ds,
-                Method::Gs,
-                Method::KMeans,
-                Method::Som,
-                Method::RbfSvm,
+                MethodId::SparseSvm,
+                MethodId::RawSvm,
+                MethodId::Ds,
+                MethodId::Gs,
+                MethodId::KMeans,
+                MethodId::Som,
+                MethodId::RbfSvm,
             ],
             perturbations: vec![
                 Perturbation::Noise,
@@ -81,10 +82,8 @@ impl RobustnessForm {
 }
 
 /// Every method of `family`, in the experiment's order.
-fn methods_of(family: Family) -> impl Iterator<Item = Method> {
-    Method::ALL
-        .into_iter()
-        .filter(move |m| m.family() == family)
+fn methods_of(family: Family) -> impl Iterator<Item = MethodId> {
+    MethodId::all().filter(move |m| Family::of(*m) == family)
 }
 
 /// Never-seen objects are a perturbation of the grasp-stability protocol only: in object

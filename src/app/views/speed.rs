@@ -10,11 +10,12 @@ use crate::app::View;
 use crate::app::figure_view::{self, Selection as FigureSelection};
 use crate::app::results::{FRONTIER_JOB, JobOutput, experiment_error, recognition_ready};
 use crate::app::selection::{Command, ModelSpec};
+use crate::catalogue::MethodId;
 use crate::experiments::clustering::UnsupervisedLearner;
-use crate::experiments::frontier::{CostAxis, Frontier, FrontierMethod, FrontierParams};
-use crate::experiments::frontier_report::frontier_figures;
+use crate::experiments::frontier::report::frontier_figures;
+use crate::experiments::frontier::{CostAxis, Frontier, FrontierParams};
 use crate::experiments::recognition::SupervisedLearner;
-use crate::experiments::report::{self, TimeAxis, date_text};
+use crate::experiments::result::{self, TimeAxis, date_text};
 use crate::experiments::stability::Config;
 use crate::features::FeatureSet;
 use crate::figures::{self, Rgb, Series, SeriesStyle};
@@ -22,7 +23,7 @@ use crate::figures::{self, Rgb, Series, SeriesStyle};
 /// What the frontier form sweeps: a method, its knobs' values as typed, and repetitions.
 #[derive(Clone, Debug)]
 pub struct FrontierForm {
-    pub method: FrontierMethod,
+    pub method: MethodId,
     pub features: FeatureSet,
     /// Fewer than the CLI's 10, so the view answers in minutes.
     pub reps: usize,
@@ -39,26 +40,14 @@ fn list_text<T: ToString>(v: &[T]) -> String {
     v.iter().map(T::to_string).collect::<Vec<_>>().join(", ")
 }
 
-/// Every method a frontier sweeps, in the form's order.
-const METHODS: [FrontierMethod; 8] = [
-    FrontierMethod::Ds,
-    FrontierMethod::Gs,
-    FrontierMethod::SparseSvm,
-    FrontierMethod::Du,
-    FrontierMethod::Gu,
-    FrontierMethod::Kmeans,
-    FrontierMethod::Som,
-    FrontierMethod::RbfSvm,
-];
-
 impl Default for FrontierForm {
     fn default() -> Self {
-        let d = FrontierParams::for_method(FrontierMethod::Ds);
-        let threshold_default = FrontierParams::for_method(FrontierMethod::Gu);
-        let k_default = FrontierParams::for_method(FrontierMethod::Kmeans);
-        let svm_default = FrontierParams::for_method(FrontierMethod::RbfSvm);
+        let d = FrontierParams::for_method(MethodId::Ds);
+        let threshold_default = FrontierParams::for_method(MethodId::Gu);
+        let k_default = FrontierParams::for_method(MethodId::KMeans);
+        let svm_default = FrontierParams::for_method(MethodId::RbfSvm);
         FrontierForm {
-            method: FrontierMethod::Ds,
+            method: MethodId::Ds,
             features: FeatureSet::All,
             reps: 3,
             capacities: list_text(&d.capacities),
@@ -95,20 +84,21 @@ impl FrontierForm {
             p.features = self.features;
         }
         match self.method {
-            FrontierMethod::Ds | FrontierMethod::Gs => {
+            MethodId::RawSvm => {}
+            MethodId::Ds | MethodId::Gs => {
                 p.capacities = parse_list(&self.capacities, "capacities")?;
                 p.taus = parse_list(&self.taus, "taus")?;
             }
-            FrontierMethod::SparseSvm => {
+            MethodId::SparseSvm => {
                 p.num_bases = parse_list(&self.num_bases, "num_bases")?;
             }
-            FrontierMethod::Du | FrontierMethod::Gu => {
+            MethodId::Du | MethodId::Gu => {
                 p.thresholds = parse_list(&self.thresholds, "thresholds")?;
             }
-            FrontierMethod::Kmeans | FrontierMethod::Som => {
+            MethodId::KMeans | MethodId::Som => {
                 p.ks = parse_list(&self.ks, "k")?;
             }
-            FrontierMethod::RbfSvm => {
+            MethodId::RbfSvm => {
                 p.svm_c = parse_list(&self.svm_c, "C")?;
                 p.svm_gamma = parse_list(&self.svm_gamma, "γ")?;
             }
@@ -119,17 +109,17 @@ impl FrontierForm {
 
     fn ready(&self, s: &crate::app::loader::LoadedSession) -> bool {
         match self.method {
-            FrontierMethod::SparseSvm => s.session.label_sets.iter().any(|l| l.classes.len() == 2),
+            MethodId::SparseSvm => s.session.label_sets.iter().any(|l| l.classes.len() == 2),
             _ => recognition_ready(s),
         }
     }
 
     fn ui(&mut self, ui: &mut egui::Ui) {
         egui::ComboBox::from_label("Frontier method")
-            .selected_text(self.method.name())
+            .selected_text(self.method.title())
             .show_ui(ui, |ui| {
-                for m in METHODS {
-                    ui.selectable_value(&mut self.method, m, m.name());
+                for m in crate::experiments::frontier::methods() {
+                    ui.selectable_value(&mut self.method, m, m.title());
                 }
             });
         if self.method.uses_features() {
@@ -142,22 +132,23 @@ impl FrontierForm {
                 });
         }
         match self.method {
-            FrontierMethod::Ds | FrontierMethod::Gs => {
+            MethodId::RawSvm => {}
+            MethodId::Ds | MethodId::Gs => {
                 text_field(ui, "capacities", &mut self.capacities);
                 text_field(ui, "taus", &mut self.taus);
             }
-            FrontierMethod::SparseSvm => text_field(
+            MethodId::SparseSvm => text_field(
                 ui,
                 "numbers of bases (each with its best β, γ)",
                 &mut self.num_bases,
             ),
-            FrontierMethod::Du | FrontierMethod::Gu => {
+            MethodId::Du | MethodId::Gu => {
                 text_field(ui, "novelty thresholds", &mut self.thresholds)
             }
-            FrontierMethod::Kmeans | FrontierMethod::Som => {
+            MethodId::KMeans | MethodId::Som => {
                 text_field(ui, "numbers of clusters k", &mut self.ks)
             }
-            FrontierMethod::RbfSvm => {
+            MethodId::RbfSvm => {
                 text_field(ui, "penalties C", &mut self.svm_c);
                 text_field(ui, "kernel widths γ", &mut self.svm_gamma);
             }
@@ -211,7 +202,7 @@ impl Room for SpeedRoom {
         let Some(s) = cx.session() else { return };
         let problem = if !self.frontier.ready(s) {
             Some(match self.frontier.method {
-                FrontierMethod::SparseSvm => "(needs a session with a two-class outcome)".into(),
+                MethodId::SparseSvm => "(needs a session with a two-class outcome)".into(),
                 _ => "(needs an object-recognition session: encoders and `object` labels)".into(),
             })
         } else {
@@ -236,7 +227,7 @@ impl Room for SpeedRoom {
                 None,
                 format!(
                     "{FRONTIER_JOB}{} on {}",
-                    params.method.name(),
+                    params.method.title(),
                     session.meta.name
                 ),
                 move |p| {
@@ -310,31 +301,32 @@ const TRAINED: &str = "trained models";
 fn spec_of(f: &Frontier, k: usize) -> Option<ModelSpec> {
     let p = &f.points[k];
     Some(match f.params.method {
-        FrontierMethod::Ds | FrontierMethod::Gs => ModelSpec::Recognition {
+        MethodId::RawSvm => return None,
+        MethodId::Ds | MethodId::Gs => ModelSpec::Recognition {
             learner: match f.params.method {
-                FrontierMethod::Ds => SupervisedLearner::Ds,
+                MethodId::Ds => SupervisedLearner::Ds,
                 _ => SupervisedLearner::Gs,
             },
             features: f.params.features,
             capacity: p.knob("capacity")? as usize,
             tau: p.knob("tau")? as usize,
         },
-        FrontierMethod::SparseSvm => ModelSpec::Stability(Config {
+        MethodId::SparseSvm => ModelSpec::Stability(Config {
             num_bases: p.knob("num_bases")? as usize,
             beta: p.knob("beta")?,
             gamma: p.knob("gamma")?,
         }),
-        FrontierMethod::Du | FrontierMethod::Gu => ModelSpec::Clustering {
+        MethodId::Du | MethodId::Gu => ModelSpec::Clustering {
             learner: match f.params.method {
-                FrontierMethod::Du => UnsupervisedLearner::Du,
+                MethodId::Du => UnsupervisedLearner::Du,
                 _ => UnsupervisedLearner::Gu,
             },
             threshold: p.knob("threshold")?,
         },
-        FrontierMethod::Kmeans | FrontierMethod::Som => ModelSpec::Baselines {
+        MethodId::KMeans | MethodId::Som => ModelSpec::Baselines {
             k: Some(p.knob("k")? as usize),
         },
-        FrontierMethod::RbfSvm => ModelSpec::Baselines { k: None },
+        MethodId::RbfSvm => ModelSpec::Baselines { k: None },
     })
 }
 
@@ -342,7 +334,7 @@ impl SpeedRoom {
     fn chart(&self, ui: &mut egui::Ui, cx: &mut Cx) {
         let axis = self.time_axis;
         let results = &cx.analyses.results;
-        let Some(fig) = report::speed_accuracy(results, axis) else {
+        let Some(fig) = result::speed_accuracy(results, axis) else {
             if axis == TimeAxis::Prediction && !results.is_empty() {
                 ui.label("None of the results times its predictions (the OIESGP learners do).");
             } else {
@@ -364,7 +356,7 @@ impl SpeedRoom {
         let height = (ui.available_height() - 40.0).max(160.0);
         let act = figure_view::show(ui, "speed-accuracy", &fig, height, FigureSelection::None);
         // Clicking a model's point opens its view, like its button.
-        let sources = report::speed_accuracy_sources(&cx.analyses.results, axis);
+        let sources = result::speed_accuracy_sources(&cx.analyses.results, axis);
         if let Some((series, k)) = act.clicked_point
             && let figures::FigureKind::Chart(c) = &fig.kind
             && c.series.get(series).is_some_and(|s| s.name == TRAINED)
@@ -435,7 +427,7 @@ impl SpeedRoom {
             .on_hover_text("SVG, PNG and CSV into the export folder")
             .clicked()
         {
-            let export = format!("{file}-{}", report::slug(&name));
+            let export = format!("{file}-{}", result::slug(&name));
             cx.analyses
                 .export
                 .write(&fig, &export, &mut cx.analyses.notes);

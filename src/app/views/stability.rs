@@ -8,12 +8,12 @@ use crate::app::View;
 use crate::app::loader::LoadedSession;
 use crate::app::results::Analyses;
 use crate::app::results::JobOutput;
-use crate::experiments::frontier::FrontierMethod;
-use crate::experiments::report::{AnalysisKind, SizeReason};
+use crate::catalogue::MethodId;
+use crate::experiments::result::{AnalysisKind, SizeReason};
+use crate::experiments::stability::report::stability_report;
 use crate::experiments::stability::{
     Config, DataOptions, GridSpec, StabilityData, StabilityError, StabilityOptions,
 };
-use crate::experiments::stability_report::stability_report;
 use crate::features::FeatureSet;
 use crate::jobs::JobError;
 use crate::sweep::{Experiment, StabilitySweep};
@@ -57,7 +57,7 @@ impl StabilityForm {
     pub fn size(&self, analyses: &Analyses, session: &str) -> (Config, SizeReason) {
         let paper = StabilityOptions::default().single;
         let recommended = analyses
-            .frontier(session, FrontierMethod::SparseSvm, FeatureSet::All)
+            .frontier(session, MethodId::SparseSvm, FeatureSet::All)
             .and_then(|f| {
                 let p = &f.points[f.recommended];
                 Some(Config {

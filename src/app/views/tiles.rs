@@ -8,7 +8,7 @@ use egui_tiles::{
 use serde::{Deserialize, Serialize};
 
 use super::{Cx, Room, panes};
-use crate::experiments::report::AnalysisResult;
+use crate::experiments::result::AnalysisResult;
 
 /// What a tile shows.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

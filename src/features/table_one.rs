@@ -17,11 +17,9 @@
 //!
 //! The layout generalises to any session with S sensors and E encoders: 15 S + 2 S E values.
 
-use ndarray::{Array2, ArrayView2};
-use serde::{Deserialize, Serialize};
+use ndarray::Array2;
 
-use super::ClusterError;
-use crate::features::FingerStats;
+use super::{FeatureError, FingerStats};
 use crate::session::Session;
 
 const SERIES: [&str; 3] = ["mean", "sd", "skewness"];
@@ -53,20 +51,20 @@ pub fn feature_names(session: &Session) -> Vec<String> {
 }
 
 /// The Table I features of grasp `g`.
-pub fn grasp_features(session: &Session, g: usize) -> Result<Vec<f64>, ClusterError> {
+pub fn grasp_row(session: &Session, g: usize) -> Result<Vec<f64>, FeatureError> {
     let grasp = session
         .grasps
         .get(g)
-        .ok_or_else(|| ClusterError::InvalidData(format!("no grasp {g}")))?;
+        .ok_or_else(|| FeatureError::InvalidData(format!("no grasp {g}")))?;
     if grasp.frames.is_empty() {
-        return Err(ClusterError::InvalidData(format!(
+        return Err(FeatureError::InvalidData(format!(
             "grasp {g} has no frames"
         )));
     }
     let n_enc = session.encoders.len();
     for (t, frame) in grasp.frames.iter().enumerate() {
         if frame.taxels.len() != session.sensors.len() || frame.encoders.len() != n_enc {
-            return Err(ClusterError::InvalidData(format!(
+            return Err(FeatureError::InvalidData(format!(
                 "grasp {g}, frame {t}: {} sensors and {} encoders, the session has {} and {n_enc}",
                 frame.taxels.len(),
                 frame.encoders.len(),
@@ -108,7 +106,7 @@ pub fn grasp_features(session: &Session, g: usize) -> Result<Vec<f64>, ClusterEr
         out.extend_from_slice(&grasp.frames[t_min].encoders);
     }
     if let Some(i) = out.iter().position(|v| !v.is_finite()) {
-        return Err(ClusterError::InvalidData(format!(
+        return Err(FeatureError::InvalidData(format!(
             "grasp {g}: feature {i} is not finite"
         )));
     }
@@ -116,103 +114,20 @@ pub fn grasp_features(session: &Session, g: usize) -> Result<Vec<f64>, ClusterEr
 }
 
 /// The Table I features of every grasp: grasps × features.
-pub fn session_features(session: &Session) -> Result<Array2<f64>, ClusterError> {
+pub fn session_features(session: &Session) -> Result<Array2<f64>, FeatureError> {
     let width = feature_count(session);
     let mut data = Array2::zeros((session.grasps.len(), width));
     for g in 0..session.grasps.len() {
-        let row = grasp_features(session, g)?;
+        let row = grasp_row(session, g)?;
         data.row_mut(g).assign(&ndarray::ArrayView1::from(&row));
     }
     Ok(data)
 }
 
-/// How features are put on a common scale before distances are taken.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum Normalisation {
-    /// (x − mean) / sd per feature (population sd).
-    ZScore,
-    /// (x − min) / (max − min) per feature, into [0, 1]; the paper min-max normalises its
-    /// per-step features, and on the Table I features it gives the better k-means scores.
-    #[default]
-    MinMax,
-}
-
-/// A per-feature affine map x ↦ (x − offset) · scale, fitted on one set of samples and
-/// applied to others (e.g. fitted on the training folds only).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Normaliser {
-    pub kind: Normalisation,
-    pub offset: Vec<f64>,
-    pub scale: Vec<f64>,
-}
-
-impl Normaliser {
-    /// Fit on the rows of `data`. A constant feature maps to 0 (scale 0), since it carries
-    /// no information and must not produce a division by zero.
-    pub fn fit(kind: Normalisation, data: ArrayView2<f64>) -> Result<Normaliser, ClusterError> {
-        super::check_data(data)?;
-        let n = data.nrows() as f64;
-        let mut offset = Vec::with_capacity(data.ncols());
-        let mut scale = Vec::with_capacity(data.ncols());
-        for col in data.columns() {
-            // Work on values divided by the largest magnitude, so squares and differences of
-            // values near f64::MAX do not overflow; `scale` is 1/spread in the original units.
-            // (Below 1e150 nothing overflows: plain arithmetic, bit for bit as always.)
-            let m = col.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            let unit = if m > 1e150 { m } else { 1.0 };
-            let (o, spread) = match kind {
-                Normalisation::ZScore => {
-                    let mean = col.iter().map(|v| v / unit).sum::<f64>() / n;
-                    let var = col
-                        .iter()
-                        .map(|v| (v / unit - mean) * (v / unit - mean))
-                        .sum::<f64>()
-                        / n;
-                    (mean * unit, var.sqrt())
-                }
-                Normalisation::MinMax => {
-                    let min = col.iter().copied().fold(f64::INFINITY, f64::min);
-                    let max = col.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-                    (min, max / unit - min / unit)
-                }
-            };
-            offset.push(o);
-            // A spread at rounding level of the values counts as constant.
-            scale.push(if spread > 1e-12 * (1.0 / unit + (o / unit).abs()) {
-                1.0 / spread / unit
-            } else {
-                0.0
-            });
-        }
-        Ok(Normaliser {
-            kind,
-            offset,
-            scale,
-        })
-    }
-
-    pub fn transform(&self, data: ArrayView2<f64>) -> Result<Array2<f64>, ClusterError> {
-        super::check_width(data, self.offset.len())?;
-        let mut out = data.to_owned();
-        for (mut col, (&o, &s)) in out
-            .columns_mut()
-            .into_iter()
-            .zip(self.offset.iter().zip(&self.scale))
-        {
-            col.mapv_inplace(|v| {
-                let d = (v - o) * s;
-                // v − o overflows only for values near f64::MAX of opposite signs.
-                if d.is_finite() { d } else { v * s - o * s }
-            });
-        }
-        Ok(out)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::features::{Normalisation, Normaliser};
     use crate::session::{Frame, Grasp, LabelSet, Layout, Sensor, SessionMeta, ValueTransform};
 
     /// Two fingers of three taxels, two encoders, raw = 10 − pressure.
@@ -256,7 +171,7 @@ mod tests {
     fn table_one_layout_by_hand() {
         let s = tiny_session();
         assert_eq!(feature_count(&s), 15 * 2 + 2 * 2 * 2);
-        let f = grasp_features(&s, 0).unwrap();
+        let f = grasp_row(&s, 0).unwrap();
         assert_eq!(f.len(), 38);
         assert_eq!(feature_names(&s).len(), 38);
         // mean series of finger a: 1, 3, 2 → mean 2, sd √(2/3), skewness 0, max 3, min 1
@@ -285,11 +200,11 @@ mod tests {
     fn malformed_grasps_are_errors() {
         let mut s = tiny_session();
         s.grasps[0].frames[1].encoders.pop();
-        assert!(grasp_features(&s, 0).is_err());
+        assert!(grasp_row(&s, 0).is_err());
         let mut s = tiny_session();
         s.grasps[0].frames.clear();
         assert!(session_features(&s).is_err());
-        assert!(grasp_features(&tiny_session(), 3).is_err());
+        assert!(grasp_row(&tiny_session(), 3).is_err());
     }
 
     #[test]

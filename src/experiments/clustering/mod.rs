@@ -12,18 +12,20 @@
 
 use std::collections::BTreeMap;
 use std::str::FromStr;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::ExperimentError;
-use super::recognition::{MeanSd, session_labels};
-use crate::cluster::grasp_features::{Normalisation, Normaliser, session_features};
+pub mod report;
+
 use crate::cluster::order_agreement::{ThresholdChoice, ThresholdCriterion, choose_threshold};
 use crate::cluster::{Schedule, SequentialKMeansParams, SomParams, scores};
+use crate::experiments::ExperimentError;
+use crate::experiments::experiment::compute_items;
+use crate::experiments::labels::session_labels;
+use crate::experiments::result::MeanSd;
 use crate::features::{FeatureSequences, FeatureSet, SequenceParams, feature_sequences};
+use crate::features::{Normalisation, Normaliser, table_one::session_features};
 use crate::jobs::Progress;
 use crate::learners::{
     DsParams, Du, DuParams, EvtDraws, Gs, GsParams, Gu, GuAggregate, GuNoise, GuParams,
@@ -407,11 +409,10 @@ pub fn prepare_clustering(
     // Fail early on parameters the learners reject.
     Gs::new(feats.dim(), &params.gs)?;
     let table = if params.baseline_max_k >= 2 {
-        let raw = session_features(session).map_err(cluster_err)?;
+        let raw = session_features(session)?;
         Some(
             Normaliser::fit(Normalisation::ZScore, raw.view())
-                .and_then(|n| n.transform(raw.view()))
-                .map_err(cluster_err)?,
+                .and_then(|n| n.transform(raw.view()))?,
         )
     } else {
         None
@@ -587,21 +588,10 @@ pub fn run_clustering(
     let start = Instant::now();
     let prep = prepare_clustering(session, params)?;
     let items = clustering_items(params, session.grasps.len());
-    let done = AtomicUsize::new(0);
     progress.set(0.0, "clustering: starting");
-    let outputs = items
-        .par_iter()
-        .map(|&item| {
-            progress.checkpoint()?;
-            let out = clustering_item(params, &prep, item)?;
-            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-            progress.set(
-                d as f64 / items.len() as f64,
-                format!("clustering: {d}/{} runs", items.len()),
-            );
-            Ok(out)
-        })
-        .collect::<Result<Vec<_>, ExperimentError>>()?;
+    let outputs = compute_items(&items, progress, "clustering", "runs", |&item| {
+        clustering_item(params, &prep, item)
+    })?;
     Ok(assemble_clustering(
         params,
         prep,

@@ -1,38 +1,43 @@
-//! The experiments a sweep can shard, each as the same units of work its single-machine
-//! run computes: the items (in the single-machine order), what every item shares, one
-//! item, and the result assembled from the items' outputs. The single-machine functions
-//! (`stability::grid_search`, `run_robustness`, `run_clustering`, `run_recognition`,
-//! `run_frontier`) call the same per-item functions, so a merged sweep equals the local run
-//! for the same seeds.
+//! An experiment as units of work: the items (in the single-machine order), what every
+//! item shares, one item, and the result assembled from the items' outputs; and the one
+//! loop that computes items in parallel with progress and cancellation. The single-machine
+//! functions (`stability::grid_search`, `run_robustness`, `run_clustering`,
+//! `run_recognition`, `run_frontier`) and every shard of a sweep (`crate::sweep`) compute
+//! the same items through that loop, so a merged sweep equals the local run for the same
+//! seeds.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
+use rayon::prelude::*;
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 
-use crate::experiments::clustering::{
+use super::ExperimentError;
+use super::clustering::report::clustering_report;
+use super::clustering::{
     ClusteringItem, ClusteringOutput, ClusteringParams, ClusteringPrep, assemble_clustering,
     clustering_item, clustering_items, prepare_clustering,
 };
-use crate::experiments::frontier::{
+use super::frontier::{
     Frontier, FrontierItem, FrontierOutput, FrontierParams, FrontierPrep, assemble_frontier,
     frontier_item, frontier_items, prepare_frontier,
 };
-use crate::experiments::recognition::{
+use super::recognition::report::recognition_report;
+use super::recognition::{
     RecognitionParams, RecognitionPrep, RepetitionResult, assemble_recognition,
     prepare_recognition, recognition_repetition,
 };
-use crate::experiments::recognition_report::{clustering_report, recognition_report};
-use crate::experiments::report::AnalysisResult;
-use crate::experiments::robustness::{
+use super::result::AnalysisResult;
+use super::robustness::report::robustness_report;
+use super::robustness::{
     self, RobustnessParams, Task, TaskScores, assemble_robustness, robustness_task,
     robustness_tasks,
 };
-use crate::experiments::robustness_report::robustness_report;
-use crate::experiments::stability::{
+use super::stability::report::stability_report;
+use super::stability::{
     self, DataOptions, GridTask, GridTaskOutput, StabilityData, StabilityOptions,
 };
-use crate::experiments::stability_report::stability_report;
 use crate::jobs::Progress;
 use crate::session::Session;
 use crate::svm::Folds;
@@ -47,9 +52,36 @@ pub struct WorkTime {
     pub threads: usize,
 }
 
-/// An experiment as a sweep: implement this for its parameters and add a variant to
-/// [`super::Experiment`] (and a line to its dispatch macro) to make it shardable.
-pub trait Sweepable: Serialize + DeserializeOwned + Clone + Sync {
+/// Compute every item in parallel, in order, with progress ("{what}: d/n {unit}") and a
+/// cancellation check before each item: the one loop of every experiment and shard.
+pub fn compute_items<I: Sync, O: Send>(
+    items: &[I],
+    progress: &Progress,
+    what: &str,
+    unit: &str,
+    compute: impl Fn(&I) -> Result<O, ExperimentError> + Sync,
+) -> Result<Vec<O>, ExperimentError> {
+    let total = items.len();
+    let done = AtomicUsize::new(0);
+    items
+        .par_iter()
+        .map(|item| {
+            progress.checkpoint()?;
+            let out = compute(item)?;
+            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+            progress.set(
+                d as f64 / total.max(1) as f64,
+                format!("{what}: {d}/{total} {unit}"),
+            );
+            Ok(out)
+        })
+        .collect()
+}
+
+/// An experiment as units of work: implement this for its parameters to make it
+/// shardable, and add a variant to [`crate::sweep::Experiment`] (and a line to its
+/// dispatch macro).
+pub trait Experiment: Serialize + DeserializeOwned + Clone + Sync {
     type Item: Serialize + DeserializeOwned + Clone + Send + Sync;
     type Prep: Sync;
     type Output: Serialize + DeserializeOwned + Send;
@@ -59,19 +91,23 @@ pub trait Sweepable: Serialize + DeserializeOwned + Clone + Sync {
     fn name(&self) -> &'static str;
     /// Every item, in the order the single-machine run assembles them. Checks the
     /// parameters against the session.
-    fn items(&self, session: &Session) -> Result<Vec<Self::Item>, String>;
+    fn items(&self, session: &Session) -> Result<Vec<Self::Item>, ExperimentError>;
     /// Relative cost of an item (to balance shards and estimate their time), in
     /// CPU-seconds on a reference core for this session.
     fn cost(&self, session: &Session, item: &Self::Item) -> f64;
     /// What every item shares (computed once per shard).
-    fn prepare(&self, session: &Session, progress: &Progress) -> Result<Self::Prep, String>;
+    fn prepare(
+        &self,
+        session: &Session,
+        progress: &Progress,
+    ) -> Result<Self::Prep, ExperimentError>;
     fn compute(
         &self,
         session: &Session,
         prep: &Self::Prep,
         item: &Self::Item,
         progress: &Progress,
-    ) -> Result<Self::Output, String>;
+    ) -> Result<Self::Output, ExperimentError>;
     /// The single-machine result from every item's output (in item order).
     fn assemble(
         &self,
@@ -80,7 +116,7 @@ pub trait Sweepable: Serialize + DeserializeOwned + Clone + Sync {
         outputs: Vec<Self::Output>,
         time: WorkTime,
         progress: &Progress,
-    ) -> Result<Self::Result, String>;
+    ) -> Result<Self::Result, ExperimentError>;
     /// The result as the workbench keeps it (for a project file); None when it is kept as
     /// its own file (frontiers: the `frontier --json` list).
     fn analysis(&self, session: &Session, result: &Self::Result) -> Option<AnalysisResult>;
@@ -129,15 +165,17 @@ pub struct StabilityPrep {
 }
 
 impl StabilitySweep {
-    fn spec(&self) -> Result<&stability::GridSpec, String> {
-        self.options
-            .grid
-            .as_ref()
-            .ok_or_else(|| "a stability sweep needs a grid (one configuration is one item)".into())
+    fn spec(&self) -> Result<&stability::GridSpec, ExperimentError> {
+        self.options.grid.as_ref().ok_or_else(|| {
+            ExperimentError::param(
+                "grid",
+                "a stability sweep needs a grid (one configuration is one item)",
+            )
+        })
     }
 }
 
-impl Sweepable for StabilitySweep {
+impl Experiment for StabilitySweep {
     type Item = GridTask;
     type Prep = StabilityPrep;
     type Output = GridTaskOutput;
@@ -147,16 +185,15 @@ impl Sweepable for StabilitySweep {
         "stability"
     }
 
-    fn items(&self, session: &Session) -> Result<Vec<GridTask>, String> {
+    fn items(&self, session: &Session) -> Result<Vec<GridTask>, ExperimentError> {
         let spec = self.spec()?;
-        let data = StabilityData::from_session(session, &self.data).map_err(|e| e.to_string())?;
+        let data = StabilityData::from_session(session, &self.data)?;
         stability::grid_folds(
             &data,
             spec,
             &self.options.settings,
             self.options.selection_cv,
-        )
-        .map_err(|e| e.to_string())?;
+        )?;
         Ok(spec.tasks())
     }
 
@@ -165,15 +202,18 @@ impl Sweepable for StabilitySweep {
         STABILITY_COST * patch_values(session) * item.num_bases as f64 * gammas as f64
     }
 
-    fn prepare(&self, session: &Session, _progress: &Progress) -> Result<StabilityPrep, String> {
-        let data = StabilityData::from_session(session, &self.data).map_err(|e| e.to_string())?;
+    fn prepare(
+        &self,
+        session: &Session,
+        _progress: &Progress,
+    ) -> Result<StabilityPrep, ExperimentError> {
+        let data = StabilityData::from_session(session, &self.data)?;
         let folds = stability::grid_folds(
             &data,
             self.spec()?,
             &self.options.settings,
             self.options.selection_cv,
-        )
-        .map_err(|e| e.to_string())?;
+        )?;
         Ok(StabilityPrep { data, folds })
     }
 
@@ -183,8 +223,8 @@ impl Sweepable for StabilitySweep {
         prep: &StabilityPrep,
         item: &GridTask,
         progress: &Progress,
-    ) -> Result<GridTaskOutput, String> {
-        stability::grid_task(
+    ) -> Result<GridTaskOutput, ExperimentError> {
+        Ok(stability::grid_task(
             &prep.data,
             &self.spec()?.gamma,
             &prep.folds,
@@ -192,8 +232,7 @@ impl Sweepable for StabilitySweep {
             *item,
             progress,
             &|_| {},
-        )
-        .map_err(|e| e.to_string())
+        )?)
     }
 
     fn assemble(
@@ -203,9 +242,9 @@ impl Sweepable for StabilitySweep {
         outputs: Vec<GridTaskOutput>,
         time: WorkTime,
         progress: &Progress,
-    ) -> Result<stability::StabilityReport, String> {
+    ) -> Result<stability::StabilityReport, ExperimentError> {
         let start = Instant::now();
-        let data = StabilityData::from_session(session, &self.data).map_err(|e| e.to_string())?;
+        let data = StabilityData::from_session(session, &self.data)?;
         let grid = stability::assemble_grid(
             self.spec()?,
             self.options.selection_cv,
@@ -214,8 +253,13 @@ impl Sweepable for StabilitySweep {
             time.seconds,
             time.threads,
         );
-        stability::finish(&data, &self.options, Some(grid), start, progress)
-            .map_err(|e| e.to_string())
+        Ok(stability::finish(
+            &data,
+            &self.options,
+            Some(grid),
+            start,
+            progress,
+        )?)
     }
 
     fn analysis(
@@ -227,7 +271,7 @@ impl Sweepable for StabilitySweep {
     }
 }
 
-impl Sweepable for RobustnessParams {
+impl Experiment for RobustnessParams {
     type Item = Task;
     type Prep = robustness::Prepared;
     type Output = TaskScores;
@@ -237,16 +281,20 @@ impl Sweepable for RobustnessParams {
         "robustness"
     }
 
-    fn items(&self, session: &Session) -> Result<Vec<Task>, String> {
-        robustness_tasks(session, self).map_err(|e| e.to_string())
+    fn items(&self, session: &Session) -> Result<Vec<Task>, ExperimentError> {
+        robustness_tasks(session, self)
     }
 
     fn cost(&self, session: &Session, _item: &Task) -> f64 {
         ROBUSTNESS_COST * readings(session)
     }
 
-    fn prepare(&self, session: &Session, progress: &Progress) -> Result<Self::Prep, String> {
-        robustness::prepare(session, self, progress).map_err(|e| e.to_string())
+    fn prepare(
+        &self,
+        session: &Session,
+        progress: &Progress,
+    ) -> Result<Self::Prep, ExperimentError> {
+        robustness::prepare(session, self, progress)
     }
 
     fn compute(
@@ -255,9 +303,9 @@ impl Sweepable for RobustnessParams {
         prep: &Self::Prep,
         item: &Task,
         progress: &Progress,
-    ) -> Result<TaskScores, String> {
-        progress.checkpoint().map_err(|e| e.to_string())?;
-        robustness_task(session, self, prep, *item).map_err(|e| e.to_string())
+    ) -> Result<TaskScores, ExperimentError> {
+        progress.checkpoint()?;
+        robustness_task(session, self, prep, *item)
     }
 
     fn assemble(
@@ -267,7 +315,7 @@ impl Sweepable for RobustnessParams {
         outputs: Vec<TaskScores>,
         time: WorkTime,
         _progress: &Progress,
-    ) -> Result<Self::Result, String> {
+    ) -> Result<Self::Result, ExperimentError> {
         // The shards' setup time is inside their seconds; the merge prepares nothing.
         Ok(assemble_robustness(
             session,
@@ -285,7 +333,7 @@ impl Sweepable for RobustnessParams {
     }
 }
 
-impl Sweepable for ClusteringParams {
+impl Experiment for ClusteringParams {
     type Item = ClusteringItem;
     type Prep = ClusteringPrep;
     type Output = ClusteringOutput;
@@ -295,8 +343,8 @@ impl Sweepable for ClusteringParams {
         "clustering"
     }
 
-    fn items(&self, session: &Session) -> Result<Vec<ClusteringItem>, String> {
-        self.validate().map_err(|e| e.to_string())?;
+    fn items(&self, session: &Session) -> Result<Vec<ClusteringItem>, ExperimentError> {
+        self.validate()?;
         Ok(clustering_items(self, session.grasps.len()))
     }
 
@@ -308,8 +356,12 @@ impl Sweepable for ClusteringParams {
         CLUSTERING_COST * share * readings(session)
     }
 
-    fn prepare(&self, session: &Session, _progress: &Progress) -> Result<ClusteringPrep, String> {
-        prepare_clustering(session, self).map_err(|e| e.to_string())
+    fn prepare(
+        &self,
+        session: &Session,
+        _progress: &Progress,
+    ) -> Result<ClusteringPrep, ExperimentError> {
+        prepare_clustering(session, self)
     }
 
     fn compute(
@@ -318,9 +370,9 @@ impl Sweepable for ClusteringParams {
         prep: &ClusteringPrep,
         item: &ClusteringItem,
         progress: &Progress,
-    ) -> Result<ClusteringOutput, String> {
-        progress.checkpoint().map_err(|e| e.to_string())?;
-        clustering_item(self, prep, *item).map_err(|e| e.to_string())
+    ) -> Result<ClusteringOutput, ExperimentError> {
+        progress.checkpoint()?;
+        clustering_item(self, prep, *item)
     }
 
     fn assemble(
@@ -330,8 +382,8 @@ impl Sweepable for ClusteringParams {
         outputs: Vec<ClusteringOutput>,
         time: WorkTime,
         _progress: &Progress,
-    ) -> Result<Self::Result, String> {
-        let prep = prepare_clustering(session, self).map_err(|e| e.to_string())?;
+    ) -> Result<Self::Result, ExperimentError> {
+        let prep = prepare_clustering(session, self)?;
         Ok(assemble_clustering(self, prep, outputs, time.seconds))
     }
 
@@ -340,7 +392,7 @@ impl Sweepable for ClusteringParams {
     }
 }
 
-impl Sweepable for RecognitionParams {
+impl Experiment for RecognitionParams {
     type Item = usize;
     type Prep = RecognitionPrep;
     type Output = RepetitionResult;
@@ -350,8 +402,8 @@ impl Sweepable for RecognitionParams {
         "recognition"
     }
 
-    fn items(&self, _session: &Session) -> Result<Vec<usize>, String> {
-        self.validate().map_err(|e| e.to_string())?;
+    fn items(&self, _session: &Session) -> Result<Vec<usize>, ExperimentError> {
+        self.validate()?;
         Ok((0..self.reps).collect())
     }
 
@@ -359,8 +411,12 @@ impl Sweepable for RecognitionParams {
         RECOGNITION_COST * readings(session)
     }
 
-    fn prepare(&self, session: &Session, _progress: &Progress) -> Result<RecognitionPrep, String> {
-        prepare_recognition(session, self).map_err(|e| e.to_string())
+    fn prepare(
+        &self,
+        session: &Session,
+        _progress: &Progress,
+    ) -> Result<RecognitionPrep, ExperimentError> {
+        prepare_recognition(session, self)
     }
 
     fn compute(
@@ -369,9 +425,9 @@ impl Sweepable for RecognitionParams {
         prep: &RecognitionPrep,
         rep: &usize,
         progress: &Progress,
-    ) -> Result<RepetitionResult, String> {
-        progress.checkpoint().map_err(|e| e.to_string())?;
-        recognition_repetition(self, session, prep, *rep).map_err(|e| e.to_string())
+    ) -> Result<RepetitionResult, ExperimentError> {
+        progress.checkpoint()?;
+        recognition_repetition(self, session, prep, *rep)
     }
 
     fn assemble(
@@ -381,8 +437,8 @@ impl Sweepable for RecognitionParams {
         outputs: Vec<RepetitionResult>,
         time: WorkTime,
         _progress: &Progress,
-    ) -> Result<Self::Result, String> {
-        let prep = prepare_recognition(session, self).map_err(|e| e.to_string())?;
+    ) -> Result<Self::Result, ExperimentError> {
+        let prep = prepare_recognition(session, self)?;
         Ok(assemble_recognition(
             self,
             prep,
@@ -411,14 +467,14 @@ pub struct FrontierSweepItem {
 }
 
 impl FrontierSweep {
-    fn params(&self, i: usize) -> Result<&FrontierParams, String> {
+    fn params(&self, i: usize) -> Result<&FrontierParams, ExperimentError> {
         self.frontiers
             .get(i)
-            .ok_or_else(|| format!("frontier {i} is not in the plan"))
+            .ok_or_else(|| ExperimentError::Data(format!("frontier {i} is not in the plan")))
     }
 }
 
-impl Sweepable for FrontierSweep {
+impl Experiment for FrontierSweep {
     type Item = FrontierSweepItem;
     type Prep = Vec<FrontierPrep>;
     type Output = FrontierOutput;
@@ -428,13 +484,24 @@ impl Sweepable for FrontierSweep {
         "frontier"
     }
 
-    fn items(&self, session: &Session) -> Result<Vec<FrontierSweepItem>, String> {
+    fn items(&self, session: &Session) -> Result<Vec<FrontierSweepItem>, ExperimentError> {
         if self.frontiers.is_empty() {
-            return Err("a frontier sweep needs at least one method".into());
+            return Err(ExperimentError::param(
+                "frontiers",
+                "a frontier sweep needs at least one method",
+            ));
         }
         let mut out = Vec::new();
         for (frontier, p) in self.frontiers.iter().enumerate() {
-            prepare_frontier(session, p).map_err(|e| format!("{}: {e}", p.label()))?;
+            prepare_frontier(session, p).map_err(|e| match e {
+                ExperimentError::InvalidParameter { name, reason } => {
+                    ExperimentError::InvalidParameter {
+                        name,
+                        reason: format!("{}: {reason}", p.label()),
+                    }
+                }
+                e => ExperimentError::Data(format!("{}: {e}", p.label())),
+            })?;
             out.extend(
                 frontier_items(p)
                     .into_iter()
@@ -471,10 +538,10 @@ impl Sweepable for FrontierSweep {
         &self,
         session: &Session,
         _progress: &Progress,
-    ) -> Result<Vec<FrontierPrep>, String> {
+    ) -> Result<Vec<FrontierPrep>, ExperimentError> {
         self.frontiers
             .iter()
-            .map(|p| prepare_frontier(session, p).map_err(|e| e.to_string()))
+            .map(|p| prepare_frontier(session, p))
             .collect()
     }
 
@@ -484,13 +551,13 @@ impl Sweepable for FrontierSweep {
         prep: &Self::Prep,
         it: &FrontierSweepItem,
         progress: &Progress,
-    ) -> Result<FrontierOutput, String> {
-        progress.checkpoint().map_err(|e| e.to_string())?;
+    ) -> Result<FrontierOutput, ExperimentError> {
+        progress.checkpoint()?;
         let p = self.params(it.frontier)?;
-        let prep = prep
-            .get(it.frontier)
-            .ok_or_else(|| format!("frontier {} is not prepared", it.frontier))?;
-        frontier_item(session, p, prep, &it.item, progress).map_err(|e| e.to_string())
+        let prep = prep.get(it.frontier).ok_or_else(|| {
+            ExperimentError::Data(format!("frontier {} is not prepared", it.frontier))
+        })?;
+        frontier_item(session, p, prep, &it.item, progress)
     }
 
     fn assemble(
@@ -500,13 +567,13 @@ impl Sweepable for FrontierSweep {
         outputs: Vec<FrontierOutput>,
         time: WorkTime,
         _progress: &Progress,
-    ) -> Result<Vec<Frontier>, String> {
+    ) -> Result<Vec<Frontier>, ExperimentError> {
         let mut per: Vec<(Vec<FrontierItem>, Vec<FrontierOutput>)> =
             vec![(Vec::new(), Vec::new()); self.frontiers.len()];
         for (it, out) in items.iter().zip(outputs) {
-            let slot = per
-                .get_mut(it.frontier)
-                .ok_or_else(|| format!("frontier {} is not in the plan", it.frontier))?;
+            let slot = per.get_mut(it.frontier).ok_or_else(|| {
+                ExperimentError::Data(format!("frontier {} is not in the plan", it.frontier))
+            })?;
             slot.0.push(it.item);
             slot.1.push(out);
         }
@@ -516,7 +583,6 @@ impl Sweepable for FrontierSweep {
             .zip(per)
             .map(|(p, (items, outputs))| {
                 assemble_frontier(&session.meta.name, p, &items, outputs, time.seconds)
-                    .map_err(|e| e.to_string())
             })
             .collect()
     }

@@ -3,7 +3,7 @@
 //! the recommended and paper-default sizes marked with short labels; for the clusterers
 //! also score against the effective clusters each size leaves.
 
-use super::frontier::{CostAxis, Frontier};
+use super::{CostAxis, Frontier};
 use crate::figures::{Axis, Figure, Rgb, Series, SeriesStyle, series_color};
 
 /// One chart per time axis (prediction first: it defines "cheapest" by default), and one

@@ -12,20 +12,25 @@
 //! the first ⌈f·T⌉ steps for each fraction f (Fig. 9).
 
 use std::str::FromStr;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use ndarray::{Array2, s};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::ExperimentError;
-use super::report::SizeReason;
+use crate::experiments::ExperimentError;
+use crate::experiments::experiment::compute_items;
+use crate::experiments::labels::session_labels;
+use crate::experiments::result::{MeanSd, SizeReason};
 use crate::features::{FeatureSequences, FeatureSet, SequenceParams, feature_sequences};
 use crate::jobs::Progress;
 use crate::learners::{Ds, DsParams, Gs, GsParams, SequenceClassifier, lengthscales};
 use crate::rng::Rng;
 use crate::session::Session;
+
+mod bench;
+pub mod report;
+
+pub use bench::*;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -127,29 +132,6 @@ impl RecognitionParams {
     }
 }
 
-/// Mean and (population) standard deviation over repetitions.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct MeanSd {
-    pub mean: f64,
-    pub sd: f64,
-}
-
-impl MeanSd {
-    pub fn of(v: impl IntoIterator<Item = f64>) -> MeanSd {
-        let v: Vec<f64> = v.into_iter().filter(|x| x.is_finite()).collect();
-        if v.is_empty() {
-            return MeanSd { mean: 0.0, sd: 0.0 };
-        }
-        let n = v.len() as f64;
-        let mean = v.iter().sum::<f64>() / n;
-        let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n;
-        MeanSd {
-            mean,
-            sd: var.sqrt(),
-        }
-    }
-}
-
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RepetitionResult {
     pub rep: usize,
@@ -225,31 +207,6 @@ pub fn new_learner(
         l.add_class()?;
     }
     Ok(l)
-}
-
-/// The class labels of the session under `label_set`, with the class names.
-pub fn session_labels(
-    session: &Session,
-    label_set: &str,
-) -> Result<(Vec<usize>, Vec<String>), ExperimentError> {
-    let set = session.label_set(label_set).ok_or_else(|| {
-        ExperimentError::param(
-            "label_set",
-            format!("the session has no label set `{label_set}`"),
-        )
-    })?;
-    let classes = session.label_sets[set].classes.clone();
-    let labels: Vec<usize> = session
-        .grasps
-        .iter()
-        .map(|g| g.labels.get(set).copied().unwrap_or(usize::MAX))
-        .collect();
-    if labels.iter().any(|&l| l >= classes.len()) {
-        return Err(ExperimentError::Data(format!(
-            "a grasp has no valid `{label_set}` label"
-        )));
-    }
-    Ok((labels, classes))
 }
 
 /// The protocol's order: one grasp per class first (the teaching phase), then the rest in
@@ -466,21 +423,11 @@ pub fn run_recognition(
     let start = Instant::now();
     let cpu_start = cpu_seconds(true);
     let prep = prepare_recognition(session, params)?;
-    let done = AtomicUsize::new(0);
     progress.set(0.0, "recognition: starting");
-    let reps: Vec<RepetitionResult> = (0..params.reps)
-        .into_par_iter()
-        .map(|rep| {
-            progress.checkpoint()?;
-            let r = recognition_repetition(params, session, &prep, rep)?;
-            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-            progress.set(
-                d as f64 / params.reps as f64,
-                format!("recognition: {d}/{} repetitions", params.reps),
-            );
-            Ok(r)
-        })
-        .collect::<Result<_, ExperimentError>>()?;
+    let items: Vec<usize> = (0..params.reps).collect();
+    let reps = compute_items(&items, progress, "recognition", "repetitions", |&rep| {
+        recognition_repetition(params, session, &prep, rep)
+    })?;
     Ok(assemble_recognition(
         params,
         prep,
@@ -589,254 +536,5 @@ pub fn grasp_trace(
         classes,
         decided: learner.decide(dist.view()),
         distribution: dist.rows().into_iter().map(|r| r.to_vec()).collect(),
-    })
-}
-
-/// CPU seconds (user + system) used so far by the calling thread, or by the whole process
-/// with `process = true`, from Linux's /proc (clock ticks of 10 ms); None elsewhere. The
-/// machine is shared, so wall-clock times mix in other work: CPU time does not.
-pub fn cpu_seconds(process: bool) -> Option<f64> {
-    let path = if process {
-        "/proc/self/stat"
-    } else {
-        "/proc/thread-self/stat"
-    };
-    let text = std::fs::read_to_string(path).ok()?;
-    let after = &text[text.rfind(')')? + 1..];
-    let f: Vec<&str> = after.split_whitespace().collect();
-    let utime: f64 = f.get(11)?.parse().ok()?;
-    let stime: f64 = f.get(12)?.parse().ok()?;
-    Some((utime + stime) / 100.0)
-}
-
-/// Per-observation cost of the learners on synthetic data of a given size.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct StepBenchParams {
-    pub dim: usize,
-    pub classes: usize,
-    pub capacity: usize,
-    pub tau: usize,
-    /// Training sequences per class before timing (fills the BV budget).
-    pub warmup_sequences: usize,
-    /// Steps of each timed sequence, and timed sequences.
-    pub steps: usize,
-    pub sequences: usize,
-    pub adaptation: bool,
-    pub seed: u64,
-}
-
-impl Default for StepBenchParams {
-    fn default() -> Self {
-        StepBenchParams {
-            dim: 34,
-            classes: 10,
-            capacity: 50,
-            tau: 15,
-            warmup_sequences: 8,
-            steps: 20,
-            sequences: 60,
-            adaptation: true,
-            seed: 0,
-        }
-    }
-}
-
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct StepBench {
-    pub params: StepBenchParams,
-    pub learner: SupervisedLearner,
-    /// Wall-clock microseconds per prediction step over all classes.
-    pub predict_step_us: f64,
-    /// Wall-clock microseconds per training step (DS: all experts observed, two updated).
-    pub train_step_us: f64,
-    /// The same in CPU time of the timing thread (None where /proc is missing).
-    pub predict_step_cpu_us: Option<f64>,
-    pub train_step_cpu_us: Option<f64>,
-    /// Mean BVs per expert and experts still adapting when timed.
-    pub mean_basis: f64,
-    pub adapting: usize,
-}
-
-fn synthetic_sequence(dim: usize, steps: usize, class: usize, rng: &mut Rng) -> Array2<f64> {
-    let mut x = Array2::zeros((steps, dim));
-    for j in 0..dim {
-        let mut v = 0.1 * ((class * 7 + j * 3) % 10) as f64;
-        for t in 0..steps {
-            v = (v + 0.05 * rng.normal()).clamp(0.0, 1.0);
-            x[[t, j]] = v;
-        }
-    }
-    x
-}
-
-/// DS and GS settings of a benchmark: experts of `capacity` and `tau`, with or without
-/// hyperparameter adaptation.
-fn bench_learners(capacity: usize, tau: usize, adaptation: bool) -> (DsParams, GsParams) {
-    let mut ds = DsParams::default();
-    let mut gs = GsParams::default();
-    for gp in [&mut ds.gp, &mut gs.gp] {
-        gp.capacity = capacity;
-        gp.tau = tau;
-        if !adaptation {
-            gp.adaptation = None;
-        }
-    }
-    (ds, gs)
-}
-
-/// Time per-observation prediction and training on one thread.
-pub fn bench_steps(
-    learner: SupervisedLearner,
-    params: &StepBenchParams,
-) -> Result<StepBench, ExperimentError> {
-    let (ds, gs) = bench_learners(params.capacity, params.tau, params.adaptation);
-    let mut l = new_learner(learner, params.dim, params.classes, &ds, &gs)?;
-    let mut rng = Rng::new(params.seed);
-    for _ in 0..params.warmup_sequences {
-        for c in 0..params.classes {
-            let s = synthetic_sequence(params.dim, params.steps, c, &mut rng);
-            l.train_sequence(s.view(), c);
-        }
-    }
-    let seqs: Vec<(usize, Array2<f64>)> = (0..params.sequences)
-        .map(|i| {
-            let c = i % params.classes;
-            (c, synthetic_sequence(params.dim, params.steps, c, &mut rng))
-        })
-        .collect();
-    let mean_basis =
-        l.models().iter().map(|m| m.n_basis() as f64).sum::<f64>() / l.models().len().max(1) as f64;
-    let adapting = l.models().iter().filter(|m| m.adapting()).count();
-    let total_steps = (params.sequences * params.steps).max(1) as f64;
-    let per_step = |a: Option<f64>, b: Option<f64>| Some(1e6 * (b? - a?) / total_steps);
-    let (t0, c0) = (Instant::now(), cpu_seconds(false));
-    for (_, s) in &seqs {
-        l.predict_sequence(s.view());
-    }
-    let predict_step_us = 1e6 * t0.elapsed().as_secs_f64() / total_steps;
-    let predict_step_cpu_us = per_step(c0, cpu_seconds(false));
-    let (t0, c0) = (Instant::now(), cpu_seconds(false));
-    for (c, s) in &seqs {
-        l.train_sequence(s.view(), *c);
-    }
-    let train_step_us = 1e6 * t0.elapsed().as_secs_f64() / total_steps;
-    let train_step_cpu_us = per_step(c0, cpu_seconds(false));
-    Ok(StepBench {
-        params: params.clone(),
-        learner,
-        predict_step_us,
-        train_step_us,
-        predict_step_cpu_us,
-        train_step_cpu_us,
-        mean_basis,
-        adapting,
-    })
-}
-
-/// Per-step cost on a session's grasps (the Table II protocol's order, all features).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct SessionBenchParams {
-    pub learner: SupervisedLearner,
-    pub capacity: usize,
-    pub tau: usize,
-    pub adaptation: bool,
-    /// Protocol repetitions (orders); steps are timed in all of them.
-    pub reps: usize,
-    pub seed: u64,
-}
-
-/// Median and 10th / 90th percentiles of per-step times, µs.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct StepTimes {
-    pub median: f64,
-    pub p10: f64,
-    pub p90: f64,
-    pub steps: usize,
-}
-
-impl StepTimes {
-    /// Nearest-rank percentiles of `us` (NaN when empty).
-    pub fn of(mut us: Vec<f64>) -> StepTimes {
-        us.sort_by(f64::total_cmp);
-        let at = |q: f64| match us.len() {
-            0 => f64::NAN,
-            n => us[((q * n as f64).ceil() as usize).clamp(1, n) - 1],
-        };
-        StepTimes {
-            median: at(0.5),
-            p10: at(0.1),
-            p90: at(0.9),
-            steps: us.len(),
-        }
-    }
-}
-
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct SessionStepBench {
-    pub params: SessionBenchParams,
-    /// A prediction step: every expert observes the step, the class distribution follows.
-    pub predict: StepTimes,
-    /// A training step (DS: every expert observes, the true class's expert and the most
-    /// probable wrong one are updated; GS: the true class's expert is updated).
-    pub train: StepTimes,
-    /// Experts still adapting their hyperparameters at the end (all repetitions).
-    pub adapting: usize,
-    pub experts: usize,
-}
-
-/// Time every step of the protocol on `session` (each grasp predicted, then trained) once
-/// every expert holds its full BV budget, on one thread.
-pub fn bench_session_steps(
-    session: &Session,
-    params: &SessionBenchParams,
-) -> Result<SessionStepBench, ExperimentError> {
-    let (labels, classes) = session_labels(session, "object")?;
-    let feats = feature_sequences(
-        session,
-        &SequenceParams {
-            features: FeatureSet::All,
-            taxel_noise_variance: 0.0,
-            seed: params.seed,
-        },
-    )?;
-    let (ds, gs) = bench_learners(params.capacity, params.tau, params.adaptation);
-    let dim = feats.dim();
-    let (mut predict_us, mut train_us) = (Vec::new(), Vec::new());
-    let (mut adapting, mut experts) = (0, 0);
-    for rep in 0..params.reps {
-        let mut l = new_learner(params.learner, dim, classes.len(), &ds, &gs)?;
-        let mut rng = Rng::stream(params.seed, rep as u64);
-        let (teach, order) = protocol_order(&labels, classes.len(), &mut rng);
-        let mut dist = vec![0.0; classes.len()];
-        for g in teach.into_iter().chain(order) {
-            let timed = l.models().iter().all(|m| m.n_basis() == params.capacity);
-            let seq = feats.sequences[g].as_standard_layout();
-            let steps = seq.as_slice().unwrap_or_default().chunks_exact(dim);
-            l.start_sequence();
-            for o in steps.clone() {
-                let t0 = Instant::now();
-                l.predict_step(o, &mut dist);
-                if timed {
-                    predict_us.push(1e6 * t0.elapsed().as_secs_f64());
-                }
-            }
-            l.start_sequence();
-            for o in steps {
-                let t0 = Instant::now();
-                l.train_step(o, labels[g]);
-                if timed {
-                    train_us.push(1e6 * t0.elapsed().as_secs_f64());
-                }
-            }
-        }
-        adapting += l.models().iter().filter(|m| m.adapting()).count();
-        experts += l.models().len();
-    }
-    Ok(SessionStepBench {
-        params: params.clone(),
-        predict: StepTimes::of(predict_us),
-        train: StepTimes::of(train_us),
-        adapting,
-        experts,
     })
 }

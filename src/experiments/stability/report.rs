@@ -6,12 +6,10 @@
 
 use std::collections::BTreeMap;
 
-use super::links::{GraspLinks, basis_links, grasps_text};
-use super::report::{
+use super::{BasisUsage, CvScheme, GridImage as PatchImage, StabilityOptions, StabilityReport};
+use crate::experiments::links::{GraspLinks, basis_links, grasps_text};
+use crate::experiments::result::{
     AnalysisKind, AnalysisResult, FigureDetails, ModelSize, SizeReason, distinct_sorted, now_unix,
-};
-use super::stability::{
-    BasisUsage, CvScheme, GridImage as PatchImage, StabilityOptions, StabilityReport,
 };
 use crate::figures::{
     Axis, AxisTitle, BarGroup, ColorScale, ErrorDisplay, ErrorRange, Figure, FigureKind, GridImage,

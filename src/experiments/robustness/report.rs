@@ -5,8 +5,8 @@
 
 use std::collections::BTreeMap;
 
-use super::report::{AnalysisKind, AnalysisResult, now_unix};
-use super::robustness::{Family, RobustnessResult, Scope, Sweep};
+use super::{Family, RobustnessResult, Scope, Sweep};
+use crate::experiments::result::{AnalysisKind, AnalysisResult, now_unix};
 use crate::figures::{Axis, Figure, Orientation, Series, SeriesStyle};
 
 fn scope_text(scope: Scope) -> &'static str {

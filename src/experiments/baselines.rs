@@ -4,7 +4,7 @@
 
 use std::collections::BTreeMap;
 
-use super::report::{AnalysisKind, AnalysisResult, distinct_sorted, now_unix};
+use super::result::{AnalysisKind, AnalysisResult, distinct_sorted, now_unix};
 use crate::cluster::baselines::{BaselinesResult, ScoreSummary};
 use crate::figures::{
     Axis, AxisTitle, BarGroup, ColorScale, ErrorDisplay, ErrorRange, Figure, FigureKind, Heatmap,

@@ -1,0 +1,397 @@
+//! Speed–accuracy frontiers by model size: sweep a method's size knobs on one session,
+//! score every size over seeded repetitions (mean and standard error), time its training
+//! and its prediction, and recommend the cheapest size whose score is within one standard
+//! error of the best ("model no more than a scene needs").
+//!
+//! Knobs: DS and GS — capacity (BV budget of every expert) × tau (kernel lags), scored by
+//! the supervised protocol of [`crate::experiments::recognition`]; sparse coding + SVM — `num_bases`,
+//! each with its best (beta, gamma) of the given lists, scored by stratified 10-fold cross
+//! validation repeated with seeded fold assignments (the dictionary is learned on all
+//! patches without labels, as in the paper and the grid search); DU and GU — the novelty
+//! threshold, scored by NMI over seeded orders with the effective clusters it leaves (the
+//! runs of [`crate::experiments::clustering`]); sequential k-means and the SOM — k centres / units on
+//! the Table I features; the RBF SVM — C × gamma, scored by repeated stratified 5-fold
+//! accuracy on the Table I features.
+//!
+//! A frontier is computed as work items (one repetition at one size, or one dictionary)
+//! whose seeds follow from the run's seed and the item alone, so a sharded sweep
+//! (`crate::sweep`) merges into exactly the local result.
+//!
+//! Cheapest means the least prediction time by default: a model is trained once (or, online,
+//! on the grasps it is taught) but predicts at every observation for as long as it is used,
+//! and for sparse coding + SVM the training time is dominated by the dictionary, an offline
+//! cost. [`CostAxis::Training`] ranks by training time instead.
+
+use std::time::Instant;
+
+use ndarray::Array2;
+use serde::{Deserialize, Serialize};
+
+use crate::catalogue::MethodId;
+use crate::cluster::{SequentialKMeansParams, scores};
+use crate::experiments::ExperimentError;
+use crate::experiments::clustering::{
+    ClusteringItem, ClusteringOutput, ClusteringParams, ClusteringPrep, ClusteringRun,
+    UnsupervisedLearner, baseline_seed, clustering_item, distinct, prepare_clustering, som_setup,
+};
+use crate::experiments::experiment::compute_items;
+use crate::experiments::labels::session_labels;
+use crate::experiments::recognition::{
+    RecognitionParams, RecognitionPrep, SupervisedLearner, prepare_recognition,
+    recognition_repetition,
+};
+use crate::experiments::stability::{
+    DataOptions, PipelineSettings, StabilityData, concatenated_codes,
+};
+use crate::features::FeatureSet;
+use crate::features::{Normalisation, Normaliser, table_one::session_features};
+use crate::jobs::Progress;
+use crate::rng::Rng;
+use crate::session::Session;
+use crate::sparse::DictionaryParams;
+use crate::svm::kernel_svm::{self, KernelSvmParams};
+use crate::svm::{cross_validate, mean_se, stratified_k_fold};
+
+mod points;
+pub mod report;
+mod run;
+
+use points::*;
+pub use run::*;
+
+/// The methods a frontier can sweep: every method of the catalogue with a size knob.
+pub fn methods() -> impl Iterator<Item = MethodId> {
+    MethodId::all().filter(|m| !m.info().size_knobs.is_empty())
+}
+
+/// Which time defines the cheapest model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CostAxis {
+    /// Prediction time per step (online learners) or per grasp.
+    #[default]
+    Prediction,
+    /// Training time per step (online learners) or per grasp of the whole fit.
+    Training,
+}
+
+/// The DS/GS score a frontier compares.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RecognitionScore {
+    /// Accuracy over every predicted grasp (Table II "all").
+    #[default]
+    All,
+    /// Accuracy over the test-only last 20 % (Table II "final 20 %").
+    Final20,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FrontierParams {
+    pub method: MethodId,
+    /// DS/GS/DU/GU: the feature set.
+    pub features: FeatureSet,
+    /// DS/GS: the score compared.
+    #[serde(default)]
+    pub score: RecognitionScore,
+    /// Seeded repetitions per size (DS/GS: protocol orders; sparse coding and RBF SVM:
+    /// fold assignments of the cross validation; DU/GU, k-means, SOM: presentation orders).
+    pub reps: usize,
+    pub seed: u64,
+    pub cost: CostAxis,
+    /// DS/GS knobs.
+    pub capacities: Vec<usize>,
+    pub taus: Vec<usize>,
+    /// Sparse coding knobs: every num_bases with its best (beta, gamma) of these lists.
+    pub num_bases: Vec<usize>,
+    pub beta: Vec<f64>,
+    pub gamma: Vec<f64>,
+    /// DU/GU knob: novelty thresholds.
+    #[serde(default)]
+    pub thresholds: Vec<f64>,
+    /// DU/GU: the experts' capacity and tau (None: the paper's 50 and 15).
+    #[serde(default)]
+    pub expert_capacity: Option<usize>,
+    #[serde(default)]
+    pub expert_tau: Option<usize>,
+    /// k-means / SOM knob: centres / units (the SOM's grid is 2 × ⌈k/2⌉).
+    #[serde(default)]
+    pub ks: Vec<usize>,
+    /// RBF SVM knobs: penalties C × kernel widths gamma.
+    #[serde(default)]
+    pub svm_c: Vec<f64>,
+    #[serde(default)]
+    pub svm_gamma: Vec<f64>,
+}
+
+impl FrontierParams {
+    /// The default sweep of a method.
+    pub fn for_method(method: MethodId) -> Self {
+        FrontierParams {
+            method,
+            features: FeatureSet::All,
+            score: RecognitionScore::All,
+            reps: 10,
+            seed: 0,
+            cost: CostAxis::Prediction,
+            capacities: vec![2, 5, 10, 20, 50, 100],
+            taus: vec![1, 2, 5, 15, 30],
+            num_bases: vec![2, 3, 5, 10, 15, 20, 29, 40, 60],
+            beta: vec![0.5, 1.0, 2.0],
+            gamma: vec![0.5, 1.0, 2.0],
+            thresholds: match method {
+                // DU's experts grow as the threshold falls (about 80 at 0.2, 180 at 0.1);
+                // below 0.2 a run costs minutes.
+                MethodId::Du => vec![0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8],
+                // GU's cluster count falls from ~30 to ~3 between 0.05 and 0.3.
+                _ => vec![0.05, 0.08, 0.1, 0.12, 0.15, 0.2, 0.3],
+            },
+            expert_capacity: None,
+            expert_tau: None,
+            ks: vec![2, 4, 6, 8, 10, 12, 16, 20],
+            svm_c: vec![1.0, 10.0, 100.0, 1000.0],
+            svm_gamma: vec![1e-3, 3e-3, 1e-2, 3e-2, 1e-1],
+        }
+    }
+
+    pub fn validate(&self) -> Result<(), ExperimentError> {
+        if self.method.info().size_knobs.is_empty() {
+            return Err(ExperimentError::param(
+                "method",
+                format!("{} has no size to sweep", self.method.key()),
+            ));
+        }
+        if self.reps < 2 {
+            return Err(ExperimentError::param(
+                "reps",
+                "a standard error needs at least 2 repetitions",
+            ));
+        }
+        match self.method {
+            // Rejected above: nothing to sweep.
+            MethodId::RawSvm => {}
+            MethodId::Ds | MethodId::Gs => {
+                if self.capacities.is_empty() || self.taus.is_empty() {
+                    return Err(ExperimentError::param(
+                        "capacities",
+                        "DS/GS need at least one capacity and one tau",
+                    ));
+                }
+                if self.capacities.contains(&0) || self.taus.contains(&0) {
+                    return Err(ExperimentError::param(
+                        "capacities",
+                        "capacity and tau must be ≥ 1",
+                    ));
+                }
+            }
+            MethodId::SparseSvm => {
+                if self.num_bases.is_empty() || self.beta.is_empty() || self.gamma.is_empty() {
+                    return Err(ExperimentError::param(
+                        "num_bases",
+                        "sparse coding needs num_bases, beta and gamma values",
+                    ));
+                }
+                if self.num_bases.contains(&0) {
+                    return Err(ExperimentError::param("num_bases", "must be ≥ 1"));
+                }
+                positive("beta", &self.beta)?;
+                positive("gamma", &self.gamma)?;
+            }
+            MethodId::Du | MethodId::Gu => {
+                if self.thresholds.is_empty() {
+                    return Err(ExperimentError::param(
+                        "thresholds",
+                        "DU/GU need at least one threshold",
+                    ));
+                }
+                if let Some(t) = self.thresholds.iter().find(|t| !(0.0..=1.0).contains(*t)) {
+                    return Err(ExperimentError::param(
+                        "thresholds",
+                        format!("{t} is not in [0, 1]"),
+                    ));
+                }
+                if self.expert_capacity == Some(0) || self.expert_tau == Some(0) {
+                    return Err(ExperimentError::param(
+                        "expert_capacity",
+                        "the experts' capacity and tau must be ≥ 1",
+                    ));
+                }
+            }
+            MethodId::KMeans | MethodId::Som => {
+                if self.ks.is_empty() || self.ks.contains(&0) {
+                    return Err(ExperimentError::param(
+                        "ks",
+                        "k-means and the SOM need cluster counts ≥ 1",
+                    ));
+                }
+            }
+            MethodId::RbfSvm => {
+                if self.svm_c.is_empty() || self.svm_gamma.is_empty() {
+                    return Err(ExperimentError::param(
+                        "svm_c",
+                        "the RBF SVM needs at least one C and one gamma",
+                    ));
+                }
+                positive("svm_c", &self.svm_c)?;
+                positive("svm_gamma", &self.svm_gamma)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+fn positive(name: &'static str, v: &[f64]) -> Result<(), ExperimentError> {
+    match v.iter().find(|b| !(**b > 0.0 && b.is_finite())) {
+        Some(b) => Err(ExperimentError::param(name, format!("{b} is not > 0"))),
+        None => Ok(()),
+    }
+}
+
+/// One model size on the frontier.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FrontierPoint {
+    /// A short label for the chart, e.g. "5·1" (capacity·tau), "K 29", "θ 0.3", "k 10" or
+    /// "C 10 γ 0.01".
+    pub label: String,
+    /// The whole configuration in words, for a tooltip.
+    pub detail: String,
+    /// The knobs by name (capacity, tau; num_bases, beta, gamma; threshold; k; c, gamma),
+    /// and for the clusterers the mean `effective` clusters (and DU/GU's `created` ones),
+    /// for the RBF SVM the mean `support_vectors`.
+    pub knobs: Vec<(String, f64)>,
+    /// Mean score over the repetitions and its standard error (sd / √reps).
+    pub score: f64,
+    pub score_se: f64,
+    pub reps: usize,
+    /// Microseconds per unit (step or grasp, see [`Frontier::unit`]), medians over the
+    /// repetitions (the machine's load varies); sparse coding's training time is one timed
+    /// dictionary and SVM fit plus the median coding time.
+    pub train_us: f64,
+    pub predict_us: f64,
+}
+
+impl FrontierPoint {
+    pub fn cost(&self, axis: CostAxis) -> f64 {
+        match axis {
+            CostAxis::Prediction => self.predict_us,
+            CostAxis::Training => self.train_us,
+        }
+    }
+
+    pub fn knob(&self, name: &str) -> Option<f64> {
+        self.knobs.iter().find(|(n, _)| n == name).map(|(_, v)| *v)
+    }
+}
+
+/// A method's frontier on one session.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Frontier {
+    pub session: String,
+    pub params: FrontierParams,
+    /// The score compared, in words ("accuracy (all)", "weighted success rate").
+    pub score_name: String,
+    /// What the times are per: "step" (DS/GS) or "grasp" (the others).
+    pub unit: String,
+    pub points: Vec<FrontierPoint>,
+    /// Indices of the non-dominated points by training / prediction time (cheapest first).
+    pub pareto_training: Vec<usize>,
+    pub pareto_prediction: Vec<usize>,
+    /// The highest mean score, and the cheapest point within one SE of it.
+    pub best: usize,
+    pub recommended: usize,
+    /// The papers' default size, where the sweep holds it.
+    pub paper_default: Option<usize>,
+    pub wall_seconds: f64,
+}
+
+impl Frontier {
+    /// "DS, all features" or "sparse coding + SVM".
+    pub fn label(&self) -> String {
+        self.params.label()
+    }
+
+    /// A short name for a chart legend: "DS all", "GU encoder", "SC+SVM", "SOM".
+    pub fn short_label(&self) -> String {
+        match self.params.method {
+            MethodId::SparseSvm => "SC+SVM".into(),
+            m if m.uses_features() => format!("{} {}", m.title(), self.params.features.name()),
+            m => m.title().to_string(),
+        }
+    }
+}
+
+/// The best point (highest mean score; ties: the cheaper) and the recommended one: the
+/// cheapest on `axis` among the points whose mean score is at least the best's mean minus
+/// the best's standard error (ties: the higher score). None without points.
+pub fn recommend(points: &[FrontierPoint], axis: CostAxis) -> Option<(usize, usize)> {
+    let cheaper = |a: usize, b: usize| points[a].cost(axis).total_cmp(&points[b].cost(axis));
+    let best = (0..points.len()).max_by(|&a, &b| {
+        points[a]
+            .score
+            .total_cmp(&points[b].score)
+            .then(cheaper(b, a))
+    })?;
+    let bar = points[best].score - points[best].score_se.max(0.0);
+    let recommended = (0..points.len())
+        .filter(|&i| points[i].score >= bar)
+        .min_by(|&a, &b| {
+            cheaper(a, b)
+                .then(points[b].score.total_cmp(&points[a].score))
+                .then(a.cmp(&b))
+        })?;
+    Some((best, recommended))
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// Folds of the RBF SVM's cross validation (the second paper's "SVM 5-fold").
+pub const SVM_FOLDS: usize = 5;
+
+/// The papers' k of the clustering baselines (Table IV: 10 clusters, the SOM 2 × 5).
+const PAPER_K: usize = 10;
+
+/// The paper's model size of sparse coding + SVM (the pipeline's default configuration).
+const SPARSE_PAPER_NUM_BASES: usize = 29;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(score: f64, se: f64, predict_us: f64, train_us: f64) -> FrontierPoint {
+        FrontierPoint {
+            label: String::new(),
+            detail: String::new(),
+            knobs: Vec::new(),
+            score,
+            score_se: se,
+            reps: 5,
+            train_us,
+            predict_us,
+        }
+    }
+
+    #[test]
+    fn the_recommended_point_is_the_cheapest_within_one_se_of_the_best() {
+        let points = vec![
+            point(0.90, 0.01, 1.0, 9.0), // cheapest, but more than one SE below the best
+            point(0.975, 0.01, 2.0, 8.0), // within one SE of the best (≥ 0.97)
+            point(0.98, 0.01, 9.0, 1.0), // the best
+            point(0.97, 0.02, 4.0, 2.0), // exactly at the bar, but dearer than 1
+        ];
+        assert_eq!(recommend(&points, CostAxis::Prediction), Some((2, 1)));
+        // By training time, the best itself is the cheapest.
+        assert_eq!(recommend(&points, CostAxis::Training), Some((2, 2)));
+        // The bar is the best's SE, not the candidate's: a wide SE does not qualify 0.
+        let mut wide = points.clone();
+        wide[0].score_se = 0.5;
+        assert_eq!(recommend(&wide, CostAxis::Prediction), Some((2, 1)));
+        assert_eq!(recommend(&[], CostAxis::Prediction), None);
+    }
+}

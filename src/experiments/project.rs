@@ -1,0 +1,279 @@
+//! A saved project: the sessions it used, the results computed on them and the frontiers.
+//! The only place that knows frontiers beside the results, so the result layer stays below
+//! the experiments.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::frontier::Frontier;
+use super::result::AnalysisResult;
+use crate::fsutil;
+
+pub const PROJECT_TAG: &str = "tactile-workbench-project";
+pub const PROJECT_VERSION: u32 = 1;
+
+/// A saved project: the sessions it used (as paths or bundled names) and its results.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Project {
+    pub format: String,
+    pub version: u32,
+    /// Where each session came from, as the workbench names it.
+    pub sessions: Vec<String>,
+    pub results: Vec<AnalysisResult>,
+    /// Speed–accuracy frontiers computed on the sessions (projects saved before frontiers
+    /// were kept have none).
+    #[serde(default)]
+    pub frontiers: Vec<Frontier>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ProjectError {
+    #[error("{path}: {message}")]
+    Read { path: String, message: String },
+    #[error(
+        "{path}: unsupported project version {found}; this build reads version {PROJECT_VERSION}"
+    )]
+    Version { path: String, found: u64 },
+    #[error("{path}: could not write: {message}")]
+    Write { path: String, message: String },
+}
+
+/// Whether `path` starts like a project file (its first field names the project format).
+pub fn is_project(path: &Path) -> bool {
+    use std::io::Read;
+    let mut head = [0u8; 128];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| f.read(&mut head))
+        .unwrap_or(0);
+    String::from_utf8_lossy(&head[..n]).contains(PROJECT_TAG)
+}
+
+impl Project {
+    pub fn new(sessions: Vec<String>, results: Vec<AnalysisResult>) -> Self {
+        Project {
+            format: PROJECT_TAG.into(),
+            version: PROJECT_VERSION,
+            sessions,
+            results,
+            frontiers: Vec::new(),
+        }
+    }
+
+    pub fn with_frontiers(mut self, frontiers: Vec<Frontier>) -> Self {
+        self.frontiers = frontiers;
+        self
+    }
+
+    pub fn save(&self, path: &Path) -> Result<(), ProjectError> {
+        let text = serde_json::to_string(self).map_err(|e| ProjectError::Write {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        fsutil::write_atomic(path, text.as_bytes()).map_err(|e| ProjectError::Write {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })
+    }
+
+    pub fn load(path: &Path) -> Result<Project, ProjectError> {
+        let text = std::fs::read_to_string(path).map_err(|e| ProjectError::Read {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        Project::parse(&text, path)
+    }
+
+    /// Read a project from the text of the file `path`. Every figure must be drawable, so a
+    /// damaged file is an error here and never a broken view later.
+    pub fn parse(text: &str, path: &Path) -> Result<Project, ProjectError> {
+        let p = path.display().to_string();
+        let read = |message: String| ProjectError::Read {
+            path: p.clone(),
+            message,
+        };
+        #[derive(Deserialize)]
+        struct Header {
+            format: Option<String>,
+            version: Option<u64>,
+        }
+        let h: Header = serde_json::from_str(text).map_err(|e| read(e.to_string()))?;
+        if h.format.as_deref() != Some(PROJECT_TAG) {
+            return Err(read("not a tactile-workbench project file".into()));
+        }
+        match h.version {
+            Some(v) if v == PROJECT_VERSION as u64 => {}
+            Some(found) => return Err(ProjectError::Version { path: p, found }),
+            None => return Err(read("`version`: missing".into())),
+        }
+        let project: Project = serde_json::from_str(text).map_err(|e| read(e.to_string()))?;
+        for (i, r) in project.results.iter().enumerate() {
+            let details = r
+                .details
+                .iter()
+                .flat_map(|d| d.items.iter().map(|(_, f)| f));
+            for f in r.figures.iter().map(|(_, f)| f).chain(details) {
+                f.validate()
+                    .map_err(|e| read(format!("`results[{i}]` ({}): {e}", r.label)))?;
+            }
+            r.check_links()
+                .map_err(|e| read(format!("`results[{i}]` ({}): {e}", r.label)))?;
+        }
+        Ok(project)
+    }
+}
+
+/// The time the speed-against-accuracy chart puts on its x axis.
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::experiments::result::tests::result;
+    use crate::experiments::result::{FigureDetails, GraspLinks, LinkedItem, figure_set};
+    use crate::figures::{Axis, Figure, Series};
+
+    #[test]
+    fn projects_round_trip_and_reject_other_versions() {
+        let dir = std::env::temp_dir().join(format!("tw-project-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("p.json");
+        let project = Project::new(vec!["sample: a.json".into()], vec![result()]);
+        project.save(&p).unwrap();
+        let back = Project::load(&p).unwrap();
+        assert_eq!(back.results.len(), 1);
+        assert_eq!(back.results[0].label, "DS, all features");
+        assert_eq!(
+            back.results[0].figures[0].1.title,
+            "Accuracy as trials progress"
+        );
+        let text = std::fs::read_to_string(&p)
+            .unwrap()
+            .replace("\"version\":1", "\"version\":9");
+        std::fs::write(&p, text).unwrap();
+        let e = Project::load(&p).unwrap_err().to_string();
+        assert!(e.contains("unsupported project version 9"), "{e}");
+        let set = figure_set(&back.results);
+        assert_eq!(set.entries[0].name, "01-ds-all-features-accuracy");
+        let _ = std::fs::remove_dir_all(dir);
+    }
+
+    #[test]
+    fn a_project_with_an_undrawable_figure_is_an_error_naming_it() {
+        let path = Path::new("broken.json");
+        let mut r = result();
+        if let crate::figures::FigureKind::Chart(c) = &mut r.figures[0].1.kind {
+            c.series[0].y.pop();
+        }
+        let text = serde_json::to_string(&Project::new(Vec::new(), vec![r])).unwrap();
+        let e = Project::parse(&text, path).unwrap_err().to_string();
+        assert!(
+            e.starts_with("broken.json: `results[0]` (DS, all features)"),
+            "{e}"
+        );
+        assert!(e.contains("x values"), "{e}");
+        let e = Project::parse("{\"format\": 3", path)
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("broken.json: "), "{e}");
+    }
+
+    #[test]
+    fn details_pick_the_nearest_key_and_older_projects_load_without_them() {
+        let fig = |t: &str| {
+            Figure::chart(
+                t,
+                Axis::new("x", ""),
+                Axis::new("y", ""),
+                vec![Series::new("s", vec![0.0], vec![0.0])],
+            )
+        };
+        let d = FigureDetails {
+            figure: "accuracy".into(),
+            selector: "novelty threshold".into(),
+            items: vec![(0.1, fig("a")), (0.2, fig("b")), (0.4, fig("c"))],
+        };
+        assert_eq!(d.nearest(-5.0), Some(0));
+        assert_eq!(d.nearest(0.16), Some(1));
+        assert_eq!(d.nearest(0.31), Some(2));
+        let mut r = result();
+        r.details.push(d);
+        assert!(r.details_of("accuracy").is_some());
+        assert!(r.details_of("other").is_none());
+        let mut json = serde_json::to_value(result()).unwrap();
+        json.as_object_mut().unwrap().remove("details");
+        let back: AnalysisResult = serde_json::from_value(json).unwrap();
+        assert!(back.details.is_empty());
+        let mut json = serde_json::to_value(result()).unwrap();
+        json.as_object_mut().unwrap().remove("model_size");
+        let back: AnalysisResult = serde_json::from_value(json).unwrap();
+        assert_eq!(back.model_size, None);
+    }
+
+    #[test]
+    fn links_must_name_a_part_of_a_figure_and_older_projects_load_without_them() {
+        use crate::figures::{AxisTitle, ColorScale, FigureKind, Heatmap};
+        let path = Path::new("linked.json");
+        let mut r = result();
+        let title = |t: &str| AxisTitle {
+            title: t.into(),
+            unit: String::new(),
+        };
+        r.figures.push((
+            "confusion".into(),
+            Figure::new(
+                "Confusion",
+                FigureKind::Heatmap(Heatmap {
+                    x: title("predicted"),
+                    y: title("true"),
+                    columns: vec!["a".into(), "b".into(), "c".into()],
+                    rows: vec!["a".into(), "b".into()],
+                    values: vec![vec![1.0, 0.0, 0.0], vec![0.0, 1.0, 0.0]],
+                    colors: ColorScale::viridis("share", ""),
+                    annotate: false,
+                    marked: Vec::new(),
+                }),
+            ),
+        ));
+        let link = |figure: &str, at: [usize; 2]| GraspLinks {
+            figure: figure.into(),
+            detail: None,
+            items: vec![LinkedItem {
+                at,
+                grasps: vec![3],
+                text: "true a, predicted c: 1 grasp".into(),
+            }],
+        };
+        let parse = |r: &AnalysisResult| {
+            let text = serde_json::to_string(&Project::new(Vec::new(), vec![r.clone()])).unwrap();
+            Project::parse(&text, path)
+        };
+        r.links = vec![link("confusion", [0, 2])];
+        let back = parse(&r).unwrap();
+        assert_eq!(back.results[0].links, r.links);
+        assert_eq!(
+            back.results[0]
+                .links_of("confusion", None)
+                .unwrap()
+                .item([0, 2])
+                .unwrap()
+                .grasps,
+            vec![3]
+        );
+        for (bad, why) in [
+            (link("confusion", [2, 0]), "no part [2, 0]"),
+            (link("confusion", [1, 3]), "no part [1, 3]"),
+            (link("accuracy", [0, 0]), "no part [0, 0]"),
+            (link("nothing", [0, 0]), "figure `nothing`"),
+        ] {
+            r.links = vec![bad];
+            let e = parse(&r).unwrap_err().to_string();
+            assert!(e.starts_with("linked.json: `results[0]`"), "{e}");
+            assert!(e.contains(why), "{e}");
+        }
+        let mut json = serde_json::to_value(result()).unwrap();
+        let fields = json.as_object_mut().unwrap();
+        fields.remove("links");
+        fields.remove("grasp_codes");
+        let back: AnalysisResult = serde_json::from_value(json).unwrap();
+        assert!(back.links.is_empty() && back.grasp_codes.is_empty());
+    }
+}
