@@ -90,8 +90,8 @@ pub fn chol_delete(n: usize, stride: usize, l: &mut [f64], p: usize, rot: &mut [
         let d = old[t + 1];
         let r = (d * d + x * x).sqrt();
         let a_tt = dot(&new[..t], &new[..t]) + r * r;
-        // (NaN fails the first test.)
-        if r.is_nan() || r * r <= PIVOT_TOL * a_tt || a_tt.is_infinite() {
+        // (NaN anywhere in the row makes a_tt NaN and fails the first test.)
+        if !a_tt.is_finite() || r * r <= PIVOT_TOL * a_tt {
             return false;
         }
         cs[t - p] = d / r;
