@@ -16,7 +16,7 @@ use crate::experiments::stability::{
 use crate::features::PatchScaling;
 use crate::jobs::Progress;
 use crate::session::{self, Session};
-use crate::sparse::{CodePenalty, DictInit, DictionaryParams};
+use crate::sparse::{CodePenalty, DictInit, Dictionary, DictionaryParams, FeatureSign};
 use crate::svm::{LinearSvmParams, Loss, cross_validate, stratified_k_fold};
 
 /// Where the real BTS3 set lives beside the project checkout.
@@ -517,6 +517,8 @@ pub struct BenchReport {
     pub dictionary_objective: f64,
     /// All patches coded with γ = 1 by feature-sign search.
     pub coding: Timing,
+    /// One feature-sign solve per patch (the same coding, one thread).
+    pub feature_sign: SolveTimes,
     /// One stratified 10-fold cross validation of the linear SVM on the K = 29 codes.
     pub cv_10fold: Timing,
     pub cv_wsr: f64,
@@ -526,6 +528,54 @@ pub struct BenchReport {
     pub grid_best_wsr: Option<f64>,
     pub scaling_k: Vec<ScalingPoint>,
     pub scaling_grasps: Vec<ScalingPoint>,
+}
+
+/// Quantiles over patches of the time of one feature-sign solve from the zero code.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct SolveTimes {
+    /// Solves timed (patches × repeats).
+    pub solves: usize,
+    pub median_us: f64,
+    pub p10_us: f64,
+    pub p90_us: f64,
+    /// Mean number of non-zero coefficients of the codes.
+    pub mean_active: f64,
+}
+
+/// Time every patch's feature-sign solve (K bases of `dict`, penalty `gamma`) on this
+/// thread, `repeats` times over, each from the zero code as `encode` starts.
+fn feature_sign_times(
+    dict: &Dictionary,
+    x: ndarray::ArrayView2<f64>,
+    gamma: f64,
+    repeats: usize,
+) -> SolveTimes {
+    let d = &dict.atoms;
+    let k = d.nrows();
+    let g: Vec<f64> = d.dot(&d.t()).iter().copied().collect();
+    let c: Vec<f64> = x.dot(&d.t()).iter().copied().collect();
+    let mut fs = FeatureSign::new(k);
+    let mut a = vec![0.0; k];
+    let mut us = Vec::with_capacity(repeats * x.nrows());
+    let mut active = 0usize;
+    for _ in 0..repeats {
+        for ci in c.chunks_exact(k) {
+            a.fill(0.0);
+            let t0 = Instant::now();
+            fs.solve(&g, ci, gamma, &mut a);
+            us.push(t0.elapsed().as_secs_f64() * 1e6);
+            active += a.iter().filter(|v| **v != 0.0).count();
+        }
+    }
+    us.sort_by(f64::total_cmp);
+    let q = |f: f64| us[((us.len() - 1) as f64 * f).round() as usize];
+    SolveTimes {
+        solves: us.len(),
+        median_us: q(0.5),
+        p10_us: q(0.1),
+        p90_us: q(0.9),
+        mean_active: active as f64 / us.len() as f64,
+    }
 }
 
 fn load_average() -> String {
@@ -606,6 +656,7 @@ pub fn bench(a: &BenchStabilityArgs) -> anyhow::Result<BenchReport> {
         coding.push(t);
     }
     let features = stability::concatenated_codes(codes.expect("coded"), data.sensor_count());
+    let feature_sign = feature_sign_times(&fit.dictionary, data.x.view(), 1.0, repeats);
     // One 10-fold CV.
     let folds = stratified_k_fold(&data.labels, 10, 0)?;
     let mut cvs = Vec::new();
@@ -675,6 +726,7 @@ pub fn bench(a: &BenchStabilityArgs) -> anyhow::Result<BenchReport> {
         dictionary_iterations: fit.iterations,
         dictionary_objective: fit.objective,
         coding: median(coding),
+        feature_sign,
         cv_10fold: median(cvs),
         cv_wsr: wsr,
         grid,
@@ -706,6 +758,11 @@ pub fn bench_report(b: &BenchReport) -> String {
         "coding all {} patches (γ = 1): {}\n",
         b.patches,
         fmt_t(&b.coding)
+    );
+    let fs = &b.feature_sign;
+    out += &format!(
+        "feature-sign, one solve per patch (γ = 1, from 0, one thread): median {:.2} µs, p10 {:.2} µs, p90 {:.2} µs over {} solves; {:.2} active bases per code\n",
+        fs.median_us, fs.p10_us, fs.p90_us, fs.solves, fs.mean_active
     );
     out += &format!(
         "one 10-fold CV on the codes: {} (weighted success rate {:.2} %)\n",

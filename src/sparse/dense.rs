@@ -31,21 +31,74 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// (relative to the diagonal); rows before r are then valid.
 pub fn cholesky(s: usize, a: &[f64], l: &mut [f64]) -> Result<(), usize> {
     for i in 0..s {
-        let (done, rest) = l.split_at_mut(i * s);
-        let li = &mut rest[..s];
-        for j in 0..i {
-            let lj = &done[j * s..j * s + j + 1];
-            let sum = a[i * s + j] - dot(&li[..j], &lj[..j]);
-            li[j] = sum / lj[j];
-        }
-        let sum = a[i * s + i] - dot(&li[..i], &li[..i]);
-        // (NaN fails the first test.)
-        if sum.is_nan() || sum <= PIVOT_TOL * a[i * s + i] || sum.is_infinite() {
+        if !chol_append(i, s, l, &a[i * s..i * s + i + 1]) {
             return Err(i);
         }
-        li[i] = sum.sqrt();
     }
     Ok(())
+}
+
+/// Grow the factor of the leading n × n block (row stride `stride`) by one row and column:
+/// `a_row` holds the new row of the matrix up to and with its diagonal (n + 1 values), and
+/// row n of L is one forward substitution against the rows above. This is exactly row n of
+/// [`cholesky`] (the same operations in the same order). False when the new pivot is not
+/// positive enough relative to its diagonal entry (row n is then not valid).
+pub fn chol_append(n: usize, stride: usize, l: &mut [f64], a_row: &[f64]) -> bool {
+    let (done, rest) = l.split_at_mut(n * stride);
+    let li = &mut rest[..n + 1];
+    for j in 0..n {
+        let lj = &done[j * stride..j * stride + j + 1];
+        let sum = a_row[j] - dot(&li[..j], &lj[..j]);
+        li[j] = sum / lj[j];
+    }
+    let sum = a_row[n] - dot(&li[..n], &li[..n]);
+    // (NaN fails the first test.)
+    if sum.is_nan() || sum <= PIVOT_TOL * a_row[n] || sum.is_infinite() {
+        return false;
+    }
+    li[n] = sum.sqrt();
+    true
+}
+
+/// Remove row and column p from the factor of the leading n × n block (row stride
+/// `stride`), leaving the factor of the matrix without them in the leading (n − 1) ×
+/// (n − 1) block. Rows before p do not change. Each later row moves up one and loses its
+/// entry in column p, x; the trailing block must then factor `L₃₃ L₃₃ᵀ + x xᵀ`, which
+/// Givens rotations of the columns of [L₃₃ x] give (one rotation per column, zeroing x's
+/// entry against the diagonal: O((n − p)²), against O(n³) for a new factor). `rot` is
+/// scratch of at least 2 (n − 1 − p) values.
+///
+/// An update only increases the trailing pivots, so in exact arithmetic every pivot
+/// passes the test of [`cholesky`] again; false when one does not (rounding, or a factor
+/// that was not that of a positive definite matrix): rows from p on are then not valid
+/// and must be refactorised.
+pub fn chol_delete(n: usize, stride: usize, l: &mut [f64], p: usize, rot: &mut [f64]) -> bool {
+    // Row by row (contiguous in memory): new row t is old row t + 1 without column p,
+    // with the rotations of the columns before it applied, then its own rotation.
+    let (cs, sn) = rot[..2 * (n - 1 - p)].split_at_mut(n - 1 - p);
+    for t in p..n - 1 {
+        let (head, tail) = l.split_at_mut((t + 1) * stride);
+        let new = &mut head[t * stride..t * stride + t + 1];
+        let old = &tail[..t + 2];
+        new[..p].copy_from_slice(&old[..p]);
+        let mut x = old[p];
+        for j in p..t {
+            let (c, s, v) = (cs[j - p], sn[j - p], old[j + 1]);
+            new[j] = c * v + s * x;
+            x = c * x - s * v;
+        }
+        let d = old[t + 1];
+        let r = (d * d + x * x).sqrt();
+        let a_tt = dot(&new[..t], &new[..t]) + r * r;
+        // (NaN anywhere in the row makes a_tt NaN and fails the first test.)
+        if !a_tt.is_finite() || r * r <= PIVOT_TOL * a_tt {
+            return false;
+        }
+        cs[t - p] = d / r;
+        sn[t - p] = x / r;
+        new[t] = r;
+    }
+    true
 }
 
 /// Solve L Lᵀ x = b for the leading r × r block of a factor stored with row stride
@@ -129,6 +182,130 @@ mod tests {
         (0..r)
             .flat_map(|i| (0..=i).map(move |j| m[i * stride + j]))
             .collect()
+    }
+
+    /// Size, eigenvalues and row stride of the update tests: A = Q diag(λ) Qᵀ with Q a
+    /// Householder reflection and λ_i = 10⁻ⁱ, so κ₂(A) = 10⁶ and ‖A‖₂ = ‖L‖₂² = 1. The
+    /// stride exceeds the size, as in the solver (stride K, active set smaller).
+    const N: usize = 7;
+    const STRIDE: usize = 9;
+    const KAPPA: f64 = 1e6;
+
+    fn conditioned() -> Vec<f64> {
+        let v = [1.0, 2.0, -1.0, 3.0, 1.0, -2.0, 1.0];
+        let vv: f64 = v.iter().map(|x| x * x).sum();
+        let q = |i: usize, j: usize| f64::from(u8::from(i == j)) - 2.0 * v[i] * v[j] / vv;
+        let mut a = vec![0.0; N * N];
+        for i in 0..N {
+            for j in 0..N {
+                a[i * N + j] = (0..N)
+                    .map(|m| q(i, m) * 10f64.powi(-(m as i32)) * q(j, m))
+                    .sum();
+            }
+        }
+        a
+    }
+
+    /// The symmetric matrix `a` (n × n) with its rows and columns in the order `idx`.
+    fn permuted(a: &[f64], n: usize, idx: &[usize]) -> Vec<f64> {
+        idx.iter()
+            .flat_map(|&i| idx.iter().map(move |&j| a[i * n + j]))
+            .collect()
+    }
+
+    /// A new factor of the m × m matrix `a`, at stride STRIDE (NaN beyond the triangle).
+    fn factor(m: usize, a: &[f64]) -> Vec<f64> {
+        let mut l = vec![f64::NAN; STRIDE * STRIDE];
+        for i in 0..m {
+            assert!(chol_append(i, STRIDE, &mut l, &a[i * m..i * m + i + 1]));
+        }
+        l
+    }
+
+    /// The Givens update is backward stable (Stewart 1979; Higham, "Accuracy and
+    /// Stability of Numerical Algorithms", §10.1 for the factor it starts from): the
+    /// updated L factors A + E with |E| ≲ c m u ‖A‖₂, so L L̃ᵀ must match the reduced
+    /// matrix to 10 m u, and the factor itself, whose perturbation is at most κ₂ times
+    /// the relative backward error (Sun 1991), a new factor to 10 m u κ₂ (7.8e-9 here).
+    fn assert_factors(m: usize, a: &[f64], got: &[f64], what: &str) {
+        let u = f64::EPSILON / 2.0;
+        let backward = 10.0 * m as f64 * u;
+        let forward = backward * KAPPA;
+        let fresh = factor(m, a);
+        for i in 0..m {
+            for j in 0..=i {
+                let prod = dot(
+                    &got[i * STRIDE..i * STRIDE + j + 1],
+                    &got[j * STRIDE..j * STRIDE + j + 1],
+                );
+                let e = (prod - a[i * m + j]).abs();
+                assert!(e <= backward, "{what}: (L Lᵀ − A)[{i}][{j}] = {e:e}");
+                let e = (got[i * STRIDE + j] - fresh[i * STRIDE + j]).abs();
+                assert!(e <= forward, "{what}: L[{i}][{j}] differs by {e:e}");
+            }
+        }
+    }
+
+    #[test]
+    fn removing_a_row_and_column_leaves_the_factor_of_the_reduced_matrix() {
+        let a = conditioned();
+        for p in [0, N / 2, N - 1] {
+            let mut l = factor(N, &a);
+            let before = l.clone();
+            let mut rot = vec![f64::NAN; 2 * N];
+            assert!(chol_delete(N, STRIDE, &mut l, p, &mut rot), "p = {p}");
+            // The rows before p are untouched.
+            assert_eq!(lower(p, STRIDE, &l), lower(p, STRIDE, &before), "p = {p}");
+            let rest: Vec<usize> = (0..N).filter(|&i| i != p).collect();
+            assert_factors(N - 1, &permuted(&a, N, &rest), &l, &format!("delete {p}"));
+            // Deleting again (the solver drops several coefficients at once, last first).
+            if p > 0 {
+                assert!(chol_delete(N - 1, STRIDE, &mut l, p - 1, &mut rot));
+                let rest: Vec<usize> = (0..N).filter(|&i| i != p && i != p - 1).collect();
+                assert_factors(
+                    N - 2,
+                    &permuted(&a, N, &rest),
+                    &l,
+                    &format!("delete {p}, {}", p - 1),
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn appending_to_an_updated_factor_gives_the_factor_of_the_grown_matrix() {
+        // Basis j leaves (an update) and comes back as the last row (an append): the
+        // factor of A with row and column j moved to the end.
+        let a = conditioned();
+        for j in [0, N / 2, N - 1] {
+            let mut l = factor(N, &a);
+            let mut rot = vec![0.0; 2 * N];
+            assert!(chol_delete(N, STRIDE, &mut l, j, &mut rot));
+            let order: Vec<usize> = (0..N).filter(|&i| i != j).chain([j]).collect();
+            let moved = permuted(&a, N, &order);
+            assert!(chol_append(N - 1, STRIDE, &mut l, &moved[(N - 1) * N..]));
+            assert_factors(N, &moved, &l, &format!("basis {j} to the end"));
+        }
+    }
+
+    #[test]
+    fn a_deletion_from_a_factor_that_is_not_positive_definite_fails() {
+        // A zero last row stands for a factor whose last pivot was lost: the rotations
+        // leave it zero, so its updated pivot is 0. NaN anywhere after p fails as well.
+        let a = conditioned();
+        let mut rot = vec![0.0; 2 * N];
+        for p in [0, N / 2] {
+            let mut l = factor(N, &a);
+            l[(N - 1) * STRIDE..(N - 1) * STRIDE + N].fill(0.0);
+            assert!(!chol_delete(N, STRIDE, &mut l, p, &mut rot), "p = {p}");
+            let mut l = factor(N, &a);
+            l[(N - 1) * STRIDE + N / 2 + 1] = f64::NAN;
+            assert!(!chol_delete(N, STRIDE, &mut l, p, &mut rot), "p = {p}");
+        }
+        // The last row is simply dropped: nothing to update, nothing to fail.
+        let mut l = factor(N, &a);
+        l[(N - 1) * STRIDE..(N - 1) * STRIDE + N].fill(0.0);
+        assert!(chol_delete(N, STRIDE, &mut l, N - 1, &mut rot));
     }
 
     #[test]

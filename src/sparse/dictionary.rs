@@ -462,10 +462,18 @@ fn sufficient_statistics(codes: ArrayView2<f64>, x: ArrayView2<f64>) -> (Array2<
     if nnz * 4 > n_patches * k {
         return (codes.t().dot(&codes), codes.t().dot(&x));
     }
-    let mut ata = Array2::<f64>::zeros((k, k));
-    let mut atx = Array2::<f64>::zeros((k, n));
+    // On slices, and AᵀA's lower triangle only (mirrored at the end: a_p a_q = a_q a_p
+    // exactly, summed over the patches in the same order).
+    let codes = codes.as_standard_layout();
+    let x = x.as_standard_layout();
+    let (a_all, x_all) = (
+        codes.as_slice().expect("standard layout"),
+        x.as_slice().expect("standard layout"),
+    );
+    let mut ata = vec![0.0; k * k];
+    let mut atx = vec![0.0; k * n];
     let mut idx: Vec<(usize, f64)> = Vec::with_capacity(k);
-    for (a, xr) in codes.rows().into_iter().zip(x.rows()) {
+    for (a, xr) in a_all.chunks_exact(k).zip(x_all.chunks_exact(n)) {
         idx.clear();
         idx.extend(
             a.iter()
@@ -473,15 +481,25 @@ fn sufficient_statistics(codes: ArrayView2<f64>, x: ArrayView2<f64>) -> (Array2<
                 .filter(|(_, v)| **v != 0.0)
                 .map(|(j, v)| (j, *v)),
         );
-        for &(p, ap) in &idx {
-            for &(q, aq) in &idx {
-                ata[[p, q]] += ap * aq;
+        for (m, &(p, ap)) in idx.iter().enumerate() {
+            let row = &mut ata[p * k..(p + 1) * k];
+            for &(q, aq) in &idx[..=m] {
+                row[q] += ap * aq;
             }
-            let mut row = atx.row_mut(p);
-            row.scaled_add(ap, &xr);
+            for (t, xv) in atx[p * n..(p + 1) * n].iter_mut().zip(xr) {
+                *t += ap * xv;
+            }
         }
     }
-    (ata, atx)
+    for p in 0..k {
+        for q in 0..p {
+            ata[q * k + p] = ata[p * k + q];
+        }
+    }
+    (
+        Array2::from_shape_vec((k, k), ata).expect("k × k"),
+        Array2::from_shape_vec((k, n), atx).expect("k × n"),
+    )
 }
 
 /// Replace the bases no code uses (zero columns of `ata`) by the normalised residuals of
