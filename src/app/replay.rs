@@ -205,7 +205,7 @@ impl Replay {
             g.trial.map(|t| format!(" #{t}")).unwrap_or_default()
         ));
 
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             if ui
                 .button("Step back")
                 .on_hover_text("Left arrow key")
@@ -294,7 +294,7 @@ impl Replay {
         };
         // The heatmaps grow with the tile: one column per sensor, beside a colour bar.
         let sensors = session.sensors.len().max(1) as f32;
-        let width = ((ui.available_width() - 140.0) / sensors - 8.0).clamp(60.0, 420.0);
+        let width = ((ui.available_width() - 140.0) / sensors - 8.0).clamp(40.0, 420.0);
         let height = (width * 1.3).min((ui.available_height() * 0.45).max(120.0));
         let cell = Vec2::new(width, height);
         let title = format!(
@@ -302,7 +302,7 @@ impl Replay {
             if self.change { "change" } else { "pressure" },
             self.colours.text()
         );
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             for (k, sensor) in session.sensors.iter().enumerate() {
                 ui.vertical(|ui| {
                     ui.label(format!(
@@ -322,7 +322,7 @@ impl Replay {
             class_distribution(ui, &t.trace, self.frame, 160.0);
         }
         if session.label_set("object").is_some() && !session.encoders.is_empty() {
-            ui.horizontal(|ui| {
+            ui.horizontal_wrapped(|ui| {
                 ComboBox::from_label("Recognition learner")
                     .selected_text(format!("{:?}", self.learner).to_uppercase())
                     .show_ui(ui, |ui| {
