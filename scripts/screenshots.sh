@@ -2,21 +2,24 @@
 # Screenshots of every workbench view, in a real window under Xvfb, on results computed
 # from the bundled sample sessions (short runs: 2 repetitions).
 #
-#   scripts/screenshots.sh [OUT_DIR]      (default: docs/screenshots)
+#   scripts/screenshots.sh [OUT_DIR] [WIDTHxHEIGHT]   (default: docs/screenshots 1400x900)
 #
+# Run it at 1400x900 and at 1000x700 (into another folder) to check the layout holds.
 # The projects are kept in target/screenshot-projects and reused; delete it to recompute.
 # Needs Xvfb, xdotool and ImageMagick's `import`
-# (Debian/Ubuntu: apt-get install xvfb xdotool imagemagick).
+# (Debian/Ubuntu: apt-get install xvfb xdotool imagemagick). The dev build is used (it is
+# optimised; a release build of the window takes far longer to compile).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-docs/screenshots}
+size=${2:-1400x900}
 mkdir -p "$out"
 work=target/screenshot-projects
 mkdir -p "$work"
 trap 'kill $(jobs -p) 2>/dev/null || true' EXIT
 
-cargo build --release
-bin=target/release/tactile-workbench
+cargo build
+bin=target/debug/tactile-workbench
 
 # Results to show: one project per experiment.
 [ -f "$work/stability.json" ] ||
@@ -38,7 +41,7 @@ projects=("$work"/stability.json "$work"/recognition.json "$work"/clustering.jso
     "$work"/baselines.json "$work"/robustness.json)
 
 export DISPLAY=:97
-Xvfb $DISPLAY -screen 0 1400x900x24 >/dev/null 2>&1 &
+Xvfb $DISPLAY -screen 0 "${size}x24" >/dev/null 2>&1 &
 sleep 1
 shot() { # VIEW NAME [xdotool actions...]
     local view=$1 name=$2
@@ -49,6 +52,9 @@ shot() { # VIEW NAME [xdotool actions...]
     local win
     win=$(xdotool search --name "Tactile Workbench" | head -1)
     xdotool windowfocus --sync "$win" 2>/dev/null || true
+    # The window opens at 1400 x 900: fit it to the screen.
+    xdotool windowmove "$win" 0 0 windowsize "$win" "${size%x*}" "${size#*x}" 2>/dev/null || true
+    sleep 2
     if [ $# -gt 0 ]; then
         xdotool "$@"
         sleep 2

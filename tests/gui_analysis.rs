@@ -131,9 +131,11 @@ fn a_cancelled_job_leaves_the_app_usable() {
     h.get_by_label("Replay").click();
     h.run_ok();
     assert_eq!(h.state().view, View::Replay);
-    h.get_by_label_contains("sponge #1 ·").click();
+    // (The session's first grasp, sponge #1, is focused since the session was chosen.)
+    h.get_by_label_contains("sponge #2 ·").click();
     h.run_ok();
-    h.get_by_label_contains("Frame 1 /");
+    assert_eq!(h.state().selection.focus, Some((1, 1)));
+    h.get_by_label_contains("key frame (full contact)");
 }
 
 #[test]
@@ -420,9 +422,22 @@ fn stability_view_shows_the_first_papers_figures() {
     let (_, g) = h.state().selection.focus.unwrap();
     assert!(expected.contains(&g));
     let code = h.state().analyses.results[0].grasp_code(g).unwrap();
-    h.get_by_label(&format!("decision value {:+.3}", code.decision));
+    h.get_by_label_contains(&format!(
+        "decision value {:+.3} (> 0 predicts failure",
+        code.decision
+    ));
     h.get_by_label(&format!("predicted: {predicted}"));
     assert!(h.query_all_by_label_contains("reconstruction (").count() >= 1);
+    h.get_by_label_contains("Selected: ");
+
+    // The selection belongs to its session: choosing another session clears it, and the
+    // focused grasp (the one every replay tile plays) moves to the new session.
+    h.get_by_label("Simulated object recognition").click();
+    h.run_ok();
+    assert!(h.state().selection.grasps.is_empty());
+    assert_eq!(h.state().selection.session, None);
+    assert_eq!(h.state().selection.focus.map(|f| f.0), Some(1));
+    assert!(h.query_by_label_contains("Selected: ").is_none());
 }
 
 #[test]

@@ -93,7 +93,7 @@ fn a_dropped_bag_is_imported_with_the_spec_beside_it_and_replays() {
     h.get_by_label(&format!("{grasps} of {grasps} grasps"));
     h.state_mut().selection.focus = Some((2, 0));
     h.run_ok();
-    h.get_by_label_contains("Frame 1 / 10");
+    h.get_by_label_contains(" / 10 · t = ");
     for sensor in ["left", "right", "palm"] {
         h.get_by_label_contains(&format!("{sensor} ("));
     }

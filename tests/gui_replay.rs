@@ -18,15 +18,33 @@ fn opens_the_samples_selects_a_grasp_and_steps_the_replay() {
     h.get_by_label("Simulated grasp stability");
     h.get_by_label("Simulated object recognition");
     h.get_by_label("540 of 540 grasps");
-    // A first start shows a grasp, not an empty replay.
+    // A first start shows a grasp, not an empty replay: at its key frame (full contact),
+    // coloured over the grasp's own range.
     assert_eq!(h.state().selection.focus, Some((0, 0)));
-    h.get_by_label_contains("Frame 1 / ");
+    let key = |h: &Harness<'static, WorkbenchApp>, g: usize| {
+        h.state().sessions[0].session.grasps[g].key_frame
+    };
+    let k0 = key(&h, 0);
+    assert!(k0 > 0, "the sample's key frame is not its first");
+    assert_eq!(h.state().replay.frame, k0);
+    h.get_by_label_contains(&format!("Frame {} / 16 · ", k0 + 1));
+    h.get_by_label_contains("key frame (full contact)");
+    assert_eq!(
+        h.state().replay.colours,
+        tactile_workbench::app::replay::ColourRange::Grasp
+    );
 
     h.get_by_label_contains("object_01 #2 ·").click();
     h.run_ok();
     assert_eq!(h.state().selection.focus, Some((0, 1)));
+    let k1 = key(&h, 1);
+    h.get_by_label_contains(&format!("Frame {} / 16", k1 + 1));
+    // The slider numbers frames as the label does, from 1: at 1 it shows the first frame.
+    // Then step with buttons and keys.
+    h.get_by_role_and_label(egui::accesskit::Role::Slider, "frame")
+        .set_value_accesskit(1.0);
+    h.run_ok();
     h.get_by_label_contains("Frame 1 / 16");
-
     h.get_by_label("Step forward").click();
     h.run_ok();
     h.get_by_label_contains("Frame 2 / 16");
@@ -94,10 +112,17 @@ fn filters_and_replays_an_object_recognition_grasp() {
         "messages: {:?}",
         h.state().analyses.notes.texts()
     );
-    h.get_by_label_contains("Class distribution at step 1 (true: sponge");
+    let k = h.state().replay.frame;
+    h.get_by_label_contains(&format!(
+        "Class distribution at step {} (true: sponge",
+        k + 1
+    ));
     h.key_press(egui::Key::ArrowRight);
     h.run_ok();
-    h.get_by_label_contains("Class distribution at step 2 (true: sponge");
+    h.get_by_label_contains(&format!(
+        "Class distribution at step {} (true: sponge",
+        k + 2
+    ));
 
     // Filtering by object keeps only that object's grasps: the combo offers every object.
     h.get_by_role_and_label(egui::accesskit::Role::ComboBox, "Filter by object")
@@ -161,4 +186,57 @@ fn a_toast_fades_and_the_log_keeps_it() {
     h.get_by_label("Notification log").click();
     h.run_ok();
     h.get_by_label("exported three figures");
+}
+
+/// A click on a trace moves the replay to the frame under the pointer.
+#[test]
+fn a_click_on_a_trace_seeks() {
+    let mut h = harness();
+    h.get_by_label("Simulated object recognition").click();
+    h.run_ok();
+    h.get_by_label_contains("sponge #3 ·").click();
+    h.run_ok();
+    let g = &h.state().sessions[1].session.grasps[2];
+    let (n, t0, t1) = (
+        g.frames.len(),
+        g.frames[0].t,
+        g.frames[g.frames.len() - 1].t,
+    );
+    assert!(h.state().replay.frame > 1);
+    // The left edge of the plot area is the grasp's first frame (x axis from t0 to t1 with a
+    // small margin): a click a few points inside it lands on the first frames.
+    let rect = h.get_by_label("Joint encoders trace").rect();
+    let near_start = egui::pos2(rect.left() + 0.06 * rect.width(), rect.center().y);
+    for pressed in [true, false] {
+        h.event(egui::Event::PointerMoved(near_start));
+        h.event(egui::Event::PointerButton {
+            pos: near_start,
+            button: egui::PointerButton::Primary,
+            pressed,
+            modifiers: egui::Modifiers::default(),
+        });
+        h.step();
+    }
+    h.run_ok();
+    let early = h.state().replay.frame;
+    assert!(early <= 2, "a click near the start seeks to frame {early}");
+    // And near the right edge, the last frames.
+    let near_end = egui::pos2(rect.right() - 0.06 * rect.width(), rect.center().y);
+    for pressed in [true, false] {
+        h.event(egui::Event::PointerMoved(near_end));
+        h.event(egui::Event::PointerButton {
+            pos: near_end,
+            button: egui::PointerButton::Primary,
+            pressed,
+            modifiers: egui::Modifiers::default(),
+        });
+        h.step();
+    }
+    h.run_ok();
+    let late = h.state().replay.frame;
+    assert!(
+        late + 3 >= n,
+        "a click near the end seeks to frame {late} of {n} ({t0}..{t1} s)"
+    );
+    h.get_by_label_contains(&format!("Frame {} / {n}", late + 1));
 }

@@ -56,7 +56,9 @@ impl Browser {
             ui.label("No session open. Use File > Open, or drop a file here.");
             return action;
         }
-        self.active = self.active.min(sessions.len() - 1);
+        // The active session persists by index: while the sessions of the last run are
+        // still loading it may point past those loaded so far (the app clamps it once all
+        // have loaded).
         for (i, s) in sessions.iter().enumerate() {
             ui.horizontal(|ui| {
                 let name = &s.session.meta.name;
@@ -80,7 +82,8 @@ impl Browser {
             });
         }
         ui.separator();
-        let s = &sessions[self.active];
+        let active = self.active.min(sessions.len() - 1);
+        let s = &sessions[active];
         let session = &s.session;
         if let Some(set) = session.label_sets.first() {
             let text = self
@@ -106,7 +109,7 @@ impl Browser {
                     ui.selectable_value(&mut self.object, Some(o), label);
                 }
             });
-        let selected_here = selection.session == Some(self.active) && !selection.grasps.is_empty();
+        let selected_here = selection.session == Some(active) && !selection.grasps.is_empty();
         if selected_here {
             ui.checkbox(
                 &mut self.only_selection,
@@ -114,7 +117,7 @@ impl Browser {
             )
             .on_hover_text(selection.origin.clone());
         }
-        let visible = self.visible(s, self.active, selection);
+        let visible = self.visible(s, active, selection);
         ui.horizontal(|ui| {
             ui.label(format!(
                 "{} of {} grasps",
@@ -149,8 +152,8 @@ impl Browser {
                         grasp.object,
                         grasp.frames.len()
                     );
-                    let focused = selection.focus == Some((self.active, g));
-                    let text = if selection.contains(self.active, g) {
+                    let focused = selection.focus == Some((active, g));
+                    let text = if selection.contains(active, g) {
                         RichText::new(format!("» {text}")).strong()
                     } else {
                         RichText::new(text)

@@ -5,6 +5,7 @@
 
 pub mod browser;
 pub mod figure_view;
+pub mod files;
 pub mod heatmap;
 pub mod import;
 pub mod loader;
@@ -23,6 +24,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::experiments::result::AnalysisKind;
 use browser::{Browser, BrowserAction};
+use files::{FilePicker, Picked, Purpose};
 use loader::{LoadedSession, Loader, Source};
 use replay::Replay;
 use results::Analyses;
@@ -80,14 +82,8 @@ impl View {
     }
 }
 
-/// Which file dialog is open.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Dialog {
-    Sessions,
-    Folder,
-    OpenProject,
-    SaveProject,
-}
+/// The file in the data folder that keeps the open project between runs.
+pub const KEPT_RESULTS: &str = "results.json";
 
 /// What persists between runs.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -105,6 +101,15 @@ pub struct Persisted {
     pub layouts: BTreeMap<String, Layout>,
     #[serde(default = "yes")]
     pub form_open: bool,
+    /// Each view's form settings.
+    #[serde(default)]
+    pub forms: views::Forms,
+    /// The folder the file picker last opened from or saved to.
+    #[serde(default)]
+    pub last_folder: Option<PathBuf>,
+    /// Run times measured on this machine, which correct the expected times.
+    #[serde(default)]
+    pub timings: crate::jobs::estimate::Timings,
 }
 
 fn yes() -> bool {
@@ -123,6 +128,9 @@ impl Default for Persisted {
             replay: Replay::default(),
             layouts: BTreeMap::new(),
             form_open: true,
+            forms: views::Forms::default(),
+            last_folder: None,
+            timings: Default::default(),
         }
     }
 }
@@ -146,7 +154,12 @@ pub struct WorkbenchApp {
     loader: Loader,
     /// Sources in the order they were asked for, so sessions list in a stable order.
     requested: Vec<Source>,
-    dialog: Option<(Dialog, Receiver<Vec<PathBuf>>)>,
+    /// The system file dialog, while it is open (on its own thread).
+    dialog: Option<(Purpose, Receiver<Vec<PathBuf>>)>,
+    /// The in-app file picker, while it is open.
+    pub picker: Option<FilePicker>,
+    /// The folder the file picker last opened from or saved to.
+    last_folder: Option<PathBuf>,
     /// Recordings (ROS 2 bags, long-format CSVs) waiting for their import spec.
     pub import: import::ImportDialog,
     pub cluster: views::cluster::ClusterForm,
@@ -172,17 +185,20 @@ impl WorkbenchApp {
             dark: p.dark,
             recent: p.recent.clone(),
             analyses: Analyses::default(),
-            rooms: Rooms::default(),
+            rooms: Rooms::with_forms(p.forms.clone()),
             layouts: p.layouts.clone(),
             form_open: p.form_open,
             loader: Loader::default(),
             requested: Vec::new(),
             dialog: None,
+            picker: None,
+            last_folder: p.last_folder.clone(),
             import: import::ImportDialog::default(),
             cluster: views::cluster::ClusterForm::default(),
             restore: None,
             focus_pending: None,
         };
+        app.analyses.timings = p.timings.clone();
         ctx.set_theme(if app.dark {
             egui::Theme::Dark
         } else {
@@ -267,7 +283,20 @@ impl WorkbenchApp {
             replay: self.replay.clone(),
             layouts: self.layouts.clone(),
             form_open: self.form_open,
+            forms: self.rooms.forms(),
+            last_folder: self.last_folder.clone(),
+            timings: self.analyses.timings.clone(),
         }
+    }
+
+    /// Keep the results (the open project) in `dir` from now on, written after each finished
+    /// job, and reopen those kept there by an earlier run.
+    pub fn keep_results_in(&mut self, ctx: &egui::Context, dir: PathBuf) {
+        let path = dir.join(KEPT_RESULTS);
+        if path.is_file() {
+            self.analyses.restore_results(ctx, path.clone());
+        }
+        self.analyses.keep = Some(path);
     }
 
     fn close(&mut self, i: usize) {
@@ -281,11 +310,51 @@ impl WorkbenchApp {
     }
 
     /// Focus (and replay) one grasp.
+    /// A newly focused grasp opens at its key frame (full contact), where the touch shows.
     pub fn select(&mut self, session: usize, grasp: usize) {
         if self.selection.focus != Some((session, grasp)) {
-            self.replay.reset();
+            let key = self
+                .sessions
+                .get(session)
+                .and_then(|s| s.session.grasps.get(grasp))
+                .map_or(0, |g| g.key_frame.min(g.frames.len().saturating_sub(1)));
+            self.replay.open_at(key);
         }
         self.selection.focus = Some((session, grasp));
+    }
+
+    /// The selection belongs to the active session and to the results shown: see
+    /// [`Selection::scope`]. The focused grasp (the one every replay plays) follows the
+    /// active session too: its first grasp when the focus was in another.
+    fn scope_selection(&mut self) {
+        if self.is_loading() {
+            return;
+        }
+        self.browser.active = self
+            .browser
+            .active
+            .min(self.sessions.len().saturating_sub(1));
+        let active = self.browser.active;
+        let name = self
+            .sessions
+            .get(active)
+            .map(|s| s.session.meta.name.as_str());
+        let analyses = &self.analyses;
+        self.selection.scope(active, |i| {
+            let (Some(r), Some(name)) = (analyses.results.get(i), name) else {
+                return false;
+            };
+            analyses.shown_index(r.kind, name) == Some(i)
+        });
+        let focus_elsewhere = self.selection.focus.is_some_and(|(s, _)| s != active);
+        if focus_elsewhere
+            && self
+                .sessions
+                .get(active)
+                .is_some_and(|s| !s.session.grasps.is_empty())
+        {
+            self.select(active, 0);
+        }
     }
 
     /// Start `view`'s run, as its form stands, on the active session.
@@ -332,6 +401,7 @@ impl WorkbenchApp {
                     session,
                     grasps,
                     origin,
+                    result,
                 } => {
                     if let Some(&first) = grasps.first() {
                         self.select(session, first);
@@ -339,6 +409,7 @@ impl WorkbenchApp {
                     self.selection.session = Some(session);
                     self.selection.grasps = grasps;
                     self.selection.origin = origin;
+                    self.selection.result = result;
                     self.browser.active = session;
                 }
                 Command::Focus { session, grasp } => self.select(session, grasp),
@@ -351,9 +422,7 @@ impl WorkbenchApp {
                     strength,
                 } => self.selection.strength = Some((result, figure, strength)),
                 Command::ClearSelection => {
-                    self.selection.grasps.clear();
-                    self.selection.session = None;
-                    self.selection.origin.clear();
+                    self.selection.clear_set();
                     self.browser.only_selection = false;
                 }
                 Command::OpenResult(i) => {
@@ -512,7 +581,7 @@ impl WorkbenchApp {
                 .get(s)
                 .is_some_and(|x| g < x.session.grasps.len())
         {
-            self.selection.focus = Some((s, g));
+            self.select(s, g);
         }
         // A first start shows something: the first grasp of the first session.
         if !self.is_loading()
@@ -523,28 +592,30 @@ impl WorkbenchApp {
                 .first()
                 .is_some_and(|s| !s.session.grasps.is_empty())
         {
-            self.selection.focus = Some((0, 0));
+            self.select(0, 0);
         }
-        if let Some((kind, rx)) = &self.dialog
+        if let Some((purpose, rx)) = &self.dialog
             && let Ok(paths) = rx.try_recv()
         {
-            let kind = *kind;
+            let purpose = *purpose;
             self.dialog = None;
-            for p in paths {
-                match kind {
-                    Dialog::Sessions | Dialog::Folder => self.open_path(p, ctx),
-                    Dialog::OpenProject => self.analyses.open_project(ctx, p),
-                    Dialog::SaveProject => {
-                        let sessions = self.sessions.iter().map(|s| s.source.label()).collect();
-                        self.analyses.save_project(ctx, p, sessions);
-                    }
+            if paths.is_empty() {
+                // Cancelled, or no dialog on this machine: the in-app picker stays.
+                if let Some(p) = &mut self.picker {
+                    p.system_gave_nothing = true;
                 }
+            } else {
+                self.picker = None;
+                self.picked(purpose, paths, ctx);
             }
         }
         self.apply_commands(ctx);
         if self.analyses.poll() {
             ctx.request_repaint();
         }
+        self.scope_selection();
+        let sessions = self.sessions.iter().map(|s| s.source.label()).collect();
+        self.analyses.keep_if_changed(ctx, sessions);
         let now = ctx.input(|i| i.time);
         if self.analyses.notes.tick(now) {
             ctx.request_repaint_after(std::time::Duration::from_millis(100));
@@ -604,25 +675,70 @@ impl WorkbenchApp {
         }
     }
 
-    fn open_dialog(&mut self, kind: Dialog) {
+    /// Open, save or add what the user picked for `purpose`.
+    fn picked(&mut self, purpose: Purpose, paths: Vec<PathBuf>, ctx: &egui::Context) {
+        if let Some(p) = paths.first() {
+            let folder = if p.is_dir() {
+                Some(p.as_path())
+            } else {
+                p.parent()
+            };
+            self.last_folder = folder.map(std::path::Path::to_path_buf);
+        }
+        for p in paths {
+            match purpose {
+                Purpose::Sessions | Purpose::Folder => self.open_path(p, ctx),
+                Purpose::OpenProject => self.analyses.open_project(ctx, p),
+                Purpose::SaveProject => {
+                    let sessions = self.sessions.iter().map(|s| s.source.label()).collect();
+                    self.analyses.save_project(ctx, p, sessions);
+                }
+            }
+        }
+    }
+
+    /// Open the in-app picker for `purpose` on its default location: the folder last used
+    /// (for sessions, that of the most recent file), else the working folder.
+    pub fn open_picker(&mut self, purpose: Purpose) {
+        let recent = self
+            .recent
+            .first()
+            .and_then(|p| p.parent())
+            .map(|p| p.to_path_buf());
+        let folder = match purpose {
+            Purpose::Sessions | Purpose::Folder => recent.or_else(|| self.last_folder.clone()),
+            Purpose::OpenProject | Purpose::SaveProject => self.last_folder.clone().or(recent),
+        }
+        .filter(|d| d.is_dir())
+        .or_else(|| std::env::current_dir().ok())
+        .unwrap_or_else(|| PathBuf::from("."));
+        let start = match purpose {
+            Purpose::SaveProject => folder.join("project.json"),
+            _ => folder,
+        };
+        self.picker = Some(FilePicker::new(purpose, start));
+    }
+
+    /// The system file dialog for `purpose`, on a thread of its own.
+    fn open_dialog(&mut self, purpose: Purpose) {
         let (tx, rx) = channel();
-        self.dialog = Some((kind, rx));
+        self.dialog = Some((purpose, rx));
         // The portal dialog blocks its thread; keep it off the UI thread.
         std::thread::spawn(move || {
             let dialog = rfd::FileDialog::new();
-            let picked = match kind {
-                Dialog::Folder => dialog.pick_folder().map(|p| vec![p]),
-                Dialog::Sessions => dialog
+            let picked = match purpose {
+                Purpose::Folder => dialog.pick_folder().map(|p| vec![p]),
+                Purpose::Sessions => dialog
                     .add_filter(
                         "Sessions, datasets and recordings",
                         &["json", "csv", "mcap"],
                     )
                     .pick_files(),
-                Dialog::OpenProject => dialog
+                Purpose::OpenProject => dialog
                     .add_filter("Projects", &["json"])
                     .pick_file()
                     .map(|p| vec![p]),
-                Dialog::SaveProject => dialog
+                Purpose::SaveProject => dialog
                     .add_filter("Projects", &["json"])
                     .set_file_name("project.json")
                     .save_file()
@@ -632,24 +748,44 @@ impl WorkbenchApp {
         });
     }
 
+    /// The in-app picker, when open.
+    fn picker_ui(&mut self, ctx: &egui::Context) {
+        let Some(picker) = &mut self.picker else {
+            return;
+        };
+        let purpose = picker.purpose;
+        match picker.show(ctx, &mut self.analyses.notes) {
+            Picked::None => {}
+            Picked::Cancel => self.picker = None,
+            Picked::System => {
+                picker.system_gave_nothing = false;
+                self.open_dialog(purpose);
+            }
+            Picked::Paths(paths) => {
+                self.picker = None;
+                self.picked(purpose, paths, ctx);
+            }
+        }
+    }
+
     fn menu(&mut self, ui: &mut egui::Ui) {
         egui::MenuBar::new().ui(ui, |ui| {
             ui.menu_button("File", |ui| {
                 if ui.button("Open sessions…").clicked() {
-                    self.open_dialog(Dialog::Sessions);
+                    self.open_picker(Purpose::Sessions);
                 }
                 if ui
                     .button("Open folder (iCub dataset or ROS 2 bag)…")
                     .clicked()
                 {
-                    self.open_dialog(Dialog::Folder);
+                    self.open_picker(Purpose::Folder);
                 }
                 ui.separator();
                 if ui.button("Open project…").clicked() {
-                    self.open_dialog(Dialog::OpenProject);
+                    self.open_picker(Purpose::OpenProject);
                 }
                 if ui.button("Save project…").clicked() {
-                    self.open_dialog(Dialog::SaveProject);
+                    self.open_picker(Purpose::SaveProject);
                 }
                 if ui.button("Export all figures").clicked() {
                     self.analyses.export_all(ui.ctx());
@@ -704,9 +840,13 @@ impl WorkbenchApp {
         if self.analyses.busy() {
             egui::Panel::bottom("jobs").show(ui, |ui| self.analyses.jobs_ui(ui));
         }
+        // Side panels keep to a share of the window, whatever a section opened in them
+        // holds, so the tiles keep their room at 1000 × 700 too.
+        let width = ui.available_width();
         egui::Panel::left("browser")
             .resizable(true)
-            .default_size(300.0)
+            .default_size(300.0_f32.min(width * 0.26))
+            .max_size((width * 0.3).max(200.0))
             .show(ui, |ui| {
                 match self.browser.ui(ui, &self.sessions, &self.selection) {
                     BrowserAction::Select(g) => {
@@ -727,7 +867,8 @@ impl WorkbenchApp {
         if view != View::Replay && *form_open {
             egui::Panel::right("form")
                 .resizable(true)
-                .default_size(250.0)
+                .default_size(250.0_f32.min(width * 0.22))
+                .max_size((width * 0.3).max(200.0))
                 .show(ui, |ui| {
                     egui::ScrollArea::vertical().show(ui, |ui| {
                         room.form_ui(ui, &mut cx);
@@ -760,6 +901,7 @@ impl WorkbenchApp {
         if let Some(source) = self.import.show(&ctx) {
             self.open(source, &ctx);
         }
+        self.picker_ui(&ctx);
     }
 }
 
@@ -888,6 +1030,12 @@ pub fn run(
             let mut app = WorkbenchApp::new(&cc.egui_ctx, persisted, files);
             if let Some(v) = view {
                 app.view = v;
+            }
+            // A measurement neither reads nor overwrites the results kept between runs.
+            if measure.is_none()
+                && let Some(dir) = eframe::storage_dir("Tactile Workbench")
+            {
+                app.keep_results_in(&cc.egui_ctx, dir);
             }
             Ok(Box::new(EframeApp {
                 app,

@@ -99,7 +99,10 @@ impl Notifications {
                 .order(egui::Order::Foreground)
                 .interactable(true)
                 .show(ctx, |ui| {
-                    ui.set_max_width(420.0);
+                    // Never wider than the window: long messages wrap instead of running off
+                    // its left edge.
+                    let width = (ctx.content_rect().width() - 48.0).clamp(120.0, 420.0);
+                    ui.set_max_width(width);
                     for i in toasts {
                         let e = &mut self.log[i];
                         // Fade over the last second of an informational toast.
@@ -111,16 +114,16 @@ impl Notifications {
                         };
                         let frame = egui::Frame::popup(ui.style()).multiply_with_opacity(alpha);
                         frame.show(ui, |ui| {
-                            ui.horizontal(|ui| {
-                                let color = match e.level {
-                                    Level::Info => ui.visuals().text_color(),
-                                    Level::Error => ui.visuals().error_fg_color,
-                                };
-                                ui.label(RichText::new(&e.text).color(color.gamma_multiply(alpha)));
-                                if ui.small_button("Dismiss").clicked() {
-                                    e.toast = false;
-                                }
-                            });
+                            ui.set_max_width(width);
+                            let color = match e.level {
+                                Level::Info => ui.visuals().text_color(),
+                                Level::Error => ui.visuals().error_fg_color,
+                            };
+                            let text = RichText::new(&e.text).color(color.gamma_multiply(alpha));
+                            ui.add(egui::Label::new(text).wrap());
+                            if ui.small_button("Dismiss").clicked() {
+                                e.toast = false;
+                            }
                         });
                     }
                 });

@@ -17,9 +17,10 @@ use crate::session::{Grasp, Session};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum ColourRange {
     /// The whole session: colours mean the same in every grasp.
-    #[default]
     Session,
-    /// This grasp: its contact pattern shows even when its pressures stay low.
+    /// This grasp: its contact pattern shows even when its pressures stay low (a session's
+    /// range is set by its hardest grasp and leaves the others dim).
+    #[default]
     Grasp,
     /// This frame alone.
     Frame,
@@ -98,7 +99,7 @@ impl Default for Replay {
             speed: 1.0,
             stat: 0,
             learner: default_learner(),
-            colours: ColourRange::Session,
+            colours: ColourRange::default(),
             change: false,
             carry: 0.0,
         }
@@ -117,10 +118,25 @@ pub enum ReplayAction {
 }
 
 impl Replay {
+    /// Back to the first frame, stopped (a replay from the start).
     pub fn reset(&mut self) {
-        self.frame = 0;
+        self.open_at(0);
+    }
+
+    /// Stopped at `frame`: a newly focused grasp opens at its key frame, where the touch is.
+    pub fn open_at(&mut self, frame: usize) {
+        self.frame = frame;
         self.playing = false;
         self.carry = 0.0;
+    }
+
+    /// Go to the frame nearest time `t` (seconds) among `times`, stopped.
+    pub fn seek(&mut self, t: f64, times: &[f64]) {
+        let nearest =
+            (0..times.len()).min_by(|&a, &b| (times[a] - t).abs().total_cmp(&(times[b] - t).abs()));
+        if let Some(k) = nearest {
+            self.open_at(k);
+        }
     }
 
     pub fn step(&mut self, delta: isize, n_frames: usize) {
@@ -189,7 +205,7 @@ impl Replay {
             g.trial.map(|t| format!(" #{t}")).unwrap_or_default()
         ));
 
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             if ui
                 .button("Step back")
                 .on_hover_text("Left arrow key")
@@ -215,13 +231,13 @@ impl Replay {
                         ui.selectable_value(&mut self.speed, sp, format!("{sp}×"));
                     }
                 });
-            let mut frame = self.frame;
+            // Numbered from 1, as everywhere the frame is shown.
+            let mut frame = self.frame + 1;
             if ui
-                .add(egui::Slider::new(&mut frame, 0..=n - 1).text("frame index"))
+                .add(egui::Slider::new(&mut frame, 1..=n).text("frame"))
                 .changed()
             {
-                self.frame = frame;
-                self.playing = false;
+                self.open_at(frame - 1);
             }
         });
         let f = &g.frames[self.frame];
@@ -278,7 +294,7 @@ impl Replay {
         };
         // The heatmaps grow with the tile: one column per sensor, beside a colour bar.
         let sensors = session.sensors.len().max(1) as f32;
-        let width = ((ui.available_width() - 140.0) / sensors - 8.0).clamp(60.0, 420.0);
+        let width = ((ui.available_width() - 140.0) / sensors - 8.0).clamp(40.0, 420.0);
         let height = (width * 1.3).min((ui.available_height() * 0.45).max(120.0));
         let cell = Vec2::new(width, height);
         let title = format!(
@@ -286,7 +302,7 @@ impl Replay {
             if self.change { "change" } else { "pressure" },
             self.colours.text()
         );
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             for (k, sensor) in session.sensors.iter().enumerate() {
                 ui.vertical(|ui| {
                     ui.label(format!(
@@ -306,7 +322,7 @@ impl Replay {
             class_distribution(ui, &t.trace, self.frame, 160.0);
         }
         if session.label_set("object").is_some() && !session.encoders.is_empty() {
-            ui.horizontal(|ui| {
+            ui.horizontal_wrapped(|ui| {
                 ComboBox::from_label("Recognition learner")
                     .selected_text(format!("{:?}", self.learner).to_uppercase())
                     .show_ui(ui, |ui| {
@@ -327,11 +343,14 @@ impl Replay {
 
         ui.separator();
         let t_now = f.t;
+        let times: Vec<f64> = g.frames.iter().map(|fr| fr.t).collect();
+        let mut seek_to: Option<f64> = None;
         let height = ((ui.available_height() - 40.0) / 2.0).max(120.0);
         if !session.encoders.is_empty() {
             ui.label("Joint encoders");
-            Plot::new("encoder_trace")
+            let shown = Plot::new("encoder_trace")
                 .allow_scroll(false)
+                .allow_drag(false)
                 .height(height)
                 .legend(Legend::default())
                 .x_axis_label("time (s)")
@@ -344,6 +363,7 @@ impl Replay {
                     }
                     plot.vline(VLine::new("current frame", t_now));
                 });
+            seek_to = seek_to.or(trace_seek(&shown, "Joint encoders trace"));
         }
         ComboBox::from_label("Per-finger feature")
             .selected_text(FingerStats::NAMES[self.stat])
@@ -352,8 +372,9 @@ impl Replay {
                     ui.selectable_value(&mut self.stat, i, *name);
                 }
             });
-        Plot::new("finger_trace")
+        let shown = Plot::new("finger_trace")
             .allow_scroll(false)
+            .allow_drag(false)
             .height(height)
             .legend(Legend::default())
             .x_axis_label("time (s)")
@@ -372,8 +393,24 @@ impl Replay {
                 }
                 plot.vline(VLine::new("current frame", t_now));
             });
+        seek_to = seek_to.or(trace_seek(&shown, "Per-finger feature trace"));
+        if let Some(t) = seek_to {
+            self.seek(t, &times);
+        }
         action
     }
+}
+
+/// The time a click or a drag on a trace points at (the trace is named `label` for
+/// assistive technology); the cursor follows it.
+fn trace_seek<R>(shown: &egui_plot::PlotResponse<R>, label: &str) -> Option<f64> {
+    let r = &shown.response;
+    r.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Image, true, label));
+    if !(r.clicked() || r.dragged()) {
+        return None;
+    }
+    let pos = r.interact_pointer_pos()?;
+    Some(shown.transform.value_from_position(pos).x)
 }
 
 /// The learner's class distribution at the current step (bars), decided class marked.

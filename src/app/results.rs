@@ -18,6 +18,7 @@ use crate::experiments::recognition::{
 use crate::experiments::result::{self, AnalysisKind, AnalysisResult, date_text};
 use crate::features::FeatureSet;
 use crate::figures::{self, Format, RenderOptions};
+use crate::jobs::estimate::Timings;
 use crate::jobs::{Job, JobError, Outcome};
 
 /// How a frontier job's title starts (one frontier runs at a time).
@@ -28,6 +29,9 @@ pub struct RunningJob {
     pub kind: Option<AnalysisKind>,
     pub title: String,
     pub job: Job<JobOutput>,
+    /// The kind of run for the timings and the seconds its model expected (a run that
+    /// finishes corrects the expectation of the next).
+    pub timing: Option<(String, f64)>,
 }
 
 pub enum JobOutput {
@@ -35,6 +39,10 @@ pub enum JobOutput {
     Frontier(Box<Frontier>),
     Message(String),
     Project(crate::experiments::project::Project),
+    /// The results kept by an earlier run, back.
+    Restored(crate::experiments::project::Project),
+    /// The results were written to the data folder.
+    Kept,
     Trace(Box<ReplayTrace>),
 }
 
@@ -75,18 +83,19 @@ impl ExportSettings {
         }
     }
 
-    /// The folder, size and DPI form.
+    /// The folder, size and DPI form, laid out down the panel so that opening it never
+    /// widens the panel.
     pub fn ui(&mut self, ui: &mut egui::Ui) {
-        ui.horizontal(|ui| {
-            let caption = ui.label("Export folder");
-            let mut dir = self.dir.display().to_string();
-            if ui
-                .text_edit_singleline(&mut dir)
-                .labelled_by(caption.id)
-                .changed()
-            {
-                self.dir = PathBuf::from(dir);
-            }
+        let caption = ui.label("Export folder");
+        let mut dir = self.dir.display().to_string();
+        if ui
+            .add(egui::TextEdit::singleline(&mut dir).desired_width(ui.available_width()))
+            .labelled_by(caption.id)
+            .changed()
+        {
+            self.dir = PathBuf::from(dir);
+        }
+        ui.horizontal_wrapped(|ui| {
             ui.add(
                 egui::DragValue::new(&mut self.width)
                     .range(200..=6000)
@@ -159,7 +168,16 @@ pub struct Analyses {
     /// Projects that just opened: the sessions each names (for the app to reopen) and the
     /// session of its first result.
     pub opened_projects: Vec<(Vec<String>, Option<String>)>,
+    /// Measured corrections of the expected run times on this machine.
+    pub timings: Timings,
+    /// The file in the data folder that keeps the results between runs (none: not kept).
+    pub keep: Option<PathBuf>,
+    /// The results changed since they were last kept.
+    keep_pending: bool,
 }
+
+/// The title of the job that keeps the results in the data folder.
+const KEEP_JOB: &str = "Keeping the results";
 
 impl Analyses {
     pub fn busy(&self) -> bool {
@@ -182,11 +200,40 @@ impl Analyses {
             }
             let mut rj = self.jobs.remove(i);
             changed = true;
-            match rj.job.take() {
+            let outcome = rj.job.take();
+            if let (Some(Outcome::Done(_)), Some((kind, modelled))) = (&outcome, &rj.timing) {
+                self.timings
+                    .record(kind, *modelled, rj.job.progress.elapsed_secs());
+            }
+            match outcome {
                 Some(Outcome::Done(JobOutput::Result(r))) => {
                     let kind = r.kind;
                     self.results.push(*r);
                     self.shown.insert(kind, self.results.len() - 1);
+                    self.keep_pending = true;
+                }
+                Some(Outcome::Done(JobOutput::Kept)) => {}
+                Some(Outcome::Done(JobOutput::Restored(p))) => {
+                    // Appended: indices held by the views stay valid; a frontier computed
+                    // meanwhile is newer than the kept one.
+                    let n = p.results.len();
+                    self.results.extend(p.results);
+                    for f in p.frontiers {
+                        let same = |g: &Frontier| {
+                            g.session == f.session
+                                && g.params.method == f.params.method
+                                && g.params.features == f.params.features
+                        };
+                        if !self.frontiers.iter().any(same) {
+                            self.frontiers.push(f);
+                        }
+                    }
+                    if n > 0 {
+                        self.notes.info(format!(
+                            "{n} result{} of the last run reopened",
+                            if n == 1 { "" } else { "s" }
+                        ));
+                    }
                 }
                 Some(Outcome::Done(JobOutput::Frontier(f))) => {
                     let rec = &f.points[f.recommended];
@@ -199,6 +246,7 @@ impl Analyses {
                         rec.score_se
                     ));
                     self.add_frontier(*f);
+                    self.keep_pending = true;
                 }
                 Some(Outcome::Done(JobOutput::Message(m))) => self.notes.info(m),
                 Some(Outcome::Done(JobOutput::Trace(t))) => self.trace = Some(*t),
@@ -215,6 +263,7 @@ impl Analyses {
                         self.add_frontier(f);
                     }
                     self.opened_projects.push((p.sessions, first));
+                    self.keep_pending = true;
                 }
                 Some(Outcome::Cancelled) => self.notes.info(format!("{}: cancelled", rj.title)),
                 Some(Outcome::Failed(e)) => self.notes.error(format!("{} failed: {e}", rj.title)),
@@ -222,6 +271,43 @@ impl Analyses {
             }
         }
         changed
+    }
+
+    /// Read the results an earlier run kept in `path` (in the background).
+    pub fn restore_results(&mut self, ctx: &egui::Context, path: PathBuf) {
+        self.spawn(
+            ctx,
+            None,
+            "Reopening the last run's results".into(),
+            move |_| {
+                let project = project::Project::load(&path).map_err(JobError::failed)?;
+                Ok(JobOutput::Restored(project))
+            },
+        );
+    }
+
+    /// Write the results (with `sessions`, their sources) to the data folder once they have
+    /// changed and no earlier write is still running; atomically, so a crash mid-write leaves
+    /// the previous file.
+    pub fn keep_if_changed(&mut self, ctx: &egui::Context, sessions: Vec<String>) {
+        let Some(path) = self.keep.clone() else {
+            return;
+        };
+        let restoring = self.jobs.iter().any(|j| j.title.starts_with("Reopening"));
+        if !self.keep_pending || restoring || self.jobs.iter().any(|j| j.title == KEEP_JOB) {
+            return;
+        }
+        self.keep_pending = false;
+        let project = project::Project::new(sessions, self.results.clone())
+            .with_frontiers(self.frontiers.clone());
+        self.spawn(ctx, None, KEEP_JOB.into(), move |_| {
+            if let Some(dir) = path.parent() {
+                std::fs::create_dir_all(dir)
+                    .map_err(|e| JobError::failed(format!("{}: {e}", dir.display())))?;
+            }
+            project.save(&path).map_err(JobError::failed)?;
+            Ok(JobOutput::Kept)
+        });
     }
 
     /// Keep `f`, replacing the frontier of the same session, method and features.
@@ -265,7 +351,32 @@ impl Analyses {
     ) {
         let c = ctx.clone();
         let job = Job::spawn(title.clone(), move || c.request_repaint(), work);
-        self.jobs.push(RunningJob { kind, title, job });
+        self.jobs.push(RunningJob {
+            kind,
+            title,
+            job,
+            timing: None,
+        });
+    }
+
+    /// Spawn a run of the timed kind `timing` whose model expects `modelled` seconds: its
+    /// time left starts from the expectation measured on this machine, and its time, once
+    /// done, corrects the next.
+    pub fn spawn_timed(
+        &mut self,
+        ctx: &egui::Context,
+        kind: AnalysisKind,
+        title: String,
+        (timing, modelled): (String, f64),
+        work: impl FnOnce(&crate::jobs::Progress) -> Result<JobOutput, JobError> + Send + 'static,
+    ) {
+        self.spawn(ctx, Some(kind), title, work);
+        if let Some(rj) = self.jobs.last_mut() {
+            rj.job
+                .progress
+                .set_expected(self.timings.expected(&timing, modelled));
+            rj.timing = Some((timing, modelled));
+        }
     }
 
     /// The jobs strip: what runs, how far, time left, Cancel.
@@ -274,10 +385,12 @@ impl Analyses {
             ui.horizontal(|ui| {
                 ui.label(&rj.title);
                 let p = &rj.job.progress;
-                let eta = p
-                    .eta_secs()
-                    .map(|s| format!(", about {s:.0} s left"))
-                    .unwrap_or_default();
+                let eta = match p.eta_secs() {
+                    Some(s) if s < 1.0 => ", finishing".to_string(),
+                    Some(s) if s < 90.0 => format!(", about {s:.0} s left"),
+                    Some(s) => format!(", about {:.0} min left", s / 60.0),
+                    None => String::new(),
+                };
                 ui.add(
                     ProgressBar::new(p.fraction() as f32)
                         .desired_width(480.0)

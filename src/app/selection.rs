@@ -20,6 +20,8 @@ pub struct Selection {
     pub focus: Option<(usize, usize)>,
     /// Where the set came from, in words ("confusion cell: true failure, predicted success").
     pub origin: String,
+    /// The result whose figure the set came from (index into the results), if any.
+    pub result: Option<usize>,
     /// A focused basis of a stability result: (result index, basis).
     pub basis: Option<(usize, usize)>,
     /// A perturbation strength chosen on a robustness chart: (result index, figure, strength).
@@ -31,15 +33,37 @@ impl Selection {
         self.session == Some(session) && self.grasps.contains(&grasp)
     }
 
+    /// Clear the selected set (the focus stays).
+    pub fn clear_set(&mut self) {
+        self.session = None;
+        self.grasps.clear();
+        self.origin.clear();
+        self.result = None;
+    }
+
+    /// Keep the selection to the active session and to the results the views show: a set of
+    /// another session, or from a result no longer shown (a new run, another result chosen),
+    /// goes, and so do a basis and a strength of a result no longer shown. `shown(i)` says
+    /// whether result `i` is the one its view shows for the active session.
+    pub fn scope(&mut self, active: usize, shown: impl Fn(usize) -> bool) {
+        let other_session = self.session.is_some_and(|s| s != active);
+        let other_result = self.result.is_some_and(|i| !shown(i));
+        if other_session || other_result {
+            self.clear_set();
+        }
+        if self.basis.is_some_and(|(i, _)| !shown(i)) {
+            self.basis = None;
+        }
+        if self.strength.as_ref().is_some_and(|(i, _, _)| !shown(*i)) {
+            self.strength = None;
+        }
+    }
+
     /// Sessions close: indices above `closed` shift down, a selection in it goes.
     pub fn session_closed(&mut self, closed: usize) {
         let shift = |s: usize| if s > closed { s - 1 } else { s };
         match self.session {
-            Some(s) if s == closed => {
-                self.session = None;
-                self.grasps.clear();
-                self.origin.clear();
-            }
+            Some(s) if s == closed => self.clear_set(),
             Some(s) => self.session = Some(shift(s)),
             None => {}
         }
@@ -54,11 +78,13 @@ impl Selection {
 /// A change a view asks for; applied by the app between frames.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Command {
-    /// Select these grasps of session `session` (the first is focused).
+    /// Select these grasps of session `session` (the first is focused), which came from a
+    /// figure of result `result`.
     SelectGrasps {
         session: usize,
         grasps: Vec<usize>,
         origin: String,
+        result: Option<usize>,
     },
     /// Focus (and replay) one grasp; the selected set stays.
     Focus { session: usize, grasp: usize },
@@ -118,5 +144,39 @@ impl ModelSpec {
             ModelSpec::Baselines { k: Some(k) } => format!("k {k}"),
             ModelSpec::Baselines { k: None } => "C × gamma grid".to_string(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn selected() -> Selection {
+        Selection {
+            session: Some(0),
+            grasps: vec![3, 5],
+            focus: Some((0, 3)),
+            origin: "basis 5".into(),
+            result: Some(2),
+            basis: Some((2, 4)),
+            strength: None,
+        }
+    }
+
+    #[test]
+    fn a_selection_goes_with_its_session_and_its_result() {
+        // Same session, its result still shown: it stays.
+        let mut s = selected();
+        s.scope(0, |i| i == 2);
+        assert_eq!(s, selected());
+        // Another session active: the set goes, the focus stays for the app to move.
+        let mut s = selected();
+        s.scope(1, |i| i == 2);
+        assert!(s.grasps.is_empty() && s.session.is_none() && s.origin.is_empty());
+        assert_eq!(s.focus, Some((0, 3)));
+        // A new result shown (a new run learned a new dictionary): the set and the basis go.
+        let mut s = selected();
+        s.scope(0, |i| i == 7);
+        assert!(s.grasps.is_empty() && s.basis.is_none());
     }
 }

@@ -1,5 +1,6 @@
-//! Background work: progress, cancellation, errors, worker threads.
+//! Background work: progress, cancellation, errors, worker threads, expected run times.
 
+pub mod estimate;
 mod progress;
 mod runner;
 

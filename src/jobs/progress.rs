@@ -18,6 +18,10 @@ struct Inner {
     cancelled: AtomicBool,
     message: Mutex<String>,
     started: Instant,
+    /// Seconds since the start when the fraction last moved.
+    moved_at_bits: AtomicU64,
+    /// Seconds the whole run is expected to take (NaN: no expectation).
+    expected_bits: AtomicU64,
 }
 
 /// A cheap, cloneable handle: the worker reports, the UI reads and may cancel.
@@ -40,6 +44,8 @@ impl Progress {
                 cancelled: AtomicBool::new(false),
                 message: Mutex::new(String::new()),
                 started: Instant::now(),
+                moved_at_bits: AtomicU64::new(0f64.to_bits()),
+                expected_bits: AtomicU64::new(f64::NAN.to_bits()),
             }),
         }
     }
@@ -58,9 +64,22 @@ impl Progress {
         } else {
             0.0
         };
-        self.inner
+        let before = self
+            .inner
             .fraction_bits
-            .store(f.to_bits(), Ordering::Relaxed);
+            .swap(f.to_bits(), Ordering::Relaxed);
+        if before != f.to_bits() {
+            self.inner
+                .moved_at_bits
+                .store(self.elapsed_secs().to_bits(), Ordering::Relaxed);
+        }
+    }
+
+    /// The whole run is expected to take `seconds` (from measurements of earlier runs).
+    pub fn set_expected(&self, seconds: f64) {
+        self.inner
+            .expected_bits
+            .store(seconds.to_bits(), Ordering::Relaxed);
     }
 
     pub fn fraction(&self) -> f64 {
@@ -96,10 +115,21 @@ impl Progress {
         self.inner.started.elapsed().as_secs_f64()
     }
 
-    /// Time left by linear extrapolation of the fraction done (None before any progress).
+    /// Time left: the expected time blended with what the part done says, counting down
+    /// between reports (see [`super::estimate::time_left`]); None before anything is known.
     pub fn eta_secs(&self) -> Option<f64> {
         let f = self.fraction();
-        (f > 1e-3 && f < 1.0).then(|| self.elapsed_secs() * (1.0 - f) / f)
+        if f >= 1.0 {
+            return None;
+        }
+        let expected = f64::from_bits(self.inner.expected_bits.load(Ordering::Relaxed));
+        let at = f64::from_bits(self.inner.moved_at_bits.load(Ordering::Relaxed));
+        super::estimate::time_left(
+            expected.is_finite().then_some(expected),
+            f,
+            at,
+            self.elapsed_secs(),
+        )
     }
 }
 

@@ -1,6 +1,6 @@
 //! Baselines: sequential k-means, a SOM and an RBF SVM on the per-grasp Table I features.
 
-use super::tiles::Pane;
+use super::pane::Pane;
 use super::{Cx, Room, duration_text, run_button};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
@@ -39,6 +39,12 @@ const SECONDS_PER_ORDER_GRASP: f64 = 0.0001;
 const SECONDS_PER_SVM_REPEAT_GRASP: f64 = 0.007;
 
 impl BaselinesForm {
+    /// The kind of run whose measured times correct [`Self::expected_seconds`]: with or
+    /// without the RBF SVM's grid.
+    pub fn timing(&self) -> String {
+        format!("baselines{}", if self.with_svm { " with SVM" } else { "" })
+    }
+
     pub fn expected_seconds(&self, grasps: usize) -> f64 {
         let g = grasps as f64;
         let svm = if self.with_svm { 2.0 } else { 0.0 };
@@ -65,7 +71,7 @@ impl Room for BaselinesRoom {
         ]
     }
 
-    fn run_text(&self, s: &LoadedSession, _analyses: &Analyses) -> Option<String> {
+    fn run_text(&self, s: &LoadedSession, analyses: &Analyses) -> Option<String> {
         if !recognition_ready(s) {
             return None;
         }
@@ -80,7 +86,11 @@ impl Room for BaselinesRoom {
                 ""
             },
             s.session.grasps.len(),
-            duration_text(f.expected_seconds(s.session.grasps.len()))
+            duration_text(
+                analyses
+                    .timings
+                    .expected(&f.timing(), f.expected_seconds(s.session.grasps.len()))
+            )
         ))
     }
 
@@ -110,10 +120,12 @@ impl Room for BaselinesRoom {
     fn start(&mut self, cx: &mut Cx) {
         let Some(s) = cx.session() else { return };
         let form = self.form.clone();
+        let timing = (form.timing(), form.expected_seconds(s.session.grasps.len()));
         let session = s.session.clone();
-        cx.spawn(
+        cx.spawn_timed(
             AnalysisKind::Baselines,
             format!("Baselines on {}", session.meta.name),
+            timing,
             move |p| {
                 let t0 = std::time::Instant::now();
                 let set = session

@@ -2,7 +2,7 @@
 //! against the threshold, NMI against effective clusters, and the true classes against the
 //! clusters at the threshold the marker selects, as tiles.
 
-use super::tiles::Pane;
+use super::pane::Pane;
 use super::{Cx, Room, duration_text, run_button};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
@@ -88,6 +88,12 @@ fn seconds_per_step(learner: UnsupervisedLearner) -> f64 {
 }
 
 impl ClusteringForm {
+    /// The kind of run whose measured times correct [`Self::expected_seconds`]: DU and GU
+    /// cost differently.
+    pub fn timing(&self) -> String {
+        format!("clustering {:?}", self.learner)
+    }
+
     pub fn expected_seconds(&self, s: &LoadedSession) -> f64 {
         let steps: usize = s.session.grasps.iter().map(|g| g.frames.len()).sum();
         seconds_per_step(self.learner)
@@ -117,7 +123,7 @@ impl Room for ClusteringRoom {
         ]
     }
 
-    fn run_text(&self, s: &LoadedSession, _analyses: &Analyses) -> Option<String> {
+    fn run_text(&self, s: &LoadedSession, analyses: &Analyses) -> Option<String> {
         if !recognition_ready(s) {
             return None;
         }
@@ -132,7 +138,11 @@ impl Room for ClusteringRoom {
             f.reps,
             if f.reps == 1 { "" } else { "s" },
             s.session.grasps.len(),
-            duration_text(f.expected_seconds(s))
+            duration_text(
+                analyses
+                    .timings
+                    .expected(&f.timing(), f.expected_seconds(s))
+            )
         ))
     }
 
@@ -215,10 +225,12 @@ impl Room for ClusteringRoom {
     fn start(&mut self, cx: &mut Cx) {
         let Some(s) = cx.session() else { return };
         let f = self.form.clone();
+        let timing = (self.form.timing(), self.form.expected_seconds(s));
         let session = s.session.clone();
-        cx.spawn(
+        cx.spawn_timed(
             AnalysisKind::Clustering,
             format!("Clustering on {}", session.meta.name),
+            timing,
             move |p| {
                 let r = run_clustering(&session, &f.params(), p).map_err(experiment_error)?;
                 Ok(JobOutput::Result(Box::new(clustering_report(

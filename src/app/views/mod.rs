@@ -5,6 +5,7 @@
 pub mod baselines;
 pub mod cluster;
 pub mod clustering;
+pub mod pane;
 pub mod panes;
 pub mod recognition;
 pub mod replay;
@@ -19,7 +20,8 @@ use super::replay::Replay;
 use super::results::Analyses;
 use super::selection::{Command, Selection};
 use crate::experiments::result::AnalysisKind;
-pub use tiles::{Layout, Pane};
+pub use pane::Pane;
+pub use tiles::Layout;
 
 /// What a room may read and ask for while it draws.
 pub struct Cx<'a> {
@@ -53,6 +55,23 @@ impl Cx<'_> {
     ) {
         let ctx = self.ctx.clone();
         self.analyses.spawn(&ctx, Some(kind), title, work);
+    }
+
+    /// Run `work` as a background job of analysis `kind`, a run of the timed kind `timing`
+    /// that its cost model puts at `modelled` seconds (see [`crate::jobs::estimate`]).
+    pub fn spawn_timed(
+        &mut self,
+        kind: AnalysisKind,
+        title: String,
+        timing: (String, f64),
+        work: impl FnOnce(
+            &crate::jobs::Progress,
+        ) -> Result<super::results::JobOutput, crate::jobs::JobError>
+        + Send
+        + 'static,
+    ) {
+        let ctx = self.ctx.clone();
+        self.analyses.spawn_timed(&ctx, kind, title, timing, work);
     }
 
     /// The result of `kind` shown for the active session (index into the results).
@@ -112,7 +131,39 @@ pub struct Rooms {
     pub robustness: robustness::RobustnessRoom,
 }
 
+/// Each room's form settings, as they persist between runs.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct Forms {
+    pub stability: stability::StabilityForm,
+    pub recognition: recognition::RecognitionForm,
+    pub clustering: clustering::ClusteringForm,
+    pub baselines: baselines::BaselinesForm,
+    pub robustness: robustness::RobustnessForm,
+}
+
 impl Rooms {
+    /// The rooms with their forms as they were left.
+    pub fn with_forms(f: Forms) -> Rooms {
+        let mut rooms = Rooms::default();
+        rooms.stability.form = f.stability;
+        rooms.recognition.form = f.recognition;
+        rooms.clustering.form = f.clustering;
+        rooms.baselines.form = f.baselines;
+        rooms.robustness.form = f.robustness;
+        rooms
+    }
+
+    pub fn forms(&self) -> Forms {
+        Forms {
+            stability: self.stability.form.clone(),
+            recognition: self.recognition.form.clone(),
+            clustering: self.clustering.form.clone(),
+            baselines: self.baselines.form.clone(),
+            robustness: self.robustness.form.clone(),
+        }
+    }
+
     pub fn get(&mut self, view: View) -> &mut dyn Room {
         match view {
             View::Replay => &mut self.replay,

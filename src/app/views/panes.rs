@@ -5,7 +5,7 @@
 use egui::RichText;
 use egui_tiles::TileId;
 
-use super::tiles::{Pane, TileRequest};
+use super::pane::{Pane, TileRequest};
 use super::{Cx, Room, number};
 use crate::app::figure_view::{self, Selection as FigureSelection};
 use crate::app::heatmap;
@@ -108,6 +108,8 @@ fn figure_pane(
         None => (None, None),
     };
     let mut requests = requests;
+    // A pinned result's selection is scoped to its session only: it is not the shown result.
+    let pinned = tile.is_none();
     ui.horizontal(|ui| {
         export = ui
             .small_button("Export")
@@ -138,6 +140,8 @@ fn figure_pane(
     }
     let r = &cx.analyses.results[i];
     let id = format!("{i}-{name}");
+    // A solid scroll bar says there is more below (the floating one shows only on hover).
+    ui.spacing_mut().scroll = egui::style::ScrollStyle::solid();
     let height = (ui.available_height() - 40.0).max(120.0);
     let linked_cells =
         r.links_of(name, None).is_some() && matches!(fig.kind, FigureKind::Heatmap(_));
@@ -159,7 +163,7 @@ fn figure_pane(
             .inner;
         if let Some(at) = act.clicked_cell {
             cx.analyses.cells.insert(key, at);
-            select_linked(cx, i, name, None, at);
+            select_linked(cx, i, name, None, at, pinned);
             if let Some(requests) = requests {
                 requests.push(TileRequest::Activate(Pane::Grasp));
             }
@@ -219,7 +223,7 @@ fn figure_pane(
             result: i,
             basis: k,
         });
-        select_linked(cx, i, name, None, [k, 0]);
+        select_linked(cx, i, name, None, [k, 0], pinned);
     }
     if (act.clicked_image.is_some() || act.marker_x.is_some())
         && let Some(requests) = requests
@@ -280,12 +284,20 @@ fn detail_pane(ui: &mut egui::Ui, cx: &mut Cx, i: usize, name: &str) {
         .inner;
     if let Some(at) = act.clicked_cell {
         cx.analyses.cells.insert(key, at);
-        select_linked(cx, i, name, Some(k), at);
+        select_linked(cx, i, name, Some(k), at, false);
     }
 }
 
-/// Select the grasps behind part `at` of figure `name` (detail item `detail`) of result `i`.
-fn select_linked(cx: &mut Cx, i: usize, name: &str, detail: Option<usize>, at: [usize; 2]) {
+/// Select the grasps behind part `at` of figure `name` (detail item `detail`) of result `i`
+/// (`pinned`: a result kept beside the shown one).
+fn select_linked(
+    cx: &mut Cx,
+    i: usize,
+    name: &str,
+    detail: Option<usize>,
+    at: [usize; 2],
+    pinned: bool,
+) {
     let r = &cx.analyses.results[i];
     let Some(session) = cx
         .sessions
@@ -311,6 +323,7 @@ fn select_linked(cx: &mut Cx, i: usize, name: &str, detail: Option<usize>, at: [
         session,
         grasps,
         origin,
+        result: (!pinned).then_some(i),
     });
 }
 
@@ -417,14 +430,23 @@ fn grasp_pane(ui: &mut egui::Ui, cx: &mut Cx, i: usize) {
         } else {
             text.color(ui.visuals().error_fg_color)
         });
-        ui.label(format!("decision value {:+.3}", code.decision))
-            .on_hover_text("The SVM's decision from the 10-fold fold that tested this grasp: positive predicts failure");
+        ui.label(format!(
+            "decision value {:+.3} (> 0 predicts failure, ≤ 0 success)",
+            code.decision
+        ))
+        .on_hover_text(
+            "The linear SVM's decision value from the 10-fold fold that tested this grasp",
+        );
     });
+    // Patch and reconstruction side by side for every sensor, fitted to the tile's width
+    // (and wrapped onto more rows when even the smallest heatmaps do not fit).
     let n_sensors = code.patches.len().max(1) as f32;
-    let width = ((ui.available_width() - 40.0) / (2.0 * n_sensors) - 8.0).clamp(50.0, 220.0);
+    let gap = ui.spacing().item_spacing.x;
+    let width = ((ui.available_width() - 24.0) / (2.0 * n_sensors) - gap).clamp(40.0, 220.0);
     let size = egui::vec2(width, width * 1.3);
+    ui.spacing_mut().scroll = egui::style::ScrollStyle::solid();
     egui::ScrollArea::vertical().show(ui, |ui| {
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             for p in &code.patches {
                 let Some(sensor) = session.sensors.get(p.sensor) else {
                     continue;
@@ -435,15 +457,21 @@ fn grasp_pane(ui: &mut egui::Ui, cx: &mut Cx, i: usize) {
                     .chain(&p.reconstruction)
                     .fold(1e-9_f64, |m, v| m.max(v.abs()));
                 let range = (-m, m);
+                // Captions wrap to their heatmap's width so a column is never wider.
                 ui.vertical(|ui| {
-                    ui.label(format!("{}: patch", sensor.name));
+                    ui.set_max_width(size.x);
+                    ui.add(egui::Label::new(format!("{}: patch", sensor.name)).wrap());
                     heatmap::sensor_heatmap(ui, sensor, &p.patch, range, ColorMap::Diverging, size);
                 });
                 ui.vertical(|ui| {
-                    ui.label(format!(
-                        "reconstruction ({:.0} % error)",
-                        100.0 * p.relative_error
-                    ));
+                    ui.set_max_width(size.x);
+                    ui.add(
+                        egui::Label::new(format!(
+                            "reconstruction ({:.0} % error)",
+                            100.0 * p.relative_error
+                        ))
+                        .wrap(),
+                    );
                     heatmap::sensor_heatmap(
                         ui,
                         sensor,
@@ -480,8 +508,12 @@ fn grasp_pane(ui: &mut egui::Ui, cx: &mut Cx, i: usize) {
 
 /// The focused grasp's replay, sized to the tile.
 pub fn replay_pane(ui: &mut egui::Ui, cx: &mut Cx) {
-    let Some((s, g)) = cx.selection.focus.filter(|(s, _)| *s < cx.sessions.len()) else {
-        ui.label("Select a grasp (in the browser, or by clicking a figure) to replay it here.");
+    // Only a grasp of the view's session (the active one) plays here.
+    let Some((s, g)) = cx.selection.focus.filter(|&(s, _)| s == cx.active) else {
+        let name = cx.session().map_or("", |s| s.session.meta.name.as_str());
+        ui.label(format!(
+            "Select a grasp of «{name}» (in the browser, or by clicking a figure) to replay it here."
+        ));
         return;
     };
     let action = cx
@@ -559,18 +591,24 @@ pub fn selection_line(ui: &mut egui::Ui, cx: &mut Cx) {
     });
 }
 
-/// At most six numbers that sum a result up: its headline first, then its first scores,
-/// then the training time.
+/// What a learner's result is compared against: the card of a learner's result (DU, GU)
+/// does not show these methods' numbers as its own.
+const COMPARED_WITH: [&str; 2] = ["sequential k-means", "SOM"];
+
+/// At most six numbers that sum a result up: its headline first, then its first scores
+/// (a learner's own, not those of the methods it is compared with), then the training time.
 pub fn headline(r: &AnalysisResult) -> Vec<(String, f64)> {
     let mut out: Vec<(String, f64)> = Vec::new();
     if let Some((n, v)) = &r.headline {
         out.push((n.clone(), *v));
     }
+    let learner = r.parameters.contains_key("learner");
+    let own = |n: &str| !learner || !COMPARED_WITH.iter().any(|m| n.starts_with(m));
     for (n, v) in &r.scores {
         if out.len() >= 5 {
             break;
         }
-        if !out.iter().any(|(m, _)| m == n) {
+        if own(n) && !out.iter().any(|(m, _)| m == n) {
             out.push((n.clone(), *v));
         }
     }

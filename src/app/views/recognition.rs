@@ -2,7 +2,7 @@
 //! features; accuracy as trials progress, the confusion matrix, early classification and
 //! lengthscale relevance as tiles, with every model of the session compared on one chart.
 
-use super::tiles::Pane;
+use super::pane::Pane;
 use super::{Cx, Room, duration_text, run_button};
 use crate::app::View;
 use crate::app::figure_view::{self, Selection as FigureSelection};
@@ -106,6 +106,12 @@ impl RecognitionForm {
         p
     }
 
+    /// The kind of run whose measured times correct [`Self::expected_seconds`]: DS and GS
+    /// cost differently.
+    pub fn timing(&self) -> String {
+        format!("recognition {:?}", self.learner)
+    }
+
     pub fn expected_seconds(&self, s: &LoadedSession) -> f64 {
         let steps: usize = s.session.grasps.iter().map(|g| g.frames.len()).sum();
         SECONDS_PER_STEP * steps as f64 * self.reps as f64
@@ -146,7 +152,11 @@ impl Room for RecognitionRoom {
             f.reps,
             if f.reps == 1 { "" } else { "s" },
             s.session.grasps.len(),
-            duration_text(f.expected_seconds(s))
+            duration_text(
+                analyses
+                    .timings
+                    .expected(&f.timing(), f.expected_seconds(s))
+            )
         ))
     }
 
@@ -240,10 +250,12 @@ impl Room for RecognitionRoom {
     fn start(&mut self, cx: &mut Cx) {
         let Some(s) = cx.session() else { return };
         let params = self.form.params(cx.analyses, &s.session.meta.name);
+        let timing = (self.form.timing(), self.form.expected_seconds(s));
         let session = s.session.clone();
-        cx.spawn(
+        cx.spawn_timed(
             AnalysisKind::Recognition,
             format!("Recognition on {}", session.meta.name),
+            timing,
             move |p| {
                 let r = run_recognition(&session, &params, p).map_err(experiment_error)?;
                 Ok(JobOutput::Result(Box::new(recognition_report(

@@ -2,7 +2,7 @@
 //! every analysis view can show beside its figures).
 
 use super::Room;
-use super::tiles::Pane;
+use super::pane::Pane;
 use crate::app::View;
 
 #[derive(Default)]

@@ -7,7 +7,7 @@ use crate::app::results::Analyses;
 use crate::catalogue::MethodId;
 use egui::RichText;
 
-use super::tiles::Pane;
+use super::pane::Pane;
 use super::{Cx, Room, duration_text};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
@@ -113,6 +113,12 @@ fn family_of(s: &LoadedSession) -> Option<Family> {
 /// sample (540 grasps). The recognition family's learners cost more per grasp.
 const SECONDS_PER_CELL_GRASP: f64 = 0.00011;
 
+/// The kind of run whose measured times correct [`RobustnessForm::expected_seconds`]: the
+/// families' methods cost differently.
+fn timing(family: Family) -> String {
+    format!("robustness {family:?}")
+}
+
 impl RobustnessForm {
     pub fn expected_seconds(&self, family: Family, grasps: usize) -> f64 {
         let p = self.params(family);
@@ -137,7 +143,7 @@ impl Room for RobustnessRoom {
         vec![vec![Pane::Scores]]
     }
 
-    fn run_text(&self, s: &LoadedSession, _analyses: &Analyses) -> Option<String> {
+    fn run_text(&self, s: &LoadedSession, analyses: &Analyses) -> Option<String> {
         let family = family_of(s)?;
         let p = self.form.params(family);
         p.validate().ok()?;
@@ -150,7 +156,10 @@ impl Room for RobustnessRoom {
             p.reps,
             if p.reps == 1 { "" } else { "s" },
             s.session.grasps.len(),
-            duration_text(self.form.expected_seconds(family, s.session.grasps.len()))
+            duration_text(analyses.timings.expected(
+                &timing(family),
+                self.form.expected_seconds(family, s.session.grasps.len())
+            ))
         ))
     }
 
@@ -224,10 +233,12 @@ impl Room for RobustnessRoom {
         let Some(s) = cx.session() else { return };
         let Some(family) = family_of(s) else { return };
         let params = self.form.params(family);
+        let modelled = self.form.expected_seconds(family, s.session.grasps.len());
         let session = s.session.clone();
-        cx.spawn(
+        cx.spawn_timed(
             AnalysisKind::Robustness,
             format!("Robustness sweep on {}", session.meta.name),
+            (timing(family), modelled),
             move |p| {
                 let r = run_robustness(&session, &params, p).map_err(experiment_error)?;
                 Ok(JobOutput::Result(Box::new(robustness_report(

@@ -2,7 +2,7 @@
 //! parsimonious choice; basis images, score against bases, usage differentials and confusion
 //! maps as tiles.
 
-use super::tiles::Pane;
+use super::pane::Pane;
 use super::{Cx, Room, duration_text, run_button};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
@@ -49,6 +49,9 @@ impl Default for StabilityForm {
 /// at 29 bases: `stability` on the grasp-stability sample (540 grasps, 29 bases) took 0.2 s
 /// on 2 cores; the dictionary's cost grows about linearly with the number of bases.
 const SECONDS_PER_GRASP_CONFIG: f64 = 0.0004;
+
+/// The kind of run whose measured times correct the model above.
+const TIMING: &str = "stability";
 
 impl StabilityForm {
     /// The single configuration the form runs with on `session` and why: the user's, else
@@ -168,7 +171,11 @@ impl Room for StabilityRoom {
         Some(format!(
             "Run: sparse coding + linear SVM on {} grasps, {what}; {}.",
             s.session.grasps.len(),
-            duration_text(f.expected_seconds(s.session.grasps.len()))
+            duration_text(
+                analyses
+                    .timings
+                    .expected(TIMING, f.expected_seconds(s.session.grasps.len()))
+            )
         ))
     }
 
@@ -262,10 +269,12 @@ impl Room for StabilityRoom {
     fn start(&mut self, cx: &mut Cx) {
         let Some(s) = cx.session() else { return };
         let options = self.form.options(cx.analyses, &s.session.meta.name);
+        let modelled = self.form.expected_seconds(s.session.grasps.len());
         let session = s.session.clone();
-        cx.spawn(
+        cx.spawn_timed(
             AnalysisKind::Stability,
             format!("Grasp stability on {}", session.meta.name),
+            (TIMING.into(), modelled),
             move |p| {
                 let data = StabilityData::from_session(&session, &DataOptions::default())
                     .map_err(JobError::failed)?;

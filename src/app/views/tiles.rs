@@ -7,79 +7,14 @@ use egui_tiles::{
 };
 use serde::{Deserialize, Serialize};
 
+use super::pane::TileRequest;
+// The rooms name their default panes through here.
+pub use super::pane::Pane;
 use super::{Cx, Room, panes};
 use crate::experiments::result::AnalysisResult;
 
-/// What a tile shows.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub enum Pane {
-    /// A figure of the result the view shows, by name.
-    Figure(String),
-    /// A figure of one chosen result, kept beside the shown one for comparison.
-    Pinned {
-        figure: String,
-        /// The result's creation time and label (together they name it).
-        created: u64,
-        label: String,
-    },
-    /// The detail figure selected through figure `0` (a basis, a threshold).
-    Detail(String),
-    /// Every number of the shown result.
-    Scores,
-    /// The replay of the focused grasp.
-    Replay,
-    /// The focused grasp as the shown stability model sees it: its key-frame patches, their
-    /// reconstructions and the SVM's decision.
-    Grasp,
-    /// Recognition: accuracy as trials progress across every model of the session.
-    Comparison,
-    /// Speed against accuracy over every result.
-    SpeedChart,
-    /// The models on the speed chart, to open.
-    Models,
-    /// The active session's speed–accuracy frontiers by model size.
-    Frontier,
-}
-
-impl Pane {
-    /// The tab title: short words from the figure's name (the figure's own title is drawn
-    /// inside the tile).
-    pub fn title(&self, result: Option<&AnalysisResult>) -> String {
-        match self {
-            Pane::Figure(name) => words(name),
-            Pane::Pinned { figure, label, .. } => format!("{} · {label}", words(figure)),
-            Pane::Detail(name) => result
-                .and_then(|r| r.details_of(name))
-                .map(|d| format!("Selected {}", d.selector))
-                .unwrap_or_else(|| format!("{} detail", words(name))),
-            Pane::Scores => "All numbers".into(),
-            Pane::Replay => "Replay".into(),
-            Pane::Grasp => "Focused grasp".into(),
-            Pane::Comparison => "Accuracy compared".into(),
-            Pane::SpeedChart => "All trained models".into(),
-            Pane::Models => "Models".into(),
-            Pane::Frontier => "Frontier by model size".into(),
-        }
-    }
-}
-
-/// "score-vs-bases" → "Score vs bases", "nmi-vs-effective" → "NMI vs effective".
-fn words(name: &str) -> String {
-    let s = name
-        .split('-')
-        .map(|w| match w {
-            "nmi" | "svm" | "ari" => w.to_uppercase(),
-            "kfold" => "10-fold".into(),
-            _ => w.to_string(),
-        })
-        .collect::<Vec<_>>()
-        .join(" ");
-    let mut c = s.chars();
-    match c.next() {
-        Some(f) => f.to_uppercase().chain(c).collect(),
-        None => s,
-    }
-}
+/// The smallest side of a tile (points).
+const MIN_TILE: f32 = 160.0;
 
 /// One view's tiles, as they persist between runs.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -214,15 +149,6 @@ impl Layout {
     }
 }
 
-/// What a pane asked of the layout this frame (applied after the tree is drawn).
-pub enum TileRequest {
-    Maximise(TileId),
-    /// Put this pane beside the tile.
-    AddBeside(Pane, TileId),
-    /// Bring this pane's tab to the front, if the layout has it.
-    Activate(Pane),
-}
-
 struct RoomTiles<'r, 'c, 'a> {
     room: &'r mut dyn Room,
     cx: &'c mut Cx<'a>,
@@ -284,6 +210,11 @@ impl Behavior<Pane> for RoomTiles<'_, '_, '_> {
 
     fn gap_width(&self, _style: &egui::Style) -> f32 {
         4.0
+    }
+
+    /// No tile is squeezed below a readable size (a chart with its ticks, a 4 × 7 heatmap).
+    fn min_size(&self) -> f32 {
+        MIN_TILE
     }
 
     fn on_edit(&mut self, _action: EditAction) {

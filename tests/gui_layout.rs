@@ -1,0 +1,42 @@
+//! The layout holds in a small window (1000 × 700): a section opened in the form panel never
+//! widens it, and toasts stay inside the window.
+#![cfg(feature = "gui")]
+
+mod common;
+
+use egui_kittest::kittest::Queryable;
+use tactile_workbench::app::View;
+
+#[test]
+fn opening_export_settings_keeps_the_form_panel_width_and_toasts_stay_inside() {
+    let mut h = common::gui::workbench(1000.0, 700.0);
+    h.state_mut().view = View::Stability;
+    h.run_ok();
+    // The central panel's right edge is the form panel's left edge.
+    let before = h.get_by_label("Hide form").rect().right();
+    h.get_by_label("Export settings").click();
+    h.run_ok();
+    h.get_by_label("Export folder");
+    let after = h.get_by_label("Hide form").rect().right();
+    assert!(
+        (after - before).abs() < 1.0,
+        "the form panel grew from {} to {} px",
+        1000.0 - before,
+        1000.0 - after
+    );
+    assert!(
+        1000.0 - after <= 0.3 * 1000.0 + 1.0,
+        "at most 30 % of the window"
+    );
+
+    let long = "exported figures-export/Simulated_grasp_stability-score-vs-bases.svg, \
+                figures-export/Simulated_grasp_stability-score-vs-bases.png, \
+                figures-export/Simulated_grasp_stability-score-vs-bases.csv";
+    h.state_mut().analyses.notes.info(long);
+    h.run_ok();
+    let toast = h.get_by_label(long).rect();
+    assert!(
+        toast.left() >= 0.0 && toast.right() <= 1000.0 && toast.bottom() <= 700.0,
+        "the toast at {toast:?} leaves the window"
+    );
+}

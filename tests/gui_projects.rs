@@ -1,0 +1,156 @@
+//! Work is never lost: a project saves and opens through the in-app path field (no system
+//! dialog is needed), and the results of a run come back when the workbench restarts on the
+//! same data folder, with the forms as they were left.
+#![cfg(feature = "gui")]
+
+mod common;
+
+use std::path::Path;
+use std::time::Duration;
+
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+use tactile_workbench::app::{KEPT_RESULTS, Persisted, View, WorkbenchApp};
+
+use common::gui::wait_for_jobs;
+
+/// The workbench keeping its results in `data`, on `persisted` (the state of a last run).
+fn workbench(data: &Path, persisted: Option<Persisted>) -> Harness<'static, WorkbenchApp> {
+    let ctx = egui::Context::default();
+    let mut app = WorkbenchApp::new(&ctx, persisted, Vec::new());
+    app.keep_results_in(&ctx, data.to_path_buf());
+    let mut h = common::gui::harness_of(app, 1400.0, 900.0);
+    wait_for_jobs(&mut h, Duration::from_secs(60));
+    h
+}
+
+/// The picker's path field.
+fn path_field<'h>(h: &'h Harness<'static, WorkbenchApp>) -> egui_kittest::Node<'h> {
+    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "Path")
+}
+
+/// File > `item`, then `path` typed into the in-app picker's path field and confirmed.
+fn through_the_picker(h: &mut Harness<'static, WorkbenchApp>, item: &str, path: &Path, ok: &str) {
+    h.get_by_label("File").click();
+    h.run_ok();
+    h.get_by_label(item).click();
+    h.run_ok();
+    assert!(h.state().picker.is_some(), "{item} opens the in-app picker");
+    path_field(h).set_text_value_accesskit(&path.display().to_string());
+    h.run_ok();
+    h.get_by_label(ok).click();
+    h.run_ok();
+    assert!(h.state().picker.is_none(), "{ok} closes the picker");
+}
+
+fn run_baselines(h: &mut Harness<'static, WorkbenchApp>) {
+    h.get_by_label("Simulated object recognition").click();
+    h.run_ok();
+    h.get_by_label("Baselines").click();
+    h.run_ok();
+    h.get_by_label("orders").set_value_accesskit(2.0);
+    h.run_ok();
+    h.get_by_label("Run").click();
+    h.step();
+    h.step();
+    wait_for_jobs(h, Duration::from_secs(300));
+    assert_eq!(
+        h.state().analyses.results.len(),
+        1,
+        "{:?}",
+        h.state().analyses.notes.texts()
+    );
+}
+
+#[test]
+fn save_and_open_a_project_through_the_path_field_and_keep_results_across_a_restart() {
+    let data = common::temp_dir("gui-kept-results");
+    let folder = common::temp_dir("gui-project-folder");
+    let mut h = workbench(&data, None);
+    run_baselines(&mut h);
+    // Kept in the data folder as soon as the job finished.
+    assert!(
+        data.join(KEPT_RESULTS).is_file(),
+        "results kept in {}",
+        data.display()
+    );
+
+    // Save project: the field starts on a location, the folder is listed, Save writes it.
+    h.get_by_label("File").click();
+    h.run_ok();
+    h.get_by_label("Save project…").click();
+    h.run_ok();
+    let start = path_field(&h).value().unwrap_or_default();
+    assert!(start.ends_with("project.json"), "default location: {start}");
+    h.get_by_label("Cancel").click();
+    h.run_ok();
+    let saved = folder.join("saved.json");
+    through_the_picker(&mut h, "Save project…", &saved, "Save");
+    wait_for_jobs(&mut h, Duration::from_secs(60));
+    assert!(saved.is_file(), "{:?}", h.state().analyses.notes.texts());
+
+    // A path that cannot be used is a toast, and the picker stays for another try.
+    h.get_by_label("File").click();
+    h.run_ok();
+    h.get_by_label("Open project…").click();
+    h.run_ok();
+    path_field(&h).set_text_value_accesskit(&folder.join("absent.json").display().to_string());
+    h.run_ok();
+    h.get_by_label("Open").click();
+    h.run_ok();
+    h.get_by_label_contains("no such file");
+    assert!(h.state().picker.is_some());
+    // The listing of the folder shows the saved file; clicking it fills the path field.
+    h.get_by_label("saved.json").click();
+    h.run_ok();
+    h.get_by_label("Open").click();
+    h.run_ok();
+    assert!(h.state().picker.is_none());
+    wait_for_jobs(&mut h, Duration::from_secs(60));
+    assert_eq!(
+        h.state().analyses.results.len(),
+        2,
+        "the project's result added"
+    );
+
+    // A form setting to see after the restart.
+    h.get_by_label("Recognition").click();
+    h.run_ok();
+    h.get_by_label("repetitions").set_value_accesskit(3.0);
+    h.run_ok();
+    let persisted = h.state().persisted();
+    let kept = h.state().analyses.results.len();
+    drop(h);
+
+    // Restart on the same data folder: the results and the form are back.
+    let mut h = workbench(&data, Some(persisted));
+    assert_eq!(h.state().analyses.results.len(), kept);
+    assert_eq!(h.state().rooms.recognition.form.reps, 3);
+    h.get_by_label_contains("reopened");
+    h.get_by_label("Baselines").click();
+    h.run_ok();
+    assert_eq!(h.state().view, View::Baselines);
+    // The view shows the reopened result, not an offer to run.
+    assert!(
+        h.query_by_label_contains("No results yet").is_none(),
+        "active {} of {:?}; results on {:?}; {:?}",
+        h.state().browser.active,
+        h.state()
+            .sessions
+            .iter()
+            .map(|s| s.session.meta.name.clone())
+            .collect::<Vec<_>>(),
+        h.state()
+            .analyses
+            .results
+            .iter()
+            .map(|r| r.session.clone())
+            .collect::<Vec<_>>(),
+        h.state().analyses.notes.texts()
+    );
+    h.get_by_label("All numbers").click();
+    h.run_ok();
+    h.get_by_label("k-means NMI");
+    let _ = std::fs::remove_dir_all(data);
+    let _ = std::fs::remove_dir_all(folder);
+}
