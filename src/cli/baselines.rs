@@ -140,6 +140,7 @@ pub fn report(r: &BaselinesResult) -> String {
 }
 
 pub fn run(a: BaselinesArgs) -> anyhow::Result<()> {
+    super::refuse_input_as_output(a.json.as_deref(), &[&a.session])?;
     if a.som_rows * a.som_cols != a.k {
         bail!(
             "the SOM grid {} × {} must have k = {} units",

@@ -195,6 +195,7 @@ pub fn print_frontier(f: &Frontier) {
 }
 
 pub fn run(args: FrontierArgs) -> anyhow::Result<()> {
+    super::refuse_input_as_output(args.json.as_deref(), &[&args.session])?;
     let params = args.params()?;
     let session = open_session(&args.session)?;
     let mut frontiers = Vec::new();

@@ -105,6 +105,18 @@ pub enum Command {
     Sweep(sweep::SweepArgs),
 }
 
+/// Refuse, before any work, an output (`-o`, `--json`, `--project`, an output folder) that
+/// is one of the command's inputs: writing it would destroy the input.
+pub(crate) fn refuse_input_as_output(
+    output: Option<&std::path::Path>,
+    inputs: &[&std::path::Path],
+) -> anyhow::Result<()> {
+    if let Some(out) = output {
+        crate::fsutil::refuse_input_as_output(out, inputs)?;
+    }
+    Ok(())
+}
+
 /// Run a subcommand.
 pub fn run(command: Command) -> anyhow::Result<()> {
     match command {

@@ -187,6 +187,11 @@ pub fn print_recognition(r: &RecognitionResult) {
 }
 
 pub fn recognition(args: RecognitionArgs) -> anyhow::Result<()> {
+    let inputs: Vec<&Path> = [Some(args.session.as_path()), args.frontier.as_deref()]
+        .into_iter()
+        .flatten()
+        .collect();
+    super::refuse_input_as_output(args.json.as_deref(), &inputs)?;
     let params = args.params()?;
     let session = open_session(&args.session)?;
     let result = with_progress(args.quiet, |p| run_recognition(&session, &params, p))?;
@@ -382,6 +387,7 @@ fn print_choice(r: &crate::experiments::clustering::ClusteringResult) {
 }
 
 pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
+    super::refuse_input_as_output(args.json.as_deref(), &[&args.session])?;
     let params = args.params()?;
     let session = open_session(&args.session)?;
     let r = with_progress(args.quiet, |p| run_clustering(&session, &params, p))?;
@@ -462,6 +468,8 @@ struct ProtocolTiming {
 }
 
 pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
+    let inputs: Vec<&Path> = args.session.as_deref().into_iter().collect();
+    super::refuse_input_as_output(args.json.as_deref(), &inputs)?;
     use crate::experiments::recognition::{StepBenchParams, bench_steps};
     let mut steps = Vec::new();
     println!("per observation, one thread (34 inputs, 10 classes, adaptation on unless noted):");

@@ -144,6 +144,7 @@ pub fn params_of(a: &RobustnessArgs) -> anyhow::Result<RobustnessParams> {
 }
 
 pub fn run(a: RobustnessArgs) -> anyhow::Result<()> {
+    super::refuse_input_as_output(a.json.as_deref(), &[&a.session])?;
     let params = params_of(&a)?;
     let session = open_session(&a.session)?;
     let pool = rayon::ThreadPoolBuilder::new()

@@ -411,6 +411,7 @@ pub fn data_options(a: &StabilityArgs) -> DataOptions {
 }
 
 pub fn run(a: StabilityArgs) -> anyhow::Result<()> {
+    super::refuse_input_as_output(a.json.as_deref(), &[&a.session])?;
     let session = open(&a.session)?;
     let data = StabilityData::from_session(&session, &data_options(&a))?;
     let opts = options_from(&a, &data)?;
@@ -748,6 +749,7 @@ pub fn bench_report(b: &BenchReport) -> String {
 }
 
 pub fn run_bench(a: BenchStabilityArgs) -> anyhow::Result<()> {
+    super::refuse_input_as_output(a.json.as_deref(), &[&a.session])?;
     let b = in_pool(a.threads, || bench(&a))??;
     print!("{}", bench_report(&b));
     if let Some(path) = &a.json {

@@ -241,6 +241,7 @@ fn plan(a: PlanArgs) -> anyhow::Result<()> {
         bail!("--threads: a plan runs nothing; give the tasks' CPUs with --cpus");
     }
     let (experiment, session, source) = experiment_of(&a.experiment)?;
+    super::refuse_input_as_output(Some(&opts.out), &[source])?;
     let program = match &opts.program {
         Some(p) => p.clone(),
         None => std::env::current_exe()
@@ -327,7 +328,33 @@ fn status(a: StatusArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The files of a plan directory and of its folders (the plan, the session copy, the
+/// shards): a merge's inputs.
+fn plan_files(dir: &Path) -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    let mut dirs = vec![dir.to_path_buf()];
+    while let Some(d) = dirs.pop() {
+        for entry in std::fs::read_dir(&d).into_iter().flatten().flatten() {
+            let p = entry.path();
+            if p.is_dir() {
+                if d == dir {
+                    dirs.push(p);
+                }
+            } else {
+                files.push(p);
+            }
+        }
+    }
+    files
+}
+
 fn merge(a: MergeArgs) -> anyhow::Result<()> {
+    let files = plan_files(&a.dir);
+    let mut inputs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    inputs.push(&a.dir);
+    inputs.extend(a.expect.as_deref());
+    super::refuse_input_as_output(Some(&a.out), &inputs)?;
+    super::refuse_input_as_output(a.project.as_deref(), &inputs)?;
     let m = with_progress(a.quiet, |p| sweep::merge(&a.dir, p))?;
     let text = serde_json::to_string_pretty(&m.result)?;
     crate::fsutil::write_atomic(&a.out, text.as_bytes())
