@@ -441,3 +441,55 @@ fn a_shard_output_of_the_wrong_shape_is_failed_naming_the_file() {
         "{msg}"
     );
 }
+
+/// Sets the first `num_bases` found in `v` to `to`; whether one was found.
+fn set_num_bases(v: &mut Value, to: u64) -> bool {
+    match v {
+        Value::Object(map) => {
+            if let Some(n) = map.get_mut("num_bases").filter(|n| n.is_u64()) {
+                *n = Value::from(to);
+                return true;
+            }
+            map.values_mut().any(|x| set_num_bases(x, to))
+        }
+        Value::Array(items) => items.iter_mut().any(|x| set_num_bases(x, to)),
+        _ => false,
+    }
+}
+
+/// Size parameters are bounded before anything is allocated for them: a plan whose item
+/// claims 10¹² bases, and `stability --num-bases 50000`, are errors naming the parameter
+/// and its limit (they aborted the process on a failed allocation).
+#[test]
+fn absurd_sizes_are_refused_naming_the_parameter_and_its_limit() {
+    let (dir, _, _) = planned("sweep-absurd", 1);
+    let plan_path = dir.join("plan.json");
+    let mut plan: Value = serde_json::from_str(&fs::read_to_string(&plan_path).unwrap()).unwrap();
+    assert!(set_num_bases(&mut plan["items"], 1_000_000_000_000));
+    fs::write(&plan_path, serde_json::to_string(&plan).unwrap()).unwrap();
+    let run = |args: &[&str], path: &Path| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_tactile-workbench"))
+            .args(args)
+            .arg(path)
+            .output()
+            .unwrap()
+    };
+    let r = run(&["sweep", "run", "--shard", "0"], &dir);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success(), "{err}");
+    assert!(
+        err.contains("num_bases` 1000000000000 is above its limit of 4096"),
+        "{err}"
+    );
+    assert!(!sweep::shard_path(&dir, 0).exists());
+    let r = run(
+        &["stability", "--num-bases", "50000"],
+        &common::sample("grasp-stability.json"),
+    );
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success(), "{err}");
+    assert!(
+        err.contains("--num-bases 50000 is above its limit of 4096"),
+        "{err}"
+    );
+}

@@ -82,6 +82,7 @@ pub struct PaperFiguresArgs {
 pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
     super::refuse_input_as_output(Some(&a.out_dir), &[&a.session])?;
     super::refuse_input_as_output(a.project.as_deref(), &[&a.session])?;
+    super::bounds::at_most("--reps", a.reps, super::bounds::MAX_REPS)?;
     let session = open_session(&a.session)?;
     let name = session.meta.name.clone();
     let (results, frontiers) = with_progress(a.quiet, |p| experiment_results(&a, &session, p))?;

@@ -74,6 +74,10 @@ pub struct RecognitionArgs {
 
 impl RecognitionArgs {
     pub(crate) fn params(&self) -> anyhow::Result<RecognitionParams> {
+        use super::bounds::{MAX_CAPACITY, MAX_REPS, MAX_TAU, at_most};
+        at_most("--reps", self.reps, MAX_REPS)?;
+        at_most("--capacity", self.capacity.unwrap_or(0), MAX_CAPACITY)?;
+        at_most("--tau", self.tau.unwrap_or(0), MAX_TAU)?;
         let mut p = RecognitionParams {
             learner: self.learner.parse()?,
             features: self.features.parse::<FeatureSet>()?,
@@ -266,6 +270,7 @@ impl ClusteringArgs {
     /// The parameters the arguments describe (checked).
     pub(crate) fn params(&self) -> anyhow::Result<ClusteringParams> {
         let args = self;
+        super::bounds::at_most("--reps", args.reps, super::bounds::MAX_REPS)?;
         let learner = args.learner.parse()?;
         let mut params = ClusteringParams {
             features: args.features.parse::<FeatureSet>()?,
@@ -470,6 +475,13 @@ struct ProtocolTiming {
 pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
     let inputs: Vec<&Path> = args.session.as_deref().into_iter().collect();
     super::refuse_input_as_output(args.json.as_deref(), &inputs)?;
+    {
+        use super::bounds::{MAX_CAPACITY, MAX_REPS, MAX_TAU, all_at_most, at_most};
+        at_most("--reps", args.reps, MAX_REPS)?;
+        at_most("--session-reps", args.session_reps, MAX_REPS)?;
+        all_at_most("--budgets", &args.budgets, MAX_CAPACITY)?;
+        all_at_most("--taus", &args.taus, MAX_TAU)?;
+    }
     use crate::experiments::recognition::{StepBenchParams, bench_steps};
     let mut steps = Vec::new();
     println!("per observation, one thread (34 inputs, 10 classes, adaptation on unless noted):");

@@ -74,6 +74,7 @@ pub struct RobustnessArgs {
 
 /// The parameters the arguments describe (checked by `validate` before any work).
 pub fn params_of(a: &RobustnessArgs) -> anyhow::Result<RobustnessParams> {
+    super::bounds::at_most("--reps", a.reps, super::bounds::MAX_REPS)?;
     let family: Family = a.family.parse()?;
     let mut p = RobustnessParams::defaults(family);
     if !a.methods.is_empty() {

@@ -174,6 +174,7 @@ pub fn parse_num_bases(s: &str) -> anyhow::Result<Vec<usize>> {
     if out.is_empty() {
         bail!("--num-bases is empty");
     }
+    super::bounds::all_at_most("--num-bases", &out, super::bounds::MAX_NUM_BASES)?;
     Ok(out)
 }
 
@@ -749,6 +750,7 @@ pub fn bench_report(b: &BenchReport) -> String {
 }
 
 pub fn run_bench(a: BenchStabilityArgs) -> anyhow::Result<()> {
+    super::bounds::at_most("--repeats", a.repeats, super::bounds::MAX_REPS)?;
     super::refuse_input_as_output(a.json.as_deref(), &[&a.session])?;
     let b = in_pool(a.threads, || bench(&a))??;
     print!("{}", bench_report(&b));

@@ -286,7 +286,23 @@ fn plan(a: PlanArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The plan's size parameters within their maxima, before a shard allocates for them (a
+/// plan is a file anyone can edit).
+fn check_plan_sizes(dir: &Path) -> anyhow::Result<()> {
+    let path = dir.join(sweep::PLAN_FILE);
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        // Reading the plan reports its own errors.
+        return Ok(());
+    };
+    if let Ok(plan) = serde_json::from_str::<serde_json::Value>(&text) {
+        super::bounds::check_plan_sizes(&plan, sweep::PLAN_FILE)
+            .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?;
+    }
+    Ok(())
+}
+
 fn run_shard(a: RunArgs) -> anyhow::Result<()> {
+    check_plan_sizes(&a.dir)?;
     let out = in_pool(a.threads, || {
         with_progress(a.quiet, |p| sweep::run_shard(&a.dir, a.shard, p))
     })??;
@@ -349,6 +365,7 @@ fn plan_files(dir: &Path) -> Vec<PathBuf> {
 }
 
 fn merge(a: MergeArgs) -> anyhow::Result<()> {
+    check_plan_sizes(&a.dir)?;
     let files = plan_files(&a.dir);
     let mut inputs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
     inputs.push(&a.dir);
