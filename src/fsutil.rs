@@ -13,6 +13,55 @@ fn temp_path(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
+/// Remove the temporary files that killed writes to `path` left beside it
+/// (`.NAME.PID.tmp` of a process no longer running), so they do not pile up. A live
+/// process's file is its write in progress and is kept. Where the system cannot tell
+/// (no `/proc`), a temporary file untouched for a day counts as left.
+fn remove_stale_temps(path: &Path) {
+    let (Some(name), Some(dir)) = (path.file_name(), path.parent()) else {
+        return;
+    };
+    let dir = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
+    let prefix = format!(".{}.", name.to_string_lossy());
+    let Ok(entries) = fs::read_dir(dir) else {
+        return;
+    };
+    let proc_fs = Path::new("/proc/self").exists();
+    for entry in entries.flatten() {
+        let file = entry.file_name();
+        let file = file.to_string_lossy();
+        let Some(pid) = file
+            .strip_prefix(&prefix)
+            .and_then(|rest| rest.strip_suffix(".tmp"))
+            .and_then(|pid| pid.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        let stale = if proc_fs {
+            !Path::new("/proc").join(pid.to_string()).exists()
+        } else {
+            entry
+                .metadata()
+                .and_then(|m| m.modified())
+                .ok()
+                .and_then(|t| t.elapsed().ok())
+                .is_some_and(|age| age.as_secs() > 24 * 3600)
+        };
+        if stale && pid != std::process::id() {
+            let p = entry.path();
+            let _ = if p.is_dir() {
+                fs::remove_dir_all(p)
+            } else {
+                fs::remove_file(p)
+            };
+        }
+    }
+}
+
 /// Write `bytes` to `path` atomically (temporary file + fsync + rename).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
     write_atomic_with(path, |w| w.write_all(bytes))
@@ -24,6 +73,7 @@ pub fn write_atomic_with(
     path: &Path,
     fill: impl FnOnce(&mut io::BufWriter<&File>) -> io::Result<()>,
 ) -> io::Result<()> {
+    remove_stale_temps(path);
     let tmp = temp_path(path);
     let result = (|| {
         let file = File::create(&tmp)?;
@@ -39,6 +89,80 @@ pub fn write_atomic_with(
         let _ = fs::remove_file(&tmp);
     }
     result
+}
+
+/// Fill a folder as a whole: `fill` writes into a temporary folder beside `dir`
+/// (`.NAME.PID.tmp`), which then becomes `dir` by a rename when `dir` does not exist yet;
+/// into an existing `dir` (which may hold other files) its files are moved one by one,
+/// those named in `last` (an index of the others) after the rest. A run killed while
+/// filling leaves `dir` as it was, and its temporary folder goes with the next write to
+/// `dir`.
+pub fn write_dir_atomic<T, E: From<io::Error>>(
+    dir: &Path,
+    last: &[&str],
+    fill: impl FnOnce(&Path) -> Result<T, E>,
+) -> Result<T, E> {
+    remove_stale_temps(dir);
+    let tmp = temp_path(dir);
+    if tmp.exists() {
+        fs::remove_dir_all(&tmp)?;
+    }
+    fs::create_dir_all(&tmp)?;
+    let placed = fill(&tmp).and_then(|value| {
+        if !dir.exists() {
+            fs::rename(&tmp, dir)?;
+            return Ok(value);
+        }
+        let mut names: Vec<_> = fs::read_dir(&tmp)?
+            .map(|e| e.map(|e| e.file_name()))
+            .collect::<io::Result<_>>()?;
+        // Files of `last` sort after the others, keeping their order.
+        names.sort_by_key(|n| last.iter().position(|l| n.as_os_str() == *l));
+        for name in names {
+            fs::rename(tmp.join(&name), dir.join(&name))?;
+        }
+        fs::remove_dir(&tmp)?;
+        Ok(value)
+    });
+    if placed.is_err() {
+        let _ = fs::remove_dir_all(&tmp);
+    }
+    placed
+}
+
+/// The path as the file system resolves it: canonical where it exists, else its folder's
+/// canonical path joined with its name (an output about to be created).
+fn resolved(path: &Path) -> PathBuf {
+    if let Ok(p) = fs::canonicalize(path) {
+        return p;
+    }
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    match (fs::canonicalize(parent), path.file_name()) {
+        (Ok(dir), Some(name)) => dir.join(name),
+        _ => path.to_path_buf(),
+    }
+}
+
+/// Refuse to write `output` when it is one of `inputs` (compared as resolved paths, so
+/// `./a.json`, `dir/../a.json` and a link to it are the same file): writing would destroy
+/// the input. The error names both.
+pub fn refuse_input_as_output(output: &Path, inputs: &[&Path]) -> io::Result<()> {
+    let out = resolved(output);
+    match inputs.iter().find(|i| resolved(i) == out) {
+        Some(input) => Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!(
+                "the output {} is the input {}: writing it would destroy the input; choose \
+                 another output",
+                output.display(),
+                input.display()
+            ),
+        )),
+        None => Ok(()),
+    }
 }
 
 #[cfg(test)]
@@ -59,6 +183,96 @@ mod tests {
         assert_eq!(fs::read(&p).unwrap(), b"old");
         let leftovers = fs::read_dir(&dir).unwrap().count();
         assert_eq!(leftovers, 1, "the temporary file is removed");
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn temporary_files_of_killed_writes_go_with_the_next_write() {
+        let dir = std::env::temp_dir().join(format!("tw-fsutil-stale-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("a.json");
+        // A process id above Linux's largest (2^22) never runs; process 1 always does.
+        let dead = dir.join(".a.json.4194305.tmp");
+        let live = dir.join(".a.json.1.tmp");
+        let other_target = dir.join(".b.json.4194305.tmp");
+        for f in [&dead, &live, &other_target] {
+            fs::write(f, b"half").unwrap();
+        }
+        write_atomic(&p, b"new").unwrap();
+        assert_eq!(fs::read(&p).unwrap(), b"new");
+        assert!(!dead.exists(), "the killed write's file is removed");
+        if Path::new("/proc/self").exists() {
+            assert!(live.exists(), "a running process's write is kept");
+        }
+        assert!(
+            other_target.exists(),
+            "another target's file is not touched"
+        );
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_folder_is_filled_whole_or_not_at_all() {
+        let dir = std::env::temp_dir().join(format!("tw-fsutil-dir-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        let out = dir.join("figures");
+        let fill = |d: &Path| -> io::Result<()> {
+            fs::write(d.join("a.svg"), b"a")?;
+            fs::write(d.join("index.md"), b"a")
+        };
+        write_dir_atomic(&out, &["index.md"], fill).unwrap();
+        assert_eq!(fs::read(out.join("index.md")).unwrap(), b"a");
+        // A failing fill leaves the folder as it was and no temporary folder.
+        fs::write(out.join("mine.txt"), b"keep").unwrap();
+        let r = write_dir_atomic(&out, &["index.md"], |d: &Path| -> io::Result<()> {
+            fs::write(d.join("a.svg"), b"half")?;
+            Err(io::Error::other("killed"))
+        });
+        assert!(r.is_err());
+        assert_eq!(fs::read(out.join("a.svg")).unwrap(), b"a");
+        // A killed run's temporary folder goes with the next write; other files stay.
+        let killed = dir.join(".figures.4194305.tmp");
+        fs::create_dir_all(&killed).unwrap();
+        write_dir_atomic(&out, &["index.md"], |d: &Path| -> io::Result<()> {
+            fs::write(d.join("a.svg"), b"b")?;
+            fs::write(d.join("index.md"), b"b")
+        })
+        .unwrap();
+        assert_eq!(fs::read(out.join("a.svg")).unwrap(), b"b");
+        assert_eq!(fs::read(out.join("mine.txt")).unwrap(), b"keep");
+        let left: Vec<_> = fs::read_dir(&dir)
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name())
+            .collect();
+        assert_eq!(left, [std::ffi::OsString::from("figures")]);
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn an_output_that_is_an_input_is_refused_by_any_spelling() {
+        let dir = std::env::temp_dir().join(format!("tw-fsutil-in-{}", std::process::id()));
+        fs::create_dir_all(dir.join("sub")).unwrap();
+        let input = dir.join("rec.mcap");
+        fs::write(&input, b"bag").unwrap();
+        let other = dir.join("other.csv");
+        let same = dir.join("sub").join("..").join("rec.mcap");
+        let e = refuse_input_as_output(&same, &[&other, &input]).unwrap_err();
+        let m = e.to_string();
+        assert!(
+            m.contains(&same.display().to_string()) && m.contains(&input.display().to_string()),
+            "{m}"
+        );
+        #[cfg(unix)]
+        {
+            let link = dir.join("link.mcap");
+            std::os::unix::fs::symlink(&input, &link).unwrap();
+            assert!(refuse_input_as_output(&link, &[&input]).is_err());
+        }
+        assert!(refuse_input_as_output(&dir.join("session.json"), &[&input]).is_ok());
+        assert!(refuse_input_as_output(&other, &[&input]).is_ok());
+        assert_eq!(fs::read(&input).unwrap(), b"bag");
         fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -99,3 +99,43 @@ fn a_frontier_project_carries_its_frontiers() {
     assert_eq!(p.frontiers[0].params.method, MethodId::SparseSvm);
     let _ = std::fs::remove_dir_all(out);
 }
+
+/// A `paper-figures` run killed while writing its figures (by a file-size limit, as in
+/// tests/atomic_write_kill.rs) leaves no output folder, so never one without its index;
+/// the next run writes the folder whole and removes what the killed one left.
+#[cfg(unix)]
+#[test]
+fn a_killed_run_leaves_no_folder_without_its_index() {
+    let dir = common::temp_dir("paper-figures-kill");
+    let out = dir.join("figures");
+    let run = |limit: &str| {
+        std::process::Command::new("sh")
+            .args([
+                "-c",
+                "ulimit -c 0; ulimit -f \"$1\"; shift; exec \"$@\"",
+                "sh",
+                limit,
+                env!("CARGO_BIN_EXE_tactile-workbench"),
+                "paper-figures",
+            ])
+            .arg(common::sample("object-recognition.json"))
+            .args(["--experiment", "baselines", "--reps", "2", "--quiet", "-o"])
+            .arg(&out)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .status()
+            .unwrap()
+    };
+    // 16 blocks of 512 bytes: the first PNG figure is larger.
+    assert!(!run("16").success(), "the run should have been stopped");
+    assert!(!out.exists(), "a killed run left {}", out.display());
+    assert!(run("unlimited").success());
+    assert!(out.join("index.md").is_file());
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, ["figures"], "temporary folders left");
+    let _ = std::fs::remove_dir_all(dir);
+}

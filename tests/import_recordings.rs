@@ -46,6 +46,9 @@ struct Expected {
     encoders: Vec<String>,
     objects: Vec<String>,
     frame_rate_hz: f64,
+    /// Frames the alignment leaves out for lacking a message within the tolerance.
+    #[serde(default)]
+    left_out: usize,
     grasps: Vec<ExpectedGrasp>,
 }
 
@@ -97,6 +100,16 @@ fn check_against_script(s: &Session, expected: &str) {
         }
     }
     assert!(values > 500, "only {values} values checked");
+    if e.left_out > 0 {
+        let note = format!("{} frames were left out", e.left_out);
+        assert!(
+            s.meta.notes.contains(&note),
+            "no `{note}` in: {}",
+            s.meta.notes
+        );
+    } else {
+        assert!(!s.meta.notes.contains("left out"), "{}", s.meta.notes);
+    }
 }
 
 fn import(pair: &(PathBuf, PathBuf)) -> Result<Session, String> {
@@ -124,6 +137,62 @@ fn uncompressed_bag_cut_by_windows_matches_the_script() {
     // The spec placed `object` itself, with its own class order.
     assert_eq!(s.label_sets[0].classes, ["ball", "can"]);
     assert_eq!(s.label_sets[1].name, "outcome");
+}
+
+fn aligned_bag(name: &str) -> (PathBuf, PathBuf) {
+    let d = fixtures().join("ros2");
+    (d.join(name), d.join(format!("{name}.spec.json")))
+}
+
+/// A bag written by rosbags whose joint states are stamped 1 ms after the tactile frames and
+/// a second sensor 1 ms before, cut by windows whose last one ends 15 ms after the bag's
+/// last message: every frame is imported, each with the joint values and palm readings
+/// nearest in time (the fixture script computed them), and the clipped window is noted.
+#[test]
+fn topics_offset_by_one_ms_and_a_window_past_the_bag_import_every_frame() {
+    let s = import(&aligned_bag("offset-joints")).unwrap();
+    check_against_script(&s, "offset-joints.json");
+    // Every frame of the 300 ms windows at 100 Hz, the last window up to the bag's end.
+    let frames: Vec<usize> = s.grasps.iter().map(|g| g.frames.len()).collect();
+    assert_eq!(frames, [31, 31, 31, 31, 30]);
+    // The first frame of each grasp has the joint message 1 ms after it: joint `wrist` is
+    // the message's index (k / 1024) at 100 Hz, so frame k of the bag has (k + 0) / 1024.
+    for (g, grasp) in s.grasps.iter().enumerate() {
+        let k = 10 + 50 * g;
+        assert_eq!(grasp.frames[0].encoders[0], k as f64 / 1024.0, "grasp {g}");
+    }
+    assert!(
+        s.meta
+            .notes
+            .contains("1 window was clipped to the bag's span"),
+        "{}",
+        s.meta.notes
+    );
+}
+
+/// A second sensor at half the reference's rate (2 ms after every other frame) reaches only
+/// those frames within the default tolerance of 5 ms, and joints that stop in the middle of
+/// the third grasp leave its later frames without a value: such frames are left out and
+/// counted, never given a held value.
+#[test]
+fn a_topic_at_half_the_rate_and_one_that_stops_leave_frames_out() {
+    let s = import(&aligned_bag("gaps")).unwrap();
+    check_against_script(&s, "gaps.json");
+    let frames: Vec<usize> = s.grasps.iter().map(|g| g.frames.len()).collect();
+    assert_eq!(frames, [16, 16, 8]);
+    assert!(s.meta.notes.contains("within 5 ms"), "{}", s.meta.notes);
+    assert!(
+        s.meta.notes.contains("`/hand/palm` in 45")
+            && s.meta.notes.contains("`/joint_states` in 16"),
+        "{}",
+        s.meta.notes
+    );
+    // A tolerance of 10 ms in the spec: the palm reaches every frame, and the third grasp
+    // keeps the frames up to 10 ms after the joints' last message (at 1.241 s).
+    let s = import(&aligned_bag("gaps-10ms")).unwrap();
+    check_against_script(&s, "gaps-10ms.json");
+    let frames: Vec<usize> = s.grasps.iter().map(|g| g.frames.len()).collect();
+    assert_eq!(frames, [31, 31, 16]);
 }
 
 #[test]
@@ -438,10 +507,11 @@ fn windows_that_overlap() {
 
 #[test]
 fn windows_outside_the_bag() {
+    // The bag spans 1700000000.000–1700000003.375 s: the second window lies wholly after.
     let (bag, spec, windows) = with_windows(
         "outside",
         "start,end,object,outcome\n1700000000.2,1700000000.5,can,success\n\
-         1700000003.0,1700000004.0,ball,failure\n",
+         1700000004.0,1700000005.0,ball,failure\n",
     );
     let e = error_of(&bag, &spec);
     assert_has(
@@ -449,8 +519,25 @@ fn windows_outside_the_bag() {
         &[
             &format!("{}:3:", windows.display()),
             "falls outside the bag, which spans 1700000000.000000000–",
+            "holds no frame",
         ],
     );
+    // Windows reaching past either end of the bag are clipped to it, and noted.
+    let (bag, spec, _) = with_windows(
+        "clipped",
+        "start,end,object,outcome\n1699999999.5,1700000000.2,can,success\n\
+         1700000003.0,1700000004.0,ball,failure\n",
+    );
+    let s = session::import_with_spec(&bag, &spec).unwrap();
+    assert!(
+        s.meta.notes.contains("2 windows were clipped"),
+        "{}",
+        s.meta.notes
+    );
+    // Frames every 25 ms from the bag's start, 0–200 ms and 3000–3375 ms.
+    let frames: Vec<usize> = s.grasps.iter().map(|g| g.frames.len()).collect();
+    assert_eq!(frames, [9, 16]);
+    assert_eq!(s.grasps[0].frames[0].t, 0.0);
     let (bag, spec, windows) = with_windows(
         "backwards-window",
         "start,end,object,outcome\n1700000000.5,1700000000.2,can,success\n",
@@ -626,5 +713,94 @@ fn a_failed_import_writes_nothing() {
         .unwrap();
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     assert!(session::load(&out_csv).is_ok());
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// A long CSV naming a column twice is refused, naming both columns: found by name, the
+/// second would otherwise be silently ignored.
+#[test]
+fn a_long_csv_naming_a_column_twice() {
+    let (csv, spec) = long_csv();
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let dir = common::temp_dir("long-duplicate");
+    let twice = dir.join("twice.csv");
+    // A 20th column, `ff_3` again (column 8), with its own values.
+    let rows: Vec<String> = text.lines().map(|l| format!("{l},99")).collect();
+    let header = format!("{},ff_3", text.lines().next().unwrap());
+    std::fs::write(&twice, format!("{header}\n{}\n", rows[1..].join("\n"))).unwrap();
+    let e = error_of(&twice, &spec);
+    assert_has(
+        &e,
+        &[
+            &format!("{}:1:", twice.display()),
+            "columns 8 and 20 are both named `ff_3`",
+        ],
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// An events topic declared in the bag that carries no message is reported as empty, not
+/// as missing.
+#[test]
+fn an_empty_events_topic_is_reported_as_empty() {
+    let bag = fixtures().join("ros2/bad/empty-events");
+    let e = error_of(&bag, &events_bag().1);
+    assert_has(
+        &e,
+        &[
+            "topic `/grasp_events`",
+            "the spec's events topic is in the bag but holds no messages",
+        ],
+    );
+    assert!(!e.contains("not in the bag"), "{e}");
+}
+
+/// `import … -o` naming the bag, one of its files, the spec or the windows CSV is refused
+/// before anything is read or written, naming both paths; the input is left intact.
+#[test]
+fn an_output_that_is_an_input_is_refused() {
+    let dir = common::temp_dir("output-is-input");
+    let (bag, spec) = windows_bag();
+    let copy = dir.join("rec.mcap");
+    std::fs::copy(&bag, &copy).unwrap();
+    let spec_copy = dir.join("rec.spec.json");
+    std::fs::copy(&spec, &spec_copy).unwrap();
+    let windows = dir.join("plain-windows.windows.csv");
+    std::fs::copy(spec.with_file_name("plain-windows.windows.csv"), &windows).unwrap();
+    let before = std::fs::read(&copy).unwrap();
+    let same_bag = dir.join(".").join("rec.mcap");
+    for output in [&same_bag, &spec_copy, &windows] {
+        let r = Command::new(env!("CARGO_BIN_EXE_tactile-workbench"))
+            .args(["import", "mcap"])
+            .arg(&copy)
+            .arg("-o")
+            .arg(output)
+            .arg("--spec")
+            .arg(&spec_copy)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(!r.status.success(), "{err}");
+        assert!(
+            err.contains(&format!("the output {} is the input", output.display())),
+            "{err}"
+        );
+    }
+    assert_eq!(std::fs::read(&copy).unwrap(), before, "the bag is intact");
+    // The same for a command with `--json`: the session is its input.
+    let session = dir.join("s.json");
+    let s = import(&windows_bag()).unwrap();
+    session::save(&s, &session).unwrap();
+    let saved = std::fs::read(&session).unwrap();
+    let r = Command::new(env!("CARGO_BIN_EXE_tactile-workbench"))
+        .arg("stability")
+        .arg(&session)
+        .arg("--json")
+        .arg(&session)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success() && err.contains("is the input"), "{err}");
+    assert_eq!(std::fs::read(&session).unwrap(), saved);
     let _ = std::fs::remove_dir_all(dir);
 }

@@ -29,6 +29,19 @@ fn bts3_err(text: &str) -> String {
     e.to_string()
 }
 
+/// CSV headers are case-free: `Object`, `Slipped`, `FF_biotac_1` name the same columns.
+#[test]
+fn bts3_header_names_in_any_case() {
+    let h = bts3_header()
+        .replace("object", "Object")
+        .replace("slipped", "SLIPPED")
+        .replace("ff_biotac_1,", "FF_Biotac_1,");
+    let good = bts3_row("cup", "0").join(",");
+    let s = bts3::parse_bts3(&format!("{h}\n{good}\n"), Path::new("x")).unwrap();
+    assert_eq!(s.grasps.len(), 1);
+    assert_eq!(s.grasps[0].object, "cup");
+}
+
 #[test]
 fn bts3_bad_inputs_name_the_problem() {
     let h = bts3_header();

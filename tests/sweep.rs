@@ -391,3 +391,104 @@ fn a_plan_refuses_more_shards_than_items_and_an_existing_plan() {
     let msg = many.err().unwrap().to_string();
     assert!(msg.contains("7 shards for 6 work items"), "{msg}");
 }
+
+/// `sweep status` checks the session copy against the plan's hash: a copy changed after
+/// the shards ran is an error naming the file, not "done".
+#[test]
+fn status_refuses_a_changed_session_copy() {
+    let (dir, _, _) = planned("sweep-status-session", 1);
+    sweep::run_shard(&dir, 0, &Progress::new()).unwrap();
+    assert!(matches!(states(&dir)[0], ShardState::Done { .. }));
+    let copy = dir.join("session.json");
+    let text = fs::read_to_string(&copy).unwrap();
+    fs::write(&copy, format!("{text}\n")).unwrap();
+    let err = sweep::status(&dir).err().expect("refused");
+    let msg = err.to_string();
+    assert!(matches!(err, SweepError::Mismatch(_)), "{msg}");
+    assert!(
+        msg.contains(&copy.display().to_string()) && msg.contains("content hash"),
+        "{msg}"
+    );
+}
+
+/// A shard whose output has the wrong shape (valid JSON, right hashes and items) is failed,
+/// naming its file, and the merge's refusal names it too.
+#[test]
+fn a_shard_output_of_the_wrong_shape_is_failed_naming_the_file() {
+    let (dir, _, _) = planned("sweep-shape", 2);
+    for i in 0..2 {
+        sweep::run_shard(&dir, i, &Progress::new()).unwrap();
+    }
+    let path = sweep::shard_path(&dir, 1);
+    let mut shard: Value = serde_json::from_str(&fs::read_to_string(&path).unwrap()).unwrap();
+    shard["outputs"][0] = Value::String("not an output".into());
+    fs::write(&path, serde_json::to_string(&shard).unwrap()).unwrap();
+    let file = path.display().to_string();
+    match &states(&dir)[1] {
+        ShardState::Failed { reason } => assert!(
+            reason.contains(&file) && reason.contains("not of its shape"),
+            "{reason}"
+        ),
+        other => panic!("expected failed, got {other:?}"),
+    }
+    let msg = sweep::merge(&dir, &Progress::new())
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        msg.contains("shard 1: failed") && msg.contains(&file),
+        "{msg}"
+    );
+}
+
+/// Sets the first `num_bases` found in `v` to `to`; whether one was found.
+fn set_num_bases(v: &mut Value, to: u64) -> bool {
+    match v {
+        Value::Object(map) => {
+            if let Some(n) = map.get_mut("num_bases").filter(|n| n.is_u64()) {
+                *n = Value::from(to);
+                return true;
+            }
+            map.values_mut().any(|x| set_num_bases(x, to))
+        }
+        Value::Array(items) => items.iter_mut().any(|x| set_num_bases(x, to)),
+        _ => false,
+    }
+}
+
+/// Size parameters are bounded before anything is allocated for them: a plan whose item
+/// claims 10¹² bases, and `stability --num-bases 50000`, are errors naming the parameter
+/// and its limit (they aborted the process on a failed allocation).
+#[test]
+fn absurd_sizes_are_refused_naming_the_parameter_and_its_limit() {
+    let (dir, _, _) = planned("sweep-absurd", 1);
+    let plan_path = dir.join("plan.json");
+    let mut plan: Value = serde_json::from_str(&fs::read_to_string(&plan_path).unwrap()).unwrap();
+    assert!(set_num_bases(&mut plan["items"], 1_000_000_000_000));
+    fs::write(&plan_path, serde_json::to_string(&plan).unwrap()).unwrap();
+    let run = |args: &[&str], path: &Path| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_tactile-workbench"))
+            .args(args)
+            .arg(path)
+            .output()
+            .unwrap()
+    };
+    let r = run(&["sweep", "run", "--shard", "0"], &dir);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success(), "{err}");
+    assert!(
+        err.contains("num_bases` 1000000000000 is above its limit of 4096"),
+        "{err}"
+    );
+    assert!(!sweep::shard_path(&dir, 0).exists());
+    let r = run(
+        &["stability", "--num-bases", "50000"],
+        &common::sample("grasp-stability.json"),
+    );
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success(), "{err}");
+    assert!(
+        err.contains("--num-bases 50000 is above its limit of 4096"),
+        "{err}"
+    );
+}

@@ -140,6 +140,16 @@ pub fn report(r: &BaselinesResult) -> String {
 }
 
 pub fn run(a: BaselinesArgs) -> anyhow::Result<()> {
+    super::refuse_input_as_output(a.json.as_deref(), &[&a.session])?;
+    {
+        use super::bounds::{MAX_K, MAX_REPS, all_at_most, at_most};
+        at_most("--k", a.k, MAX_K)?;
+        all_at_most("--k-sweep", &a.k_sweep, MAX_K)?;
+        at_most("--orders", a.orders, MAX_REPS)?;
+        at_most("--cv-repeats", a.cv_repeats, MAX_REPS)?;
+        at_most("--som-rows", a.som_rows, MAX_K)?;
+        at_most("--som-cols", a.som_cols, MAX_K)?;
+    }
     if a.som_rows * a.som_cols != a.k {
         bail!(
             "the SOM grid {} × {} must have k = {} units",

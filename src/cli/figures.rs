@@ -27,6 +27,7 @@ pub struct RenderFigureArgs {
 }
 
 pub fn run(args: RenderFigureArgs) -> anyhow::Result<()> {
+    super::refuse_input_as_output(Some(&args.output), &[&args.figure])?;
     let text = std::fs::read_to_string(&args.figure)
         .with_context(|| format!("cannot read {}", args.figure.display()))?;
     let figure: Figure = serde_json::from_str(&text)

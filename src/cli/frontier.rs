@@ -81,6 +81,18 @@ impl FrontierArgs {
     /// One parameter set per method × feature set (the methods on fixed features take the
     /// first feature set only).
     pub(crate) fn params(&self) -> anyhow::Result<Vec<FrontierParams>> {
+        use super::bounds::*;
+        at_most("--reps", self.reps, MAX_REPS)?;
+        all_at_most("--capacities", &self.capacities, MAX_CAPACITY)?;
+        all_at_most("--taus", &self.taus, MAX_TAU)?;
+        all_at_most("--num-bases", &self.num_bases, MAX_NUM_BASES)?;
+        all_at_most("--ks", &self.ks, MAX_K)?;
+        at_most(
+            "--expert-capacity",
+            self.expert_capacity.unwrap_or(0),
+            MAX_CAPACITY,
+        )?;
+        at_most("--expert-tau", self.expert_tau.unwrap_or(0), MAX_TAU)?;
         let score = match self.score.as_str() {
             "all" => RecognitionScore::All,
             "final-20" => RecognitionScore::Final20,
@@ -196,6 +208,7 @@ pub fn print_frontier(f: &Frontier) {
 }
 
 pub fn run(args: FrontierArgs) -> anyhow::Result<()> {
+    super::refuse_input_as_output(args.json.as_deref(), &[&args.session])?;
     let params = args.params()?;
     let session = open_session(&args.session)?;
     let mut frontiers = Vec::new();

@@ -2,6 +2,7 @@
 //! Each subcommand lives in its own file with its `clap::Args` struct and a `run`.
 
 pub mod baselines;
+pub mod bounds;
 mod figures;
 pub mod frontier;
 pub mod paper_figures;
@@ -103,6 +104,18 @@ pub enum Command {
     /// Sharded sweeps for a cluster: plan the shards and a Slurm job array, run a shard,
     /// show their status, merge them into the single-machine result.
     Sweep(sweep::SweepArgs),
+}
+
+/// Refuse, before any work, an output (`-o`, `--json`, `--project`, an output folder) that
+/// is one of the command's inputs: writing it would destroy the input.
+pub(crate) fn refuse_input_as_output(
+    output: Option<&std::path::Path>,
+    inputs: &[&std::path::Path],
+) -> anyhow::Result<()> {
+    if let Some(out) = output {
+        crate::fsutil::refuse_input_as_output(out, inputs)?;
+    }
+    Ok(())
 }
 
 /// Run a subcommand.

@@ -81,6 +81,9 @@ pub struct PaperFiguresArgs {
 }
 
 pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
+    super::refuse_input_as_output(Some(&a.out_dir), &[&a.session])?;
+    super::refuse_input_as_output(a.project.as_deref(), &[&a.session])?;
+    super::bounds::at_most("--reps", a.reps, super::bounds::MAX_REPS)?;
     let session = open_session(&a.session)?;
     let name = session.meta.name.clone();
     let (results, frontiers) = with_progress(a.quiet, |p| experiment_results(&a, &session, p))?;
@@ -110,12 +113,16 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
         dpi: a.dpi,
     };
     let t0 = std::time::Instant::now();
-    let index = export_all(
-        &set,
-        &a.out_dir,
-        &[Format::Svg, Format::Png, Format::Csv],
-        &opts,
-    )?;
+    // Into a temporary folder put in place at the end: a killed run never leaves a folder
+    // of figures without its index.
+    let index = crate::fsutil::write_dir_atomic(&a.out_dir, &["index.md"], |dir| {
+        anyhow::Ok(export_all(
+            &set,
+            dir,
+            &[Format::Svg, Format::Png, Format::Csv],
+            &opts,
+        )?)
+    })?;
     println!(
         "wrote {} figures to {} in {:.2} s",
         index.entries.len(),

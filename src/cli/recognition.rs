@@ -75,6 +75,10 @@ pub struct RecognitionArgs {
 
 impl RecognitionArgs {
     pub(crate) fn params(&self) -> anyhow::Result<RecognitionParams> {
+        use super::bounds::{MAX_CAPACITY, MAX_REPS, MAX_TAU, at_most};
+        at_most("--reps", self.reps, MAX_REPS)?;
+        at_most("--capacity", self.capacity.unwrap_or(0), MAX_CAPACITY)?;
+        at_most("--tau", self.tau.unwrap_or(0), MAX_TAU)?;
         let mut p = RecognitionParams {
             learner: self.learner.parse()?,
             features: self.features.parse::<FeatureSet>()?,
@@ -188,6 +192,11 @@ pub fn print_recognition(r: &RecognitionResult) {
 }
 
 pub fn recognition(args: RecognitionArgs) -> anyhow::Result<()> {
+    let inputs: Vec<&Path> = [Some(args.session.as_path()), args.frontier.as_deref()]
+        .into_iter()
+        .flatten()
+        .collect();
+    super::refuse_input_as_output(args.json.as_deref(), &inputs)?;
     let params = args.params()?;
     let session = open_session(&args.session)?;
     let result = with_progress(args.quiet, |p| run_recognition(&session, &params, p))?;
@@ -262,6 +271,7 @@ impl ClusteringArgs {
     /// The parameters the arguments describe (checked).
     pub(crate) fn params(&self) -> anyhow::Result<ClusteringParams> {
         let args = self;
+        super::bounds::at_most("--reps", args.reps, super::bounds::MAX_REPS)?;
         let learner = args.learner.parse()?;
         let mut params = ClusteringParams {
             features: args.features.parse::<FeatureSet>()?,
@@ -383,6 +393,7 @@ fn print_choice(r: &crate::experiments::clustering::ClusteringResult) {
 }
 
 pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
+    super::refuse_input_as_output(args.json.as_deref(), &[&args.session])?;
     let params = args.params()?;
     let session = open_session(&args.session)?;
     let r = with_progress(args.quiet, |p| run_clustering(&session, &params, p))?;
@@ -463,6 +474,15 @@ struct ProtocolTiming {
 }
 
 pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
+    let inputs: Vec<&Path> = args.session.as_deref().into_iter().collect();
+    super::refuse_input_as_output(args.json.as_deref(), &inputs)?;
+    {
+        use super::bounds::{MAX_CAPACITY, MAX_REPS, MAX_TAU, all_at_most, at_most};
+        at_most("--reps", args.reps, MAX_REPS)?;
+        at_most("--session-reps", args.session_reps, MAX_REPS)?;
+        all_at_most("--budgets", &args.budgets, MAX_CAPACITY)?;
+        all_at_most("--taus", &args.taus, MAX_TAU)?;
+    }
     use crate::experiments::recognition::{StepBenchParams, bench_steps};
     let mut steps = Vec::new();
     println!("per observation, one thread (34 inputs, 10 classes, adaptation on unless noted):");

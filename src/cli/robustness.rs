@@ -75,6 +75,7 @@ pub struct RobustnessArgs {
 
 /// The parameters the arguments describe (checked by `validate` before any work).
 pub fn params_of(a: &RobustnessArgs) -> anyhow::Result<RobustnessParams> {
+    super::bounds::at_most("--reps", a.reps, super::bounds::MAX_REPS)?;
     let family: Family = a.family.parse()?;
     let mut p = RobustnessParams::defaults(family);
     if !a.methods.is_empty() {
@@ -145,6 +146,7 @@ pub fn params_of(a: &RobustnessArgs) -> anyhow::Result<RobustnessParams> {
 }
 
 pub fn run(a: RobustnessArgs) -> anyhow::Result<()> {
+    super::refuse_input_as_output(a.json.as_deref(), &[&a.session])?;
     let params = params_of(&a)?;
     let session = open_session(&a.session)?;
     let pool = rayon::ThreadPoolBuilder::new()

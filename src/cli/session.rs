@@ -166,29 +166,49 @@ fn write(s: &Session, output: &Path) -> anyhow::Result<()> {
 }
 
 pub fn import(args: ImportArgs) -> anyhow::Result<()> {
+    use crate::fsutil::refuse_input_as_output as refuse;
     match args.source {
         ImportSource::Icub {
             dir,
             output,
             include_full_coke,
         } => {
+            refuse(&output, &[&dir])?;
             let s = session::import_icub_with(&dir, &IcubOptions { include_full_coke })
                 .with_context(|| format!("importing the iCub dataset from {}", dir.display()))?;
             write(&s, &output)
         }
         ImportSource::Bts3 { csv, output } => {
+            refuse(&output, &[&csv])?;
             let s = session::import_bts3(&csv)
                 .with_context(|| format!("importing BTS3 grasps from {}", csv.display()))?;
             write(&s, &output)
         }
-        ImportSource::Mcap { bag, output, spec } => {
-            let spec = session::ImportSpec::load(&spec)?;
+        ImportSource::Mcap {
+            bag,
+            output,
+            spec: spec_path,
+        } => {
+            let spec = session::ImportSpec::load(&spec_path)?;
+            // The bag, each of its files, the spec and its windows CSV.
+            let files = session::bag::bag_files(&bag).unwrap_or_default();
+            let mut inputs: Vec<&Path> = vec![&bag, &spec_path];
+            inputs.extend(files.iter().map(PathBuf::as_path));
+            if let Some(session::spec::GraspCut::Windows(csv)) = &spec.cut {
+                inputs.push(csv);
+            }
+            refuse(&output, &inputs)?;
             let s = session::ros2::import_bag(&bag, &spec)
                 .with_context(|| format!("importing the ROS 2 bag {}", bag.display()))?;
             write(&s, &output)
         }
-        ImportSource::Csv { file, output, spec } => {
-            let spec = session::ImportSpec::load(&spec)?;
+        ImportSource::Csv {
+            file,
+            output,
+            spec: spec_path,
+        } => {
+            refuse(&output, &[&file, &spec_path])?;
+            let spec = session::ImportSpec::load(&spec_path)?;
             let s = session::long_csv::import_long_csv(&file, &spec)
                 .with_context(|| format!("importing the long-format CSV {}", file.display()))?;
             write(&s, &output)

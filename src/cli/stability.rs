@@ -174,6 +174,7 @@ pub fn parse_num_bases(s: &str) -> anyhow::Result<Vec<usize>> {
     if out.is_empty() {
         bail!("--num-bases is empty");
     }
+    super::bounds::all_at_most("--num-bases", &out, super::bounds::MAX_NUM_BASES)?;
     Ok(out)
 }
 
@@ -411,6 +412,7 @@ pub fn data_options(a: &StabilityArgs) -> DataOptions {
 }
 
 pub fn run(a: StabilityArgs) -> anyhow::Result<()> {
+    super::refuse_input_as_output(a.json.as_deref(), &[&a.session])?;
     let session = open(&a.session)?;
     let data = StabilityData::from_session(&session, &data_options(&a))?;
     let opts = options_from(&a, &data)?;
@@ -805,6 +807,8 @@ pub fn bench_report(b: &BenchReport) -> String {
 }
 
 pub fn run_bench(a: BenchStabilityArgs) -> anyhow::Result<()> {
+    super::bounds::at_most("--repeats", a.repeats, super::bounds::MAX_REPS)?;
+    super::refuse_input_as_output(a.json.as_deref(), &[&a.session])?;
     let b = in_pool(a.threads, || bench(&a))??;
     print!("{}", bench_report(&b));
     if let Some(path) = &a.json {

@@ -241,6 +241,7 @@ fn plan(a: PlanArgs) -> anyhow::Result<()> {
         bail!("--threads: a plan runs nothing; give the tasks' CPUs with --cpus");
     }
     let (experiment, session, source) = experiment_of(&a.experiment)?;
+    super::refuse_input_as_output(Some(&opts.out), &[source])?;
     let program = match &opts.program {
         Some(p) => p.clone(),
         None => std::env::current_exe()
@@ -285,7 +286,23 @@ fn plan(a: PlanArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The plan's size parameters within their maxima, before a shard allocates for them (a
+/// plan is a file anyone can edit).
+fn check_plan_sizes(dir: &Path) -> anyhow::Result<()> {
+    let path = dir.join(sweep::PLAN_FILE);
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        // Reading the plan reports its own errors.
+        return Ok(());
+    };
+    if let Ok(plan) = serde_json::from_str::<serde_json::Value>(&text) {
+        super::bounds::check_plan_sizes(&plan, sweep::PLAN_FILE)
+            .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?;
+    }
+    Ok(())
+}
+
 fn run_shard(a: RunArgs) -> anyhow::Result<()> {
+    check_plan_sizes(&a.dir)?;
     let out = in_pool(a.threads, || {
         with_progress(a.quiet, |p| sweep::run_shard(&a.dir, a.shard, p))
     })??;
@@ -327,7 +344,34 @@ fn status(a: StatusArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The files of a plan directory and of its folders (the plan, the session copy, the
+/// shards): a merge's inputs.
+fn plan_files(dir: &Path) -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    let mut dirs = vec![dir.to_path_buf()];
+    while let Some(d) = dirs.pop() {
+        for entry in std::fs::read_dir(&d).into_iter().flatten().flatten() {
+            let p = entry.path();
+            if p.is_dir() {
+                if d == dir {
+                    dirs.push(p);
+                }
+            } else {
+                files.push(p);
+            }
+        }
+    }
+    files
+}
+
 fn merge(a: MergeArgs) -> anyhow::Result<()> {
+    check_plan_sizes(&a.dir)?;
+    let files = plan_files(&a.dir);
+    let mut inputs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    inputs.push(&a.dir);
+    inputs.extend(a.expect.as_deref());
+    super::refuse_input_as_output(Some(&a.out), &inputs)?;
+    super::refuse_input_as_output(a.project.as_deref(), &inputs)?;
     let m = with_progress(a.quiet, |p| sweep::merge(&a.dir, p))?;
     let text = serde_json::to_string_pretty(&m.result)?;
     crate::fsutil::write_atomic(&a.out, text.as_bytes())

@@ -77,8 +77,10 @@ pub fn parse_bts3(text: &str, path: &Path) -> Result<Session, SessionError> {
             ),
         ));
     }
+    // Names are matched regardless of case (`Object`, `FF_biotac_1`): CSV headers are
+    // case-free, and spreadsheet tools capitalise them.
     for (i, (got, want)) in names.iter().zip(&expected).enumerate() {
-        if got != want {
+        if !got.eq_ignore_ascii_case(want) {
             return Err(SessionError::line(
                 path,
                 1,

@@ -72,7 +72,28 @@ struct Columns {
     key: Option<usize>,
 }
 
+/// A header naming one column twice: found by name, the second would be silently ignored.
+/// Names both columns (1-based) of the first repeated name; empty names are not compared.
+pub fn duplicate_column<S: AsRef<str>>(names: &[S]) -> Result<(), String> {
+    for (j, b) in names.iter().enumerate() {
+        let b = b.as_ref().trim();
+        if b.is_empty() {
+            continue;
+        }
+        if let Some(i) = names[..j].iter().position(|a| a.as_ref().trim() == b) {
+            return Err(format!(
+                "columns {} and {} are both named `{}`",
+                i + 1,
+                j + 1,
+                shorten(b)
+            ));
+        }
+    }
+    Ok(())
+}
+
 fn columns(names: &[Cow<'_, str>], spec: &ImportSpec) -> Result<Columns, String> {
+    duplicate_column(names)?;
     let find = |name: &str| names.iter().position(|n| n.trim() == name);
     let need = |name: &str| find(name).ok_or_else(|| format!("no `{name}` column"));
     Ok(Columns {

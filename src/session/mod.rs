@@ -2,6 +2,7 @@
 //! researchers' own recordings (ROS 2 bags, long-format CSVs, described by an import spec),
 //! the simulator of the sample sessions, and validation.
 
+pub mod align;
 pub mod bag;
 pub mod bts3;
 pub mod cdr;

@@ -1,18 +1,23 @@
 //! Importer of a researcher's ROS 2 bag (MCAP) with an import spec: the bag's streams are
-//! cut into grasps by a CSV of windows or by an event topic, and resampled onto the
-//! reference topic's stamps.
+//! cut into grasps by a CSV of windows or by an event topic, and aligned on the reference
+//! topic's stamps (see [`super::align`]).
 //!
+//! - A window is clipped to the bag's span (a note says so) and refused only when it holds
+//!   no frame.
 //! - The reference topic is the first sensor's. A grasp's frames are its messages whose
-//!   bag time lies in the grasp's window (both ends included); a frame's `t` is its time
+//!   bag time lies in the (clipped) window, both ends included; a frame's `t` is its time
 //!   from the window's start.
-//! - Every other topic (a sensor's or the joints') gives each frame its latest message at
-//!   or before the frame's time: values are held, never interpolated. Frames at the start
-//!   of a window before some topic's first message are left out.
+//! - Every other topic (a sensor's or the joints') gives each frame its message nearest in
+//!   time within the tolerance (the spec's `sync_tolerance_s`, default half the reference's
+//!   median period): values are never interpolated, and never come from farther than the
+//!   tolerance outside the window. A frame lacking a message of some topic within the
+//!   tolerance is left out, and the session's notes count it.
 //! - The key frame is the frame nearest to the `key` time where the windows CSV or a `key`
 //!   event gives one (the earlier on a tie), else the frame of greatest total pressure.
 
 use std::path::Path;
 
+use super::align;
 use super::bag::{self, Bag};
 use super::error::{bag_time, read_text, shorten};
 use super::long_csv::split_line;
@@ -62,23 +67,37 @@ pub fn import_bag(path: &Path, spec: &ImportSpec) -> Result<Session, SessionErro
     };
     let (windows, windows_file) = match (windows, events_topic) {
         (Some((csv, w)), _) => {
-            check_windows(&w, csv, span)?;
+            check_windows(&w, csv)?;
             (w, csv)
         }
         (None, Some(topic)) => (events_to_windows(&bag, path, topic, spec)?, path),
         (None, None) => unreachable!("a cut is either windows or events"),
     };
-    let grasps = cut_grasps(&bag, spec, &windows, windows_file, events_topic)?;
+    let tolerance = spec
+        .sync_tolerance_ns
+        .unwrap_or_else(|| align::default_tolerance(&bag.tactile[0].stamps));
+    let cut = cut_grasps(
+        &bag,
+        spec,
+        &windows,
+        windows_file,
+        events_topic,
+        span,
+        tolerance,
+    )?;
     let how = format!(
-        "Frames: the messages of `{}` inside each grasp's {}; other topics held at their \
-         latest message.",
+        "Frames: the messages of `{}` inside each grasp's {}; every other topic gives each \
+         frame its message nearest in time within {} ms.{}",
         bag.tactile[0].topic,
-        match cut {
-            GraspCut::Windows(csv) => format!("window of {}", super::file_name(csv)),
-            GraspCut::Events(t) => format!("start and end events on `{t}`"),
-        }
+        match spec.cut.as_ref() {
+            Some(GraspCut::Windows(csv)) => format!("window of {}", super::file_name(csv)),
+            Some(GraspCut::Events(t)) => format!("start and end events on `{t}`"),
+            None => String::new(),
+        },
+        tolerance as f64 / 1e6,
+        cut.notes(&bag),
     );
-    assemble(spec, path, "ROS 2 bag", &how, grasps)
+    assemble(spec, path, "ROS 2 bag", &how, cut.grasps)
 }
 
 /// Seconds of bag time, as a windows CSV writes them (`1700000000.153` or with all nine
@@ -112,6 +131,8 @@ fn read_windows(csv: &Path, spec: &ImportSpec) -> Result<Vec<Window>, SessionErr
     };
     let header_line = text.lines().position(|l| !l.trim().is_empty()).unwrap_or(0) + 1;
     let names = split_line(header.trim_start_matches('\u{feff}'))
+        .map_err(|m| SessionError::line(csv, header_line, m))?;
+    super::long_csv::duplicate_column(&names)
         .map_err(|m| SessionError::line(csv, header_line, m))?;
     let col = |name: &str| names.iter().position(|n| n.trim() == name);
     let need = |name: &str| {
@@ -218,27 +239,12 @@ fn read_windows(csv: &Path, spec: &ImportSpec) -> Result<Vec<Window>, SessionErr
     Ok(windows)
 }
 
-/// Windows must lie inside the bag and must not overlap.
-fn check_windows(windows: &[Window], csv: &Path, span: (u64, u64)) -> Result<(), SessionError> {
+/// Windows must not overlap (whether they reach into the bag is checked when cutting).
+fn check_windows(windows: &[Window], csv: &Path) -> Result<(), SessionError> {
     let line = |w: &Window| match w.origin {
         Origin::Line(l) => l,
         Origin::Event(_) => 0,
     };
-    for w in windows {
-        if w.start < span.0 || w.end > span.1 {
-            return Err(SessionError::line(
-                csv,
-                line(w),
-                format!(
-                    "the window {}–{} s falls outside the bag, which spans {}–{} s",
-                    bag_time(w.start),
-                    bag_time(w.end),
-                    bag_time(span.0),
-                    bag_time(span.1)
-                ),
-            ));
-        }
-    }
     let mut order: Vec<&Window> = windows.iter().collect();
     order.sort_by_key(|w| (w.start, line(w)));
     for pair in order.windows(2) {
@@ -352,9 +358,50 @@ fn events_to_windows(
     Ok(windows)
 }
 
-/// Index of the latest stamp at or before `t`.
-fn latest(stamps: &[u64], t: u64) -> Option<usize> {
-    stamps.partition_point(|&s| s <= t).checked_sub(1)
+/// The grasps cut from a bag, with what the alignment left out.
+struct Cut {
+    grasps: Vec<RawGrasp>,
+    /// Frames left out, per topic of `Bag::tactile` then the joints (last), that lacked a
+    /// message within the tolerance (a frame may lack several).
+    lacking: Vec<usize>,
+    left_out: usize,
+    clipped: usize,
+}
+
+impl Cut {
+    /// The alignment's notes for the session, empty when nothing was left out or clipped.
+    fn notes(&self, bag: &Bag) -> String {
+        let mut out = String::new();
+        if self.left_out > 0 {
+            let topics: Vec<&str> = bag
+                .tactile
+                .iter()
+                .map(|t| t.topic.as_str())
+                .chain(bag.joints.as_ref().map(|j| j.topic.as_str()))
+                .collect();
+            let which: Vec<String> = self
+                .lacking
+                .iter()
+                .zip(&topics)
+                .filter(|(n, _)| **n > 0)
+                .map(|(n, t)| format!("`{t}` in {n}"))
+                .collect();
+            out += &format!(
+                " {} frame{} left out for lacking a message within the tolerance ({}).",
+                self.left_out,
+                if self.left_out == 1 { " was" } else { "s were" },
+                which.join(", ")
+            );
+        }
+        if self.clipped > 0 {
+            out += &format!(
+                " {} window{} clipped to the bag's span.",
+                self.clipped,
+                if self.clipped == 1 { " was" } else { "s were" }
+            );
+        }
+        out
+    }
 }
 
 fn cut_grasps(
@@ -363,7 +410,9 @@ fn cut_grasps(
     windows: &[Window],
     windows_file: &Path,
     events_topic: Option<&str>,
-) -> Result<Vec<RawGrasp>, SessionError> {
+    span: (u64, u64),
+    tolerance: u64,
+) -> Result<Cut, SessionError> {
     let reference = &bag.tactile[0];
     // Which topic, and where in its rows, each sensor's values are.
     let places: Vec<(usize, std::ops::Range<usize>)> = spec
@@ -379,56 +428,94 @@ fn cut_grasps(
         })
         .collect();
     let n_joints = spec.encoder_names().len();
-    let mut grasps = Vec::with_capacity(windows.len());
+    let n_topics = bag.tactile.len();
+    let mut cut = Cut {
+        grasps: Vec::with_capacity(windows.len()),
+        lacking: vec![0; n_topics + 1],
+        left_out: 0,
+        clipped: 0,
+    };
+    let mut rows = vec![0usize; n_topics];
     for w in windows {
-        let first = reference.stamps.partition_point(|&s| s < w.start);
-        let last = reference.stamps.partition_point(|&s| s <= w.end);
+        let where_ = |m: String| match (w.origin, events_topic) {
+            (Origin::Line(l), _) => SessionError::line(windows_file, l, m),
+            (Origin::Event(t), Some(topic)) => SessionError::topic(windows_file, topic, Some(t), m),
+            (Origin::Event(_), None) => SessionError::file(windows_file, m),
+        };
+        let (start, end) = (w.start.max(span.0), w.end.min(span.1));
+        if start > end {
+            return Err(where_(format!(
+                "the window {}–{} s falls outside the bag, which spans {}–{} s, and holds no \
+                 frame",
+                bag_time(w.start),
+                bag_time(w.end),
+                bag_time(span.0),
+                bag_time(span.1)
+            )));
+        }
+        if (start, end) != (w.start, w.end) {
+            cut.clipped += 1;
+        }
+        let first = reference.stamps.partition_point(|&s| s < start);
+        let last = reference.stamps.partition_point(|&s| s <= end);
         let mut frames = Vec::with_capacity(last - first);
         let mut stamps = Vec::with_capacity(last - first);
-        'frames: for i in first..last {
+        for i in first..last {
             let t = reference.stamps[i];
-            let mut taxels = Vec::with_capacity(places.len());
-            for (topic, range) in &places {
-                let tt = &bag.tactile[*topic];
-                let row = if *topic == 0 {
+            // Each topic's nearest message within the tolerance; the reference's is its own.
+            let mut complete = true;
+            for (k, tt) in bag.tactile.iter().enumerate() {
+                match if k == 0 {
                     Some(i)
                 } else {
-                    latest(&tt.stamps, t)
-                };
-                let Some(row) = row else {
-                    continue 'frames;
-                };
-                taxels.push(tt.row(row)[range.clone()].to_vec());
+                    align::nearest(&tt.stamps, t, tolerance)
+                } {
+                    Some(row) => rows[k] = row,
+                    None => {
+                        cut.lacking[k] += 1;
+                        complete = false;
+                    }
+                }
             }
-            let encoders = match &bag.joints {
-                Some(j) => match latest(&j.stamps, t) {
-                    Some(row) => j.values[row * n_joints..(row + 1) * n_joints].to_vec(),
-                    None => continue 'frames,
-                },
-                None => Vec::new(),
+            let joint_row = match &bag.joints {
+                Some(j) => {
+                    let row = align::nearest(&j.stamps, t, tolerance);
+                    if row.is_none() {
+                        cut.lacking[n_topics] += 1;
+                        complete = false;
+                    }
+                    row
+                }
+                None => None,
+            };
+            if !complete {
+                cut.left_out += 1;
+                continue;
+            }
+            let taxels = places
+                .iter()
+                .map(|(topic, range)| bag.tactile[*topic].row(rows[*topic])[range.clone()].to_vec())
+                .collect();
+            let encoders = match (&bag.joints, joint_row) {
+                (Some(j), Some(row)) => j.values[row * n_joints..(row + 1) * n_joints].to_vec(),
+                _ => Vec::new(),
             };
             frames.push(Frame {
-                t: (t - w.start) as f64 / 1e9,
+                t: (t - start) as f64 / 1e9,
                 taxels,
                 encoders,
             });
             stamps.push(t);
         }
         if frames.is_empty() {
-            let m = format!(
-                "the grasp {}–{} s holds no message of `{}` with every other topic already \
-                 publishing",
+            return Err(where_(format!(
+                "the grasp {}–{} s holds no frame: no message of `{}` inside it has a message \
+                 of every other topic within {} ms",
                 bag_time(w.start),
                 bag_time(w.end),
-                reference.topic
-            );
-            return Err(match (w.origin, events_topic) {
-                (Origin::Line(l), _) => SessionError::line(windows_file, l, m),
-                (Origin::Event(t), Some(topic)) => {
-                    SessionError::topic(windows_file, topic, Some(t), m)
-                }
-                (Origin::Event(_), None) => SessionError::file(windows_file, m),
-            });
+                reference.topic,
+                tolerance as f64 / 1e6
+            )));
         }
         let key_frame = w.key.map(|k| {
             // The nearest stamp; the earlier one on a tie.
@@ -439,14 +526,14 @@ fn cut_grasps(
                 after
             }
         });
-        grasps.push(RawGrasp {
+        cut.grasps.push(RawGrasp {
             object: w.object.clone(),
             classes: w.classes.clone(),
             frames,
             key_frame,
         });
     }
-    Ok(grasps)
+    Ok(cut)
 }
 
 #[cfg(test)]

@@ -33,6 +33,9 @@ use super::{
     bts3, file_name, file_stem, icub, key_frame_by_pressure, validate,
 };
 
+/// The largest `sync_tolerance_s`: an hour, far beyond any two topics of one recording.
+const MAX_SYNC_TOLERANCE_S: f64 = 3600.0;
+
 /// The label set every imported session has: the grasped object.
 pub const OBJECT: &str = "object";
 
@@ -43,6 +46,8 @@ struct SpecFile {
     name: Option<String>,
     #[serde(default)]
     frame_rate_hz: Option<f64>,
+    #[serde(default)]
+    sync_tolerance_s: Option<f64>,
     sensors: Vec<SensorFile>,
     #[serde(default)]
     joints: Option<JointsSpec>,
@@ -123,6 +128,9 @@ pub struct ImportSpec {
     pub path: PathBuf,
     pub name: Option<String>,
     pub frame_rate_hz: Option<f64>,
+    /// Bags: how far (ns) another topic's message may lie from a frame and still be its
+    /// value (default: half the reference topic's median period).
+    pub sync_tolerance_ns: Option<u64>,
     pub sensors: Vec<SensorSpec>,
     pub joints: Option<JointsSpec>,
     /// The label sets as the spec gives them; `object` may be among them to fix its classes.
@@ -198,6 +206,18 @@ impl ImportSpec {
                 format!("{hz} is not a positive frame rate"),
             ));
         }
+        let sync_tolerance_ns = match file.sync_tolerance_s {
+            None => None,
+            Some(s) if s.is_finite() && (0.0..=MAX_SYNC_TOLERANCE_S).contains(&s) => {
+                Some((s * 1e9).round() as u64)
+            }
+            Some(s) => {
+                return Err(err(
+                    "sync_tolerance_s".into(),
+                    format!("{s} is not a tolerance in seconds from 0 to {MAX_SYNC_TOLERANCE_S}"),
+                ));
+            }
+        };
         if file.sensors.is_empty() {
             return Err(err("sensors".into(), "the spec has no sensors".into()));
         }
@@ -348,6 +368,7 @@ impl ImportSpec {
             path: path.to_path_buf(),
             name: file.name,
             frame_rate_hz: file.frame_rate_hz,
+            sync_tolerance_ns,
             sensors,
             joints: file.joints,
             label_sets: file.label_sets,

@@ -426,7 +426,36 @@ fn read_shard(
             path.display()
         ));
     }
+    with_experiment!(&plan.experiment, e => outputs_fit(e, &f))
+        .map_err(|m| format!("{}: {m}", path.display()))?;
     Ok(Some(f))
+}
+
+/// Checks that every output of a shard has the experiment's output shape, so that a shard
+/// is only called done when the merge can read it.
+fn outputs_fit<E: Sweepable>(_: &E, f: &ShardFile) -> Result<(), String> {
+    for (item, v) in f.items.iter().zip(&f.outputs) {
+        serde_json::from_value::<E::Output>(v.clone())
+            .map_err(|err| format!("the output of item {item} is not of its shape ({err})"))?;
+    }
+    Ok(())
+}
+
+/// Checks the plan's copy of the session against the plan's content hash, without parsing
+/// it.
+fn check_session_copy(dir: &Path, plan: &Plan) -> Result<(), SweepError> {
+    let path = dir.join(&plan.session.file);
+    let bytes = fs::read(&path).map_err(|e| io_err(&path, e))?;
+    let hash = content_hash(&bytes);
+    if hash != plan.session.hash {
+        return Err(SweepError::Mismatch(format!(
+            "{}: content hash {hash} is not the plan's {}: the session copy was changed or \
+             replaced since the plan was made",
+            path.display(),
+            plan.session.hash
+        )));
+    }
+    Ok(())
 }
 
 /// Temporary files a killed run of the shard left behind.
@@ -579,6 +608,7 @@ impl Status {
 /// The state of every shard of the plan in `dir`.
 pub fn status(dir: &Path) -> Result<Status, SweepError> {
     let (plan, plan_hash) = read_plan(dir)?;
+    check_session_copy(dir, &plan)?;
     let shards = (0..plan.shard_count())
         .map(|i| match read_shard(dir, i, &plan, &plan_hash) {
             Ok(Some(f)) => ShardState::Done {
