@@ -280,7 +280,7 @@ impl Analyses {
             None,
             "Reopening the last run's results".into(),
             move |_| {
-                let project = project::Project::load(&path).map_err(JobError::failed)?;
+                let project = crate::experiments::project::Project::load(&path).map_err(JobError::failed)?;
                 Ok(JobOutput::Restored(project))
             },
         );
@@ -298,7 +298,7 @@ impl Analyses {
             return;
         }
         self.keep_pending = false;
-        let project = project::Project::new(sessions, self.results.clone())
+        let project = crate::experiments::project::Project::new(sessions, self.results.clone())
             .with_frontiers(self.frontiers.clone());
         self.spawn(ctx, None, KEEP_JOB.into(), move |_| {
             if let Some(dir) = path.parent() {
