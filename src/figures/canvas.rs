@@ -9,7 +9,7 @@ use plotters::style::FontTransform;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::FigureError;
-use super::model::Rgb;
+use super::colormap::Rgb;
 
 /// The family name the embedded font is registered under.
 pub(super) const FONT: &str = "sans-serif";

@@ -44,6 +44,7 @@ mod render;
 
 use std::path::PathBuf;
 
+pub use colormap::Rgb;
 pub use colormap::{ColorMap, series_color};
 pub use csv::to_csv;
 pub use export::{
@@ -51,8 +52,8 @@ pub use export::{
 };
 pub use model::{
     Axis, AxisTitle, BarChart, BarGroup, Chart, ColorScale, ErrorDisplay, ErrorRange, Figure,
-    FigureEntry, FigureKind, FigureSet, GridImage, Heatmap, ImageGrid, Orientation, RefLine, Rgb,
-    Scale, Series, SeriesStyle, pareto_front,
+    FigureEntry, FigureKind, FigureSet, GridImage, Heatmap, ImageGrid, Orientation, RefLine, Scale,
+    Series, SeriesStyle, pareto_front,
 };
 
 #[derive(Debug, thiserror::Error)]

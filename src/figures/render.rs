@@ -6,10 +6,10 @@ use plotters::style::text_anchor::HPos;
 
 use super::FigureError;
 use super::canvas::{AXIS, Canvas, GRID, MUTED, Marker, TEXT, WHITE};
-use super::colormap::{ColorMap, series_color};
+use super::colormap::{ColorMap, Rgb, series_color};
 use super::model::{
     Axis, BarChart, Chart, ColorScale, ErrorDisplay, Figure, FigureKind, Heatmap, ImageGrid,
-    Orientation, Rgb, Scale, Series, SeriesStyle,
+    Orientation, Scale, Series, SeriesStyle,
 };
 
 // Font sizes (em, CSS pixels at 96 DPI).
