@@ -2,7 +2,7 @@
 //! Each subcommand lives in its own file with its `clap::Args` struct and a `run`.
 
 pub mod baselines;
-mod figures;
+pub mod figures;
 pub mod frontier;
 pub mod paper_figures;
 mod progress;

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
+use super::figures::Preset;
 use super::progress::with_progress;
 use super::recognition::open_session;
 use crate::cluster::baselines::{BaselinesParams, grid_for, run_baselines};
@@ -25,7 +26,7 @@ use crate::experiments::stability::{
 };
 use crate::experiments::stability_report::stability_report;
 use crate::features::FeatureSet;
-use crate::figures::{FigureEntry, Format, RenderOptions, export_all};
+use crate::figures::{FigureEntry, FigureSet, Format, RenderOptions, export_all};
 use crate::jobs::Progress;
 use crate::session::Session;
 
@@ -65,6 +66,10 @@ pub struct PaperFiguresArgs {
     pub reps: usize,
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// A size for a paper (a 3.5-in column or a 7-in page at 300 DPI); replaces --width,
+    /// --height and --dpi.
+    #[arg(long, value_enum)]
+    pub preset: Option<Preset>,
     #[arg(long, default_value_t = 960)]
     pub width: u32,
     #[arg(long, default_value_t = 640)]
@@ -80,9 +85,36 @@ pub struct PaperFiguresArgs {
 }
 
 pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
+    let set = figures(&a)?;
+    let opts = a.preset.map_or(
+        RenderOptions {
+            width: a.width,
+            height: a.height,
+            dpi: a.dpi,
+        },
+        Preset::options,
+    );
+    let t0 = std::time::Instant::now();
+    let index = export_all(
+        &set,
+        &a.out_dir,
+        &[Format::Svg, Format::Pdf, Format::Png, Format::Csv],
+        &opts,
+    )?;
+    println!(
+        "wrote {} figures to {} in {:.2} s",
+        index.entries.len(),
+        a.out_dir.display(),
+        t0.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// Run the experiment and gather every figure of it (saving the project when asked).
+pub fn figures(a: &PaperFiguresArgs) -> anyhow::Result<FigureSet> {
     let session = open_session(&a.session)?;
     let name = session.meta.name.clone();
-    let (results, frontiers) = with_progress(a.quiet, |p| experiment_results(&a, &session, p))?;
+    let (results, frontiers) = with_progress(a.quiet, |p| experiment_results(a, &session, p))?;
     if let Some(path) = &a.project {
         Project::new(vec![a.session.display().to_string()], results.clone())
             .with_frontiers(frontiers.clone())
@@ -103,25 +135,7 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
             date: crate::experiments::report::date_text(crate::experiments::report::now_unix()),
         });
     }
-    let opts = RenderOptions {
-        width: a.width,
-        height: a.height,
-        dpi: a.dpi,
-    };
-    let t0 = std::time::Instant::now();
-    let index = export_all(
-        &set,
-        &a.out_dir,
-        &[Format::Svg, Format::Png, Format::Csv],
-        &opts,
-    )?;
-    println!(
-        "wrote {} figures to {} in {:.2} s",
-        index.entries.len(),
-        a.out_dir.display(),
-        t0.elapsed().as_secs_f64()
-    );
-    Ok(())
+    Ok(set)
 }
 
 /// The frontiers' figures, one set per score and time unit (DS/GS accuracy per step; the

@@ -1,90 +1,17 @@
 //! Grouped bar charts and their category labels.
 
 use plotters::prelude::DrawingBackend;
-use plotters::style::text_anchor::HPos;
 
-use super::frame::{axes, frame};
-use super::legend::{LegendEntry, draw_legend, fit_legend};
+use super::categories::{CategoryLabels, category_labels, draw_category_label};
+use super::frame::{Frame, axes, draw_grid, frame};
+use super::legend::{Legend, LegendEntry, Obstacles, Placement};
 use super::scale::limits;
-use super::{Rect, TICK_EM, missing_note, truncated};
+use super::{Rect, TICK_EM, missing_note};
 use crate::figures::FigureError;
-use crate::figures::canvas::{AXIS, Canvas, TEXT};
-use crate::figures::colormap::{ColorMap, series_color};
-use crate::figures::model::BarChart;
-
-/// Which category labels to draw: every `step`-th, rotated or not, and the height taken.
-#[derive(Clone, Copy)]
-pub(super) struct CategoryLabels {
-    pub(super) step: usize,
-    pub(super) rotated: bool,
-    pub(super) height: f64,
-    /// Room one label needs along the axis.
-    pub(super) needed: f64,
-}
-
-impl CategoryLabels {
-    /// The same layout for the final slot width: only how many labels are skipped changes,
-    /// so that the height already reserved stays right.
-    pub(super) fn for_slot(self, slot: f64) -> Self {
-        let step = (self.needed / slot.max(1e-9)).ceil().max(1.0) as usize;
-        CategoryLabels { step, ..self }
-    }
-}
-
-pub(super) fn category_labels<DB: DrawingBackend>(
-    c: &Canvas<'_, DB>,
-    labels: &[String],
-    slot: f64,
-    em: f64,
-) -> Result<CategoryLabels, FigureError> {
-    let mut widest: f64 = 0.0;
-    for l in labels {
-        widest = widest.max(c.text_size(l, em)?.0);
-    }
-    let line_h = c.px(em * 1.2);
-    let gap = c.px(6.0);
-    // Long names that do not fit read better rotated; short ones (indices) are thinned out.
-    let rotated = widest + gap > slot && widest > c.px(em * 3.0);
-    let layout = if rotated {
-        CategoryLabels {
-            step: 1,
-            rotated,
-            height: widest.min(c.px(160.0)),
-            needed: line_h,
-        }
-    } else {
-        CategoryLabels {
-            step: 1,
-            rotated,
-            height: line_h,
-            needed: widest + gap,
-        }
-    };
-    Ok(layout.for_slot(slot))
-}
-
-pub(super) fn draw_category_label<DB: DrawingBackend>(
-    c: &Canvas<'_, DB>,
-    label: &str,
-    x: f64,
-    top: f64,
-    em: f64,
-    layout: &CategoryLabels,
-) -> Result<(), FigureError> {
-    if layout.rotated {
-        let label = truncated(c, label, em, layout.height)?;
-        c.text(&label, (x, top), em, TEXT, HPos::Right, true)
-    } else {
-        c.text(
-            label,
-            (x, top + c.px(em * 0.6)),
-            em,
-            TEXT,
-            HPos::Center,
-            false,
-        )
-    }
-}
+use crate::figures::canvas::{AXIS, Canvas};
+use crate::figures::colormap::{ColorMap, Rgb, series_color};
+use crate::figures::layout::Bounds;
+use crate::figures::model::{BarChart, BarGroup};
 
 pub(super) fn draw_bars<DB: DrawingBackend>(
     c: &Canvas<'_, DB>,
@@ -92,7 +19,6 @@ pub(super) fn draw_bars<DB: DrawingBackend>(
     area: Rect,
 ) -> Result<(), FigureError> {
     let n = bars.categories.len();
-    let ng = bars.groups.len();
     let mut values = vec![0.0];
     for g in &bars.groups {
         for (k, &v) in g.values.iter().enumerate() {
@@ -104,102 +30,148 @@ pub(super) fn draw_bars<DB: DrawingBackend>(
             }
         }
     }
-    let (ylo, yhi) = limits(&values, &bars.y, 0.05);
-    let sign_pos = ColorMap::Diverging.at(0.85);
-    let sign_neg = ColorMap::Diverging.at(0.15);
-    let mut entries: Vec<LegendEntry> = if bars.sign_colors {
-        let missing = bars.groups[0]
-            .values
-            .iter()
-            .filter(|v| !v.is_finite())
-            .count();
-        vec![
-            LegendEntry {
-                name: missing_note(&format!("{} > 0", bars.groups[0].name), missing),
-                color: sign_pos,
-                line: false,
-                marker: None,
-                band: false,
-                bar: true,
-            },
-            LegendEntry {
-                name: format!("{} < 0", bars.groups[0].name),
-                color: sign_neg,
-                line: false,
-                marker: None,
-                band: false,
-                bar: true,
-            },
-        ]
-    } else {
-        bars.groups
-            .iter()
-            .enumerate()
-            .map(|(i, g)| LegendEntry {
-                name: missing_note(&g.name, g.values.iter().filter(|v| !v.is_finite()).count()),
-                color: g.color.unwrap_or(series_color(i)),
-                line: false,
-                marker: None,
-                band: false,
-                bar: true,
-            })
-            .collect()
-    };
-    let show_legend = ng > 1 || bars.sign_colors || entries[0].name != bars.groups[0].name;
-    let mut body = area;
-    if show_legend {
-        let lw = fit_legend(c, &mut entries, area.w() * 0.4)?;
-        body.r -= lw + c.px(12.0);
-    }
+    let (ylo, yhi) = limits(&values, &bars.y, 0.05)?;
+    let entries = legend_entries(bars);
+    let colors: Vec<Rgb> = entries.iter().map(|e| e.color).collect();
+    let show_legend =
+        bars.groups.len() > 1 || bars.sign_colors || entries[0].name != bars.groups[0].name;
     // The label layout needs the slot width, which needs the y-label width: estimate the
     // slot from the body, then lay out the frame with the labels' height.
-    let slot_estimate = (body.w() - c.px(60.0)) / n as f64;
-    let labels = category_labels(c, &bars.categories, slot_estimate, TICK_EM)?;
-    let f = frame(c, body, &bars.y, (ylo, yhi), None, labels.height)?;
-    let slot = f.plot.w() / n as f64;
-    let labels = labels.for_slot(slot);
-    let bar_w = slot * 0.8 / ng as f64;
-    let inset = if bar_w > c.px(4.0) { c.px(0.5) } else { 0.0 };
+    let layout = |body: Rect| -> Result<(Frame, CategoryLabels), FigureError> {
+        let slot_estimate = (body.w() - c.px(60.0)) / n as f64;
+        let max_h = c.px(160.0).min(body.h() * 0.3);
+        let labels = category_labels(c, &bars.categories, slot_estimate, TICK_EM, max_h)?;
+        let f = frame(c, body, &bars.y, (ylo, yhi), None, labels.height)?;
+        let labels = labels.for_slot(f.plot.w() / n as f64);
+        Ok((f, labels))
+    };
+    let (mut f, mut labels) = layout(area)?;
+    let mut legend = None;
+    let mut body = area;
+    if show_legend {
+        let mut l = Legend::new(c, entries, area.w() * 0.45)?;
+        let data = Obstacles {
+            marks: bar_rects(bars, &f).into_iter().map(|(_, _, r)| r).collect(),
+            segments: Vec::new(),
+        };
+        let placement = match l.inside(f.plot, &data, c.px(4.0)) {
+            Some((x, y)) => Placement::Inside(x, y),
+            None => {
+                let placement;
+                (body, placement) = l.outside(c, area)?;
+                (f, labels) = layout(body)?;
+                placement
+            }
+        };
+        legend = Some((l, placement));
+    }
+    draw_grid(c, &f)?;
     let y0 = f.y.map(0.0);
-    for (gi, g) in bars.groups.iter().enumerate() {
-        for (k, &v) in g.values.iter().enumerate() {
-            if !v.is_finite() {
-                continue;
-            }
-            let x0 = f.plot.l + slot * (k as f64 + 0.1) + bar_w * gi as f64;
-            let color = if bars.sign_colors {
-                if v >= 0.0 { sign_pos } else { sign_neg }
-            } else {
-                entries[gi].color
-            };
-            c.fill_rect((x0 + inset, y0), (x0 + bar_w - inset, f.y.map(v)), color)?;
-            if let Some(e) = g
-                .error
-                .as_ref()
-                .map(|e| e[k].abs())
-                .filter(|e| e.is_finite() && *e > 0.0)
-            {
-                let x = x0 + bar_w / 2.0;
-                let (ya, yb) = (f.y.map(v - e), f.y.map(v + e));
-                let cap = (bar_w * 0.25).min(c.px(4.0));
-                c.line((x, ya), (x, yb), AXIS, 1.0)?;
-                c.line((x - cap, ya), (x + cap, ya), AXIS, 1.0)?;
-                c.line((x - cap, yb), (x + cap, yb), AXIS, 1.0)?;
-            }
+    for (gi, k, r) in bar_rects(bars, &f) {
+        let v = bars.groups[gi].values[k];
+        let color = if bars.sign_colors {
+            colors[if v >= 0.0 { 0 } else { 1 }]
+        } else {
+            colors[gi]
+        };
+        let inset = if r.w() > c.px(4.0) { c.px(0.5) } else { 0.0 };
+        c.note_data(Bounds::new(r.l + inset, r.t, r.r - inset, r.b));
+        c.fill_rect((r.l + inset, r.t), (r.r - inset, r.b), color)?;
+        if let Some(e) = bars.groups[gi].error.as_ref().map(|e| e[k].abs())
+            && e.is_finite()
+            && e > 0.0
+        {
+            let x = (r.l + r.r) / 2.0;
+            let (ya, yb) = (f.y.map(v - e), f.y.map(v + e));
+            let cap = (r.w() * 0.25).min(c.px(4.0));
+            c.line((x, ya), (x, yb), AXIS, 1.0)?;
+            c.line((x - cap, ya), (x + cap, ya), AXIS, 1.0)?;
+            c.line((x - cap, yb), (x + cap, yb), AXIS, 1.0)?;
         }
     }
     if ylo < 0.0 {
         c.line((f.plot.l, y0), (f.plot.r, y0), AXIS, 1.0)?;
     }
-    axes(c, &f, area, &bars.x.text(), &bars.y.text())?;
+    axes(c, &f, body, &bars.x.text(), &bars.y.text())?;
     let tick = c.px(4.0);
+    let slot = f.plot.w() / n as f64;
+    let shown: Vec<String> = bars
+        .categories
+        .iter()
+        .step_by(labels.step)
+        .cloned()
+        .collect();
+    c.note_axis(&bars.x.text(), Some(n), &shown);
     for (k, label) in bars.categories.iter().enumerate().step_by(labels.step) {
         let x = f.plot.l + slot * (k as f64 + 0.5);
         c.line((x, f.plot.b), (x, f.plot.b + tick), AXIS, 1.0)?;
-        draw_category_label(c, label, x, f.plot.b + tick + c.px(4.0), TICK_EM, &labels)?;
+        draw_category_label(c, label, x, f.plot.b + tick + c.px(4.0), &labels)?;
     }
-    if show_legend {
-        draw_legend(c, &entries, body.r + c.px(12.0), f.plot.t)?;
+    if let Some((l, placement)) = &legend {
+        let at = l.origin(*placement, f.plot, area);
+        l.draw(c, at, matches!(placement, Placement::Inside(..)))?;
     }
     Ok(())
+}
+
+/// Every drawn bar as (group, category, its rectangle from 0 to the value).
+fn bar_rects(bars: &BarChart, f: &Frame) -> Vec<(usize, usize, Rect)> {
+    let n = bars.categories.len();
+    let slot = f.plot.w() / n as f64;
+    let bar_w = slot * 0.8 / bars.groups.len() as f64;
+    let y0 = f.y.map(0.0);
+    let mut out = Vec::new();
+    for (gi, g) in bars.groups.iter().enumerate() {
+        for (k, &v) in g.values.iter().enumerate() {
+            if v.is_finite() {
+                let l = f.plot.l + slot * (k as f64 + 0.1) + bar_w * gi as f64;
+                let y = f.y.map(v);
+                out.push((
+                    gi,
+                    k,
+                    Rect {
+                        l,
+                        r: l + bar_w,
+                        t: y.min(y0),
+                        b: y.max(y0),
+                    },
+                ));
+            }
+        }
+    }
+    out
+}
+
+/// One entry per group in its colour; with sign colours, one per sign.
+fn legend_entries(bars: &BarChart) -> Vec<LegendEntry> {
+    let entry = |name: String, color: Rgb| LegendEntry {
+        name,
+        color,
+        line: false,
+        marker: None,
+        band: false,
+        bar: true,
+    };
+    let missing = |g: &BarGroup| g.values.iter().filter(|v| !v.is_finite()).count();
+    if bars.sign_colors {
+        let g = &bars.groups[0];
+        vec![
+            entry(
+                missing_note(&format!("{} > 0", g.name), missing(g)),
+                ColorMap::Diverging.at(0.85),
+            ),
+            entry(format!("{} < 0", g.name), ColorMap::Diverging.at(0.15)),
+        ]
+    } else {
+        bars.groups
+            .iter()
+            .enumerate()
+            .map(|(i, g)| {
+                entry(
+                    missing_note(&g.name, missing(g)),
+                    g.color.unwrap_or(series_color(i)),
+                )
+            })
+            .collect()
+    }
 }

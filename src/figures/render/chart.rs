@@ -3,13 +3,14 @@
 use plotters::prelude::DrawingBackend;
 use plotters::style::text_anchor::HPos;
 
-use super::frame::{Frame, axes, frame};
-use super::legend::{LegendEntry, draw_legend, fit_legend};
+use super::frame::{Frame, axes, draw_grid, frame};
+use super::legend::{Legend, LegendEntry, Obstacles, Placement};
 use super::scale::limits;
 use super::{NOTE_EM, Rect, TICK_EM, missing_note};
 use crate::figures::FigureError;
 use crate::figures::canvas::{Canvas, MUTED, Marker, TEXT};
-use crate::figures::colormap::series_color;
+use crate::figures::colormap::{Rgb, series_color};
+use crate::figures::layout::Bounds;
 use crate::figures::model::{Chart, ErrorDisplay, Orientation, Series, SeriesStyle};
 
 pub(super) fn draw_chart<DB: DrawingBackend>(
@@ -17,13 +18,62 @@ pub(super) fn draw_chart<DB: DrawingBackend>(
     chart: &Chart,
     area: Rect,
 ) -> Result<(), FigureError> {
+    let [(xlo, xhi), (ylo, yhi)] = chart_limits(chart)?;
+    let entries = legend_entries(chart);
+    let colors: Vec<Rgb> = entries.iter().map(|e| e.color).collect();
+    let show_legend =
+        chart.series.len() > 1 || entries.iter().any(|e| e.name != chart.series[0].name);
+    let tick_label_h = c.px(TICK_EM * 1.2);
+    let layout = |body: Rect| {
+        frame(
+            c,
+            body,
+            &chart.y,
+            (ylo, yhi),
+            Some((&chart.x, xlo, xhi)),
+            tick_label_h,
+        )
+    };
+    let mut f = layout(area)?;
+    let mut legend = None;
+    let mut body = area;
+    if show_legend {
+        let mut l = Legend::new(c, entries, area.w() * 0.45)?;
+        let placement = match l.inside(f.plot, &obstacles(c, chart, &f), c.px(4.0)) {
+            Some((x, y)) => Placement::Inside(x, y),
+            None => {
+                let placement;
+                (body, placement) = l.outside(c, area)?;
+                f = layout(body)?;
+                placement
+            }
+        };
+        legend = Some((l, placement));
+    }
+    draw_grid(c, &f)?;
+    draw_bands(c, chart, &f, &colors)?;
+    for (i, s) in chart.series.iter().enumerate() {
+        draw_series(c, chart, s, i, &f, colors[i])?;
+    }
+    axes(c, &f, body, &chart.x.text(), &chart.y.text())?;
+    // Labels avoid the legend, then each other.
+    let mut placed = Vec::new();
+    if let Some((l, placement)) = &legend {
+        let at = l.origin(*placement, f.plot, area);
+        placed.push(l.draw(c, at, matches!(placement, Placement::Inside(..)))?);
+    }
+    draw_ref_lines(c, chart, &f, &mut placed)?;
+    draw_point_labels(c, chart, &f, &mut placed)
+}
+
+/// The x and y limits: every drawable point, error bound and reference line.
+fn chart_limits(chart: &Chart) -> Result<[(f64, f64); 2], FigureError> {
     let (xs, ys) = (chart.x.scale, chart.y.scale);
-    let ok = |x: f64, y: f64| xs.can_draw(x) && ys.can_draw(y);
     let mut all_x = Vec::new();
     let mut all_y = Vec::new();
     for s in &chart.series {
         for i in 0..s.x.len() {
-            if ok(s.x[i], s.y[i]) {
+            if xs.can_draw(s.x[i]) && ys.can_draw(s.y[i]) {
                 all_x.push(s.x[i]);
                 all_y.push(s.y[i]);
                 if let Some(e) = &s.error {
@@ -43,10 +93,17 @@ pub(super) fn draw_chart<DB: DrawingBackend>(
             Orientation::Horizontal => all_y.push(r.value),
         }
     }
-    let (xlo, xhi) = limits(&all_x, &chart.x, 0.04);
-    let (ylo, yhi) = limits(&all_y, &chart.y, 0.06);
+    Ok([
+        limits(&all_x, &chart.x, 0.04)?,
+        limits(&all_y, &chart.y, 0.06)?,
+    ])
+}
 
-    let mut entries: Vec<LegendEntry> = chart
+/// One entry per series, its swatch in the series' colour: the line, the marker and the
+/// band (a series' range is part of its entry, not an entry of its own).
+fn legend_entries(chart: &Chart) -> Vec<LegendEntry> {
+    let ok = |x: f64, y: f64| chart.x.scale.can_draw(x) && chart.y.scale.can_draw(y);
+    chart
         .series
         .iter()
         .enumerate()
@@ -64,34 +121,65 @@ pub(super) fn draw_chart<DB: DrawingBackend>(
                 bar: false,
             }
         })
-        .collect();
-    let show_legend =
-        chart.series.len() > 1 || entries.iter().any(|e| e.name != chart.series[0].name);
-    let mut body = area;
-    if show_legend {
-        let lw = fit_legend(c, &mut entries, area.w() * 0.4)?;
-        body.r -= lw + c.px(12.0);
-    }
-    let tick_label_h = c.px(TICK_EM * 1.2);
-    let f = frame(
-        c,
-        body,
-        &chart.y,
-        (ylo, yhi),
-        Some((&chart.x, xlo, xhi)),
-        tick_label_h,
-    )?;
+        .collect()
+}
 
-    // Error bands under everything else.
+/// The pixels the data takes: a box per point, the lines between points, error bars and
+/// reference lines.
+fn obstacles<DB: DrawingBackend>(c: &Canvas<'_, DB>, chart: &Chart, f: &Frame) -> Obstacles {
+    let ok =
+        |s: &Series, k: usize| chart.x.scale.can_draw(s.x[k]) && chart.y.scale.can_draw(s.y[k]);
+    let mut o = Obstacles::default();
+    let m = c.px(4.0);
+    for s in &chart.series {
+        let pixel = |k: usize| (f.x.map(s.x[k]), f.y.map(s.y[k]));
+        for k in (0..s.x.len()).filter(|&k| ok(s, k)) {
+            let (x, y) = pixel(k);
+            o.marks.push(Rect {
+                l: x - m,
+                r: x + m,
+                t: y - m,
+                b: y + m,
+            });
+            if s.style != SeriesStyle::Markers && k + 1 < s.x.len() && ok(s, k + 1) {
+                o.segments.push((pixel(k), pixel(k + 1)));
+            }
+            if let Some(e) = s.error.as_ref()
+                && chart.y.scale.can_draw(e.lower[k])
+                && chart.y.scale.can_draw(e.upper[k])
+            {
+                o.segments
+                    .push(((x, f.y.map(e.lower[k])), (x, f.y.map(e.upper[k]))));
+            }
+        }
+    }
+    let p = f.plot;
+    for r in &chart.ref_lines {
+        o.segments.push(match r.orientation {
+            Orientation::Vertical => ((f.x.map(r.value), p.t), (f.x.map(r.value), p.b)),
+            Orientation::Horizontal => ((p.l, f.y.map(r.value)), (p.r, f.y.map(r.value))),
+        });
+    }
+    o
+}
+
+/// Error bands, under everything else.
+fn draw_bands<DB: DrawingBackend>(
+    c: &Canvas<'_, DB>,
+    chart: &Chart,
+    f: &Frame,
+    colors: &[Rgb],
+) -> Result<(), FigureError> {
+    let (xs, ys) = (chart.x.scale, chart.y.scale);
     for (i, s) in chart.series.iter().enumerate() {
         let Some(e) = s.error.as_ref().filter(|e| e.display == ErrorDisplay::Band) else {
             continue;
         };
-        let color = entries[i].color;
         let mut run: Vec<usize> = Vec::new();
         for k in 0..=s.x.len() {
             let good = k < s.x.len()
-                && ok(s.x[k], s.y[k])
+                && xs.can_draw(s.x[k])
+                && ys.can_draw(s.y[k])
                 && ys.can_draw(e.lower[k])
                 && ys.can_draw(e.upper[k]);
             if good {
@@ -106,137 +194,140 @@ pub(super) fn draw_chart<DB: DrawingBackend>(
                         .rev()
                         .map(|&j| (f.x.map(s.x[j]), f.y.map(e.lower[j]))),
                 );
-                c.polygon(&poly, color, 0.2)?;
+                c.polygon(&poly, colors[i], 0.2)?;
                 run.clear();
             }
         }
     }
+    Ok(())
+}
+
+/// Dashed reference lines; each label at the first free place along its line (top then
+/// lower rows; right then left of a vertical line), dropped when none is free.
+fn draw_ref_lines<DB: DrawingBackend>(
+    c: &Canvas<'_, DB>,
+    chart: &Chart,
+    f: &Frame,
+    placed: &mut Vec<Rect>,
+) -> Result<(), FigureError> {
+    let p = f.plot;
+    let (gap, row) = (c.px(4.0), c.px(NOTE_EM * 1.3));
     for r in &chart.ref_lines {
-        let p = f.plot;
-        match r.orientation {
+        let (w, h) = c.text_size(&r.label, NOTE_EM)?;
+        let candidates: Vec<Rect> = match r.orientation {
             Orientation::Vertical => {
                 let x = f.x.map(r.value);
                 c.dashed_line((x, p.t), (x, p.b), MUTED, 1.2)?;
-                c.text(
-                    &r.label,
-                    (x + c.px(4.0), p.t + c.px(8.0)),
-                    NOTE_EM,
-                    MUTED,
-                    HPos::Left,
-                    false,
-                )?;
+                (0..3)
+                    .flat_map(|k| {
+                        let t = p.t + gap + k as f64 * row;
+                        [x + gap, x - gap - w].map(|l| Rect {
+                            l,
+                            t,
+                            r: l + w,
+                            b: t + h,
+                        })
+                    })
+                    .collect()
             }
             Orientation::Horizontal => {
                 let y = f.y.map(r.value);
                 c.dashed_line((p.l, y), (p.r, y), MUTED, 1.2)?;
-                c.text(
-                    &r.label,
-                    (p.r - c.px(4.0), y - c.px(8.0)),
-                    NOTE_EM,
-                    MUTED,
-                    HPos::Right,
-                    false,
-                )?;
+                [y - gap - h, y + gap]
+                    .into_iter()
+                    .flat_map(|t| {
+                        [p.r - gap - w, p.l + gap].map(|l| Rect {
+                            l,
+                            t,
+                            r: l + w,
+                            b: t + h,
+                        })
+                    })
+                    .collect()
             }
+        };
+        if r.label.is_empty() {
+            continue;
         }
-    }
-    for (i, s) in chart.series.iter().enumerate() {
-        let color = entries[i].color;
-        if s.style != SeriesStyle::Markers {
-            // The line breaks at missing points.
-            let mut run = Vec::new();
-            for k in 0..=s.x.len() {
-                if k < s.x.len() && ok(s.x[k], s.y[k]) {
-                    run.push((f.x.map(s.x[k]), f.y.map(s.y[k])));
-                } else {
-                    c.polyline(&run, color, 2.0)?;
-                    run.clear();
-                }
-            }
+        let free = candidates
+            .into_iter()
+            .find(|b| p.contains(b) && !placed.iter().any(|q| q.overlaps(b)));
+        if let Some(b) = free {
+            c.text(
+                &r.label,
+                (b.l, (b.t + b.b) / 2.0),
+                NOTE_EM,
+                MUTED,
+                HPos::Left,
+                false,
+            )?;
+            placed.push(b);
         }
-        if let Some(e) = s.error.as_ref().filter(|e| e.display == ErrorDisplay::Bars) {
-            for k in (0..s.x.len()).filter(|&k| ok(s.x[k], s.y[k])) {
-                if ys.can_draw(e.lower[k]) && ys.can_draw(e.upper[k]) {
-                    let x = f.x.map(s.x[k]);
-                    let (y0, y1) = (f.y.map(e.lower[k]), f.y.map(e.upper[k]));
-                    let cap = c.px(3.0);
-                    c.line((x, y0), (x, y1), color, 1.2)?;
-                    c.line((x - cap, y0), (x + cap, y0), color, 1.2)?;
-                    c.line((x - cap, y1), (x + cap, y1), color, 1.2)?;
-                }
-            }
-        }
-        if let Some(m) = entries[i].marker {
-            for k in (0..s.x.len()).filter(|&k| ok(s.x[k], s.y[k])) {
-                c.marker(m, (f.x.map(s.x[k]), f.y.map(s.y[k])), 3.5, color)?;
-            }
-        }
-    }
-    axes(c, &f, area, &chart.x.text(), &chart.y.text())?;
-    draw_point_labels(c, chart, &f)?;
-    if show_legend {
-        draw_legend(c, &entries, body.r + c.px(12.0), f.plot.t)?;
     }
     Ok(())
 }
 
-/// Does the segment `a`–`b` cross the rectangle? (Liang–Barsky clipping.)
-pub(super) fn segment_hits(r: &Rect, a: (f64, f64), b: (f64, f64)) -> bool {
-    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
-    let (mut t0, mut t1) = (0.0f64, 1.0f64);
-    for (p, q) in [
-        (-dx, a.0 - r.l),
-        (dx, r.r - a.0),
-        (-dy, a.1 - r.t),
-        (dy, r.b - a.1),
-    ] {
-        if p == 0.0 {
-            if q < 0.0 {
-                return false;
-            }
-        } else {
-            let t = q / p;
-            if p < 0.0 {
-                t0 = t0.max(t);
+/// A series' line (broken at missing points), error bars and markers.
+fn draw_series<DB: DrawingBackend>(
+    c: &Canvas<'_, DB>,
+    chart: &Chart,
+    s: &Series,
+    i: usize,
+    f: &Frame,
+    color: Rgb,
+) -> Result<(), FigureError> {
+    let ys = chart.y.scale;
+    let ok = |k: usize| chart.x.scale.can_draw(s.x[k]) && ys.can_draw(s.y[k]);
+    if s.style != SeriesStyle::Markers {
+        let mut run = Vec::new();
+        for k in 0..=s.x.len() {
+            if k < s.x.len() && ok(k) {
+                let (x, y) = (f.x.map(s.x[k]), f.y.map(s.y[k]));
+                let r = c.px(1.5);
+                c.note_data(Bounds::new(x - r, y - r, x + r, y + r));
+                run.push((x, y));
             } else {
-                t1 = t1.min(t);
-            }
-            if t0 > t1 {
-                return false;
+                c.polyline(&run, color, 2.0)?;
+                run.clear();
             }
         }
     }
-    true
+    if let Some(e) = s.error.as_ref().filter(|e| e.display == ErrorDisplay::Bars) {
+        for k in (0..s.x.len()).filter(|&k| ok(k)) {
+            if ys.can_draw(e.lower[k]) && ys.can_draw(e.upper[k]) {
+                let x = f.x.map(s.x[k]);
+                let (y0, y1) = (f.y.map(e.lower[k]), f.y.map(e.upper[k]));
+                let cap = c.px(3.0);
+                c.line((x, y0), (x, y1), color, 1.2)?;
+                c.line((x - cap, y0), (x + cap, y0), color, 1.2)?;
+                c.line((x - cap, y1), (x + cap, y1), color, 1.2)?;
+            }
+        }
+    }
+    if s.style != SeriesStyle::Line {
+        let m = Marker::nth(i);
+        for k in (0..s.x.len()).filter(|&k| ok(k)) {
+            let (x, y) = (f.x.map(s.x[k]), f.y.map(s.y[k]));
+            let r = c.px(3.5);
+            c.note_data(Bounds::new(x - r, y - r, x + r, y + r));
+            c.marker(m, (x, y), 3.5, color)?;
+        }
+    }
+    Ok(())
 }
 
 /// Point labels beside their points: of eight positions around the point, the one that
-/// crosses the fewest lines, markers and earlier labels, and stays inside the plot.
-pub(super) fn draw_point_labels<DB: DrawingBackend>(
+/// crosses the fewest lines and markers, inside the plot and clear of earlier labels and
+/// the legend; a label with no such place is dropped (its value is in the CSV).
+fn draw_point_labels<DB: DrawingBackend>(
     c: &Canvas<'_, DB>,
     chart: &Chart,
     f: &Frame,
+    placed: &mut Vec<Rect>,
 ) -> Result<(), FigureError> {
     let ok =
         |s: &Series, k: usize| chart.x.scale.can_draw(s.x[k]) && chart.y.scale.can_draw(s.y[k]);
-    let mut segments = Vec::new();
-    let mut markers = Vec::new();
-    for s in &chart.series {
-        let pixel = |k: usize| (f.x.map(s.x[k]), f.y.map(s.y[k]));
-        for k in (0..s.x.len()).filter(|&k| ok(s, k)) {
-            let (x, y) = pixel(k);
-            let m = c.px(4.0);
-            markers.push(Rect {
-                l: x - m,
-                r: x + m,
-                t: y - m,
-                b: y + m,
-            });
-            if s.style != SeriesStyle::Markers && k + 1 < s.x.len() && ok(s, k + 1) {
-                segments.push((pixel(k), pixel(k + 1)));
-            }
-        }
-    }
-    let mut placed: Vec<Rect> = Vec::new();
+    let data = obstacles(c, chart, f);
     let (gap, lift) = (c.px(7.0), c.px(2.0));
     for s in &chart.series {
         for (k, label) in s.point_labels.iter().enumerate() {
@@ -261,50 +352,24 @@ pub(super) fn draw_point_labels<DB: DrawingBackend>(
                 at(px - w / 2.0, py - gap - h),
                 at(px - w / 2.0, py + gap),
             ];
-            let cost = |r: &Rect| {
-                let outside = if f.plot.contains(r) { 0 } else { 100 };
-                let labels = placed.iter().filter(|p| p.overlaps(r)).count() * 3;
-                let marks = markers.iter().filter(|m| m.overlaps(r)).count() * 2;
-                let lines = segments
-                    .iter()
-                    .filter(|(a, b)| segment_hits(r, *a, *b))
-                    .count();
-                outside + labels + marks + lines
-            };
             let chosen = candidates
                 .iter()
                 .enumerate()
-                .min_by_key(|(i, r)| (cost(r), *i))
-                .map_or(candidates[0], |(_, r)| *r);
-            c.text(
-                label,
-                (chosen.l, (chosen.t + chosen.b) / 2.0),
-                NOTE_EM,
-                TEXT,
-                HPos::Left,
-                false,
-            )?;
-            placed.push(chosen);
+                .filter(|(_, r)| f.plot.contains(r) && !placed.iter().any(|p| p.overlaps(r)))
+                .min_by_key(|(i, r)| (data.hit(r), *i))
+                .map(|(_, r)| *r);
+            if let Some(chosen) = chosen {
+                c.text(
+                    label,
+                    (chosen.l, (chosen.t + chosen.b) / 2.0),
+                    NOTE_EM,
+                    TEXT,
+                    HPos::Left,
+                    false,
+                )?;
+                placed.push(chosen);
+            }
         }
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn segments_hit_rectangles() {
-        let r = Rect {
-            l: 0.0,
-            t: 0.0,
-            r: 10.0,
-            b: 10.0,
-        };
-        assert!(segment_hits(&r, (-5.0, 5.0), (15.0, 5.0)));
-        assert!(segment_hits(&r, (5.0, 5.0), (50.0, 50.0)));
-        assert!(!segment_hits(&r, (-5.0, -1.0), (15.0, -1.0)));
-        assert!(!segment_hits(&r, (11.0, 0.0), (20.0, 10.0)));
-    }
 }

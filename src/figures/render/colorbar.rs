@@ -81,6 +81,7 @@ pub(super) fn draw_colorbar<DB: DrawingBackend>(
         )?;
     }
     let title = scale.text();
+    c.note_axis(&title, None, &ticks.labels);
     if !title.is_empty() {
         let title_h = c.px(AXIS_TITLE_EM * 1.3);
         let em = fitting_em(c, &title, AXIS_TITLE_EM, bottom - top)?;

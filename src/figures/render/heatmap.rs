@@ -3,7 +3,7 @@
 use plotters::prelude::DrawingBackend;
 use plotters::style::text_anchor::HPos;
 
-use super::bars::{category_labels, draw_category_label};
+use super::categories::{CategoryLabels, category_labels, draw_category_label};
 use super::colorbar::{colorbar_span, colorbar_width, draw_colorbar, light, value_decimals};
 use super::scale::format_tick;
 use super::{AXIS_TITLE_EM, Rect, TICK_EM, fitting_em, too_small, truncated};
@@ -32,7 +32,8 @@ pub(super) fn draw_heatmap<DB: DrawingBackend>(
     let left = area.l + axis_title_h + c.px(6.0) + row_w.min(area.w() * 0.3) + c.px(8.0);
     let right = area.r - cb_w;
     let avail_w = right - left;
-    let col_layout = category_labels(c, &h.columns, avail_w / nc as f64, TICK_EM)?;
+    let max_h = c.px(160.0).min(area.h() * 0.3);
+    let col_layout = category_labels(c, &h.columns, avail_w / nc as f64, TICK_EM, max_h)?;
     let bottom = area.b - axis_title_h - c.px(6.0) - col_layout.height - c.px(8.0);
     let avail_h = bottom - area.t;
     if avail_w <= 0.0 || avail_h <= 0.0 {
@@ -99,13 +100,15 @@ pub(super) fn draw_heatmap<DB: DrawingBackend>(
     }
     c.stroke_rect((grid.l, grid.t), (grid.r, grid.b), AXIS, 1.0)?;
     // Row labels, thinned out when rows are shorter than a line of text.
-    let row_step = (c.px(TICK_EM * 1.2) / ch).ceil().max(1.0) as usize;
-    for (r, label) in h.rows.iter().enumerate().step_by(row_step) {
-        let label = truncated(c, label, TICK_EM, area.w() * 0.3)?;
+    let row_layout = CategoryLabels::level(nr, c.px(TICK_EM * 1.1), TICK_EM).for_slot(ch);
+    c.note_axis(&h.y.text(), Some(nr), &row_layout.shown(&h.rows));
+    c.note_axis(&h.x.text(), Some(nc), &col_layout.shown(&h.columns));
+    for (r, label) in h.rows.iter().enumerate().step_by(row_layout.step) {
+        let label = truncated(c, label, row_layout.em, area.w() * 0.3)?;
         c.text(
             &label,
             (grid.l - c.px(6.0), (ye(r) + ye(r + 1)) / 2.0),
-            TICK_EM,
+            row_layout.em,
             TEXT,
             HPos::Right,
             false,
@@ -117,7 +120,6 @@ pub(super) fn draw_heatmap<DB: DrawingBackend>(
             label,
             (xe(k) + xe(k + 1)) / 2.0,
             grid.b + c.px(6.0),
-            TICK_EM,
             &col_layout,
         )?;
     }
@@ -134,19 +136,16 @@ pub(super) fn draw_heatmap<DB: DrawingBackend>(
         HPos::Center,
         false,
     )?;
-    let y_title = h.y.text();
-    let em = fitting_em(c, &y_title, AXIS_TITLE_EM, grid.h().max(c.px(100.0)))?;
+    // Centred on the rows, but within the body: cut to its height.
+    let em = fitting_em(c, &h.y.text(), AXIS_TITLE_EM, grid.h().max(c.px(100.0)))?;
+    let y_title = truncated(c, &h.y.text(), em, area.h())?;
+    let half = c.text_size(&y_title, em)?.0 / 2.0;
+    let title_y =
+        ((grid.t + grid.b) / 2.0).clamp(area.t + half, (area.b - half).max(area.t + half));
     // Beside the row labels, not at the far left when square cells leave room.
     let title_x = (grid.l - c.px(14.0) - row_w.min(area.w() * 0.3) - axis_title_h / 2.0)
         .max(area.l + axis_title_h / 2.0);
-    c.text(
-        &y_title,
-        (title_x, (grid.t + grid.b) / 2.0),
-        em,
-        TEXT,
-        HPos::Center,
-        true,
-    )?;
+    c.text(&y_title, (title_x, title_y), em, TEXT, HPos::Center, true)?;
     let (cb_top, cb_bottom) = colorbar_span(c, grid, area);
     draw_colorbar(
         c, &h.colors, limits, &cb_ticks, grid.r, cb_top, cb_bottom, cb_w,

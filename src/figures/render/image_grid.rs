@@ -4,7 +4,7 @@ use plotters::prelude::DrawingBackend;
 use plotters::style::text_anchor::HPos;
 
 use super::colorbar::{colorbar_span, colorbar_width, draw_colorbar};
-use super::{NOTE_EM, Rect, fitting_em, too_small};
+use super::{NOTE_EM, Rect, fitting_em, too_small, truncated};
 use crate::figures::FigureError;
 use crate::figures::canvas::{Canvas, TEXT};
 use crate::figures::colormap::Rgb;
@@ -90,9 +90,12 @@ pub(super) fn draw_image_grid<DB: DrawingBackend>(
             1.0,
         )?;
         if !im.caption.is_empty() {
-            let em = fitting_em(c, &im.caption, NOTE_EM, img_w + gap * 0.8)?;
+            // Smaller to fit, then cut: a caption never runs into its neighbour's.
+            let room = img_w + gap * 0.8;
+            let em = fitting_em(c, &im.caption, NOTE_EM, room)?;
+            let caption = truncated(c, &im.caption, em, room)?;
             c.text(
-                &im.caption,
+                &caption,
                 (left + img_w / 2.0, top + img_h + cap_h / 2.0),
                 em,
                 TEXT,
