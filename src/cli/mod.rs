@@ -3,7 +3,7 @@
 
 pub mod baselines;
 pub mod bounds;
-mod figures;
+pub mod figures;
 pub mod frontier;
 pub mod paper_figures;
 mod progress;

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
+use super::figures::Preset;
 use super::progress::with_progress;
 use super::recognition::open_session;
 use crate::catalogue::MethodId;
@@ -26,7 +27,7 @@ use crate::experiments::stability::{
 };
 use crate::features::FeatureSet;
 use crate::features::table_one::session_features;
-use crate::figures::{FigureEntry, Format, RenderOptions, export_all};
+use crate::figures::{FigureEntry, FigureSet, Format, RenderOptions, export_all};
 use crate::jobs::Progress;
 use crate::session::Session;
 
@@ -66,6 +67,10 @@ pub struct PaperFiguresArgs {
     pub reps: usize,
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// A size for a paper (a 3.5-in column or a 7-in page at 300 DPI); replaces --width,
+    /// --height and --dpi.
+    #[arg(long, value_enum)]
+    pub preset: Option<Preset>,
     #[arg(long, default_value_t = 960)]
     pub width: u32,
     #[arg(long, default_value_t = 640)]
@@ -84,9 +89,40 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
     super::refuse_input_as_output(Some(&a.out_dir), &[&a.session])?;
     super::refuse_input_as_output(a.project.as_deref(), &[&a.session])?;
     super::bounds::at_most("--reps", a.reps, super::bounds::MAX_REPS)?;
+    let set = figures(&a)?;
+    let opts = a.preset.map_or(
+        RenderOptions {
+            width: a.width,
+            height: a.height,
+            dpi: a.dpi,
+        },
+        Preset::options,
+    );
+    let t0 = std::time::Instant::now();
+    // Into a temporary folder put in place at the end: a killed run never leaves a folder
+    // of figures without its index.
+    let index = crate::fsutil::write_dir_atomic(&a.out_dir, &["index.md"], |dir| {
+        anyhow::Ok(export_all(
+            &set,
+            dir,
+            &[Format::Svg, Format::Pdf, Format::Png, Format::Csv],
+            &opts,
+        )?)
+    })?;
+    println!(
+        "wrote {} figures to {} in {:.2} s",
+        index.entries.len(),
+        a.out_dir.display(),
+        t0.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// Run the experiment and gather every figure of it (saving the project when asked).
+pub fn figures(a: &PaperFiguresArgs) -> anyhow::Result<FigureSet> {
     let session = open_session(&a.session)?;
     let name = session.meta.name.clone();
-    let (results, frontiers) = with_progress(a.quiet, |p| experiment_results(&a, &session, p))?;
+    let (results, frontiers) = with_progress(a.quiet, |p| experiment_results(a, &session, p))?;
     if let Some(path) = &a.project {
         Project::new(vec![a.session.display().to_string()], results.clone())
             .with_frontiers(frontiers.clone())
@@ -107,29 +143,7 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
             date: crate::experiments::result::date_text(crate::experiments::result::now_unix()),
         });
     }
-    let opts = RenderOptions {
-        width: a.width,
-        height: a.height,
-        dpi: a.dpi,
-    };
-    let t0 = std::time::Instant::now();
-    // Into a temporary folder put in place at the end: a killed run never leaves a folder
-    // of figures without its index.
-    let index = crate::fsutil::write_dir_atomic(&a.out_dir, &["index.md"], |dir| {
-        anyhow::Ok(export_all(
-            &set,
-            dir,
-            &[Format::Svg, Format::Png, Format::Csv],
-            &opts,
-        )?)
-    })?;
-    println!(
-        "wrote {} figures to {} in {:.2} s",
-        index.entries.len(),
-        a.out_dir.display(),
-        t0.elapsed().as_secs_f64()
-    );
-    Ok(())
+    Ok(set)
 }
 
 /// The frontiers' figures, one set per score and time unit (DS/GS accuracy per step; the

@@ -8,8 +8,11 @@ use plotters::prelude::*;
 use plotters::style::FontTransform;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
+use std::cell::RefCell;
+
 use super::FigureError;
-use super::model::Rgb;
+use super::colormap::Rgb;
+use super::layout::{AxisLabels, Bounds, FigureLayout, PlacedText};
 
 /// The family name the embedded font is registered under.
 pub(super) const FONT: &str = "sans-serif";
@@ -33,6 +36,8 @@ pub(super) enum TextMode {
     Svg,
     /// Rasterised here from the embedded font's outlines.
     Raster,
+    /// As SVG paths of the glyph outlines (for the PDF, which then needs no font).
+    Outline,
 }
 
 pub(super) struct Canvas<'a, DB: DrawingBackend> {
@@ -41,6 +46,10 @@ pub(super) struct Canvas<'a, DB: DrawingBackend> {
     pub scale: f64,
     font: &'a FontRef<'static>,
     mode: TextMode,
+    /// What was placed where, for the layout checks.
+    record: RefCell<FigureLayout>,
+    /// Glyph outlines as SVG `<path>` elements ([`TextMode::Outline`]).
+    glyph_paths: RefCell<String>,
 }
 
 /// A line of text laid out from its baseline origin, in device pixels.
@@ -60,11 +69,71 @@ impl<'a, DB: DrawingBackend> Canvas<'a, DB> {
         font: &'a FontRef<'static>,
         mode: TextMode,
     ) -> Self {
+        let (w, h) = area.dim_in_pixel();
         Canvas {
             area,
             scale,
             font,
             mode,
+            record: RefCell::new(FigureLayout {
+                width: w as f64,
+                height: h as f64,
+                ..FigureLayout::default()
+            }),
+            glyph_paths: RefCell::new(String::new()),
+        }
+    }
+
+    /// The glyph outlines drawn in [`TextMode::Outline`], as SVG elements.
+    pub fn glyph_paths(&self) -> String {
+        self.glyph_paths.borrow().clone()
+    }
+
+    /// What was drawn so far.
+    pub fn layout_record(&self) -> FigureLayout {
+        self.record.borrow().clone()
+    }
+
+    /// Record the tick labels of an axis; `categories` for a category axis.
+    pub fn note_axis(&self, title: &str, categories: Option<usize>, labels: &[String]) {
+        self.record.borrow_mut().axes.push(AxisLabels {
+            title: title.to_string(),
+            categories,
+            labels: labels.to_vec(),
+        });
+    }
+
+    pub fn note_legend(&self, bounds: Bounds) {
+        self.record.borrow_mut().legend = Some(bounds);
+    }
+
+    /// Record a data mark (marker, line vertex, bar).
+    pub fn note_data(&self, bounds: Bounds) {
+        self.record.borrow_mut().data.push(bounds);
+    }
+
+    /// The box `text` takes when drawn by [`Canvas::text`] with these arguments: the
+    /// glyphs' em box (not the line height), so that stacked lines do not count as touching.
+    pub fn text_bounds(
+        &self,
+        text: &str,
+        (x, y): (f64, f64),
+        em_css: f64,
+        anchor: HPos,
+        rotated: bool,
+    ) -> Bounds {
+        let w = self.layout(text, em_css).width;
+        let h = em_css * self.scale;
+        let (a, b) = match anchor {
+            HPos::Left => (0.0, w),
+            HPos::Center => (-w / 2.0, w / 2.0),
+            HPos::Right => (-w, 0.0),
+        };
+        if rotated {
+            // Reads bottom to top: the text's x runs up the page.
+            Bounds::new(x - h / 2.0, y - b, x + h / 2.0, y - a)
+        } else {
+            Bounds::new(x + a, y - h / 2.0, x + b, y + h / 2.0)
         }
     }
 
@@ -155,6 +224,80 @@ impl<'a, DB: DrawingBackend> Canvas<'a, DB> {
         Ok(())
     }
 
+    /// Append the glyphs' outlines as one SVG path, placed as [`Canvas::raster_text`] places
+    /// its pixels.
+    fn outline_text(
+        &self,
+        layout: &Layout,
+        (x, y): (f64, f64),
+        em_css: f64,
+        c: Rgb,
+        h: HPos,
+        rotated: bool,
+    ) {
+        use std::fmt::Write;
+        let dx = match h {
+            HPos::Left => 0.0,
+            HPos::Center => -layout.width / 2.0,
+            HPos::Right => -layout.width,
+        };
+        let em_px = em_css * self.scale;
+        let baseline = 0.35 * em_px;
+        // Font units (y up) to pixels.
+        let k = em_px / f64::from(self.font.units_per_em().unwrap_or(1000.0));
+        let mut d = String::new();
+        for g in &layout.glyphs {
+            let Some(outline) = self.font.outline(g.id) else {
+                continue;
+            };
+            let gx = dx + f64::from(g.position.x);
+            let place = |p: ab_glyph::Point| {
+                let (lx, ly) = (gx + f64::from(p.x) * k, baseline - f64::from(p.y) * k);
+                if rotated {
+                    (x + ly, y - lx)
+                } else {
+                    (x + lx, y + ly)
+                }
+            };
+            let mut last: Option<ab_glyph::Point> = None;
+            for curve in &outline.curves {
+                let (start, end) = match curve {
+                    ab_glyph::OutlineCurve::Line(a, b) => (*a, *b),
+                    ab_glyph::OutlineCurve::Quad(a, _, b) => (*a, *b),
+                    ab_glyph::OutlineCurve::Cubic(a, _, _, b) => (*a, *b),
+                };
+                if last != Some(start) {
+                    let (px, py) = place(start);
+                    let _ = write!(d, "M{px:.2} {py:.2}");
+                }
+                match curve {
+                    ab_glyph::OutlineCurve::Line(_, b) => {
+                        let (px, py) = place(*b);
+                        let _ = write!(d, "L{px:.2} {py:.2}");
+                    }
+                    ab_glyph::OutlineCurve::Quad(_, c1, b) => {
+                        let ((ax, ay), (bx, by)) = (place(*c1), place(*b));
+                        let _ = write!(d, "Q{ax:.2} {ay:.2} {bx:.2} {by:.2}");
+                    }
+                    ab_glyph::OutlineCurve::Cubic(_, c1, c2, b) => {
+                        let ((ax, ay), (bx, by), (ex, ey)) = (place(*c1), place(*c2), place(*b));
+                        let _ = write!(d, "C{ax:.2} {ay:.2} {bx:.2} {by:.2} {ex:.2} {ey:.2}");
+                    }
+                }
+                last = Some(end);
+            }
+        }
+        if !d.is_empty() {
+            let _ = writeln!(
+                self.glyph_paths.borrow_mut(),
+                r##"<path fill="#{:02x}{:02x}{:02x}" d="{d}"/>"##,
+                c.0,
+                c.1,
+                c.2
+            );
+        }
+    }
+
     /// Width and height of `text` in device pixels at font size `em_css`.
     pub fn text_size(&self, text: &str, em_css: f64) -> Result<(f64, f64), FigureError> {
         if text.is_empty() {
@@ -177,10 +320,20 @@ impl<'a, DB: DrawingBackend> Canvas<'a, DB> {
         if text.is_empty() {
             return Ok(());
         }
+        let bounds = self.text_bounds(text, (x, y), em_css, anchor, rotated);
+        self.record.borrow_mut().texts.push(PlacedText {
+            text: text.to_string(),
+            bounds,
+        });
         match self.mode {
             TextMode::Raster => {
                 let layout = self.layout(text, em_css);
                 self.raster_text(&layout, (x, y), em_css, c, anchor, rotated)
+            }
+            TextMode::Outline => {
+                let layout = self.layout(text, em_css);
+                self.outline_text(&layout, (x, y), em_css, c, anchor, rotated);
+                Ok(())
             }
             TextMode::Svg => {
                 let mut style = (FONT, em_css * self.scale * EM_TO_PLOTTERS)

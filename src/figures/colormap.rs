@@ -7,7 +7,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::model::Rgb;
+/// An sRGB colour, serialised as `[r, g, b]`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Rgb(pub u8, pub u8, pub u8);
 
 /// Which colour map a heatmap or image grid uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 use super::FigureError;
 use super::canvas::{Canvas, FONT, TextMode};
 use super::csv::to_csv;
+use super::layout::FigureLayout;
 use super::model::{Figure, FigureSet};
 use super::render;
 use crate::fsutil;
@@ -34,6 +35,26 @@ impl Default for RenderOptions {
             width: 960,
             height: 640,
             dpi: 96.0,
+        }
+    }
+}
+
+impl RenderOptions {
+    /// A journal column: 3.5 in wide (and 7/3 in tall) at 300 DPI; text is 8–9 pt.
+    pub fn column() -> Self {
+        RenderOptions {
+            width: 1050,
+            height: 700,
+            dpi: 300.0,
+        }
+    }
+
+    /// A full page width: 7 in wide (and 3.5 in tall) at 300 DPI; text is 8–9 pt.
+    pub fn page() -> Self {
+        RenderOptions {
+            width: 2100,
+            height: 1050,
+            dpi: 300.0,
         }
     }
 }
@@ -75,6 +96,8 @@ pub enum Format {
     Svg,
     Png,
     Csv,
+    /// Vector, with the text as glyph outlines (no font needed to view or print it).
+    Pdf,
 }
 
 impl Format {
@@ -83,6 +106,7 @@ impl Format {
             Format::Svg => "svg",
             Format::Png => "png",
             Format::Csv => "csv",
+            Format::Pdf => "pdf",
         }
     }
 
@@ -96,8 +120,9 @@ impl Format {
             Some("svg") => Ok(Format::Svg),
             Some("png") => Ok(Format::Png),
             Some("csv") => Ok(Format::Csv),
+            Some("pdf") => Ok(Format::Pdf),
             _ => Err(FigureError::Options(format!(
-                "{}: the file name must end in .svg, .png or .csv",
+                "{}: the file name must end in .svg, .png, .pdf or .csv",
                 path.display()
             ))),
         }
@@ -122,18 +147,56 @@ fn draw_err(e: impl std::fmt::Display) -> FigureError {
     FigureError::Render(e.to_string())
 }
 
-/// The figure as an SVG document.
-pub fn render_svg(fig: &Figure, opts: &RenderOptions) -> Result<String, FigureError> {
+/// The figure as an SVG document (text as `<text>` or as glyph outlines), with what was
+/// placed where.
+fn svg_and_layout(
+    fig: &Figure,
+    opts: &RenderOptions,
+    mode: TextMode,
+) -> Result<(String, FigureLayout), FigureError> {
     opts.validate()?;
     let font = font()?;
     let mut out = String::new();
+    let (layout, glyphs);
     {
         let root = SVGBackend::with_string(&mut out, (opts.width, opts.height)).into_drawing_area();
         root.fill(&WHITE).map_err(draw_err)?;
-        render::draw(&Canvas::new(&root, opts.scale(), font, TextMode::Svg), fig)?;
+        let canvas = Canvas::new(&root, opts.scale(), font, mode);
+        render::draw(&canvas, fig)?;
+        layout = canvas.layout_record();
+        glyphs = canvas.glyph_paths();
         root.present().map_err(draw_err)?;
     }
-    Ok(out)
+    // Bands are translucent fills: `fill-opacity` says so in every renderer (plotters
+    // writes `opacity`, which some renderers ignore on polygons).
+    let mut out = out.replace("<polygon opacity=", "<polygon fill-opacity=");
+    if let Some(end) = out.rfind("</svg>") {
+        out.insert_str(end, &glyphs);
+    }
+    Ok((out, layout))
+}
+
+/// The figure as an SVG document.
+pub fn render_svg(fig: &Figure, opts: &RenderOptions) -> Result<String, FigureError> {
+    Ok(svg_and_layout(fig, opts, TextMode::Svg)?.0)
+}
+
+/// The figure as a one-page PDF of the image's physical size (pixels / DPI), converted
+/// from the SVG with its text as glyph outlines.
+pub fn render_pdf(fig: &Figure, opts: &RenderOptions) -> Result<Vec<u8>, FigureError> {
+    let svg = svg_and_layout(fig, opts, TextMode::Outline)?.0;
+    let tree = svg2pdf::usvg::Tree::from_str(&svg, &svg2pdf::usvg::Options::default())
+        .map_err(draw_err)?;
+    let page = svg2pdf::PageOptions {
+        dpi: opts.dpi as f32,
+    };
+    svg2pdf::to_pdf(&tree, svg2pdf::ConversionOptions::default(), page).map_err(draw_err)
+}
+
+/// Where the export places each text, tick label, the legend and the data of `fig` at
+/// this size: for checking that a figure stays legible (see [`FigureLayout`]).
+pub fn layout_of(fig: &Figure, opts: &RenderOptions) -> Result<FigureLayout, FigureError> {
+    Ok(svg_and_layout(fig, opts, TextMode::Svg)?.1)
 }
 
 /// The figure as PNG bytes (RGB, 8 bits), with its DPI recorded in the pHYs chunk.
@@ -173,6 +236,7 @@ fn render(fig: &Figure, format: Format, opts: &RenderOptions) -> Result<Vec<u8>,
         Format::Svg => render_svg(fig, opts)?.into_bytes(),
         Format::Png => render_png(fig, opts)?,
         Format::Csv => to_csv(fig)?.into_bytes(),
+        Format::Pdf => render_pdf(fig, opts)?,
     })
 }
 

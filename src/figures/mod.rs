@@ -39,21 +39,26 @@ mod canvas;
 pub mod colormap;
 mod csv;
 mod export;
+pub mod layout;
 pub mod model;
 mod render;
 
 use std::path::PathBuf;
 
+pub use colormap::Rgb;
 pub use colormap::{ColorMap, series_color};
 pub use csv::to_csv;
 pub use export::{
-    Format, Index, IndexEntry, RenderOptions, export_all, render_png, render_svg, write_figure,
+    Format, Index, IndexEntry, RenderOptions, export_all, layout_of, render_pdf, render_png,
+    render_svg, write_figure,
 };
+pub use layout::{AxisLabels, Bounds, FigureLayout, PlacedText};
 pub use model::{
     Axis, AxisTitle, BarChart, BarGroup, Chart, ColorScale, ErrorDisplay, ErrorRange, Figure,
-    FigureEntry, FigureKind, FigureSet, GridImage, Heatmap, ImageGrid, Orientation, RefLine, Rgb,
-    Scale, Series, SeriesStyle, pareto_front,
+    FigureEntry, FigureKind, FigureSet, GridImage, Heatmap, ImageGrid, Orientation, RefLine, Scale,
+    Series, SeriesStyle, pareto_front,
 };
+pub use render::{axis_ticks, tick_label};
 
 #[derive(Debug, thiserror::Error)]
 pub enum FigureError {

@@ -172,12 +172,15 @@ fn frontier_chart(frontiers: &[Frontier], axis: CostAxis) -> Figure {
                 .color(Rgb(0x88, 0x88, 0x88)),
         );
     }
-    let cheapest = match frontiers[0].params.cost {
-        CostAxis::Prediction => "prediction",
-        CostAxis::Training => "training",
+    // The subtitle speaks of the time on this chart's axis; the recommendation's own
+    // criterion is named only where it is another time.
+    let cheapest = match (axis, frontiers[0].params.cost) {
+        (a, c) if a == c => "the cheapest".to_string(),
+        (_, CostAxis::Prediction) => "the cheapest by prediction time (not shown)".to_string(),
+        (_, CostAxis::Training) => "the cheapest by training time (not shown)".to_string(),
     };
     Figure::chart(title, x.log(), Axis::new(scores.join(" / "), ""), series).subtitle(format!(
-        "{} on {}; mean ± SE over repetitions; recommended: the cheapest (by {cheapest} time) within one SE of the best",
+        "{} on {}; mean ± SE over repetitions; recommended: {cheapest} within one SE of the best",
         frontiers
             .iter()
             .map(|f| f.short_label())

@@ -1,0 +1,103 @@
+//! Axes: numeric (linear or log, with a range to include) and categorical titles.
+
+use serde::{Deserialize, Serialize};
+
+/// A categorical axis: only a title and a unit (empty for a dimensionless quantity).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AxisTitle {
+    pub title: String,
+    #[serde(default)]
+    pub unit: String,
+}
+
+impl AxisTitle {
+    pub fn new(title: impl Into<String>, unit: impl Into<String>) -> Self {
+        AxisTitle {
+            title: title.into(),
+            unit: unit.into(),
+        }
+    }
+
+    /// "Title (unit)", or just the title for a dimensionless quantity.
+    pub fn text(&self) -> String {
+        axis_text(&self.title, &self.unit)
+    }
+}
+
+pub(super) fn axis_text(title: &str, unit: &str) -> String {
+    if unit.is_empty() {
+        title.to_string()
+    } else {
+        format!("{title} ({unit})")
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Scale {
+    #[default]
+    Linear,
+    /// Base-10 logarithmic; values ≤ 0 cannot be drawn and are skipped like missing ones.
+    Log,
+}
+
+impl Scale {
+    /// Can `v` be drawn on an axis of this scale? (Finite, and positive on a log axis.)
+    /// Values that cannot are skipped and counted as missing.
+    pub fn can_draw(self, v: f64) -> bool {
+        v.is_finite() && (self == Scale::Linear || v > 0.0)
+    }
+}
+
+/// A numeric axis.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Axis {
+    pub title: String,
+    #[serde(default)]
+    pub unit: String,
+    #[serde(default)]
+    pub scale: Scale,
+    /// A range the axis must show in addition to the data (e.g. `[0, 1]` for an accuracy).
+    /// Data is never clipped: the axis always covers every drawn value.
+    #[serde(default)]
+    pub include: Option<[f64; 2]>,
+}
+
+impl Axis {
+    pub fn new(title: impl Into<String>, unit: impl Into<String>) -> Self {
+        Axis {
+            title: title.into(),
+            unit: unit.into(),
+            scale: Scale::Linear,
+            include: None,
+        }
+    }
+
+    pub fn log(mut self) -> Self {
+        self.scale = Scale::Log;
+        self
+    }
+
+    pub fn including(mut self, lo: f64, hi: f64) -> Self {
+        self.include = Some([lo, hi]);
+        self
+    }
+
+    pub fn text(&self) -> String {
+        axis_text(&self.title, &self.unit)
+    }
+}
+
+pub(super) fn check_include(axis: &Axis) -> Result<(), String> {
+    match axis.include {
+        Some([lo, hi]) if !(lo.is_finite() && hi.is_finite() && lo <= hi) => Err(format!(
+            "axis {:?}: the included range must be finite and ordered",
+            axis.title
+        )),
+        Some([lo, _]) if axis.scale == Scale::Log && lo <= 0.0 => Err(format!(
+            "axis {:?}: a log axis cannot include values ≤ 0",
+            axis.title
+        )),
+        _ => Ok(()),
+    }
+}

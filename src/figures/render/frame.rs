@@ -1,0 +1,204 @@
+//! The frame of a numeric chart: axes, ticks, gridlines and axis titles.
+
+use plotters::prelude::DrawingBackend;
+use plotters::style::text_anchor::HPos;
+
+use super::scale::{Span, Ticks, ticks_for};
+use super::{AXIS_TITLE_EM, Rect, TICK_EM, fitting_em, truncated};
+use crate::figures::FigureError;
+use crate::figures::canvas::{AXIS, Canvas, GRID, TEXT};
+use crate::figures::model::{Axis, Scale};
+
+/// Frame of a numeric chart: y axis on the left, x axis at the bottom.
+pub(super) struct Frame {
+    pub(super) plot: Rect,
+    pub(super) x: Span,
+    pub(super) y: Span,
+    pub(super) xt: Ticks,
+    pub(super) yt: Ticks,
+}
+
+/// Lay out the axes in `area` (nothing is drawn: see [`draw_grid`] and [`axes`]).
+pub(super) fn frame<DB: DrawingBackend>(
+    c: &Canvas<'_, DB>,
+    area: Rect,
+    y_axis: &Axis,
+    (ylo, yhi): (f64, f64),
+    x_numeric: Option<(&Axis, f64, f64)>,
+    x_label_h: f64,
+) -> Result<Frame, FigureError> {
+    let y_log = y_axis.scale == Scale::Log;
+    let axis_title_h = c.px(AXIS_TITLE_EM * 1.3);
+    let bottom = area.b - axis_title_h - c.px(6.0) - x_label_h - c.px(8.0);
+    let top = area.t + c.px(4.0);
+    let y_max = ((bottom - top) / c.px(36.0)).floor().clamp(3.0, 10.0) as usize;
+    let label_h = c.px(TICK_EM);
+    let y_span = |plot_t: f64, plot_b: f64| Span {
+        lo: ylo,
+        hi: yhi,
+        log: y_log,
+        p0: plot_b,
+        p1: plot_t,
+    };
+    // Labels a line apart at most (a log axis can offer 1…9 per decade).
+    let yt = thinned(
+        ticks_for(ylo, yhi, y_log, y_max),
+        &y_span(top, bottom),
+        |_| Ok(label_h * 1.15),
+    )?;
+    let mut label_w: f64 = 0.0;
+    for l in &yt.labels {
+        label_w = label_w.max(c.text_size(l, TICK_EM)?.0);
+    }
+    let left = area.l + axis_title_h + c.px(6.0) + label_w + c.px(8.0);
+    let plot = Rect {
+        l: left,
+        t: top,
+        r: area.r,
+        b: bottom,
+    };
+    let y = y_span(plot.t, plot.b);
+    let (x, xt) = match x_numeric {
+        Some((axis, lo, hi)) => {
+            let x = Span {
+                lo,
+                hi,
+                log: axis.scale == Scale::Log,
+                p0: plot.l,
+                p1: plot.r,
+            };
+            let max = (plot.w() / c.px(55.0)).floor().clamp(3.0, 10.0) as usize;
+            let gap = c.px(10.0);
+            let xt = thinned(ticks_for(lo, hi, x.log, max), &x, |l| {
+                Ok(c.text_size(l, TICK_EM)?.0 + gap)
+            })?;
+            (x, xt)
+        }
+        None => (
+            Span {
+                lo: 0.0,
+                hi: 1.0,
+                log: false,
+                p0: plot.l,
+                p1: plot.r,
+            },
+            Ticks {
+                values: Vec::new(),
+                labels: Vec::new(),
+            },
+        ),
+    };
+    Ok(Frame { plot, x, y, xt, yt })
+}
+
+/// Drop tick labels that would touch their neighbour (`room` is the extent a label needs
+/// along the axis): every other one until none touch, so that the kept ones stay evenly
+/// spaced; never below three when three fit at all.
+fn thinned(
+    ticks: Ticks,
+    span: &Span,
+    room: impl Fn(&str) -> Result<f64, FigureError>,
+) -> Result<Ticks, FigureError> {
+    let pos: Vec<f64> = ticks.values.iter().map(|&v| span.map(v)).collect();
+    let mut need = Vec::with_capacity(pos.len());
+    for l in &ticks.labels {
+        need.push(room(l)?);
+    }
+    let fits = |keep: &[usize]| {
+        keep.windows(2)
+            .all(|w| (pos[w[1]] - pos[w[0]]).abs() >= (need[w[0]] + need[w[1]]) / 2.0)
+    };
+    let all: Vec<usize> = (0..pos.len()).collect();
+    let mut keep = all.clone();
+    let mut every = 1;
+    while !fits(&keep) && pos.len().div_ceil(every + 1) >= 3 {
+        every += 1;
+        keep = all.iter().copied().step_by(every).collect();
+    }
+    if !fits(&keep) && keep.len() > 2 {
+        // Three labels that still touch: the ends and the middle one read better than a smear.
+        keep = vec![0, pos.len() / 2, pos.len() - 1];
+        if !fits(&keep) {
+            keep = vec![0, pos.len() - 1];
+        }
+    }
+    Ok(Ticks {
+        values: keep.iter().map(|&i| ticks.values[i]).collect(),
+        labels: keep.iter().map(|&i| ticks.labels[i].clone()).collect(),
+    })
+}
+
+/// Light gridlines at the ticks (before the data).
+pub(super) fn draw_grid<DB: DrawingBackend>(
+    c: &Canvas<'_, DB>,
+    f: &Frame,
+) -> Result<(), FigureError> {
+    for &v in &f.yt.values {
+        let py = f.y.map(v);
+        c.line((f.plot.l, py), (f.plot.r, py), GRID, 1.0)?;
+    }
+    for &v in &f.xt.values {
+        let px = f.x.map(v);
+        c.line((px, f.plot.t), (px, f.plot.b), GRID, 1.0)?;
+    }
+    Ok(())
+}
+
+/// Spines, ticks, tick labels and axis titles (after the data).
+pub(super) fn axes<DB: DrawingBackend>(
+    c: &Canvas<'_, DB>,
+    f: &Frame,
+    area: Rect,
+    x_title: &str,
+    y_title: &str,
+) -> Result<(), FigureError> {
+    let p = f.plot;
+    let tick = c.px(4.0);
+    c.line((p.l, p.t), (p.l, p.b), AXIS, 1.0)?;
+    c.line((p.l, p.b), (p.r, p.b), AXIS, 1.0)?;
+    for (v, l) in f.yt.values.iter().zip(&f.yt.labels) {
+        let y = f.y.map(*v);
+        c.line((p.l - tick, y), (p.l, y), AXIS, 1.0)?;
+        c.text(
+            l,
+            (p.l - tick - c.px(4.0), y),
+            TICK_EM,
+            TEXT,
+            HPos::Right,
+            false,
+        )?;
+    }
+    let label_y = p.b + tick + c.px(4.0) + c.px(TICK_EM * 0.6);
+    for (v, l) in f.xt.values.iter().zip(&f.xt.labels) {
+        let x = f.x.map(*v);
+        c.line((x, p.b), (x, p.b + tick), AXIS, 1.0)?;
+        c.text(l, (x, label_y), TICK_EM, TEXT, HPos::Center, false)?;
+    }
+    c.note_axis(y_title, None, &f.yt.labels);
+    if !f.xt.values.is_empty() {
+        c.note_axis(x_title, None, &f.xt.labels);
+    }
+    // Axis titles shrink, then are cut, to their axis' length.
+    let title_h = c.px(AXIS_TITLE_EM * 1.3);
+    let em = fitting_em(c, x_title, AXIS_TITLE_EM, p.w())?;
+    let x_title = &truncated(c, x_title, em, area.w())?;
+    c.text(
+        x_title,
+        ((p.l + p.r) / 2.0, area.b - title_h / 2.0),
+        em,
+        TEXT,
+        HPos::Center,
+        false,
+    )?;
+    let em = fitting_em(c, y_title, AXIS_TITLE_EM, p.h())?;
+    let y_title = &truncated(c, y_title, em, p.h())?;
+    c.text(
+        y_title,
+        (area.l + title_h / 2.0, (p.t + p.b) / 2.0),
+        em,
+        TEXT,
+        HPos::Center,
+        true,
+    )?;
+    Ok(())
+}
