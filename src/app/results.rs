@@ -280,7 +280,8 @@ impl Analyses {
             None,
             "Reopening the last run's results".into(),
             move |_| {
-                let project = crate::experiments::project::Project::load(&path).map_err(JobError::failed)?;
+                let project =
+                    crate::experiments::project::Project::load(&path).map_err(JobError::failed)?;
                 Ok(JobOutput::Restored(project))
             },
         );

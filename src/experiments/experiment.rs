@@ -3,13 +3,11 @@
 //! loop that computes items in parallel with progress and cancellation. The single-machine
 //! functions (`stability::grid_search`, `run_robustness`, `run_clustering`,
 //! `run_recognition`, `run_frontier`) and every shard of a sweep (`crate::sweep`) compute
-//! the same items through that loop, so a merged sweep equals the local run for the same
+//! the same items through one loop (`parallel::compute_items`), so a merged sweep equals the local run for the same
 //! seeds.
 
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use rayon::prelude::*;
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 
@@ -50,32 +48,6 @@ pub struct WorkTime {
     pub seconds: f64,
     /// Worker threads of the shards (the largest).
     pub threads: usize,
-}
-
-/// Compute every item in parallel, in order, with progress ("{what}: d/n {unit}") and a
-/// cancellation check before each item: the one loop of every experiment and shard.
-pub fn compute_items<I: Sync, O: Send>(
-    items: &[I],
-    progress: &Progress,
-    what: &str,
-    unit: &str,
-    compute: impl Fn(&I) -> Result<O, ExperimentError> + Sync,
-) -> Result<Vec<O>, ExperimentError> {
-    let total = items.len();
-    let done = AtomicUsize::new(0);
-    items
-        .par_iter()
-        .map(|item| {
-            progress.checkpoint()?;
-            let out = compute(item)?;
-            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-            progress.set(
-                d as f64 / total.max(1) as f64,
-                format!("{what}: {d}/{total} {unit}"),
-            );
-            Ok(out)
-        })
-        .collect()
 }
 
 /// An experiment as units of work: implement this for its parameters to make it

@@ -7,6 +7,7 @@ pub mod experiment;
 pub mod frontier;
 pub mod labels;
 pub mod links;
+pub mod parallel;
 pub mod project;
 pub mod recognition;
 pub mod result;

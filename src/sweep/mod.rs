@@ -18,10 +18,11 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use sha2::{Digest, Sha256};
 
-use crate::experiments::experiment::{Experiment as Sweepable, compute_items};
+use crate::experiments::experiment::Experiment as Sweepable;
 pub use crate::experiments::experiment::{
     FrontierSweep, FrontierSweepItem, StabilitySweep, WorkTime,
 };
+use crate::experiments::parallel::compute_items;
 pub use sbatch::{Resources, sbatch_script};
 
 use crate::experiments::clustering::ClusteringParams;

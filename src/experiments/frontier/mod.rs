@@ -34,8 +34,8 @@ use crate::experiments::clustering::{
     ClusteringItem, ClusteringOutput, ClusteringParams, ClusteringPrep, ClusteringRun,
     UnsupervisedLearner, baseline_seed, clustering_item, distinct, prepare_clustering, som_setup,
 };
-use crate::experiments::experiment::compute_items;
 use crate::experiments::labels::session_labels;
+use crate::experiments::parallel::compute_items;
 use crate::experiments::recognition::{
     RecognitionParams, RecognitionPrep, SupervisedLearner, prepare_recognition,
     recognition_repetition,

@@ -18,8 +18,8 @@ use ndarray::{Array2, s};
 use serde::{Deserialize, Serialize};
 
 use crate::experiments::ExperimentError;
-use crate::experiments::experiment::compute_items;
 use crate::experiments::labels::session_labels;
+use crate::experiments::parallel::compute_items;
 use crate::experiments::result::{MeanSd, SizeReason};
 use crate::features::{FeatureSequences, FeatureSet, SequenceParams, feature_sequences};
 use crate::jobs::Progress;

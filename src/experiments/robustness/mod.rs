@@ -36,8 +36,8 @@ use crate::experiments::ExperimentError;
 use crate::experiments::clustering::{
     ClusteringParams, UnsupervisedLearner, every_gu_cluster, one_run, som_setup,
 };
-use crate::experiments::experiment::compute_items;
 use crate::experiments::labels::session_labels;
+use crate::experiments::parallel::compute_items;
 use crate::experiments::recognition::{SupervisedLearner, new_learner, protocol_order};
 use crate::experiments::result::MeanSd;
 use crate::experiments::stability::{
