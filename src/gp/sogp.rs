@@ -134,7 +134,8 @@ pub struct Sogp {
     wlen: usize,
     bv_raw: Vec<f64>,
     bv_scaled: Vec<f64>,
-    /// The scaled BVs again, lag-major for the many-BV kernels.
+    /// The scaled BVs again, lag-major for the many-BV kernels of the gradient (current
+    /// only while adapting, see [`Sogp::sync_basis`]).
     basis: LagMajor,
     /// The BVs' distinct inputs and the observed window's distances to them.
     inputs: Inputs,

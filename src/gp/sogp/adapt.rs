@@ -28,6 +28,7 @@ impl Sogp {
             let sngd = Sngd::new(params.theta(), lo, hi, p.clone());
             let mut buf =
                 GradBuffers::new(dim, self.kernel.tau(), self.stride, self.basis.stride());
+            self.sync_basis();
             self.fill_gram_derivatives(&mut buf);
             self.adapt = Some(Box::new(Adaptation { sngd, buf }));
         }
@@ -190,6 +191,7 @@ impl Sogp {
                 }
             }
             self.adapt = Some(ad);
+            self.sync_basis();
         }
         self.version += 1;
         self.observed = None;
@@ -207,6 +209,7 @@ impl Sogp {
             self.stride,
             self.basis.stride(),
         );
+        self.sync_basis();
         self.fill_gram_derivatives(&mut buf);
         match self.likelihood_terms() {
             Some((_, ds, logp)) => {

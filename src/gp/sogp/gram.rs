@@ -57,6 +57,16 @@ impl GradBuffers {
 }
 
 impl Sogp {
+    /// Store every BV in the lag-major [`Sogp::basis`]. Only the gradient reads it, so it
+    /// is kept up to date while adapting and filled here when adaptation starts or a
+    /// one-off gradient needs it.
+    pub(super) fn sync_basis(&mut self) {
+        let w = self.wlen;
+        for i in 0..self.n {
+            self.basis.set(i, &self.bv_scaled[i * w..(i + 1) * w]);
+        }
+    }
+
     /// The Gram matrix's unit-kernel derivatives and values, one BV against all earlier
     /// ones at a time (K is symmetric).
     pub(super) fn fill_gram_derivatives(&self, buf: &mut GradBuffers) {

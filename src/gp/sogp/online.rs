@@ -90,61 +90,54 @@ impl Sogp {
     #[inline(always)]
     pub(super) fn posterior_update_portable(&mut self, r: f64) {
         let (n, s, no) = (self.n, self.stride, self.n_out);
-        for i in 0..n {
-            self.ehat[i] = dot(&self.q[i * s..i * s + n], &self.k[..n]);
+        let k = &self.k[..n];
+        for (e, qrow) in self.ehat[..n].iter_mut().zip(self.q.chunks_exact(s)) {
+            *e = dot(&qrow[..n], k);
         }
         let sf2 = self.kernel.sigma_f2();
-        let kqk: f64 = (0..n).map(|i| self.k[i] * self.ehat[i]).sum();
+        let kqk: f64 = k.iter().zip(&self.ehat[..n]).map(|(k, e)| k * e).sum();
         let gamma = (sf2 - kqk).max(0.0);
         if gamma >= self.eps * sf2 && gamma > 0.0 {
-            // Full update: the point becomes BV n.
-            for j in 0..=n {
-                self.c[n * s + j] = 0.0;
-                self.c[j * s + n] = 0.0;
-                self.q[n * s + j] = 0.0;
-                self.q[j * s + n] = 0.0;
-            }
+            // Full update: the point becomes BV n. Row and column n of Q are written
+            // whole; those of C start from zero (kept as `0 + x`, which differs from x in
+            // the sign of a zero).
             let ig = 1.0 / gamma;
-            for i in 0..n {
-                for j in 0..n {
-                    self.q[i * s + j] += ig * self.ehat[i] * self.ehat[j];
+            let ehat = &self.ehat[..n];
+            for (i, &ei) in ehat.iter().enumerate() {
+                let row = &mut self.q[i * s..i * s + n + 1];
+                // (ig·e_i)·e_j, the association of ig * e_i * e_j.
+                let g = ig * ei;
+                for (q, ej) in row[..n].iter_mut().zip(ehat) {
+                    *q += g * ej;
                 }
-                self.q[i * s + n] = -ig * self.ehat[i];
-                self.q[n * s + i] = -ig * self.ehat[i];
+                row[n] = -ig * ei;
+            }
+            for (i, &ei) in ehat.iter().enumerate() {
+                self.q[n * s + i] = -ig * ei;
             }
             self.q[n * s + n] = ig;
             for d in 0..no {
-                for i in 0..n {
-                    self.alpha[i * no + d] += self.ck[i] * self.qv[d];
+                let qd = self.qv[d];
+                for (a, ck) in self.alpha.iter_mut().skip(d).step_by(no).zip(&self.ck[..n]) {
+                    *a += ck * qd;
                 }
-                self.alpha[n * no + d] = self.qv[d];
+                self.alpha[n * no + d] = qd;
             }
-            for i in 0..=n {
-                let si = if i < n { self.ck[i] } else { 1.0 };
+            let ck = &self.ck[..n];
+            for (i, &si) in ck.iter().enumerate() {
                 let row = &mut self.c[i * s..i * s + n + 1];
-                for (c, sj) in row.iter_mut().zip(&self.ck[..n]) {
-                    *c += r * si * sj;
+                let g = r * si;
+                for (c, sj) in row[..n].iter_mut().zip(ck) {
+                    *c += g * sj;
                 }
-                row[n] += r * si;
+                row[n] = 0.0 + g;
             }
-            let w = self.wlen;
-            self.bv_raw[n * w..(n + 1) * w].copy_from_slice(&self.x_raw);
-            self.bv_scaled[n * w..(n + 1) * w].copy_from_slice(&self.x_scaled);
-            self.basis.set(n, &self.x_scaled);
-            let inv_rho = 1.0 / self.kernel.params().sigma_rho;
-            self.inputs.add_bv(n, &self.x_raw, &self.x_scaled, inv_rho);
-            self.bv_y[n * no..(n + 1) * no].copy_from_slice(&self.y_tmp);
-            if let Some(a) = self.adapt.as_mut() {
-                let (pk, lanes) = (a.buf.pk, a.buf.lanes);
-                for j in 0..n {
-                    for p in 0..pk {
-                        a.buf.kb[tri(n, j) * pk + p] = a.buf.kx[p * lanes + j];
-                    }
-                }
-                let diag = &mut a.buf.kb[tri(n, n) * pk..(tri(n, n) + 1) * pk];
-                diag.fill(0.0);
-                diag[pk - 1] = 1.0;
+            let row = &mut self.c[n * s..n * s + n + 1];
+            for (c, sj) in row[..n].iter_mut().zip(ck) {
+                *c = 0.0 + r * sj;
             }
+            row[n] = 0.0 + r;
+            self.store_bv(n);
             self.n += 1;
         } else {
             // Projected update onto the current BVs, with Csató's η = 1/(1 + γ r).
@@ -152,21 +145,52 @@ impl Sogp {
             if !(eta.is_finite() && eta > 0.0) {
                 return;
             }
-            for i in 0..n {
-                self.ehat[i] += self.ck[i];
+            for (e, ck) in self.ehat[..n].iter_mut().zip(&self.ck[..n]) {
+                *e += ck;
             }
+            let ehat = &self.ehat[..n];
             for d in 0..no {
-                for i in 0..n {
-                    self.alpha[i * no + d] += eta * self.ehat[i] * self.qv[d];
+                let qd = self.qv[d];
+                for (a, e) in self.alpha.iter_mut().skip(d).step_by(no).zip(ehat) {
+                    *a += eta * e * qd;
                 }
             }
-            for i in 0..n {
-                for j in 0..n {
-                    self.c[i * s + j] += r * eta * self.ehat[i] * self.ehat[j];
+            let re = r * eta;
+            for (i, &ei) in ehat.iter().enumerate() {
+                // ((r·η)·e_i)·e_j, the association of r * eta * e_i * e_j.
+                let g = re * ei;
+                for (c, ej) in self.c[i * s..i * s + n].iter_mut().zip(ehat) {
+                    *c += g * ej;
                 }
             }
         }
         self.version += 1;
+    }
+
+    /// Store the observed window, its target and (when adapting) its kernel derivatives
+    /// as BV `n`.
+    fn store_bv(&mut self, n: usize) {
+        let (w, no) = (self.wlen, self.n_out);
+        self.bv_raw[n * w..(n + 1) * w].copy_from_slice(&self.x_raw);
+        self.bv_scaled[n * w..(n + 1) * w].copy_from_slice(&self.x_scaled);
+        if self.adapt.is_some() {
+            self.basis.set(n, &self.x_scaled);
+        }
+        let inv_rho = 1.0 / self.kernel.params().sigma_rho;
+        self.inputs.add_bv(n, &self.x_raw, &self.x_scaled, inv_rho);
+        self.bv_y[n * no..(n + 1) * no].copy_from_slice(&self.y_tmp);
+        if let Some(a) = self.adapt.as_mut() {
+            let (pk, lanes) = (a.buf.pk, a.buf.lanes);
+            let row = &mut a.buf.kb[tri(n, 0) * pk..tri(n, n) * pk];
+            for (j, pair) in row.chunks_exact_mut(pk).enumerate() {
+                for (p, v) in pair.iter_mut().enumerate() {
+                    *v = a.buf.kx[p * lanes + j];
+                }
+            }
+            let diag = &mut a.buf.kb[tri(n, n) * pk..(tri(n, n) + 1) * pk];
+            diag.fill(0.0);
+            diag[pk - 1] = 1.0;
+        }
     }
 
     /// Remove the BV with the lowest |α_i|²/(Q_ii + C_ii) (paper eq. 10).
@@ -194,76 +218,85 @@ impl Sogp {
         dispatch_wide!(["avx512f", "avx2"] Sogp::delete_portable, (this: &mut Sogp = self, i: usize = i))
     }
 
+    /// The removal runs on BV i's column where it stands; then the last BV moves into
+    /// slot i. This is the order a swap of i with the last BV followed by the removal of
+    /// the last gives (every entry is updated on its own, so the results are the same to
+    /// the last bit), without moving the other rows.
     #[inline(always)]
     pub(super) fn delete_portable(&mut self, i: usize) {
-        let last = self.n - 1;
-        self.swap_bv(i, last);
-        let (s, no, l) = (self.stride, self.n_out, last);
-        let qs = self.q[l * s + l].max(1e-300);
-        let den = (self.q[l * s + l] + self.c[l * s + l]).max(1e-300);
+        let (s, no, n) = (self.stride, self.n_out, self.n);
+        let last = n - 1;
+        let qs = self.q[i * s + i].max(1e-300);
+        let den = (self.q[i * s + i] + self.c[i * s + i]).max(1e-300);
+        // Column i copied out so that the rank-one updates run over contiguous rows.
+        for j in 0..n {
+            self.col_q[j] = self.q[j * s + i];
+            self.col_c[j] = self.c[j * s + i];
+        }
+        let (cq, cc) = (&self.col_q[..n], &self.col_c[..n]);
         for d in 0..no {
-            let a_star = self.alpha[l * no + d];
-            for j in 0..l {
-                let qc = self.q[j * s + l] + self.c[j * s + l];
-                self.alpha[j * no + d] -= a_star * qc / den;
+            let a_star = self.alpha[i * no + d];
+            for ((a, qm), cm) in self.alpha.iter_mut().skip(d).step_by(no).zip(cq).zip(cc) {
+                let qc = qm + cm;
+                *a -= a_star * qc / den;
             }
-            self.alpha[l * no + d] = 0.0;
         }
-        // Column l copied out so that the rank-one updates run over contiguous rows.
-        for j in 0..l {
-            self.col_q[j] = self.q[j * s + l];
-            self.col_c[j] = self.c[j * s + l];
-        }
-        let (cq, cc) = (&self.col_q[..l], &self.col_c[..l]);
-        for j in 0..l {
-            let (qj, cj) = (cq[j], cc[j]);
-            let crow = &mut self.c[j * s..j * s + l];
-            let qrow = &mut self.q[j * s..j * s + l];
+        // Row and column i are updated too and then overwritten by the last BV's.
+        for ((crow, qrow), (&qj, &cj)) in self
+            .c
+            .chunks_exact_mut(s)
+            .zip(self.q.chunks_exact_mut(s))
+            .zip(cq.iter().zip(cc))
+        {
+            let crow = &mut crow[..n];
+            let qrow = &mut qrow[..n];
             for (((c, q), qm), cm) in crow.iter_mut().zip(qrow.iter_mut()).zip(cq).zip(cc) {
                 *c += qj * qm / qs - (qj + cj) * (qm + cm) / den;
                 *q -= qj * qm / qs;
             }
         }
-        self.inputs.release_bv(l);
+        self.inputs.release_bv(i);
+        if i != last {
+            self.move_bv(last, i);
+        }
+        for a in &mut self.alpha[last * no..n * no] {
+            *a = 0.0;
+        }
         self.n -= 1;
         self.version += 1;
     }
 
-    pub(super) fn swap_bv(&mut self, i: usize, j: usize) {
-        if i == j {
-            return;
-        }
+    /// Move BV `from` (the last) into slot `to`, whose BV is gone: its row and column of C
+    /// and Q (the pair with itself to the diagonal), window, target, weights and Gram
+    /// derivatives.
+    fn move_bv(&mut self, from: usize, to: usize) {
         let (s, w, no) = (self.stride, self.wlen, self.n_out);
         for m in [&mut self.c, &mut self.q] {
-            for r in 0..s {
-                m.swap(i * s + r, j * s + r);
+            let diag = m[from * s + from];
+            m.copy_within(from * s..from * s + from, to * s);
+            m[to * s + to] = diag;
+            for r in (0..from).filter(|&r| r != to) {
+                m[r * s + to] = m[r * s + from];
             }
-            for r in 0..s {
-                m.swap(r * s + i, r * s + j);
-            }
         }
-        for t in 0..w {
-            self.bv_raw.swap(i * w + t, j * w + t);
-            self.bv_scaled.swap(i * w + t, j * w + t);
+        self.bv_raw.copy_within(from * w..(from + 1) * w, to * w);
+        self.bv_scaled.copy_within(from * w..(from + 1) * w, to * w);
+        if self.adapt.is_some() {
+            self.basis.copy(from, to);
         }
-        self.basis.swap(i, j);
-        self.inputs.swap_bv(i, j);
-        for d in 0..no {
-            self.bv_y.swap(i * no + d, j * no + d);
-            self.alpha.swap(i * no + d, j * no + d);
-        }
+        self.inputs.move_bv(from, to);
+        self.bv_y.copy_within(from * no..(from + 1) * no, to * no);
+        self.alpha.copy_within(from * no..(from + 1) * no, to * no);
         if let Some(a) = self.adapt.as_mut() {
-            // Rows and columns i and j trade places; the pair (i, j) itself stays.
             let pk = a.buf.pk;
             let kb = &mut a.buf.kb;
-            for r in (0..s).filter(|&r| r != i && r != j) {
-                for p in 0..pk {
-                    kb.swap(tri(i, r) * pk + p, tri(j, r) * pk + p);
-                }
+            for r in (0..from).filter(|&r| r != to) {
+                kb.copy_within(tri(from, r) * pk..(tri(from, r) + 1) * pk, tri(to, r) * pk);
             }
-            for p in 0..pk {
-                kb.swap(tri(i, i) * pk + p, tri(j, j) * pk + p);
-            }
+            kb.copy_within(
+                tri(from, from) * pk..(tri(from, from) + 1) * pk,
+                tri(to, to) * pk,
+            );
         }
     }
 }

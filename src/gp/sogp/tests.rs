@@ -111,10 +111,14 @@ fn kernel_from_input_rows_equals_the_direct_evaluation() {
             gp.observe(window.as_slice());
             let mut xs = vec![0.0; gp.wlen];
             gp.kernel.scale_into(window.as_slice(), &mut xs);
-            let lanes = gp.basis.stride();
+            // The BVs' lag-major store, built afresh.
+            let mut basis = LagMajor::new(dim, tau, gp.stride);
+            for i in 0..gp.n {
+                basis.set(i, gp.bv(i));
+            }
+            let lanes = basis.stride();
             let (mut lag_k, mut k) = (vec![0.0; tau * lanes], vec![0.0; lanes]);
-            gp.kernel
-                .unit_many(&xs, &gp.basis, gp.n, &mut lag_k, &mut k);
+            gp.kernel.unit_many(&xs, &basis, gp.n, &mut lag_k, &mut k);
             let sf2 = gp.kernel.sigma_f2();
             for i in 0..gp.n {
                 let direct = sf2 * gp.kernel.unit_scaled(&xs, gp.bv(i));
