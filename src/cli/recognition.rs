@@ -6,6 +6,10 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use clap::Args;
 
+mod bench;
+
+pub use bench::{BenchArgs, bench};
+
 use super::progress::with_progress;
 use crate::catalogue::MethodId;
 use crate::experiments::clustering::{ClusteringParams, run_clustering};
@@ -15,7 +19,6 @@ use crate::experiments::recognition::{
 };
 use crate::experiments::result::SizeReason;
 use crate::features::FeatureSet;
-use crate::jobs::Progress;
 use crate::session::{self, Session};
 
 /// A native session file, a BTS3 CSV or the iCub dataset folder (imported on the fly).
@@ -415,207 +418,4 @@ pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
     let us = r.runs.iter().map(|x| x.learn_step_us).sum::<f64>() / r.runs.len().max(1) as f64;
     println!("  learning phase {us:.1} µs per observation (threads share the cores)");
     write_json(&r, args.json.as_deref())
-}
-
-/// The session timed when none is given: the iCub dataset beside the checkout, if present.
-const DEFAULT_BENCH_SESSION: &str = "../shared/datasets/icub-grasp";
-
-#[derive(Args, Debug)]
-pub struct BenchArgs {
-    /// Time the steps on this session (native file or iCub folder; default: the iCub
-    /// dataset at ../shared/datasets/icub-grasp when present).
-    pub session: Option<PathBuf>,
-    /// Protocol orders over which the session's steps are timed.
-    #[arg(long, default_value_t = 3)]
-    pub session_reps: usize,
-    /// Also time the whole Table II protocol on the session.
-    #[arg(long)]
-    pub protocol: bool,
-    /// Repetitions of the protocol timing.
-    #[arg(long, default_value_t = 50)]
-    pub reps: usize,
-    /// BV budgets of the per-step scaling (at the default tau).
-    #[arg(long, value_delimiter = ',', default_value = "10,25,50,100")]
-    pub budgets: Vec<usize>,
-    /// Kernel lags of the per-step scaling (at the default budget).
-    #[arg(long, value_delimiter = ',', default_value = "5,15,30")]
-    pub taus: Vec<usize>,
-    /// Learners to time: ds, gs or both.
-    #[arg(long, value_delimiter = ',', default_value = "ds,gs")]
-    pub learners: Vec<String>,
-    /// Timed sequences per setting (20 steps each; more gives steadier figures).
-    #[arg(long, default_value_t = 60)]
-    pub sequences: usize,
-    /// Skip the per-step timings on synthetic sequences.
-    #[arg(long)]
-    pub no_steps: bool,
-    /// Write the measurements here as JSON.
-    #[arg(long)]
-    pub json: Option<PathBuf>,
-}
-
-#[derive(serde::Serialize)]
-struct BenchReport {
-    steps: Vec<crate::experiments::recognition::StepBench>,
-    session_steps: Vec<crate::experiments::recognition::SessionStepBench>,
-    protocol: Vec<ProtocolTiming>,
-    threads: usize,
-}
-
-#[derive(serde::Serialize)]
-struct ProtocolTiming {
-    learner: String,
-    features: String,
-    reps: usize,
-    wall_seconds: f64,
-    cpu_seconds: Option<f64>,
-    all: f64,
-    final_20: f64,
-}
-
-pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
-    let inputs: Vec<&Path> = args.session.as_deref().into_iter().collect();
-    super::refuse_input_as_output(args.json.as_deref(), &inputs)?;
-    {
-        use super::bounds::{MAX_CAPACITY, MAX_REPS, MAX_TAU, all_at_most, at_most};
-        at_most("--reps", args.reps, MAX_REPS)?;
-        at_most("--session-reps", args.session_reps, MAX_REPS)?;
-        all_at_most("--budgets", &args.budgets, MAX_CAPACITY)?;
-        all_at_most("--taus", &args.taus, MAX_TAU)?;
-    }
-    use crate::experiments::recognition::{StepBenchParams, bench_steps};
-    let mut steps = Vec::new();
-    println!("per observation, one thread (34 inputs, 10 classes, adaptation on unless noted):");
-    let learners = args
-        .learners
-        .iter()
-        .map(|l| l.parse::<SupervisedLearner>())
-        .collect::<Result<Vec<_>, _>>()?;
-    let base = StepBenchParams {
-        sequences: args.sequences,
-        ..StepBenchParams::default()
-    };
-    let mut configs = Vec::new();
-    if !args.no_steps {
-        for &capacity in &args.budgets {
-            configs.push(StepBenchParams {
-                capacity,
-                ..base.clone()
-            });
-        }
-        for &tau in args.taus.iter().filter(|&&t| t != base.tau) {
-            configs.push(StepBenchParams {
-                tau,
-                ..base.clone()
-            });
-        }
-        configs.push(StepBenchParams {
-            adaptation: false,
-            ..base.clone()
-        });
-    }
-    for p in configs {
-        for &learner in &learners {
-            let b = bench_steps(learner, &p)?;
-            let cpu = |v: Option<f64>| v.map_or("?".to_string(), |v| format!("{v:.0}"));
-            println!(
-                "  {:?} budget {:>3} tau {:>2} adapt {:<5}: predict {:>7.1} µs/step (cpu {}), train {:>7.1} µs/step (cpu {})  ({:.0} BVs, {} adapting)",
-                learner,
-                p.capacity,
-                p.tau,
-                p.adaptation,
-                b.predict_step_us,
-                cpu(b.predict_step_cpu_us),
-                b.train_step_us,
-                cpu(b.train_step_cpu_us),
-                b.mean_basis,
-                b.adapting
-            );
-            steps.push(b);
-        }
-    }
-    let path = args.session.clone().or_else(|| {
-        let p = PathBuf::from(DEFAULT_BENCH_SESSION);
-        p.exists().then_some(p)
-    });
-    let session = path.as_deref().map(open_session).transpose()?;
-    let shown = path.as_deref().map(|p| p.display().to_string());
-    let mut session_steps = Vec::new();
-    if let Some(session) = &session {
-        use crate::experiments::recognition::{SessionBenchParams, bench_session_steps};
-        println!(
-            "per step on {} once every expert is full (all features, capacity {}, tau {}, {} orders, one thread), µs median [p10, p90]:",
-            shown.unwrap_or_default(),
-            base.capacity,
-            base.tau,
-            args.session_reps
-        );
-        for adaptation in [true, false] {
-            for &learner in &learners {
-                let b = bench_session_steps(
-                    session,
-                    &SessionBenchParams {
-                        learner,
-                        capacity: base.capacity,
-                        tau: base.tau,
-                        adaptation,
-                        reps: args.session_reps,
-                        seed: 0,
-                    },
-                )?;
-                println!(
-                    "  {:?} adapt {:<5}: predict {:>6.1} [{:.1}, {:.1}], train {:>6.1} [{:.1}, {:.1}]  ({} steps; {} of {} experts adapting at the end)",
-                    learner,
-                    adaptation,
-                    b.predict.median,
-                    b.predict.p10,
-                    b.predict.p90,
-                    b.train.median,
-                    b.train.p10,
-                    b.train.p90,
-                    b.train.steps,
-                    b.adapting,
-                    b.experts
-                );
-                session_steps.push(b);
-            }
-        }
-    }
-    let mut protocol = Vec::new();
-    if let Some(session) = session.as_ref().filter(|_| args.protocol) {
-        for &learner in &learners {
-            let p = RecognitionParams {
-                learner,
-                reps: args.reps,
-                ..RecognitionParams::default()
-            };
-            let r = run_recognition(session, &p, &Progress::new())?;
-            println!(
-                "  Table II protocol {:?}/all, {} reps: {:.1} s wall, {:.1} s CPU ({} threads)",
-                learner,
-                args.reps,
-                r.wall_seconds,
-                r.cpu_seconds.unwrap_or(f64::NAN),
-                rayon::current_num_threads()
-            );
-            protocol.push(ProtocolTiming {
-                learner: format!("{learner:?}"),
-                features: "all".into(),
-                reps: args.reps,
-                wall_seconds: r.wall_seconds,
-                cpu_seconds: r.cpu_seconds,
-                all: r.summary.all.mean,
-                final_20: r.summary.final_20.mean,
-            });
-        }
-    }
-    write_json(
-        &BenchReport {
-            steps,
-            session_steps,
-            protocol,
-            threads: rayon::current_num_threads(),
-        },
-        args.json.as_deref(),
-    )
 }

@@ -12,6 +12,7 @@
 //! are bit-identical to [`super::RecursiveArd::unit_many`].
 
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 
 use super::kernel::{LANES, LagMajor, RecursiveArd, exp_nonpos};
 use super::wide::dispatch_wide;
@@ -36,7 +37,7 @@ pub(crate) struct Inputs {
     /// Slots ever used (the rows cover 0..used).
     used: usize,
     /// Hash of a raw input → its slot.
-    lookup: HashMap<u64, u32>,
+    lookup: HashMap<u64, u32, BuildHasherDefault<Prehashed>>,
     /// Input slot of BV i at lag l: `index[l * lanes + i]`.
     index: Vec<u32>,
     /// K_t of BV i after t = l + 1 padding lags (all-zero inputs, as at the start of a
@@ -78,6 +79,25 @@ impl Shift {
     }
 }
 
+/// The map's hasher: its keys are already hashes ([`hash_bits`]), so they are taken as
+/// they are instead of being hashed again.
+#[derive(Default)]
+struct Prehashed(u64);
+
+impl Hasher for Prehashed {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for b in bytes {
+            self.0 = (self.0 << 8) | u64::from(*b);
+        }
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.0 = v;
+    }
+}
+
 /// Hash of the bits of a raw input (FxHash's mix).
 fn hash_bits(x: &[f64]) -> u64 {
     x.iter().fold(0u64, |h, v| {
@@ -105,7 +125,7 @@ impl Inputs {
             refs: vec![0; slots],
             free: Vec::new(),
             used: 0,
-            lookup: HashMap::new(),
+            lookup: HashMap::default(),
             index: vec![0; tau * lanes],
             prefix: vec![0.0; tau * lanes],
             lead: 0,
@@ -155,6 +175,19 @@ impl Inputs {
     /// one (a model stores the window it observed); a new input's distances to the
     /// observed lags are then added to the rows.
     pub(crate) fn add_bv(&mut self, i: usize, raw: &[f64], scaled: &[f64], inv_rho: f64) {
+        // Wide vectors for the new input's distances and the prefixes' exponentials (the
+        // same operations in the same order, so the same bits).
+        dispatch_wide!(["avx512f", "avx2"] Inputs::add_bv_portable, (
+            this: &mut Inputs = self,
+            i: usize = i,
+            raw: &[f64] = raw,
+            scaled: &[f64] = scaled,
+            inv_rho: f64 = inv_rho,
+        ))
+    }
+
+    #[inline(always)]
+    fn add_bv_portable(&mut self, i: usize, raw: &[f64], scaled: &[f64], inv_rho: f64) {
         let d = self.dim;
         let mut k = 1.0;
         for lag in 0..self.tau {
@@ -191,10 +224,11 @@ impl Inputs {
         }
     }
 
-    pub(crate) fn swap_bv(&mut self, i: usize, j: usize) {
+    /// Move BV `from`'s inputs and prefixes into slot `to` (whose BV was released).
+    pub(crate) fn move_bv(&mut self, from: usize, to: usize) {
         for lag in 0..self.tau {
-            self.index.swap(lag * self.lanes + i, lag * self.lanes + j);
-            self.prefix.swap(lag * self.lanes + i, lag * self.lanes + j);
+            self.index[lag * self.lanes + to] = self.index[lag * self.lanes + from];
+            self.prefix[lag * self.lanes + to] = self.prefix[lag * self.lanes + from];
         }
     }
 

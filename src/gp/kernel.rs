@@ -260,16 +260,17 @@ impl LagMajor {
         self.norms[lag * self.stride + i]
     }
 
-    pub fn swap(&mut self, i: usize, j: usize) {
+    /// Copy BV `from` into slot `to`.
+    pub fn copy(&mut self, from: usize, to: usize) {
         let s = self.stride;
         for lag in 0..self.tau {
             for k in 0..self.dim {
-                let (a, b) = (self.index(lag, k, i), self.index(lag, k, j));
-                self.data.swap(a, b);
+                let (a, b) = (self.index(lag, k, from), self.index(lag, k, to));
+                self.data[b] = self.data[a];
             }
         }
         for r in 0..self.tau {
-            self.norms.swap(r * s + i, r * s + j);
+            self.norms[r * s + to] = self.norms[r * s + from];
         }
     }
 

@@ -1,0 +1,404 @@
+//! `bench-recognition`: the cost of a step of the recognition learners, on synthetic
+//! sequences and on a session, beside the figures of the authors' C++ library (libOTL).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::Args;
+
+use super::{open_session, write_json};
+use crate::experiments::recognition::{
+    RecognitionParams, StepTimes, SupervisedLearner, run_recognition,
+};
+use crate::jobs::Progress;
+
+/// The session timed when none is given: the iCub dataset beside the checkout, if present.
+const DEFAULT_BENCH_SESSION: &str = "../shared/datasets/icub-grasp";
+
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// Time the steps on this session (native file or iCub folder; default: the iCub
+    /// dataset at ../shared/datasets/icub-grasp when present).
+    pub session: Option<PathBuf>,
+    /// Protocol orders over which the session's steps are timed.
+    #[arg(long, default_value_t = 3)]
+    pub session_reps: usize,
+    /// Also time the whole Table II protocol on the session.
+    #[arg(long)]
+    pub protocol: bool,
+    /// Repetitions of the protocol timing.
+    #[arg(long, default_value_t = 50)]
+    pub reps: usize,
+    /// BV budgets of the per-step scaling (at the default tau).
+    #[arg(long, value_delimiter = ',', default_value = "10,25,50,100")]
+    pub budgets: Vec<usize>,
+    /// Kernel lags of the per-step scaling (at the default budget).
+    #[arg(long, value_delimiter = ',', default_value = "5,15,30")]
+    pub taus: Vec<usize>,
+    /// Learners to time: ds, gs or both.
+    #[arg(long, value_delimiter = ',', default_value = "ds,gs")]
+    pub learners: Vec<String>,
+    /// Timed sequences per setting (20 steps each; more gives steadier figures).
+    #[arg(long, default_value_t = 60)]
+    pub sequences: usize,
+    /// Skip the per-step timings on synthetic sequences.
+    #[arg(long)]
+    pub no_steps: bool,
+    /// Skip the steps timed beside libOTL's figures on the session.
+    #[arg(long)]
+    pub no_anchor: bool,
+    /// Skip the DS and GS steps on the session with and without adaptation.
+    #[arg(long)]
+    pub no_session_steps: bool,
+    /// Write the measurements here as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(serde::Serialize)]
+struct BenchReport {
+    steps: Vec<crate::experiments::recognition::StepBench>,
+    session_steps: Vec<crate::experiments::recognition::SessionStepBench>,
+    protocol: Vec<ProtocolTiming>,
+    anchor: Option<AnchorBench>,
+    threads: usize,
+}
+
+#[derive(serde::Serialize)]
+struct ProtocolTiming {
+    learner: String,
+    features: String,
+    reps: usize,
+    wall_seconds: f64,
+    cpu_seconds: Option<f64>,
+    all: f64,
+    final_20: f64,
+}
+
+pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
+    let inputs: Vec<&Path> = args.session.as_deref().into_iter().collect();
+    crate::cli::refuse_input_as_output(args.json.as_deref(), &inputs)?;
+    {
+        use crate::cli::bounds::{MAX_CAPACITY, MAX_REPS, MAX_TAU, all_at_most, at_most};
+        at_most("--reps", args.reps, MAX_REPS)?;
+        at_most("--session-reps", args.session_reps, MAX_REPS)?;
+        all_at_most("--budgets", &args.budgets, MAX_CAPACITY)?;
+        all_at_most("--taus", &args.taus, MAX_TAU)?;
+    }
+    use crate::experiments::recognition::{StepBenchParams, bench_steps};
+    let mut steps = Vec::new();
+    println!("per observation, one thread (34 inputs, 10 classes, adaptation on unless noted):");
+    let learners = args
+        .learners
+        .iter()
+        .map(|l| l.parse::<SupervisedLearner>())
+        .collect::<Result<Vec<_>, _>>()?;
+    let base = StepBenchParams {
+        sequences: args.sequences,
+        ..StepBenchParams::default()
+    };
+    let mut configs = Vec::new();
+    if !args.no_steps {
+        for &capacity in &args.budgets {
+            configs.push(StepBenchParams {
+                capacity,
+                ..base.clone()
+            });
+        }
+        for &tau in args.taus.iter().filter(|&&t| t != base.tau) {
+            configs.push(StepBenchParams {
+                tau,
+                ..base.clone()
+            });
+        }
+        configs.push(StepBenchParams {
+            adaptation: false,
+            ..base.clone()
+        });
+    }
+    for p in configs {
+        for &learner in &learners {
+            let b = bench_steps(learner, &p)?;
+            let cpu = |v: Option<f64>| v.map_or("?".to_string(), |v| format!("{v:.0}"));
+            println!(
+                "  {:?} budget {:>3} tau {:>2} adapt {:<5}: predict {:>7.1} µs/step (cpu {}), train {:>7.1} µs/step (cpu {})  ({:.0} BVs, {} adapting)",
+                learner,
+                p.capacity,
+                p.tau,
+                p.adaptation,
+                b.predict_step_us,
+                cpu(b.predict_step_cpu_us),
+                b.train_step_us,
+                cpu(b.train_step_cpu_us),
+                b.mean_basis,
+                b.adapting
+            );
+            steps.push(b);
+        }
+    }
+    let path = args.session.clone().or_else(|| {
+        let p = PathBuf::from(DEFAULT_BENCH_SESSION);
+        p.exists().then_some(p)
+    });
+    let session = path.as_deref().map(open_session).transpose()?;
+    let shown = path.as_deref().map(|p| p.display().to_string());
+    let anchor = match &session {
+        Some(session) if !args.no_anchor => {
+            let a = anchor_steps(session, base.capacity, base.tau, args.session_reps)?;
+            print_anchor(&a);
+            Some(a)
+        }
+        _ => None,
+    };
+    let mut session_steps = Vec::new();
+    if let Some(session) = session.as_ref().filter(|_| !args.no_session_steps) {
+        use crate::experiments::recognition::{SessionBenchParams, bench_session_steps};
+        println!(
+            "per step on {} once every expert is full (all features, capacity {}, tau {}, {} orders, one thread), µs median [p10, p90]:",
+            shown.unwrap_or_default(),
+            base.capacity,
+            base.tau,
+            args.session_reps
+        );
+        for adaptation in [true, false] {
+            for &learner in &learners {
+                let b = bench_session_steps(
+                    session,
+                    &SessionBenchParams {
+                        learner,
+                        capacity: base.capacity,
+                        tau: base.tau,
+                        adaptation,
+                        reps: args.session_reps,
+                        seed: 0,
+                    },
+                )?;
+                println!(
+                    "  {:?} adapt {:<5}: predict {:>6.1} [{:.1}, {:.1}], train {:>6.1} [{:.1}, {:.1}]  ({} steps; {} of {} experts adapting at the end)",
+                    learner,
+                    adaptation,
+                    b.predict.median,
+                    b.predict.p10,
+                    b.predict.p90,
+                    b.train.median,
+                    b.train.p10,
+                    b.train.p90,
+                    b.train.steps,
+                    b.adapting,
+                    b.experts
+                );
+                session_steps.push(b);
+            }
+        }
+    }
+    let mut protocol = Vec::new();
+    if let Some(session) = session.as_ref().filter(|_| args.protocol) {
+        for &learner in &learners {
+            let p = RecognitionParams {
+                learner,
+                reps: args.reps,
+                ..RecognitionParams::default()
+            };
+            let r = run_recognition(session, &p, &Progress::new())?;
+            println!(
+                "  Table II protocol {:?}/all, {} reps: {:.1} s wall, {:.1} s CPU ({} threads)",
+                learner,
+                args.reps,
+                r.wall_seconds,
+                r.cpu_seconds.unwrap_or(f64::NAN),
+                rayon::current_num_threads()
+            );
+            protocol.push(ProtocolTiming {
+                learner: format!("{learner:?}"),
+                features: "all".into(),
+                reps: args.reps,
+                wall_seconds: r.wall_seconds,
+                cpu_seconds: r.cpu_seconds,
+                all: r.summary.all.mean,
+                final_20: r.summary.final_20.mean,
+            });
+        }
+    }
+    write_json(
+        &BenchReport {
+            steps,
+            session_steps,
+            protocol,
+            anchor,
+            threads: rayon::current_num_threads(),
+        },
+        args.json.as_deref(),
+    )
+}
+
+/// libOTL's figures at the anchor's settings (the authors' C++ library built `-O3`, on the
+/// machine of docs/recognition-speed.md: iCub features, 10 classes, capacity 50, tau 15, no
+/// adaptation, medians once every expert holds 50 BVs), µs.
+const LIBOTL_US: AnchorFigures = AnchorFigures {
+    update: 17.0,
+    predict: 307.0,
+    ds_train: 387.0,
+    all_updated: 458.0,
+};
+
+/// One figure per step the anchor times.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub(crate) struct AnchorFigures<T = f64> {
+    /// One `Sogp::update` alone (with the deletion it triggers at the budget).
+    update: T,
+    /// A 10-class prediction step: every expert observes, the class distribution follows.
+    predict: T,
+    /// A DS training step: every expert observes, the true class's expert and the most
+    /// probable wrong one are updated.
+    ds_train: T,
+    /// Every expert observes and every expert is updated (+1 the true class, −1 the rest).
+    all_updated: T,
+}
+
+/// The steps libOTL was timed on, timed here the same way (DS experts, adaptation off, the
+/// Table II protocol's orders, one thread), with libOTL's figures beside them.
+#[derive(Debug, serde::Serialize)]
+pub(crate) struct AnchorBench {
+    capacity: usize,
+    tau: usize,
+    orders: usize,
+    ours: AnchorFigures<StepTimes>,
+    libotl: AnchorFigures,
+}
+
+/// DS's experts, trained step by step over the protocol's orders of `session` as DS trains
+/// them (`all` = false) or with every expert updated at every step, timing each part.
+fn anchor_steps(
+    session: &crate::session::Session,
+    capacity: usize,
+    tau: usize,
+    orders: usize,
+) -> anyhow::Result<AnchorBench> {
+    use crate::experiments::{labels::session_labels, recognition::protocol_order};
+    use crate::features::{FeatureSet, SequenceParams, feature_sequences};
+    use crate::gp::{Sogp, SogpParams, Window};
+    use crate::learners::DsParams;
+    use crate::rng::Rng;
+
+    let (labels, classes) = session_labels(session, "object")?;
+    let feats = feature_sequences(
+        session,
+        &SequenceParams {
+            features: FeatureSet::All,
+            taxel_noise_variance: 0.0,
+            seed: 0,
+        },
+    )?;
+    let dim = feats.dim();
+    let gp = SogpParams {
+        capacity,
+        tau,
+        adaptation: None,
+        ..DsParams::default().gp
+    };
+    let us = |t0: Instant| 1e6 * t0.elapsed().as_secs_f64();
+    let (mut update, mut predict, mut ds_train, mut all_updated) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for all in [false, true] {
+        for rep in 0..orders {
+            let mut experts = vec![Sogp::new(dim, 1, &gp)?; classes.len()];
+            let mut q = vec![0.0; classes.len()];
+            let mut window = Window::new(dim, tau);
+            let mut rng = Rng::stream(0, rep as u64);
+            let (teach, order) = protocol_order(&labels, classes.len(), &mut rng);
+            for g in teach.into_iter().chain(order) {
+                let timed = experts.iter().all(|m| m.n_basis() == capacity);
+                let seq = feats.sequences[g].as_standard_layout();
+                let steps = seq.as_slice().unwrap_or_default().chunks_exact(dim);
+                window.reset();
+                for o in steps.clone() {
+                    let t0 = Instant::now();
+                    window.push(o);
+                    for (m, q) in experts.iter_mut().zip(q.iter_mut()) {
+                        m.observe_window(&window);
+                        *q = m.probability();
+                    }
+                    let sum: f64 = q.iter().sum();
+                    for q in q.iter_mut() {
+                        *q /= sum;
+                    }
+                    if timed && !all {
+                        predict.push(us(t0));
+                    }
+                }
+                window.reset();
+                for o in steps {
+                    let t0 = Instant::now();
+                    window.push(o);
+                    for (m, q) in experts.iter_mut().zip(q.iter_mut()) {
+                        m.observe_window(&window);
+                        *q = m.probability();
+                    }
+                    let class = labels[g];
+                    if all {
+                        for (c, m) in experts.iter_mut().enumerate() {
+                            m.update(&[if c == class { 1.0 } else { -1.0 }]);
+                        }
+                        if timed {
+                            all_updated.push(us(t0));
+                        }
+                        continue;
+                    }
+                    let wrong = (0..experts.len())
+                        .filter(|&c| c != class)
+                        .max_by(|&a, &b| q[a].total_cmp(&q[b]));
+                    for (c, y) in [(Some(class), 1.0), (wrong, -1.0)] {
+                        let Some(c) = c else { continue };
+                        let t1 = Instant::now();
+                        experts[c].update(&[y]);
+                        if timed {
+                            update.push(us(t1));
+                        }
+                    }
+                    if timed {
+                        ds_train.push(us(t0));
+                    }
+                }
+            }
+        }
+    }
+    Ok(AnchorBench {
+        capacity,
+        tau,
+        orders,
+        ours: AnchorFigures {
+            update: StepTimes::of(update),
+            predict: StepTimes::of(predict),
+            ds_train: StepTimes::of(ds_train),
+            all_updated: StepTimes::of(all_updated),
+        },
+        libotl: LIBOTL_US,
+    })
+}
+
+fn print_anchor(a: &AnchorBench) {
+    println!(
+        "beside libOTL (DS experts, no adaptation, capacity {}, tau {}, {} orders, one thread), µs median [p10, p90]:",
+        a.capacity, a.tau, a.orders
+    );
+    let rows = [
+        ("one update alone", &a.ours.update, a.libotl.update),
+        ("10-class prediction", &a.ours.predict, a.libotl.predict),
+        ("DS training step", &a.ours.ds_train, a.libotl.ds_train),
+        (
+            "every expert updated",
+            &a.ours.all_updated,
+            a.libotl.all_updated,
+        ),
+    ];
+    for (name, t, theirs) in rows {
+        println!(
+            "  {name:<21} {:>7.1} [{:.1}, {:.1}]  libOTL {theirs:>5.0}  ratio {:.1}×  ({} steps)",
+            t.median,
+            t.p10,
+            t.p90,
+            theirs / t.median,
+            t.steps
+        );
+    }
+}

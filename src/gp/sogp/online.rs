@@ -1,0 +1,302 @@
+//! The online update of the posterior (Csató & Opper): a new point projected onto the BVs
+//! or added as a BV, the deletion of the least informative BV at the budget, and the repair
+//! of Q = K_B⁻¹ when rounding has made it drift.
+
+use ndarray::Array2;
+
+use super::super::kernel::dot;
+use super::super::wide::dispatch_wide;
+use super::gram::tri;
+use super::{DRIFT_TOL, Sogp};
+use crate::linalg::Cholesky;
+
+impl Sogp {
+    /// The BVs' Gram matrix K_B (row-major, n × n).
+    pub(super) fn gram(&self) -> Vec<f64> {
+        let n = self.n;
+        let sf2 = self.kernel.sigma_f2();
+        let mut k = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..=i {
+                let v = sf2 * self.kernel.unit_scaled(self.bv(i), self.bv(j));
+                k[i * n + j] = v;
+                k[j * n + i] = v;
+            }
+        }
+        k
+    }
+
+    /// max_i |(Q·K_B)_ii − 1| for a candidate Q (stride `s`), infinite if Q is not finite.
+    pub(super) fn diag_residual(q: &[f64], s: usize, gram: &[f64], n: usize) -> f64 {
+        let mut worst = 0.0f64;
+        for i in 0..n {
+            let qk = dot(&q[i * s..i * s + n], &gram[i * n..(i + 1) * n]);
+            let e = (qk - 1.0).abs();
+            if !e.is_finite() {
+                return f64::INFINITY;
+            }
+            worst = worst.max(e);
+        }
+        worst
+    }
+
+    /// Drift of Q from K_B⁻¹: max_i |(Q·K_B)_ii − 1| (0 for an exact inverse, infinite if
+    /// Q holds a non-finite value).
+    pub fn inverse_drift(&self) -> f64 {
+        Self::diag_residual(&self.q, self.stride, &self.gram(), self.n)
+    }
+
+    /// Detect and repair the drift of Q. The rank-one growth and the (Q + C) deletions
+    /// update Q = K_B⁻¹ incrementally, so rounding accumulates over long runs at the
+    /// budget; every [`DRIFT_CHECK_EVERY`] updates the diagonal of Q·K_B is compared with
+    /// 1 and, past [`DRIFT_TOL`] (or on a non-finite entry), Q is recomputed from K_B by
+    /// Cholesky with jitter. The new Q is kept only if it is closer to the inverse (jitter
+    /// on a near-singular K_B may not help). α and C are left alone: they are the
+    /// posterior, and Q only drives the novelty γ and the deletion scores.
+    pub(super) fn check_inverse(&mut self) {
+        let (n, s) = (self.n, self.stride);
+        let gram = self.gram();
+        let drift = Self::diag_residual(&self.q, s, &gram, n);
+        if drift <= DRIFT_TOL {
+            return;
+        }
+        let k = Array2::from_shape_fn((n, n), |(i, j)| gram[i * n + j]);
+        let sf2 = self.kernel.sigma_f2();
+        let Ok((chol, _)) = Cholesky::with_jitter(k.view(), 1e-12 * sf2, 1e-3 * sf2) else {
+            return;
+        };
+        let inv = chol.inverse();
+        let mut q = vec![0.0; s * s];
+        for i in 0..n {
+            for j in 0..n {
+                q[i * s + j] = inv[[i, j]];
+            }
+        }
+        if Self::diag_residual(&q, s, &gram, n) < drift {
+            self.q = q;
+            self.inverse_rebuilds += 1;
+            self.version += 1;
+        }
+    }
+
+    pub(super) fn posterior_update(&mut self, r: f64) {
+        // The O(n²) updates, in wide vectors where available.
+        dispatch_wide!(["avx512f", "avx2"] Sogp::posterior_update_portable, (
+            this: &mut Sogp = self,
+            r: f64 = r,
+        ))
+    }
+
+    #[inline(always)]
+    pub(super) fn posterior_update_portable(&mut self, r: f64) {
+        let (n, s, no) = (self.n, self.stride, self.n_out);
+        let k = &self.k[..n];
+        for (e, qrow) in self.ehat[..n].iter_mut().zip(self.q.chunks_exact(s)) {
+            *e = dot(&qrow[..n], k);
+        }
+        let sf2 = self.kernel.sigma_f2();
+        let kqk: f64 = k.iter().zip(&self.ehat[..n]).map(|(k, e)| k * e).sum();
+        let gamma = (sf2 - kqk).max(0.0);
+        if gamma >= self.eps * sf2 && gamma > 0.0 {
+            // Full update: the point becomes BV n. Row and column n of Q are written
+            // whole; those of C start from zero (kept as `0 + x`, which differs from x in
+            // the sign of a zero).
+            let ig = 1.0 / gamma;
+            let ehat = &self.ehat[..n];
+            for (i, &ei) in ehat.iter().enumerate() {
+                let row = &mut self.q[i * s..i * s + n + 1];
+                // (ig·e_i)·e_j, the association of ig * e_i * e_j.
+                let g = ig * ei;
+                for (q, ej) in row[..n].iter_mut().zip(ehat) {
+                    *q += g * ej;
+                }
+                row[n] = -ig * ei;
+            }
+            for (i, &ei) in ehat.iter().enumerate() {
+                self.q[n * s + i] = -ig * ei;
+            }
+            self.q[n * s + n] = ig;
+            for d in 0..no {
+                let qd = self.qv[d];
+                for (a, ck) in self.alpha.iter_mut().skip(d).step_by(no).zip(&self.ck[..n]) {
+                    *a += ck * qd;
+                }
+                self.alpha[n * no + d] = qd;
+            }
+            let ck = &self.ck[..n];
+            for (i, &si) in ck.iter().enumerate() {
+                let row = &mut self.c[i * s..i * s + n + 1];
+                let g = r * si;
+                for (c, sj) in row[..n].iter_mut().zip(ck) {
+                    *c += g * sj;
+                }
+                row[n] = 0.0 + g;
+            }
+            let row = &mut self.c[n * s..n * s + n + 1];
+            for (c, sj) in row[..n].iter_mut().zip(ck) {
+                *c = 0.0 + r * sj;
+            }
+            row[n] = 0.0 + r;
+            self.store_bv(n);
+            self.n += 1;
+        } else {
+            // Projected update onto the current BVs, with Csató's η = 1/(1 + γ r).
+            let eta = 1.0 / (1.0 + gamma * r);
+            if !(eta.is_finite() && eta > 0.0) {
+                return;
+            }
+            for (e, ck) in self.ehat[..n].iter_mut().zip(&self.ck[..n]) {
+                *e += ck;
+            }
+            let ehat = &self.ehat[..n];
+            for d in 0..no {
+                let qd = self.qv[d];
+                for (a, e) in self.alpha.iter_mut().skip(d).step_by(no).zip(ehat) {
+                    *a += eta * e * qd;
+                }
+            }
+            let re = r * eta;
+            for (i, &ei) in ehat.iter().enumerate() {
+                // ((r·η)·e_i)·e_j, the association of r * eta * e_i * e_j.
+                let g = re * ei;
+                for (c, ej) in self.c[i * s..i * s + n].iter_mut().zip(ehat) {
+                    *c += g * ej;
+                }
+            }
+        }
+        self.version += 1;
+    }
+
+    /// Store the observed window, its target and (when adapting) its kernel derivatives
+    /// as BV `n`.
+    fn store_bv(&mut self, n: usize) {
+        let (w, no) = (self.wlen, self.n_out);
+        self.bv_raw[n * w..(n + 1) * w].copy_from_slice(&self.x_raw);
+        self.bv_scaled[n * w..(n + 1) * w].copy_from_slice(&self.x_scaled);
+        if self.adapt.is_some() {
+            self.basis.set(n, &self.x_scaled);
+        }
+        let inv_rho = 1.0 / self.kernel.params().sigma_rho;
+        self.inputs.add_bv(n, &self.x_raw, &self.x_scaled, inv_rho);
+        self.bv_y[n * no..(n + 1) * no].copy_from_slice(&self.y_tmp);
+        if let Some(a) = self.adapt.as_mut() {
+            let (pk, lanes) = (a.buf.pk, a.buf.lanes);
+            let row = &mut a.buf.kb[tri(n, 0) * pk..tri(n, n) * pk];
+            for (j, pair) in row.chunks_exact_mut(pk).enumerate() {
+                for (p, v) in pair.iter_mut().enumerate() {
+                    *v = a.buf.kx[p * lanes + j];
+                }
+            }
+            let diag = &mut a.buf.kb[tri(n, n) * pk..(tri(n, n) + 1) * pk];
+            diag.fill(0.0);
+            diag[pk - 1] = 1.0;
+        }
+    }
+
+    /// Remove the BV with the lowest |α_i|²/(Q_ii + C_ii) (paper eq. 10).
+    pub(super) fn delete_least_informative(&mut self) {
+        let (s, no) = (self.stride, self.n_out);
+        let mut best = 0;
+        let mut best_score = f64::INFINITY;
+        for i in 0..self.n {
+            let a2: f64 = (0..no).map(|d| self.alpha[i * no + d].powi(2)).sum();
+            let den = (self.q[i * s + i] + self.c[i * s + i]).max(1e-300);
+            let score = a2 / den;
+            if score < best_score {
+                best_score = score;
+                best = i;
+            }
+        }
+        self.delete(best);
+    }
+
+    /// Remove BV `i` with the (Q + C) removal of Csató & Opper.
+    pub fn delete(&mut self, i: usize) {
+        if i >= self.n {
+            return;
+        }
+        dispatch_wide!(["avx512f", "avx2"] Sogp::delete_portable, (this: &mut Sogp = self, i: usize = i))
+    }
+
+    /// The removal runs on BV i's column where it stands; then the last BV moves into
+    /// slot i. This is the order a swap of i with the last BV followed by the removal of
+    /// the last gives (every entry is updated on its own, so the results are the same to
+    /// the last bit), without moving the other rows.
+    #[inline(always)]
+    pub(super) fn delete_portable(&mut self, i: usize) {
+        let (s, no, n) = (self.stride, self.n_out, self.n);
+        let last = n - 1;
+        let qs = self.q[i * s + i].max(1e-300);
+        let den = (self.q[i * s + i] + self.c[i * s + i]).max(1e-300);
+        // Column i copied out so that the rank-one updates run over contiguous rows.
+        for j in 0..n {
+            self.col_q[j] = self.q[j * s + i];
+            self.col_c[j] = self.c[j * s + i];
+        }
+        let (cq, cc) = (&self.col_q[..n], &self.col_c[..n]);
+        for d in 0..no {
+            let a_star = self.alpha[i * no + d];
+            for ((a, qm), cm) in self.alpha.iter_mut().skip(d).step_by(no).zip(cq).zip(cc) {
+                let qc = qm + cm;
+                *a -= a_star * qc / den;
+            }
+        }
+        // Row and column i are updated too and then overwritten by the last BV's.
+        for ((crow, qrow), (&qj, &cj)) in self
+            .c
+            .chunks_exact_mut(s)
+            .zip(self.q.chunks_exact_mut(s))
+            .zip(cq.iter().zip(cc))
+        {
+            let crow = &mut crow[..n];
+            let qrow = &mut qrow[..n];
+            for (((c, q), qm), cm) in crow.iter_mut().zip(qrow.iter_mut()).zip(cq).zip(cc) {
+                *c += qj * qm / qs - (qj + cj) * (qm + cm) / den;
+                *q -= qj * qm / qs;
+            }
+        }
+        self.inputs.release_bv(i);
+        if i != last {
+            self.move_bv(last, i);
+        }
+        for a in &mut self.alpha[last * no..n * no] {
+            *a = 0.0;
+        }
+        self.n -= 1;
+        self.version += 1;
+    }
+
+    /// Move BV `from` (the last) into slot `to`, whose BV is gone: its row and column of C
+    /// and Q (the pair with itself to the diagonal), window, target, weights and Gram
+    /// derivatives.
+    fn move_bv(&mut self, from: usize, to: usize) {
+        let (s, w, no) = (self.stride, self.wlen, self.n_out);
+        for m in [&mut self.c, &mut self.q] {
+            let diag = m[from * s + from];
+            m.copy_within(from * s..from * s + from, to * s);
+            m[to * s + to] = diag;
+            for r in (0..from).filter(|&r| r != to) {
+                m[r * s + to] = m[r * s + from];
+            }
+        }
+        self.bv_raw.copy_within(from * w..(from + 1) * w, to * w);
+        self.bv_scaled.copy_within(from * w..(from + 1) * w, to * w);
+        if self.adapt.is_some() {
+            self.basis.copy(from, to);
+        }
+        self.inputs.move_bv(from, to);
+        self.bv_y.copy_within(from * no..(from + 1) * no, to * no);
+        self.alpha.copy_within(from * no..(from + 1) * no, to * no);
+        if let Some(a) = self.adapt.as_mut() {
+            let pk = a.buf.pk;
+            let kb = &mut a.buf.kb;
+            for r in (0..from).filter(|&r| r != to) {
+                kb.copy_within(tri(from, r) * pk..(tri(from, r) + 1) * pk, tri(to, r) * pk);
+            }
+            kb.copy_within(
+                tri(from, from) * pk..(tri(from, from) + 1) * pk,
+                tri(to, to) * pk,
+            );
+        }
+    }
+}
