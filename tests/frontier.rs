@@ -212,7 +212,7 @@ fn the_frontier_command_writes_json_and_rejects_unknown_methods() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("`svm` is not ds, gs, sparse-svm, du, gu, kmeans, som or rbf-svm"),
+        err.contains("`svm` is not one of sparse-svm, ds, gs, du, gu, kmeans, som, rbf-svm"),
         "{err}"
     );
     let _ = std::fs::remove_dir_all(dir);

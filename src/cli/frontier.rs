@@ -10,7 +10,7 @@ use super::progress::with_progress;
 use super::recognition::{open_session, write_json};
 use crate::catalogue::MethodId;
 use crate::experiments::frontier::{
-    CostAxis, Frontier, FrontierParams, RecognitionScore, run_frontier,
+    self, CostAxis, Frontier, FrontierParams, RecognitionScore, run_frontier,
 };
 use crate::features::FeatureSet;
 
@@ -110,7 +110,16 @@ impl FrontierArgs {
             .collect::<Result<Vec<_>, _>>()?;
         let mut out = Vec::new();
         for m in &self.method {
-            let method: MethodId = m.parse().map_err(|e| anyhow::anyhow!("--method: {e}"))?;
+            let method = m
+                .parse::<MethodId>()
+                .ok()
+                .filter(|id| frontier::methods().any(|f| f == *id))
+                .ok_or_else(|| {
+                    anyhow::anyhow!(
+                        "--method: `{m}` is not one of {}",
+                        MethodId::keys(frontier::methods())
+                    )
+                })?;
             let sets = if method.uses_features() {
                 &features[..]
             } else {

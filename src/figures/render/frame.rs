@@ -116,11 +116,19 @@ fn thinned(
         keep = all.iter().copied().step_by(every).collect();
     }
     if !fits(&keep) && keep.len() > 2 {
-        // Three labels that still touch: the ends and the middle one read better than a smear.
-        keep = vec![0, pos.len() / 2, pos.len() - 1];
-        if !fits(&keep) {
-            keep = vec![0, pos.len() - 1];
-        }
+        // Unevenly spaced ticks (a log axis within a decade): the three that fit with the
+        // widest margin, else the ends (better than a smear).
+        let n = pos.len();
+        let margin = |t: &[usize]| {
+            t.windows(2)
+                .map(|w| (pos[w[1]] - pos[w[0]]).abs() - (need[w[0]] + need[w[1]]) / 2.0)
+                .fold(f64::INFINITY, f64::min)
+        };
+        let best = (0..n)
+            .flat_map(|a| (a + 1..n).flat_map(move |b| (b + 1..n).map(move |c| [a, b, c])))
+            .filter(|t| fits(t))
+            .max_by(|s, t| margin(s).total_cmp(&margin(t)));
+        keep = best.map_or_else(|| vec![0, n - 1], |t| t.to_vec());
     }
     Ok(Ticks {
         values: keep.iter().map(|&i| ticks.values[i]).collect(),
@@ -201,4 +209,38 @@ pub(super) fn axes<DB: DrawingBackend>(
         true,
     )?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Log ticks within a decade crowd towards the top: 4, 5, 6, 7 × 10⁻⁵ on a 300 px axis
+    /// from 4e-5 to 7.2e-5 sit at 0, 113.9, 206.9 and 285.6 px. With labels needing 85 px
+    /// only the last gap (78.7 px) is too narrow, so 4, 5 and 7 fit; the ends alone do not
+    /// make three.
+    #[test]
+    fn uneven_ticks_keep_three_that_fit() {
+        let values = vec![4e-5, 5e-5, 6e-5, 7e-5];
+        let ticks = Ticks {
+            labels: values.iter().map(|v| format!("{v:e}")).collect(),
+            values,
+        };
+        let span = Span {
+            lo: 4e-5,
+            hi: 7.2e-5,
+            log: true,
+            p0: 0.0,
+            p1: 300.0,
+        };
+        let kept = thinned(ticks, &span, |_| Ok(85.0)).unwrap();
+        assert_eq!(kept.values, vec![4e-5, 5e-5, 7e-5]);
+        // When no three fit, the ends.
+        let ticks = Ticks {
+            values: vec![4e-5, 5e-5, 6e-5, 7e-5],
+            labels: vec!["a".into(), "b".into(), "c".into(), "d".into()],
+        };
+        let kept = thinned(ticks, &span, |_| Ok(150.0)).unwrap();
+        assert_eq!(kept.labels, vec!["a", "d"]);
+    }
 }
