@@ -153,10 +153,20 @@ pub(super) fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
             .filter(within)
             .collect();
     }
-    if ticks.len() < 3 {
+    // Too few, or bunched at one end (90, 100, 200 on 85–210: no three labels fit): round
+    // linear steps, which a log axis this narrow shows nearly evenly.
+    if ticks.len() < 3 || log_spread(&ticks) > 3.0 {
         ticks = linear_ticks(lo, hi, 4).0;
     }
     ticks
+}
+
+/// The widest gap between neighbouring ticks over the narrowest, in log space.
+fn log_spread(ticks: &[f64]) -> f64 {
+    let gaps: Vec<f64> = ticks.windows(2).map(|w| (w[1] / w[0]).log10()).collect();
+    let widest = gaps.iter().copied().fold(0.0, f64::max);
+    let narrowest = gaps.iter().copied().fold(f64::INFINITY, f64::min);
+    widest / narrowest
 }
 
 pub(super) fn format_tick(v: f64, decimals: usize) -> String {
@@ -278,6 +288,13 @@ mod tests {
         assert_eq!(log_ticks(2.5, 9.5), vec![3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]);
         assert_eq!(log_ticks(125.0, 200.0), vec![140.0, 160.0, 180.0, 200.0]);
         assert_eq!(format_log_tick(125.893), "126");
+        // 1–9 mantissas give 90, 100, 200 here, bunched at the bottom: linear steps instead.
+        let t = log_ticks(85.0, 210.0);
+        assert!(
+            t.len() >= 3 && t.iter().all(|&v| (85.0..=210.0).contains(&v)),
+            "{t:?}"
+        );
+        assert!(log_spread(&t) <= 3.0, "{t:?}");
         assert_eq!(format_log_tick(0.002), "0.002");
     }
 
