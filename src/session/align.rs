@@ -60,10 +60,7 @@ mod tests {
         let frames: Vec<u64> = (0..20).map(|k| 1000 * MS + k * 10 * MS).collect();
         let tol = default_tolerance(&frames);
         for offset in [MS as i64, -(MS as i64)] {
-            let other: Vec<u64> = frames
-                .iter()
-                .map(|&t| t.checked_add_signed(offset).unwrap())
-                .collect();
+            let other: Vec<u64> = frames.iter().map(|&t| (t as i64 + offset) as u64).collect();
             for (k, &t) in frames.iter().enumerate() {
                 assert_eq!(
                     nearest(&other, t, tol),

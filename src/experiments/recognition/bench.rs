@@ -259,3 +259,153 @@ pub fn bench_session_steps(
         experts,
     })
 }
+
+/// libOTL's figures at the anchor's settings (the authors' C++ library built `-O3`, on the
+/// machine of docs/recognition-speed.md: iCub features, 10 classes, capacity 50, tau 15, no
+/// adaptation, medians once every expert holds 50 BVs), µs.
+pub const LIBOTL_US: AnchorFigures = AnchorFigures {
+    update: 17.0,
+    predict: 307.0,
+    ds_train: 387.0,
+    all_updated: 458.0,
+};
+
+/// One figure per step the anchor times.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct AnchorFigures<T = f64> {
+    /// One `Sogp::update` alone (with the deletion it triggers at the budget).
+    pub update: T,
+    /// A 10-class prediction step: every expert observes, the class distribution follows.
+    pub predict: T,
+    /// A DS training step: every expert observes, the true class's expert and the most
+    /// probable wrong one are updated.
+    pub ds_train: T,
+    /// Every expert observes and every expert is updated (+1 the true class, −1 the rest).
+    pub all_updated: T,
+}
+
+/// The steps libOTL was timed on, timed here the same way (DS experts, adaptation off, the
+/// Table II protocol's orders, one thread), with libOTL's figures beside them.
+#[derive(Debug, serde::Serialize)]
+pub struct AnchorBench {
+    pub capacity: usize,
+    pub tau: usize,
+    pub orders: usize,
+    pub ours: AnchorFigures<StepTimes>,
+    pub libotl: AnchorFigures,
+}
+
+/// DS's experts, trained step by step over the protocol's orders of `session` as DS trains
+/// them (`all` = false) or with every expert updated at every step, timing each part.
+pub fn anchor_steps(
+    session: &Session,
+    capacity: usize,
+    tau: usize,
+    orders: usize,
+) -> Result<AnchorBench, ExperimentError> {
+    use crate::experiments::{labels::session_labels, recognition::protocol_order};
+    use crate::features::{FeatureSet, SequenceParams, feature_sequences};
+    use crate::gp::{Sogp, SogpParams, Window};
+    use crate::learners::DsParams;
+    use crate::rng::Rng;
+
+    let (labels, classes) = session_labels(session, "object")?;
+    let feats = feature_sequences(
+        session,
+        &SequenceParams {
+            features: FeatureSet::All,
+            taxel_noise_variance: 0.0,
+            seed: 0,
+        },
+    )?;
+    let dim = feats.dim();
+    let gp = SogpParams {
+        capacity,
+        tau,
+        adaptation: None,
+        ..DsParams::default().gp
+    };
+    let us = |t0: Instant| 1e6 * t0.elapsed().as_secs_f64();
+    let (mut update, mut predict, mut ds_train, mut all_updated) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for all in [false, true] {
+        for rep in 0..orders {
+            let mut experts =
+                vec![
+                    Sogp::new(dim, 1, &gp)
+                        .map_err(|e| ExperimentError::param("gp", e.to_string()))?;
+                    classes.len()
+                ];
+            let mut q = vec![0.0; classes.len()];
+            let mut window = Window::new(dim, tau);
+            let mut rng = Rng::stream(0, rep as u64);
+            let (teach, order) = protocol_order(&labels, classes.len(), &mut rng);
+            for g in teach.into_iter().chain(order) {
+                let timed = experts.iter().all(|m| m.n_basis() == capacity);
+                let seq = feats.sequences[g].as_standard_layout();
+                let steps = seq.as_slice().unwrap_or_default().chunks_exact(dim);
+                window.reset();
+                for o in steps.clone() {
+                    let t0 = Instant::now();
+                    window.push(o);
+                    for (m, q) in experts.iter_mut().zip(q.iter_mut()) {
+                        m.observe_window(&window);
+                        *q = m.probability();
+                    }
+                    let sum: f64 = q.iter().sum();
+                    for q in q.iter_mut() {
+                        *q /= sum;
+                    }
+                    if timed && !all {
+                        predict.push(us(t0));
+                    }
+                }
+                window.reset();
+                for o in steps {
+                    let t0 = Instant::now();
+                    window.push(o);
+                    for (m, q) in experts.iter_mut().zip(q.iter_mut()) {
+                        m.observe_window(&window);
+                        *q = m.probability();
+                    }
+                    let class = labels[g];
+                    if all {
+                        for (c, m) in experts.iter_mut().enumerate() {
+                            m.update(&[if c == class { 1.0 } else { -1.0 }]);
+                        }
+                        if timed {
+                            all_updated.push(us(t0));
+                        }
+                        continue;
+                    }
+                    let wrong = (0..experts.len())
+                        .filter(|&c| c != class)
+                        .max_by(|&a, &b| q[a].total_cmp(&q[b]));
+                    for (c, y) in [(Some(class), 1.0), (wrong, -1.0)] {
+                        let Some(c) = c else { continue };
+                        let t1 = Instant::now();
+                        experts[c].update(&[y]);
+                        if timed {
+                            update.push(us(t1));
+                        }
+                    }
+                    if timed {
+                        ds_train.push(us(t0));
+                    }
+                }
+            }
+        }
+    }
+    Ok(AnchorBench {
+        capacity,
+        tau,
+        orders,
+        ours: AnchorFigures {
+            update: StepTimes::of(update),
+            predict: StepTimes::of(predict),
+            ds_train: StepTimes::of(ds_train),
+            all_updated: StepTimes::of(all_updated),
+        },
+        libotl: LIBOTL_US,
+    })
+}
