@@ -5,6 +5,8 @@ use std::fs::{self, File};
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
+use sha2::Digest;
+
 fn temp_path(path: &Path) -> PathBuf {
     let name = path
         .file_name()
@@ -163,6 +165,17 @@ pub fn refuse_input_as_output(output: &Path, inputs: &[&Path]) -> io::Result<()>
         )),
         None => Ok(()),
     }
+}
+
+/// `sha256:` and the hex digest of `bytes`.
+pub fn content_hash(bytes: &[u8]) -> String {
+    let digest = sha2::Sha256::digest(bytes);
+    let mut out = String::with_capacity(7 + 64);
+    out.push_str("sha256:");
+    for b in digest {
+        out.push_str(&format!("{b:02x}"));
+    }
+    out
 }
 
 #[cfg(test)]

@@ -452,6 +452,7 @@ fn a_project_on_the_command_line_reopens_its_sessions_and_shows_its_results() {
         .meta
         .name;
     let result = AnalysisResult {
+        held_out: None,
         kind: AnalysisKind::Stability,
         label: "saved model".into(),
         session,

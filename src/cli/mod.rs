@@ -5,6 +5,7 @@ pub mod baselines;
 pub mod bounds;
 pub mod figures;
 pub mod frontier;
+pub mod model;
 pub mod paper_figures;
 mod progress;
 pub mod recognition;
@@ -101,6 +102,14 @@ pub enum Command {
     /// over seeded repetitions, and recommend the cheapest within one standard error of
     /// the best.
     Frontier(frontier::FrontierArgs),
+    /// Fit a method on a session and save the model file (evaluate it elsewhere).
+    Fit(model::FitArgs),
+    /// A model's scores on a session it did not train on, with every grasp's prediction.
+    Evaluate(model::EvaluateArgs),
+    /// A model's prediction for every grasp of a session, as CSV.
+    Predict(model::PredictArgs),
+    /// A session of some grasps of another (objects, trials, labels).
+    Subset(model::SubsetArgs),
     /// Sharded sweeps for a cluster: plan the shards and a Slurm job array, run a shard,
     /// show their status, merge them into the single-machine result.
     Sweep(sweep::SweepArgs),
@@ -136,5 +145,9 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Robustness(a) => robustness::run(a),
         Command::Frontier(a) => frontier::run(a),
         Command::Sweep(a) => sweep::run(a),
+        Command::Fit(a) => model::fit(a),
+        Command::Evaluate(a) => model::evaluate(a),
+        Command::Predict(a) => model::predict(a),
+        Command::Subset(a) => model::subset(a),
     }
 }

@@ -74,6 +74,9 @@ pub struct StabilityArgs {
     /// Write the machine-readable results here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Also save the recommended model as a model file (`evaluate`, `predict`).
+    #[arg(long, value_name = "MODEL.json")]
+    pub save_model: Option<PathBuf>,
     /// With a grid: also score its selection by nested cross validation, under stratified
     /// 10-fold and 10 folds by object (outer and inner folds alike); about ten grid
     /// searches each.
@@ -413,6 +416,7 @@ pub fn data_options(a: &StabilityArgs) -> DataOptions {
 
 pub fn run(a: StabilityArgs) -> anyhow::Result<()> {
     super::refuse_input_as_output(a.json.as_deref(), &[&a.session])?;
+    super::refuse_input_as_output(a.save_model.as_deref(), &[&a.session])?;
     let session = open(&a.session)?;
     let data = StabilityData::from_session(&session, &data_options(&a))?;
     let opts = options_from(&a, &data)?;
@@ -423,6 +427,11 @@ pub fn run(a: StabilityArgs) -> anyhow::Result<()> {
     if let Some(path) = &a.json {
         write_json(path, &report)?;
         println!("wrote {}", path.display());
+    }
+    if let Some(path) = &a.save_model {
+        let file = super::model::stability_model_file(&session, &data, &opts, &report);
+        crate::models::save(&file, path)?;
+        println!("wrote {} ({})", path.display(), file.provenance.summary());
     }
     Ok(())
 }

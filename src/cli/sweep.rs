@@ -173,6 +173,11 @@ fn experiment_of(e: &PlanExperiment) -> anyhow::Result<(Experiment, Session, &Pa
     Ok(match e {
         PlanExperiment::Stability { args, .. } => {
             no_json(&args.json)?;
+            if args.save_model.is_some() {
+                bail!(
+                    "a plan saves no model: `fit sparse-svm` with the merged result's configuration does"
+                );
+            }
             let session = super::stability::open(&args.session)?;
             let data = data_options(args);
             let prepared = StabilityData::from_session(&session, &data)?;

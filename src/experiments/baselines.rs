@@ -140,6 +140,7 @@ pub fn baselines_report(session: &str, r: &BaselinesResult, train_seconds: f64) 
         ),
     ]);
     AnalysisResult {
+        held_out: None,
         kind: AnalysisKind::Baselines,
         label: format!("baselines, k = {k}"),
         session: session.to_string(),

@@ -74,6 +74,34 @@ pub struct AnalysisResult {
     /// saved before sizes were recorded).
     #[serde(default)]
     pub model_size: Option<ModelSize>,
+    /// Scores of a model on a session it did not train on (None: within one session).
+    /// Such scores are never compared with cross-validated ones as if they were alike.
+    #[serde(default)]
+    pub held_out: Option<HeldOut>,
+}
+
+/// Where a held-out result's model trained and how the tested session was calibrated.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HeldOut {
+    pub trained_on: String,
+    pub trained_grasps: usize,
+    pub tested_on: String,
+    pub tested_grasps: usize,
+    pub calibration: String,
+}
+
+impl HeldOut {
+    /// "trained on A (n grasps), tested on B (m grasps), calibration session".
+    pub fn text(&self) -> String {
+        format!(
+            "trained on {} ({} grasps), tested on {} ({} grasps), calibration {}",
+            self.trained_on,
+            self.trained_grasps,
+            self.tested_on,
+            self.tested_grasps,
+            self.calibration
+        )
+    }
 }
 
 /// Why a model has its size.
@@ -436,6 +464,7 @@ pub(crate) mod tests {
 
     pub(crate) fn result() -> AnalysisResult {
         AnalysisResult {
+            held_out: None,
             kind: AnalysisKind::Recognition,
             label: "DS, all features".into(),
             session: "iCub".into(),

@@ -29,7 +29,8 @@ fn num(v: f64) -> String {
     }
 }
 
-fn row(out: &mut String, cells: impl IntoIterator<Item = String>) {
+/// Append one CSV row, quoting fields where needed.
+pub fn row(out: &mut String, cells: impl IntoIterator<Item = String>) {
     let cells: Vec<String> = cells.into_iter().map(|c| field(&c)).collect();
     // Writing to a String cannot fail.
     let _ = writeln!(out, "{}", cells.join(","));

@@ -47,7 +47,7 @@ use std::path::PathBuf;
 
 pub use colormap::Rgb;
 pub use colormap::{ColorMap, series_color};
-pub use csv::to_csv;
+pub use csv::{row as csv_row, to_csv};
 pub use export::{
     Format, Index, IndexEntry, RenderOptions, export_all, layout_of, render_pdf, render_png,
     render_svg, write_figure,

@@ -14,6 +14,7 @@ pub mod native;
 pub mod ros2;
 pub mod simulate;
 pub mod spec;
+pub mod subset;
 mod validate;
 
 pub use bts3::import_bts3;
@@ -22,6 +23,7 @@ pub use icub::{import_icub, import_icub_with};
 pub use model::*;
 pub use native::{load, save};
 pub use spec::ImportSpec;
+pub use subset::{SubsetError, SubsetSpec, subset};
 pub use validate::validate;
 
 /// Import a researcher's own recording as its import spec describes: a `.mcap` file or a

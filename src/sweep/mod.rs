@@ -16,7 +16,6 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
-use sha2::{Digest, Sha256};
 
 use crate::experiments::experiment::Experiment as Sweepable;
 pub use crate::experiments::experiment::{
@@ -102,17 +101,6 @@ fn format_err(path: &Path, e: impl std::fmt::Display) -> SweepError {
         path: path.display().to_string(),
         message: e.to_string(),
     }
-}
-
-/// `sha256:` and the hex digest of `bytes`.
-pub fn content_hash(bytes: &[u8]) -> String {
-    let digest = Sha256::digest(bytes);
-    let mut out = String::with_capacity(7 + 64);
-    out.push_str("sha256:");
-    for b in digest {
-        out.push_str(&format!("{b:02x}"));
-    }
-    out
 }
 
 /// The session a plan was made for.
@@ -306,7 +294,7 @@ pub fn write_plan(
             file: SESSION_FILE.into(),
             name: session.meta.name.clone(),
             source: request.source.clone(),
-            hash: content_hash(text.as_bytes()),
+            hash: fsutil::content_hash(text.as_bytes()),
         },
         experiment,
         items,
@@ -360,14 +348,14 @@ pub fn read_plan(dir: &Path) -> Result<(Plan, String), SweepError> {
     if let Some(i) = seen.iter().position(|s| !s) {
         return Err(format_err(&path, format!("item {i} is in no shard")));
     }
-    Ok((plan, content_hash(&bytes)))
+    Ok((plan, fsutil::content_hash(&bytes)))
 }
 
 /// The plan's copy of the session, refused when its content hash is not the plan's.
 pub fn read_session(dir: &Path, plan: &Plan) -> Result<Session, SweepError> {
     let path = dir.join(&plan.session.file);
     let bytes = fs::read(&path).map_err(|e| io_err(&path, e))?;
-    let hash = content_hash(&bytes);
+    let hash = fsutil::content_hash(&bytes);
     if hash != plan.session.hash {
         return Err(SweepError::Mismatch(format!(
             "{}: content hash {hash} is not the plan's {}: the plan was made for another session",
@@ -447,7 +435,7 @@ fn outputs_fit<E: Sweepable>(_: &E, f: &ShardFile) -> Result<(), String> {
 fn check_session_copy(dir: &Path, plan: &Plan) -> Result<(), SweepError> {
     let path = dir.join(&plan.session.file);
     let bytes = fs::read(&path).map_err(|e| io_err(&path, e))?;
-    let hash = content_hash(&bytes);
+    let hash = fsutil::content_hash(&bytes);
     if hash != plan.session.hash {
         return Err(SweepError::Mismatch(format!(
             "{}: content hash {hash} is not the plan's {}: the session copy was changed or \

@@ -195,6 +195,7 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
     parameters.insert("grasps to keep a cluster".into(), min_grasps.to_string());
     let (details, links) = clustering_details(r);
     AnalysisResult {
+        held_out: None,
         kind: AnalysisKind::Clustering,
         label,
         session: session.to_string(),

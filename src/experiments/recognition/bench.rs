@@ -330,12 +330,11 @@ pub fn anchor_steps(
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for all in [false, true] {
         for rep in 0..orders {
-            let mut experts =
-                vec![
-                    Sogp::new(dim, 1, &gp)
-                        .map_err(|e| ExperimentError::param("gp", e.to_string()))?;
-                    classes.len()
-                ];
+            let mut experts = vec![
+                Sogp::new(dim, 1, &gp)
+                    .map_err(|e| ExperimentError::param("gp", e.to_string()))?;
+                classes.len()
+            ];
             let mut q = vec![0.0; classes.len()];
             let mut window = Window::new(dim, tau);
             let mut rng = Rng::stream(0, rep as u64);

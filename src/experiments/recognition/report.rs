@@ -173,6 +173,7 @@ pub fn recognition_report(session: &str, r: &RecognitionResult) -> AnalysisResul
         ("test fraction".to_string(), p.test_fraction.to_string()),
     ]);
     AnalysisResult {
+        held_out: None,
         kind: AnalysisKind::Recognition,
         label,
         session: session.to_string(),
@@ -311,6 +312,7 @@ mod tests {
         )
         .ref_line(Orientation::Vertical, 8.5, "test only from here");
         AnalysisResult {
+            held_out: None,
             kind,
             label: label.into(),
             session: session.into(),

@@ -157,6 +157,7 @@ pub fn robustness_report(session: &str, r: &RobustnessResult) -> AnalysisResult 
         }
     }
     AnalysisResult {
+        held_out: None,
         kind: AnalysisKind::Robustness,
         label,
         session: session.to_string(),

@@ -15,7 +15,7 @@ use crate::figures::{
     Axis, AxisTitle, BarGroup, ColorScale, ErrorDisplay, ErrorRange, Figure, FigureKind, GridImage,
     Heatmap, ImageGrid, Orientation, Series, SeriesStyle,
 };
-use crate::svm::eval::CvResult;
+use crate::svm::eval::{Confusion, CvResult};
 
 fn image(caption: String, img: &PatchImage) -> GridImage {
     let values = (0..img.rows)
@@ -35,7 +35,17 @@ fn image(caption: String, img: &PatchImage) -> GridImage {
 }
 
 fn confusion(title: &str, cv: &CvResult, success: &str, failure: &str) -> Figure {
-    let m = cv.confusion.matrix;
+    confusion_map(title, &cv.confusion, success, failure).subtitle(format!(
+        "weighted success rate {:.1}%, failure recall {:.1}%",
+        100.0 * cv.weighted_success_rate,
+        100.0 * cv.failure_recall
+    ))
+}
+
+/// The confusion map of a grasp-stability classifier: the share of each true outcome
+/// predicted as each (rows and columns: success, failure).
+pub fn confusion_map(title: &str, confusion: &Confusion, success: &str, failure: &str) -> Figure {
+    let m = confusion.matrix;
     let share = |t: usize, p: usize| {
         let total = m[t][0] + m[t][1];
         if total == 0 {
@@ -64,11 +74,7 @@ fn confusion(title: &str, cv: &CvResult, success: &str, failure: &str) -> Figure
         marked: Vec::new(),
     };
     heat.colors.limits = Some([0.0, 1.0]);
-    Figure::new(title, FigureKind::Heatmap(heat)).subtitle(format!(
-        "weighted success rate {:.1}%, failure recall {:.1}%",
-        100.0 * cv.weighted_success_rate,
-        100.0 * cv.failure_recall
-    ))
+    Figure::new(title, FigureKind::Heatmap(heat))
 }
 
 fn signed_bars(title: &str, y: &str, name: &str, values: &[f64]) -> Figure {
@@ -503,6 +509,7 @@ pub fn stability_report(r: &StabilityReport) -> AnalysisResult {
         ("model selection".to_string(), r.selection_cv.clone()),
     ]);
     AnalysisResult {
+        held_out: None,
         kind: AnalysisKind::Stability,
         label,
         session: r.session.clone(),

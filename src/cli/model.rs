@@ -1,0 +1,280 @@
+//! Models that leave their session: `fit` a method on a session into a model file,
+//! `evaluate` it on another session, `predict` a session's grasps, and `subset` a session
+//! into the grasps of some objects, trials or labels.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use clap::{Args, Subcommand};
+
+use super::progress::with_progress;
+use super::stability::{StabilityArgs, data_options, in_pool, options_from};
+use crate::catalogue::MethodId;
+use crate::experiments::result::figure_set;
+use crate::experiments::stability::{StabilityData, StabilityOptions, StabilityReport};
+use crate::figures::{Format, RenderOptions, export_all};
+use crate::models::{self, Calibration, HeldOutScores, ModelFile, stability::StabilityFit};
+use crate::session::{self, Session, SubsetSpec};
+
+#[derive(Args, Debug)]
+pub struct FitArgs {
+    #[command(subcommand)]
+    pub method: FitMethod,
+}
+
+/// The method to fit, named as `frontier --method` names it.
+#[derive(Subcommand, Debug)]
+pub enum FitMethod {
+    /// Sparse coding of the key-frame patches + linear SVM (the first paper), with the
+    /// options of `stability`: one configuration, or a grid's parsimonious choice.
+    SparseSvm(FitStabilityArgs),
+    /// The linear SVM on the scaled key-frame values (the first paper's baseline).
+    #[command(alias = "linear-svm")]
+    RawSvm(FitStabilityArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct FitStabilityArgs {
+    #[command(flatten)]
+    pub stability: StabilityArgs,
+    /// The model file to write.
+    #[arg(short, long, value_name = "MODEL.json")]
+    pub output: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub struct EvaluateArgs {
+    /// A model file (`fit`, or `--save-model` of an analysis).
+    pub model: PathBuf,
+    /// A session the model did not train on (native file, BTS3 CSV or iCub folder).
+    pub session: PathBuf,
+    /// How the session's taxels are put on the model's scale: `none` (the training
+    /// session's statistics), `session` (the new session's own) or `first:K` (its first K
+    /// grasps'). docs/held-out.md says why `session` is the default.
+    #[arg(long, default_value = "session")]
+    pub calibration: String,
+    /// Write the scores and every grasp's prediction here.
+    #[arg(long, value_name = "OUT.json")]
+    pub json: Option<PathBuf>,
+    /// Write the figures (SVG, PDF, PNG, CSV and an index) to this folder.
+    #[arg(long, value_name = "DIR")]
+    pub figures: Option<PathBuf>,
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct PredictArgs {
+    pub model: PathBuf,
+    pub session: PathBuf,
+    /// As for `evaluate`.
+    #[arg(long, default_value = "session")]
+    pub calibration: String,
+    /// One row per grasp: grasp, object, trial, truth (when labelled), predicted, decision.
+    #[arg(short, long, value_name = "predictions.csv")]
+    pub output: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub struct SubsetArgs {
+    pub session: PathBuf,
+    /// Keep these objects (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    pub objects: Vec<String>,
+    /// Keep these trial numbers: a list `1,2,5` and/or ranges `1..10` (inclusive).
+    #[arg(long)]
+    pub trials: Option<String>,
+    /// Keep grasps of these classes: `SET=CLASS,…` (classes of one set: any of them).
+    #[arg(long, value_delimiter = ',')]
+    pub labels: Vec<String>,
+    /// The new session's name (default: the output file's stem).
+    #[arg(long)]
+    pub name: Option<String>,
+    /// The session file to write (native format).
+    #[arg(short, long, value_name = "OUT.json")]
+    pub output: PathBuf,
+}
+
+/// The model file of a `stability` run's recommended model.
+pub fn stability_model_file(
+    session: &Session,
+    data: &StabilityData,
+    opts: &StabilityOptions,
+    report: &StabilityReport,
+) -> ModelFile {
+    StabilityFit::from_report(session, data, opts, report).into_file(session, data)
+}
+
+pub fn fit(a: FitArgs) -> anyhow::Result<()> {
+    let (method, f) = match a.method {
+        FitMethod::SparseSvm(f) => (MethodId::SparseSvm, f),
+        FitMethod::RawSvm(f) => (MethodId::RawSvm, f),
+    };
+    let s = &f.stability;
+    if s.json.is_some() || s.save_model.is_some() || s.nested {
+        bail!(
+            "fit writes one model file (-o); --json, --save-model and --nested belong to `stability`"
+        );
+    }
+    super::refuse_input_as_output(Some(&f.output), &[&s.session])?;
+    let session = super::stability::open(&s.session)?;
+    let data = StabilityData::from_session(&session, &data_options(s))?;
+    let opts = options_from(s, &data)?;
+    let fitted = in_pool(s.threads, || {
+        with_progress(s.quiet, |p| {
+            models::fit_stability(method, &session, &data, &opts, p)
+        })
+    })??;
+    let file = fitted.into_file(&session, &data);
+    models::save(&file, &f.output)?;
+    let p = &file.provenance;
+    println!("{} in {:.1} s", p.summary(), p.train_seconds);
+    for s in &p.selection {
+        println!("  {} {:.2} % ({})", s.name, 100.0 * s.value, s.protocol);
+    }
+    println!("wrote {}", f.output.display());
+    Ok(())
+}
+
+fn load_pair(model: &Path, session: &Path) -> anyhow::Result<(ModelFile, Session)> {
+    let file = models::load(model)?;
+    let session =
+        session::open(session).with_context(|| format!("opening {}", session.display()))?;
+    Ok((file, session))
+}
+
+pub fn evaluate(a: EvaluateArgs) -> anyhow::Result<()> {
+    let inputs = [a.model.as_path(), a.session.as_path()];
+    super::refuse_input_as_output(a.json.as_deref(), &inputs)?;
+    super::refuse_input_as_output(a.figures.as_deref(), &inputs)?;
+    let calibration: Calibration = a.calibration.parse()?;
+    let (file, session) = load_pair(&a.model, &a.session)?;
+    let r = models::evaluate(&file, &session, calibration).with_context(|| {
+        format!(
+            "evaluating {} on {}",
+            a.model.display(),
+            a.session.display()
+        )
+    })?;
+    if !a.quiet {
+        println!("{}", r.model);
+        println!(
+            "tested on {} ({} grasps), calibration {}",
+            r.tested_on.name, r.tested_on.grasps, r.calibration_text
+        );
+        match &r.scores {
+            HeldOutScores::Stability {
+                weighted_success_rate,
+                failure_recall,
+                success_recall,
+                ..
+            } => println!(
+                "weighted success rate {:.2} %, failure recall {:.2} %, success recall {:.2} %",
+                100.0 * weighted_success_rate,
+                100.0 * failure_recall,
+                100.0 * success_recall
+            ),
+        }
+    }
+    if let Some(path) = &a.json {
+        let text = serde_json::to_string_pretty(&r)?;
+        crate::fsutil::write_atomic(path, text.as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    if let Some(dir) = &a.figures {
+        let set = figure_set(&[models::held_out_report(&r)]);
+        let index = crate::fsutil::write_dir_atomic(dir, &["index.md"], |d| {
+            anyhow::Ok(export_all(
+                &set,
+                d,
+                &[Format::Svg, Format::Pdf, Format::Png, Format::Csv],
+                &RenderOptions::default(),
+            )?)
+        })?;
+        println!("wrote {} figures to {}", index.entries.len(), dir.display());
+    }
+    Ok(())
+}
+
+pub fn predict(a: PredictArgs) -> anyhow::Result<()> {
+    super::refuse_input_as_output(Some(&a.output), &[&a.model, &a.session])?;
+    let calibration: Calibration = a.calibration.parse()?;
+    let (file, session) = load_pair(&a.model, &a.session)?;
+    let rows = models::predict(&file, &session, calibration)?;
+    crate::fsutil::write_atomic(
+        &a.output,
+        models::held_out::predictions_csv(&rows).as_bytes(),
+    )
+    .with_context(|| format!("writing {}", a.output.display()))?;
+    println!(
+        "{} grasps of {} predicted by {} (calibration {calibration}); wrote {}",
+        rows.len(),
+        session.meta.name,
+        file.provenance.summary(),
+        a.output.display()
+    );
+    Ok(())
+}
+
+/// Parse `1,2,5` / `1..10` (inclusive) trial numbers.
+fn parse_trials(s: &str) -> anyhow::Result<Vec<u32>> {
+    let mut out = Vec::new();
+    for item in s.split(',').map(str::trim).filter(|i| !i.is_empty()) {
+        let bad = || format!("--trials: bad item {item:?} (expected N or A..B)");
+        match item.split_once("..") {
+            Some((a, b)) => {
+                let (a, b): (u32, u32) = (
+                    a.parse().with_context(bad)?,
+                    b.trim_start_matches('=').parse().with_context(bad)?,
+                );
+                if a > b {
+                    bail!(bad());
+                }
+                out.extend(a..=b);
+            }
+            None => out.push(item.parse().with_context(bad)?),
+        }
+    }
+    Ok(out)
+}
+
+pub fn subset(a: SubsetArgs) -> anyhow::Result<()> {
+    super::refuse_input_as_output(Some(&a.output), &[&a.session])?;
+    let labels = a
+        .labels
+        .iter()
+        .map(|l| {
+            l.split_once('=')
+                .map(|(s, c)| (s.trim().to_string(), c.trim().to_string()))
+                .with_context(|| format!("--labels: {l:?} is not SET=CLASS"))
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let spec = SubsetSpec {
+        objects: a.objects.clone(),
+        trials: a
+            .trials
+            .as_deref()
+            .map(parse_trials)
+            .transpose()?
+            .unwrap_or_default(),
+        labels,
+    };
+    let source =
+        session::open(&a.session).with_context(|| format!("opening {}", a.session.display()))?;
+    let name = a
+        .name
+        .clone()
+        .unwrap_or_else(|| session::file_stem(&a.output));
+    let sub = session::subset(&source, &spec, &name)?;
+    session::save(&sub, &a.output)?;
+    println!(
+        "{}: {} of {} grasps ({}); wrote {}",
+        sub.meta.name,
+        sub.grasps.len(),
+        source.grasps.len(),
+        spec.describe(),
+        a.output.display()
+    );
+    Ok(())
+}

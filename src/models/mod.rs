@@ -1,0 +1,54 @@
+//! Models that leave their session: a method of the catalogue fitted on one recording,
+//! saved as a versioned JSON file with its provenance, and applied to another recording —
+//! evaluated against its labels, or predicting without them — under a stated calibration
+//! of the new recording's sensors.
+//!
+//! - [`file`]: the model file (format, version, provenance, the model) and its checks;
+//! - [`calibration`]: which per-taxel statistics stand for a new recording;
+//! - [`stability`]: the grasp-stability classifiers (sparse coding + linear SVM, the raw
+//!   linear SVM): fitting, the session checks, decision values;
+//! - [`held_out`]: scores, predictions and figures on a session the model did not train on.
+
+pub mod calibration;
+pub mod file;
+pub mod held_out;
+pub mod stability;
+#[cfg(test)]
+mod tests;
+
+pub use calibration::Calibration;
+pub use file::{
+    FORMAT, Model, ModelFile, Provenance, SelectionScore, SessionRef, VERSION, load, save,
+};
+pub use held_out::{
+    GraspPrediction, HeldOutResult, HeldOutScores, evaluate, held_out_report, predict,
+};
+pub use stability::{SensorShape, SparseCodes, StabilityClassifier, fit_stability};
+
+use crate::experiments::stability::StabilityError;
+
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ModelError {
+    /// A model file that cannot be read or is not a model file.
+    #[error("{path}: {message}")]
+    File { path: String, message: String },
+    /// A field of a model file that is present but wrong.
+    #[error("model field `{field}`: {reason}")]
+    Field { field: String, reason: String },
+    /// A session that the model cannot read (other sensors, taxels, classes).
+    #[error("the session does not fit the model: {0}")]
+    Mismatch(String),
+    #[error("{0}")]
+    Param(String),
+    #[error(transparent)]
+    Stability(#[from] StabilityError),
+}
+
+impl ModelError {
+    pub(crate) fn field(field: impl Into<String>, reason: impl Into<String>) -> ModelError {
+        ModelError::Field {
+            field: field.into(),
+            reason: reason.into(),
+        }
+    }
+}

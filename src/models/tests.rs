@@ -1,0 +1,203 @@
+//! Model files on the grasp-stability sample: a saved model predicts as the one in memory,
+//! calibration undoes a planted drift, and bad files and sessions get errors naming what
+//! differs.
+
+use super::*;
+use crate::catalogue::MethodId;
+use crate::experiments::stability::{self, Config, DataOptions, StabilityData, StabilityOptions};
+use crate::jobs::Progress;
+use crate::session::{Session, ValueTransform, simulate};
+
+fn sample() -> (Session, StabilityData) {
+    let session = simulate::grasp_stability(0);
+    let data = StabilityData::from_session(&session, &DataOptions::default()).unwrap();
+    (session, data)
+}
+
+fn small() -> StabilityOptions {
+    StabilityOptions {
+        single: Config {
+            num_bases: 8,
+            beta: 1.0,
+            gamma: 1.0,
+        },
+        ..Default::default()
+    }
+}
+
+fn fitted(method: MethodId) -> (Session, ModelFile) {
+    let (session, data) = sample();
+    let fit = fit_stability(method, &session, &data, &small(), &Progress::new()).unwrap();
+    let file = fit.into_file(&session, &data);
+    (session, file)
+}
+
+fn wsr(r: &HeldOutResult) -> f64 {
+    let HeldOutScores::Stability {
+        weighted_success_rate,
+        ..
+    } = r.scores;
+    weighted_success_rate
+}
+
+#[test]
+fn a_saved_model_predicts_bit_for_bit_as_the_model_in_memory() {
+    let (session, data) = sample();
+    let report = stability::run(&data, &small(), &Progress::new()).unwrap();
+    let classifier = StabilityClassifier::from_sparse(&report.model, &data, &session);
+    let file = super::stability::StabilityFit::from_report(&session, &data, &small(), &report)
+        .into_file(&session, &data);
+    let loaded = ModelFile::from_json(&file.to_json(), "m.json").unwrap();
+    assert_eq!(loaded, file);
+    let Model::Stability(back) = &loaded.model;
+    let before = classifier.decisions(&session, Calibration::None).unwrap();
+    let after = back.decisions(&session, Calibration::None).unwrap();
+    let bits = |v: &[f64]| v.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&before), bits(&after));
+    // The analyses' model, one grasp at a time, decides as the batched decision values.
+    let images = data.patches.pressures.view();
+    for (g, d) in after.iter().enumerate() {
+        let failure = report.model.predict_failure(images.row(g)).unwrap();
+        assert_eq!(failure, *d > 0.0, "grasp {g}");
+    }
+}
+
+/// The session with every taxel's pressure raised by `shift`.
+fn shifted(session: &Session, shift: f64) -> Session {
+    let mut s = session.clone();
+    for (i, sensor) in s.sensors.iter().enumerate() {
+        // Raw readings move against pressure for the reversed transforms.
+        let raw_shift = match sensor.transform {
+            ValueTransform::Identity => shift,
+            _ => -shift,
+        };
+        for g in &mut s.grasps {
+            for f in &mut g.frames {
+                f.taxels[i].iter_mut().for_each(|v| *v += raw_shift);
+            }
+        }
+    }
+    s
+}
+
+#[test]
+fn a_drifted_session_needs_its_own_statistics() {
+    for method in [MethodId::RawSvm, MethodId::SparseSvm] {
+        let (session, file) = fitted(method);
+        let Model::Stability(c) = &file.model;
+        // Five times the widest taxel's spread: a baseline drift as between recording days.
+        let spread = c.taxel_stats.sd.iter().fold(0.0f64, |a, b| a.max(*b));
+        let drifted = shifted(&session, 5.0 * spread);
+        let none = evaluate(&file, &drifted, Calibration::None).unwrap();
+        let own = evaluate(&file, &drifted, Calibration::Session).unwrap();
+        // Chance is 0.5: uncalibrated, the drift puts every grasp on one side; with the
+        // session's own statistics the model reads the grasps as before.
+        assert!(wsr(&none) < 0.6, "{method:?} none {}", wsr(&none));
+        assert!(wsr(&own) > 0.7, "{method:?} session {}", wsr(&own));
+    }
+}
+
+#[test]
+fn first_k_reads_only_the_first_grasps_statistics() {
+    let (session, file) = fitted(MethodId::RawSvm);
+    let k = 40;
+    let mut later_changed = session.clone();
+    // Grasps after the first K do not move the statistics of first:K ...
+    for g in &mut later_changed.grasps[k..] {
+        for f in &mut g.frames {
+            f.taxels[0].iter_mut().for_each(|v| *v *= 1.5);
+        }
+    }
+    let c = Calibration::First { grasps: k };
+    let a = predict(&file, &session, c).unwrap();
+    let b = predict(&file, &later_changed, c).unwrap();
+    assert_eq!(a[..k], b[..k]);
+    // ... but they move those of the whole session.
+    let a = predict(&file, &session, Calibration::Session).unwrap();
+    let b = predict(&file, &later_changed, Calibration::Session).unwrap();
+    assert_ne!(a[..k], b[..k]);
+}
+
+#[test]
+fn bad_model_files_name_the_field() {
+    let (_, file) = fitted(MethodId::SparseSvm);
+    let good: serde_json::Value = serde_json::from_str(&file.to_json()).unwrap();
+    type Break = Box<dyn Fn(&mut serde_json::Value)>;
+    let cases: Vec<(&str, Break)> = vec![
+        ("format", Box::new(|v| v["format"] = "a-session".into())),
+        ("version 2", Box::new(|v| v["version"] = 2.into())),
+        (
+            "svm.weights",
+            Box::new(|v| {
+                let w = v["model"]["svm"]["weights"]["data"].as_array_mut().unwrap();
+                w.pop();
+                let n = w.len();
+                v["model"]["svm"]["weights"]["dim"] = serde_json::json!([n]);
+            }),
+        ),
+        (
+            "taxel_stats",
+            Box::new(|v| {
+                v["model"]["taxel_stats"]["sd"]
+                    .as_array_mut()
+                    .unwrap()
+                    .pop();
+            }),
+        ),
+        (
+            "codes.dictionary.atoms",
+            Box::new(|v| {
+                let atoms = &mut v["model"]["codes"]["dictionary"]["atoms"];
+                let dim = atoms["dim"][1].as_u64().unwrap() as usize;
+                let rows = atoms["dim"][0].as_u64().unwrap() as usize;
+                atoms["dim"] = serde_json::json!([rows * dim / 2, 2]);
+            }),
+        ),
+        (
+            "provenance.method",
+            Box::new(|v| v["provenance"]["method"] = "raw_svm".into()),
+        ),
+        (
+            "trained_at",
+            Box::new(|v| v["provenance"]["trained_at"] = "yesterday".into()),
+        ),
+        (
+            "failure_class",
+            Box::new(|v| v["model"]["failure_class"] = v["model"]["success_class"].clone()),
+        ),
+    ];
+    for (field, break_it) in cases {
+        let mut v = good.clone();
+        break_it(&mut v);
+        let e = ModelFile::from_json(&v.to_string(), "bad-model.json")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("bad-model.json"), "{field}: {e}");
+        assert!(e.contains(field), "{field}: {e}");
+    }
+    let e = ModelFile::from_json("{\"format\": 1", "m.json").unwrap_err();
+    assert!(e.to_string().contains("not JSON"), "{e}");
+}
+
+#[test]
+fn a_session_of_other_sensors_or_classes_is_refused_by_name() {
+    let (session, file) = fitted(MethodId::RawSvm);
+    let other = simulate::object_recognition(0);
+    let e = evaluate(&file, &other, Calibration::Session)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("sensors") && e.contains(&session.sensors[0].name),
+        "{e}"
+    );
+    let Model::Stability(c) = &file.model;
+    let mut renamed = session.clone();
+    let i = renamed.label_set(&c.label_set).unwrap();
+    let set = &mut renamed.label_sets[i];
+    let old = set.classes[1].clone();
+    set.classes[1] = "wobbly".into();
+    let e = evaluate(&file, &renamed, Calibration::Session)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("wobbly") && e.contains(&old), "{e}");
+}

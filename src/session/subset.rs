@@ -1,0 +1,188 @@
+//! A session of some of another session's grasps: for train/test splits across objects,
+//! trials or labels, and for researchers building their own test sets. Sensors, encoders,
+//! label sets and every kept grasp are copied unchanged; the notes say what was kept.
+
+use super::Session;
+
+/// Which grasps to keep: all conditions must hold (an empty list does not filter).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SubsetSpec {
+    pub objects: Vec<String>,
+    pub trials: Vec<u32>,
+    /// (label set, class): within one label set a grasp may have any of the classes
+    /// listed for it.
+    pub labels: Vec<(String, String)>,
+}
+
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct SubsetError(String);
+
+impl SubsetSpec {
+    /// In words, for the new session's notes.
+    pub fn describe(&self) -> String {
+        let mut parts = Vec::new();
+        if !self.objects.is_empty() {
+            parts.push(format!("objects {}", self.objects.join(", ")));
+        }
+        if !self.trials.is_empty() {
+            let t: Vec<String> = self.trials.iter().map(u32::to_string).collect();
+            parts.push(format!("trials {}", t.join(", ")));
+        }
+        for (set, class) in &self.labels {
+            parts.push(format!("{set} = {class}"));
+        }
+        if parts.is_empty() {
+            "every grasp".into()
+        } else {
+            parts.join("; ")
+        }
+    }
+}
+
+/// The grasps of `session` that `spec` keeps, as a session of their own named `name`.
+pub fn subset(session: &Session, spec: &SubsetSpec, name: &str) -> Result<Session, SubsetError> {
+    let objects = session.objects();
+    if let Some(o) = spec.objects.iter().find(|o| !objects.contains(o)) {
+        return Err(SubsetError(format!(
+            "no object {o:?} in {}; it has {}",
+            session.meta.name,
+            objects.join(", ")
+        )));
+    }
+    if !spec.trials.is_empty() && session.grasps.iter().all(|g| g.trial.is_none()) {
+        return Err(SubsetError(format!(
+            "the grasps of {} carry no trial numbers",
+            session.meta.name
+        )));
+    }
+    // Per label set named, the classes allowed.
+    let mut allowed: Vec<(usize, Vec<usize>)> = Vec::new();
+    for (set_name, class) in &spec.labels {
+        let set = session.label_set(set_name).ok_or_else(|| {
+            SubsetError(format!(
+                "no label set {set_name:?}; the session has {}",
+                session
+                    .label_sets
+                    .iter()
+                    .map(|l| l.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ))
+        })?;
+        let classes = &session.label_sets[set].classes;
+        let c = classes.iter().position(|c| c == class).ok_or_else(|| {
+            SubsetError(format!(
+                "label set {set_name:?} has no class {class:?} (classes {})",
+                classes.join(", ")
+            ))
+        })?;
+        match allowed.iter_mut().find(|(s, _)| *s == set) {
+            Some((_, cs)) => cs.push(c),
+            None => allowed.push((set, vec![c])),
+        }
+    }
+    let grasps: Vec<_> = session
+        .grasps
+        .iter()
+        .filter(|g| spec.objects.is_empty() || spec.objects.contains(&g.object))
+        .filter(|g| spec.trials.is_empty() || g.trial.is_some_and(|t| spec.trials.contains(&t)))
+        .filter(|g| {
+            allowed
+                .iter()
+                .all(|(set, cs)| g.labels.get(*set).is_some_and(|l| cs.contains(l)))
+        })
+        .cloned()
+        .collect();
+    if grasps.is_empty() {
+        return Err(SubsetError(format!(
+            "no grasp of {} has {}",
+            session.meta.name,
+            spec.describe()
+        )));
+    }
+    let mut meta = session.meta.clone();
+    let note = format!(
+        "{} of the {} grasps of {} ({})",
+        grasps.len(),
+        session.grasps.len(),
+        session.meta.name,
+        spec.describe()
+    );
+    meta.notes = if meta.notes.is_empty() {
+        note
+    } else {
+        format!("{}\n{note}", meta.notes)
+    };
+    meta.name = name.to_string();
+    Ok(Session {
+        meta,
+        grasps,
+        ..session.clone()
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::session::simulate;
+
+    fn session() -> Session {
+        simulate::object_recognition(1)
+    }
+
+    #[test]
+    fn keeps_exactly_the_grasps_every_condition_allows() {
+        let s = session();
+        let objects = s.objects();
+        let spec = SubsetSpec {
+            objects: vec![objects[0].clone(), objects[2].clone()],
+            trials: vec![1, 2],
+            labels: Vec::new(),
+        };
+        let sub = subset(&s, &spec, "part").unwrap();
+        assert_eq!(sub.meta.name, "part");
+        let wanted: Vec<_> = s
+            .grasps
+            .iter()
+            .filter(|g| g.object == objects[0] || g.object == objects[2])
+            .filter(|g| matches!(g.trial, Some(1 | 2)))
+            .collect();
+        assert!(!wanted.is_empty() && wanted.len() < s.grasps.len());
+        assert_eq!(sub.grasps.iter().collect::<Vec<_>>(), wanted);
+        assert!(sub.meta.notes.contains(&format!(
+            "{} of the {} grasps",
+            wanted.len(),
+            s.grasps.len()
+        )));
+        assert_eq!(sub.sensors, s.sensors);
+        assert_eq!(sub.label_sets, s.label_sets);
+    }
+
+    #[test]
+    fn unknown_names_and_empty_results_are_errors_that_name_them() {
+        let s = session();
+        let err = |spec: SubsetSpec| subset(&s, &spec, "x").unwrap_err().to_string();
+        assert!(
+            err(SubsetSpec {
+                objects: vec!["teapot".into()],
+                ..Default::default()
+            })
+            .contains("teapot")
+        );
+        assert!(
+            err(SubsetSpec {
+                labels: vec![("colour".into(), "red".into())],
+                ..Default::default()
+            })
+            .contains("colour")
+        );
+        assert!(
+            err(SubsetSpec {
+                trials: vec![99],
+                ..Default::default()
+            })
+            .contains("no grasp")
+        );
+    }
+}
