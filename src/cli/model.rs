@@ -11,9 +11,9 @@ use super::progress::with_progress;
 use super::stability::{StabilityArgs, data_options, in_pool, options_from};
 use crate::catalogue::MethodId;
 use crate::experiments::result::figure_set;
-use crate::experiments::stability::{StabilityData, StabilityOptions, StabilityReport};
+use crate::experiments::stability::StabilityData;
 use crate::figures::{Format, RenderOptions, export_all};
-use crate::models::{self, Calibration, HeldOutScores, ModelFile, stability::StabilityFit};
+use crate::models::{self, Calibration, HeldOutScores, ModelFile};
 use crate::session::{self, Session, SubsetSpec};
 
 #[derive(Args, Debug)]
@@ -93,16 +93,6 @@ pub struct SubsetArgs {
     /// The session file to write (native format).
     #[arg(short, long, value_name = "OUT.json")]
     pub output: PathBuf,
-}
-
-/// The model file of a `stability` run's recommended model.
-pub fn stability_model_file(
-    session: &Session,
-    data: &StabilityData,
-    opts: &StabilityOptions,
-    report: &StabilityReport,
-) -> ModelFile {
-    StabilityFit::from_report(session, data, opts, report).into_file(session, data)
 }
 
 pub fn fit(a: FitArgs) -> anyhow::Result<()> {

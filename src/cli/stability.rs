@@ -429,7 +429,9 @@ pub fn run(a: StabilityArgs) -> anyhow::Result<()> {
         println!("wrote {}", path.display());
     }
     if let Some(path) = &a.save_model {
-        let file = super::model::stability_model_file(&session, &data, &opts, &report);
+        let file =
+            crate::models::stability::StabilityFit::from_report(&session, &data, &opts, &report)
+                .into_file(&session, &data);
         crate::models::save(&file, path)?;
         println!("wrote {} ({})", path.display(), file.provenance.summary());
     }
