@@ -58,13 +58,51 @@ pub struct Assignment {
     pub created: bool,
 }
 
-#[derive(Clone, Debug)]
+/// Saved with serde as its DS learner, its own parameters and the grasps of each cluster;
+/// loading (deserialising) checks them against each other (see [`super`]). A loaded DU
+/// goes on learning: a novel grasp opens a new cluster.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(try_from = "DuState")]
 pub struct Du {
     ds: Ds,
     threshold: f64,
     min_grasps: usize,
     /// Grasps trained into each cluster.
+    #[serde(rename = "grasps_per_cluster")]
     grasps: Vec<usize>,
+}
+
+/// A [`Du`] as it is saved: the fields of [`Du`].
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DuState {
+    ds: Ds,
+    threshold: f64,
+    min_grasps: usize,
+    grasps_per_cluster: Vec<usize>,
+}
+
+impl TryFrom<DuState> for Du {
+    type Error = LearnerError;
+
+    fn try_from(s: DuState) -> Result<Du, LearnerError> {
+        let du = Du {
+            ds: s.ds,
+            threshold: s.threshold,
+            min_grasps: s.min_grasps,
+            grasps: s.grasps_per_cluster,
+        };
+        du.params().validate()?;
+        super::check_per_class("grasps_per_cluster", du.grasps.len(), du.n_clusters())?;
+        // Every cluster was opened by a grasp trained into it.
+        if let Some(c) = du.grasps.iter().position(|g| *g == 0) {
+            return Err(LearnerError::state(
+                format!("grasps_per_cluster[{c}]"),
+                "a cluster without grasps",
+            ));
+        }
+        Ok(du)
+    }
 }
 
 /// nu_D of eq. 28 from the q of cluster s at every step.
@@ -93,6 +131,20 @@ impl Du {
 
     pub fn learner(&self) -> &Ds {
         &self.ds
+    }
+
+    /// The parameters the learner was built with.
+    pub fn params(&self) -> DuParams {
+        DuParams {
+            ds: self.ds.params().clone(),
+            threshold: self.threshold,
+            min_grasps: self.min_grasps,
+        }
+    }
+
+    /// The grasps trained into each cluster.
+    pub fn grasps_per_cluster(&self) -> &[usize] {
+        &self.grasps
     }
 
     /// Assign one grasp (opening a cluster if it is novel) and train on it.

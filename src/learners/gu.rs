@@ -143,7 +143,11 @@ fn log_likelihood_diag(o: &[f64], mean: &[f64], variance: &[f64]) -> f64 {
         .sum()
 }
 
-#[derive(Clone, Debug)]
+/// Saved with serde as its GS learner, its own parameters, the grasps of each cluster and
+/// the per-dimension noise estimates; loading (deserialising) checks them against each
+/// other (see [`super`]). A loaded GU goes on learning: a novel grasp opens a new cluster.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(try_from = "GuState")]
 pub struct Gu {
     gs: Gs,
     threshold: f64,
@@ -152,13 +156,98 @@ pub struct Gu {
     noise: GuNoise,
     noise_floor: f64,
     min_grasps: usize,
+    /// Scratch of the novelty, written before it is read.
+    #[serde(skip)]
     residual: Vec<f64>,
+    #[serde(skip)]
     variance: Vec<f64>,
     /// Grasps trained into each expert.
+    #[serde(rename = "grasps_per_cluster")]
     grasps: Vec<usize>,
     /// Per expert under [`GuNoise::PerDimension`]: the sum of squared training residuals
     /// per output dimension, and the number of steps behind it.
-    squared_residuals: Vec<(Vec<f64>, usize)>,
+    squared_residuals: Vec<ResidualSums>,
+}
+
+/// The squared training residuals of one expert, per output dimension, summed over `steps`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ResidualSums {
+    /// Non-negative; +∞ where a residual overflowed.
+    #[serde(with = "crate::gp::floats")]
+    sums: Vec<f64>,
+    steps: usize,
+}
+
+/// A [`Gu`] as it is saved: the fields of [`Gu`] but its scratch.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GuState {
+    gs: Gs,
+    threshold: f64,
+    aggregate: GuAggregate,
+    draws: EvtDraws,
+    noise: GuNoise,
+    noise_floor: f64,
+    min_grasps: usize,
+    grasps_per_cluster: Vec<usize>,
+    squared_residuals: Vec<ResidualSums>,
+}
+
+impl TryFrom<GuState> for Gu {
+    type Error = LearnerError;
+
+    fn try_from(s: GuState) -> Result<Gu, LearnerError> {
+        let dim = s.gs.dim();
+        let gu = Gu {
+            gs: s.gs,
+            threshold: s.threshold,
+            aggregate: s.aggregate,
+            draws: s.draws,
+            noise: s.noise,
+            noise_floor: s.noise_floor,
+            min_grasps: s.min_grasps,
+            residual: vec![0.0; dim],
+            variance: vec![0.0; dim],
+            grasps: s.grasps_per_cluster,
+            squared_residuals: s.squared_residuals,
+        };
+        gu.params().validate()?;
+        let clusters = gu.n_clusters();
+        super::check_per_class("grasps_per_cluster", gu.grasps.len(), clusters)?;
+        // Every cluster was opened by a grasp trained into it.
+        if let Some(c) = gu.grasps.iter().position(|g| *g == 0) {
+            return Err(LearnerError::state(
+                format!("grasps_per_cluster[{c}]"),
+                "a cluster without grasps",
+            ));
+        }
+        // The estimates grow with the experts trained so far.
+        if gu.squared_residuals.len() > clusters {
+            return Err(LearnerError::state(
+                "squared_residuals",
+                format!(
+                    "{} experts' sums for {clusters} clusters",
+                    gu.squared_residuals.len()
+                ),
+            ));
+        }
+        for (c, r) in gu.squared_residuals.iter().enumerate() {
+            if r.sums.len() != dim {
+                return Err(LearnerError::state(
+                    format!("squared_residuals[{c}].sums"),
+                    format!("{} values for {dim} output dimensions", r.sums.len()),
+                ));
+            }
+            if let Some(d) = r.sums.iter().position(|v| v.is_nan() || *v < 0.0) {
+                return Err(LearnerError::state(
+                    format!("squared_residuals[{c}].sums[{d}]"),
+                    format!("{} is not a sum of squares", r.sums[d]),
+                ));
+            }
+        }
+        Ok(gu)
+    }
 }
 
 impl Gu {
@@ -187,6 +276,24 @@ impl Gu {
         &self.gs
     }
 
+    /// The parameters the learner was built with.
+    pub fn params(&self) -> GuParams {
+        GuParams {
+            gs: self.gs.params().clone(),
+            threshold: self.threshold,
+            aggregate: self.aggregate,
+            draws: self.draws,
+            noise: self.noise,
+            noise_floor: self.noise_floor,
+            min_grasps: self.min_grasps,
+        }
+    }
+
+    /// The grasps trained into each cluster.
+    pub fn grasps_per_cluster(&self) -> &[usize] {
+        &self.grasps
+    }
+
     /// nu_G of a grasp under expert `c`, combined over the steps.
     pub fn novelty(&mut self, c: usize, seq: ArrayView2<f64>) -> f64 {
         let (means, vars) = self.gs.expert_predictions(c, seq);
@@ -209,7 +316,7 @@ impl Gu {
         if self.noise == GuNoise::Shared {
             return None;
         }
-        let (sums, steps) = self.squared_residuals.get(c)?;
+        let ResidualSums { sums, steps } = self.squared_residuals.get(c)?;
         if *steps == 0 {
             return None;
         }
@@ -298,10 +405,15 @@ impl Gu {
         }
         let (means, _) = self.gs.expert_predictions(cluster, seq);
         if cluster >= self.squared_residuals.len() {
-            self.squared_residuals
-                .resize(cluster + 1, (vec![0.0; seq.ncols()], 0));
+            self.squared_residuals.resize(
+                cluster + 1,
+                ResidualSums {
+                    sums: vec![0.0; seq.ncols()],
+                    steps: 0,
+                },
+            );
         }
-        let (sums, steps) = &mut self.squared_residuals[cluster];
+        let ResidualSums { sums, steps } = &mut self.squared_residuals[cluster];
         for (o, mu) in seq.rows().into_iter().zip(means.rows()) {
             for ((s, x), y) in sums.iter_mut().zip(o).zip(mu) {
                 *s += (x - y) * (x - y);
