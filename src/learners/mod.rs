@@ -320,7 +320,6 @@ pub(crate) mod testing {
             Err(e) => {
                 let e = e.to_string();
                 assert!(e.contains(field), "`{field}` not named in: {e}");
-                eprintln!("{e}");
                 e
             }
         }

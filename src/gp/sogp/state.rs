@@ -195,32 +195,25 @@ impl Sogp {
 
     /// The model a saved state describes, every field checked against the others.
     fn from_state(st: SogpState) -> Result<Sogp, GpError> {
-        if st.dim == 0 {
-            return Err(GpError::state("dim", "must be at least 1"));
+        for (name, v) in [("dim", st.dim), ("tau", st.tau), ("n_out", st.n_out)] {
+            if v == 0 {
+                return Err(GpError::state(name, "must be at least 1"));
+            }
+        }
+        if st.likelihood == Likelihood::Probit && st.n_out != 1 {
+            return Err(GpError::state(
+                "n_out",
+                format!("{} outputs in a probit model", st.n_out),
+            ));
+        }
+        if let Some(a) = &st.adaptation {
+            a.validate().map_err(|e| e.within("adaptation"))?;
         }
         // Every lengthscale is in the file, so that this bounds dim by the file's size.
         st.kernel.validate(st.dim).map_err(|e| e.within("kernel"))?;
         Sogp::check_loadable_size(st.dim, st.tau, st.capacity, st.n_out)?;
-        let params = SogpParams {
-            capacity: st.capacity,
-            tau: st.tau,
-            novelty_eps: st.novelty_eps,
-            lengthscale: st.kernel.lengthscales[0],
-            sigma_rho: st.kernel.sigma_rho,
-            sigma_f: st.kernel.sigma_f,
-            sigma_n: st.kernel.sigma_n,
-            likelihood: st.likelihood,
-            adaptation: st.adaptation.clone(),
-        };
-        if let Some(a) = &st.adaptation {
-            a.validate().map_err(|e| e.within("adaptation"))?;
-        }
-        // Checks the budget, lags, novelty threshold and outputs (named as in the state).
-        let mut m = Sogp::new(st.dim, st.n_out, &params).map_err(|e| match e {
-            GpError::InvalidParameter { name, reason } => GpError::state(name, reason),
-            e => e,
-        })?;
-        let (n, no, w, s) = (st.n_basis, st.n_out, m.wlen, m.stride);
+        // The lengths first: nothing is allocated for a state that does not hold together.
+        let (n, no, w) = (st.n_basis, st.n_out, st.tau * st.dim);
         if n > st.capacity {
             return Err(GpError::state(
                 "n_basis",
@@ -253,7 +246,23 @@ impl Sogp {
             ));
         }
         check_adaptation(&st)?;
-
+        let params = SogpParams {
+            capacity: st.capacity,
+            tau: st.tau,
+            novelty_eps: st.novelty_eps,
+            lengthscale: st.kernel.lengthscales[0],
+            sigma_rho: st.kernel.sigma_rho,
+            sigma_f: st.kernel.sigma_f,
+            sigma_n: st.kernel.sigma_n,
+            likelihood: st.likelihood,
+            adaptation: st.adaptation.clone(),
+        };
+        // Checks the budget, novelty threshold and outputs (named as in the state).
+        let mut m = Sogp::new(st.dim, st.n_out, &params).map_err(|e| match e {
+            GpError::InvalidParameter { name, reason } => GpError::state(name, reason),
+            e => e,
+        })?;
+        let s = m.stride;
         m.kernel = RecursiveArd::new(st.dim, st.tau, st.kernel).map_err(|e| e.within("kernel"))?;
         m.n = n;
         m.seen = st.seen;
