@@ -98,7 +98,8 @@ mod tests {
     }
 
     /// Every f64 comes back with its bits: signed zeros, subnormals, the extremes, values
-    /// whose shortest decimal needs all 17 digits, and the non-finite ones.
+    /// whose shortest decimal needs all 17 digits, the infinities and (as the one NaN
+    /// `f64::NAN`) NaN.
     #[test]
     fn every_value_comes_back_bit_for_bit() {
         let v = vec![

@@ -5,7 +5,9 @@
 //! on learning and predicting exactly as that one does, bit for bit. Deserialising is the
 //! checked constructor: the parameters, every expert (see [`crate::gp`]) and the learner's
 //! own state are checked against each other, and a state that disagrees is an error naming
-//! the field (`models[2].alpha`), so that no inconsistent learner can be obtained.
+//! the field (an expert's as `models[2]: invalid state `alpha`: …`, with serde_json's line
+//! and column), so that no inconsistent learner can be obtained. Errors of the JSON types
+//! themselves (a negative count, a string for a number) are serde's, with line and column.
 
 pub mod ds;
 pub mod du;
