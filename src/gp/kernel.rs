@@ -575,6 +575,10 @@ impl Stamp {
 }
 
 /// The last `tau` inputs, oldest first, zero padded at the start of a sequence.
+///
+/// Saved as its inputs; a loaded window starts a sequence of its own (as a clone does), so
+/// a model that observed the original sees the first window pushed to it as a new one and
+/// evaluates it in full, which gives the same values as the shift by one.
 #[derive(Debug)]
 pub struct Window {
     dim: usize,
@@ -627,6 +631,58 @@ impl Window {
 
     pub fn stamp(&self) -> Stamp {
         self.stamp
+    }
+
+    /// The inputs per lag.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+}
+
+/// A [`Window`] as it is saved.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct WindowState {
+    dim: usize,
+    /// tau lags of `dim` inputs, oldest first.
+    #[serde(with = "super::floats")]
+    inputs: Vec<f64>,
+}
+
+impl Serialize for Window {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        WindowState {
+            dim: self.dim,
+            inputs: self.data.clone(),
+        }
+        .serialize(s)
+    }
+}
+
+impl<'de> Deserialize<'de> for Window {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Window, D::Error> {
+        let w = WindowState::deserialize(d)?;
+        if w.dim == 0 {
+            return Err(serde::de::Error::custom(GpError::state(
+                "dim",
+                "must be at least 1",
+            )));
+        }
+        if w.inputs.is_empty() || !w.inputs.len().is_multiple_of(w.dim) {
+            return Err(serde::de::Error::custom(GpError::state(
+                "inputs",
+                format!(
+                    "{} values are not one or more lags of {} inputs",
+                    w.inputs.len(),
+                    w.dim
+                ),
+            )));
+        }
+        Ok(Window {
+            dim: w.dim,
+            data: w.inputs,
+            stamp: Stamp::fresh(),
+        })
     }
 }
 

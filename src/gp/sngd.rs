@@ -68,6 +68,10 @@ impl SngdParams {
 }
 
 /// The optimiser's state for one model.
+///
+/// Saved as its parameters, bounds, theta and the window in progress (the running mean
+/// gradient, the inverse Fisher estimate and the samples in it) with its counters; `hg`
+/// and `h_next` are scratch of [`Sngd::push`], written before they are read.
 #[derive(Clone, Debug)]
 pub struct Sngd {
     params: SngdParams,
@@ -124,6 +128,9 @@ impl Sngd {
     }
     pub fn updates(&self) -> usize {
         self.updates
+    }
+    pub fn params(&self) -> &SngdParams {
+        &self.params
     }
 
     /// h_next = (H − ε (Hg)(Hg)ᵀ/denom)/(1 − ε), in wide vectors where available (the
@@ -217,5 +224,118 @@ impl Sngd {
         }
         self.restart_window();
         true
+    }
+}
+
+/// An [`Sngd`] as it is saved.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SngdState {
+    params: SngdParams,
+    #[serde(with = "super::floats")]
+    lower: Vec<f64>,
+    #[serde(with = "super::floats")]
+    upper: Vec<f64>,
+    #[serde(with = "super::floats")]
+    theta: Vec<f64>,
+    /// The window in progress: its mean gradient, inverse Fisher estimate (P × P,
+    /// row-major) and gradient samples.
+    #[serde(with = "super::floats")]
+    mean_gradient: Vec<f64>,
+    #[serde(with = "super::floats")]
+    inverse_fisher: Vec<f64>,
+    samples: usize,
+    updates: usize,
+    /// Consecutive small steps so far.
+    calm: usize,
+    stopped: bool,
+}
+
+impl Serialize for Sngd {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        SngdState {
+            params: self.params.clone(),
+            lower: self.lo.clone(),
+            upper: self.hi.clone(),
+            theta: self.theta.clone(),
+            mean_gradient: self.g_bar.clone(),
+            inverse_fisher: self.h.clone(),
+            samples: self.t,
+            updates: self.updates,
+            calm: self.calm,
+            stopped: self.stopped,
+        }
+        .serialize(s)
+    }
+}
+
+impl<'de> Deserialize<'de> for Sngd {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Sngd, D::Error> {
+        Sngd::from_state(SngdState::deserialize(d)?).map_err(serde::de::Error::custom)
+    }
+}
+
+impl Sngd {
+    fn from_state(s: SngdState) -> Result<Sngd, GpError> {
+        s.params.validate().map_err(|e| e.within("params"))?;
+        let p = s.theta.len();
+        if p == 0 {
+            return Err(GpError::state("theta", "is empty"));
+        }
+        for (name, v, len) in [
+            ("lower", &s.lower, p),
+            ("upper", &s.upper, p),
+            ("theta", &s.theta, p),
+            ("mean_gradient", &s.mean_gradient, p),
+            ("inverse_fisher", &s.inverse_fisher, p * p),
+        ] {
+            if v.len() != len {
+                return Err(GpError::state(
+                    name,
+                    format!("{} values, expected {len}", v.len()),
+                ));
+            }
+            if let Some((i, x)) = super::floats::first_non_finite(v) {
+                return Err(GpError::state(
+                    format!("{name}[{i}]"),
+                    format!("{x} is not finite"),
+                ));
+            }
+        }
+        if let Some(i) = (0..p).find(|&i| s.lower[i] > s.upper[i]) {
+            return Err(GpError::state(
+                format!("lower[{i}]"),
+                format!("{} is above the upper bound {}", s.lower[i], s.upper[i]),
+            ));
+        }
+        if s.samples >= s.params.window {
+            return Err(GpError::state(
+                "samples",
+                format!("{} in a window of {}", s.samples, s.params.window),
+            ));
+        }
+        if s.calm > s.params.stop_count || (s.calm == s.params.stop_count) != s.stopped {
+            return Err(GpError::state(
+                "calm",
+                format!(
+                    "{} small steps with stop_count {} and stopped {}",
+                    s.calm, s.params.stop_count, s.stopped
+                ),
+            ));
+        }
+        Ok(Sngd {
+            params: s.params,
+            lo: s.lower,
+            hi: s.upper,
+            theta: s.theta,
+            g_bar: s.mean_gradient,
+            h: s.inverse_fisher,
+            hg: vec![0.0; p],
+            h_next: vec![0.0; p * p],
+            t: s.samples,
+            updates: s.updates,
+            calm: s.calm,
+            stopped: s.stopped,
+        })
     }
 }

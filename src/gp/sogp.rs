@@ -24,6 +24,7 @@
 mod adapt;
 mod gram;
 mod online;
+mod state;
 #[cfg(test)]
 mod tests;
 
@@ -121,7 +122,8 @@ impl SogpParams {
     }
 }
 
-/// One OIESGP model.
+/// One OIESGP model. It saves and loads with serde: `state.rs` says what the file holds
+/// and what is rebuilt; loading checks every field.
 #[derive(Clone, Debug)]
 pub struct Sogp {
     kernel: RecursiveArd,
@@ -236,6 +238,20 @@ impl Sogp {
     }
     pub fn n_out(&self) -> usize {
         self.n_out
+    }
+    /// The BV budget.
+    pub fn capacity(&self) -> usize {
+        self.cap
+    }
+    pub fn likelihood(&self) -> Likelihood {
+        self.likelihood
+    }
+    pub fn novelty_eps(&self) -> f64 {
+        self.eps
+    }
+    /// The adaptation the model was built with (None: off).
+    pub fn adaptation_params(&self) -> Option<&SngdParams> {
+        self.adaptation_params.as_ref()
     }
     pub fn seen(&self) -> usize {
         self.seen

@@ -46,13 +46,58 @@ impl DsParams {
     }
 }
 
-#[derive(Clone, Debug)]
+/// Saved with serde as its parameters, experts, window and the last step's q; loading
+/// (deserialising) checks them against each other (see [`super`]).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(try_from = "DsState")]
 pub struct Ds {
     params: DsParams,
     dim: usize,
     models: Vec<Sogp>,
     window: Window,
+    #[serde(serialize_with = "crate::gp::floats::serialize")]
     q: Vec<f64>,
+}
+
+/// A [`Ds`] as it is saved: the fields of [`Ds`].
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DsState {
+    params: DsParams,
+    dim: usize,
+    #[serde(deserialize_with = "super::deserialize_models")]
+    models: Vec<Sogp>,
+    #[serde(deserialize_with = "super::deserialize_window")]
+    window: Window,
+    #[serde(with = "crate::gp::floats")]
+    q: Vec<f64>,
+}
+
+impl TryFrom<DsState> for Ds {
+    type Error = LearnerError;
+
+    fn try_from(s: DsState) -> Result<Ds, LearnerError> {
+        s.params.validate().map_err(|e| e.within("params"))?;
+        super::check_loadable_size(s.dim, 1, &s.params.gp)?;
+        let mut ds = Ds::new(s.dim, &s.params)?;
+        super::check_experts(&s.models, s.dim, 1, &s.params.gp)?;
+        super::check_window(&s.window, s.dim, s.params.gp.tau)?;
+        super::check_per_class("q", s.q.len(), s.models.len())?;
+        // q is Φ of the last step (NaN where the step's inputs were).
+        if let Some(i) =
+            s.q.iter()
+                .position(|q| !(q.is_nan() || (0.0..=1.0).contains(q)))
+        {
+            return Err(LearnerError::state(
+                format!("q[{i}]"),
+                format!("{} is not a probability", s.q[i]),
+            ));
+        }
+        ds.models = s.models;
+        ds.window = s.window;
+        ds.q = s.q;
+        Ok(ds)
+    }
 }
 
 impl Ds {
@@ -67,6 +112,11 @@ impl Ds {
             window: Window::new(dim, params.gp.tau),
             q: Vec::new(),
         })
+    }
+
+    /// The parameters the learner was built with.
+    pub fn params(&self) -> &DsParams {
+        &self.params
     }
 
     /// Push o_t and evaluate every expert; q_c into `self.q`.
@@ -225,7 +275,143 @@ impl SequenceClassifier for Ds {
 mod tests {
     use ndarray::Array2;
 
+    use super::super::testing::{bits, grasps, load_error, quick_adaptation, round_trip};
     use super::*;
+
+    fn small(adapting: bool) -> DsParams {
+        DsParams {
+            gp: SogpParams {
+                capacity: 10,
+                tau: 4,
+                adaptation: adapting.then(quick_adaptation),
+                ..DsParams::default().gp
+            },
+        }
+    }
+
+    /// DS trained on three objects until its experts are at their budget (and, adapting,
+    /// have stepped their hyperparameters many times), saved halfway through a grasp streamed
+    /// step by step, and loaded: the grasp goes on, a fourth object gets an expert, and
+    /// predicting and every way of training give the saved learner's values bit for bit,
+    /// ending in the same state.
+    #[test]
+    fn a_loaded_ds_goes_on_as_the_saved_one_bit_for_bit() {
+        for adapting in [true, false] {
+            let mut a = Ds::new(3, &small(adapting)).unwrap();
+            for _ in 0..3 {
+                a.add_class().unwrap();
+            }
+            let s1 = grasps(1, 30, 3, 3);
+            for (c, g) in &s1 {
+                a.train_sequence(g.view(), *c);
+            }
+            let streamed = &s1[0].1;
+            let mut dist = [0.0; 3];
+            a.start_sequence();
+            for o in streamed.rows().into_iter().take(4) {
+                a.predict_step(o.as_slice().unwrap(), &mut dist);
+            }
+            assert!(a.models().iter().all(|m| m.n_basis() == 10));
+            if adapting {
+                assert!(a.models().iter().all(|m| m.hyper_updates() >= 5));
+            }
+            let mut b = round_trip(&a);
+            let (mut da, mut db) = ([0.0; 3], [0.0; 3]);
+            for o in streamed.rows().into_iter().skip(4) {
+                let o = o.as_slice().unwrap();
+                a.predict_step(o, &mut da);
+                b.predict_step(o, &mut db);
+                assert_eq!(bits(&da), bits(&db));
+                assert_eq!(bits(a.q()), bits(b.q()));
+            }
+            assert_eq!((a.add_class().unwrap(), b.add_class().unwrap()), (3, 3));
+            for (i, (c, g)) in grasps(2, 24, 4, 3).iter().enumerate() {
+                let (qa, pa) = a.predict_q_and_p(g.view());
+                let (qb, pb) = b.predict_q_and_p(g.view());
+                assert_eq!(bits(&qa), bits(&qb), "grasp {i}");
+                assert_eq!(bits(&pa), bits(&pb), "grasp {i}");
+                match i % 3 {
+                    0 => {
+                        a.train_sequence(g.view(), *c);
+                        b.train_sequence(g.view(), *c);
+                    }
+                    1 => {
+                        a.train_sequence_predicted(g.view(), *c, qa.view());
+                        b.train_sequence_predicted(g.view(), *c, qb.view());
+                    }
+                    _ => {
+                        a.start_sequence();
+                        b.start_sequence();
+                        for o in g.rows() {
+                            a.train_step(o.as_slice().unwrap(), *c);
+                            b.train_step(o.as_slice().unwrap(), *c);
+                            assert_eq!(bits(a.q()), bits(b.q()), "grasp {i}");
+                        }
+                    }
+                }
+            }
+            let (ja, jb) = (serde_json::to_string(&a), serde_json::to_string(&b));
+            assert_eq!(ja.unwrap(), jb.unwrap());
+        }
+    }
+
+    /// A damaged state is an error naming what is wrong, and nothing panics.
+    #[test]
+    fn a_damaged_ds_state_is_an_error_naming_the_field() {
+        let trained = |dim: usize| {
+            let mut ds = Ds::new(dim, &small(true)).unwrap();
+            for _ in 0..2 {
+                ds.add_class().unwrap();
+            }
+            for (c, g) in &grasps(3, 12, 2, dim) {
+                ds.train_sequence(g.view(), *c);
+            }
+            ds
+        };
+        let ds = trained(3);
+        let e = load_error(&ds, "alpha", |v| {
+            v["models"][1]["alpha"].as_array_mut().unwrap().pop();
+        });
+        assert!(e.contains("models[1]"), "{e}");
+        load_error(&ds, "n_basis", |v| v["models"][0]["n_basis"] = 11.into());
+        load_error(&ds, "c[0]", |v| v["models"][0]["c"][0] = "NaN".into());
+        load_error(&ds, "basis_targets[2]", |v| {
+            v["models"][0]["basis_targets"][2] = 0.5.into()
+        });
+        load_error(&ds, "seen", |v| v["models"][0]["seen"] = 3.into());
+        // An expert of two inputs among experts of three.
+        let other = serde_json::to_value(trained(2)).unwrap();
+        load_error(&ds, "models[0].dim", |v| {
+            v["models"][0] = other["models"][0].clone()
+        });
+        load_error(&ds, "window", |v| {
+            v["window"]["inputs"].as_array_mut().unwrap().truncate(9)
+        });
+        load_error(&ds, "q", |v| {
+            v["q"].as_array_mut().unwrap().push(0.5.into())
+        });
+        load_error(&ds, "q[1]", |v| v["q"][1] = 1.5.into());
+        load_error(&ds, "models[0].capacity", |v| {
+            v["params"]["gp"]["capacity"] = 12.into()
+        });
+        // Budgets no model has: refused before anything is allocated for them.
+        load_error(&ds, "params.gp.capacity", |v| {
+            v["params"]["gp"]["capacity"] = (1u64 << 40).into()
+        });
+        load_error(&ds, "capacity", |v| {
+            v["models"][0]["capacity"] = (1u64 << 40).into()
+        });
+        load_error(&ds, "dim", |v| v["dim"] = (1u64 << 40).into());
+        load_error(&ds, "sngd", |v| {
+            v["models"][0]["sngd"] = serde_json::Value::Null
+        });
+        load_error(&ds, "inverse_fisher", |v| {
+            v["models"][0]["sngd"]["inverse_fisher"]
+                .as_array_mut()
+                .unwrap()
+                .pop();
+        });
+    }
 
     /// Eq. 26 is 0/0 at a step where every expert's q is 0: p is then uniform. DS's own
     /// training does not get there (a probit expert's μ/σ grows only slowly with targets of

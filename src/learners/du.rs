@@ -58,13 +58,51 @@ pub struct Assignment {
     pub created: bool,
 }
 
-#[derive(Clone, Debug)]
+/// Saved with serde as its DS learner, its own parameters and the grasps of each cluster;
+/// loading (deserialising) checks them against each other (see [`super`]). A loaded DU
+/// goes on learning: a novel grasp opens a new cluster.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(try_from = "DuState")]
 pub struct Du {
     ds: Ds,
     threshold: f64,
     min_grasps: usize,
     /// Grasps trained into each cluster.
+    #[serde(rename = "grasps_per_cluster")]
     grasps: Vec<usize>,
+}
+
+/// A [`Du`] as it is saved: the fields of [`Du`].
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DuState {
+    ds: Ds,
+    threshold: f64,
+    min_grasps: usize,
+    grasps_per_cluster: Vec<usize>,
+}
+
+impl TryFrom<DuState> for Du {
+    type Error = LearnerError;
+
+    fn try_from(s: DuState) -> Result<Du, LearnerError> {
+        let du = Du {
+            ds: s.ds,
+            threshold: s.threshold,
+            min_grasps: s.min_grasps,
+            grasps: s.grasps_per_cluster,
+        };
+        du.params().validate()?;
+        super::check_per_class("grasps_per_cluster", du.grasps.len(), du.n_clusters())?;
+        // Every cluster was opened by a grasp trained into it.
+        if let Some(c) = du.grasps.iter().position(|g| *g == 0) {
+            return Err(LearnerError::state(
+                format!("grasps_per_cluster[{c}]"),
+                "a cluster without grasps",
+            ));
+        }
+        Ok(du)
+    }
 }
 
 /// nu_D of eq. 28 from the q of cluster s at every step.
@@ -93,6 +131,20 @@ impl Du {
 
     pub fn learner(&self) -> &Ds {
         &self.ds
+    }
+
+    /// The parameters the learner was built with.
+    pub fn params(&self) -> DuParams {
+        DuParams {
+            ds: self.ds.params().clone(),
+            threshold: self.threshold,
+            min_grasps: self.min_grasps,
+        }
+    }
+
+    /// The grasps trained into each cluster.
+    pub fn grasps_per_cluster(&self) -> &[usize] {
+        &self.grasps
     }
 
     /// Assign one grasp (opening a cluster if it is novel) and train on it.
@@ -161,7 +213,95 @@ fn confirmed_decision(q: ArrayView2<f64>, confirmed: &[usize]) -> usize {
 mod tests {
     use ndarray::array;
 
+    use super::super::testing::{grasps, load_error, quick_adaptation, round_trip};
     use super::*;
+    use crate::gp::SogpParams;
+
+    fn small(adapting: bool) -> DuParams {
+        DuParams {
+            ds: DsParams {
+                gp: SogpParams {
+                    capacity: 10,
+                    tau: 4,
+                    adaptation: adapting.then(quick_adaptation),
+                    ..DsParams::default().gp
+                },
+            },
+            threshold: 0.3,
+            min_grasps: 2,
+        }
+    }
+
+    /// DU that clustered grasps of three objects, saved and loaded, goes on learning as
+    /// the saved one: grasps of two more objects open new clusters in both, every
+    /// assignment (cluster, novelty, creation) and re-assignment is the same, bit for bit,
+    /// and both end in the same state.
+    #[test]
+    fn a_loaded_du_goes_on_as_the_saved_one_bit_for_bit() {
+        for adapting in [true, false] {
+            let mut a = Du::new(3, &small(adapting)).unwrap();
+            for (_, g) in &grasps(1, 30, 3, 3) {
+                a.learn(g.view()).unwrap();
+            }
+            let before = a.n_clusters();
+            if adapting {
+                let m = a.learner().models();
+                assert!(m.iter().any(|m| m.hyper_updates() >= 5));
+            }
+            let mut b = round_trip(&a);
+            assert_eq!(
+                (b.params(), b.grasps_per_cluster()),
+                (a.params(), a.grasps_per_cluster())
+            );
+            let s2 = grasps(2, 30, 5, 3);
+            for (i, (_, g)) in s2.iter().enumerate() {
+                let (la, lb) = (a.learn(g.view()).unwrap(), b.learn(g.view()).unwrap());
+                assert_eq!(
+                    (la.cluster, la.created),
+                    (lb.cluster, lb.created),
+                    "grasp {i}"
+                );
+                assert_eq!(la.novelty.to_bits(), lb.novelty.to_bits(), "grasp {i}");
+            }
+            assert!(
+                a.n_clusters() > before,
+                "{before} clusters before, {} after",
+                a.n_clusters()
+            );
+            for (i, (_, g)) in s2.iter().enumerate() {
+                assert_eq!(a.assign(g.view()), b.assign(g.view()), "grasp {i}");
+            }
+            let (ja, jb) = (serde_json::to_string(&a), serde_json::to_string(&b));
+            assert_eq!(ja.unwrap(), jb.unwrap());
+        }
+    }
+
+    /// A damaged state is an error naming what is wrong, and nothing panics (learning into
+    /// a cluster without its count would index past the counts).
+    #[test]
+    fn a_damaged_du_state_is_an_error_naming_the_field() {
+        let mut du = Du::new(3, &small(false)).unwrap();
+        for (_, g) in &grasps(2, 30, 5, 3) {
+            du.learn(g.view()).unwrap();
+        }
+        assert!(du.n_clusters() >= 2);
+        load_error(&du, "grasps_per_cluster", |v| {
+            v["grasps_per_cluster"].as_array_mut().unwrap().pop();
+        });
+        load_error(&du, "grasps_per_cluster[0]", |v| {
+            v["grasps_per_cluster"][0] = 0.into()
+        });
+        load_error(&du, "threshold", |v| v["threshold"] = 1.5.into());
+        load_error(&du, "min_grasps", |v| v["min_grasps"] = 0.into());
+        load_error(&du, "models[1]: invalid state `q`", |v| {
+            v["ds"]["models"][1]["q"] = serde_json::json!([0.5, 0.5])
+        });
+        // A negative count is not a count (serde says where).
+        let mut v = serde_json::to_value(&du).unwrap();
+        v["grasps_per_cluster"][1] = (-1).into();
+        let e = serde_json::from_value::<Du>(v).unwrap_err().to_string();
+        assert!(e.contains("-1"), "{e}");
+    }
 
     /// Worked by hand: clusters 0 and 1 are confirmed, 2 is not. Renormalised over 0 and 1
     /// the steps' q are (0.1, 0.9), (0.6, 0.4) and, where both are 0, (0.5, 0.5): means

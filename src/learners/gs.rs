@@ -47,13 +47,51 @@ impl GsParams {
     }
 }
 
-#[derive(Clone, Debug)]
+/// Saved with serde as its parameters, experts, window and the filter's log posterior;
+/// loading (deserialising) checks them against each other (see [`super`]).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(try_from = "GsState")]
 pub struct Gs {
     params: GsParams,
     dim: usize,
     models: Vec<Sogp>,
     window: Window,
+    #[serde(rename = "log_posterior")]
+    #[serde(serialize_with = "crate::gp::floats::serialize")]
     log_post: Vec<f64>,
+}
+
+/// A [`Gs`] as it is saved: the fields of [`Gs`].
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GsState {
+    params: GsParams,
+    dim: usize,
+    #[serde(deserialize_with = "super::deserialize_models")]
+    models: Vec<Sogp>,
+    #[serde(deserialize_with = "super::deserialize_window")]
+    window: Window,
+    /// The filter's state within a sequence (−∞ for a class ruled out, NaN after a step
+    /// of NaN inputs): any value.
+    #[serde(with = "crate::gp::floats")]
+    log_posterior: Vec<f64>,
+}
+
+impl TryFrom<GsState> for Gs {
+    type Error = LearnerError;
+
+    fn try_from(s: GsState) -> Result<Gs, LearnerError> {
+        s.params.validate().map_err(|e| e.within("params"))?;
+        super::check_loadable_size(s.dim, s.dim, &s.params.gp)?;
+        let mut gs = Gs::new(s.dim, &s.params)?;
+        super::check_experts(&s.models, s.dim, s.dim, &s.params.gp)?;
+        super::check_window(&s.window, s.dim, s.params.gp.tau)?;
+        super::check_per_class("log_posterior", s.log_posterior.len(), s.models.len())?;
+        gs.models = s.models;
+        gs.window = s.window;
+        gs.log_post = s.log_posterior;
+        Ok(gs)
+    }
 }
 
 /// ln N(o | μ, S·I) summed over the dimensions.
@@ -73,6 +111,11 @@ impl Gs {
             window: Window::new(dim, params.gp.tau),
             log_post: Vec::new(),
         })
+    }
+
+    /// The parameters the learner was built with.
+    pub fn params(&self) -> &GsParams {
+        &self.params
     }
 
     /// The windows each step of `seq` is predicted from: the window of the inputs before it.
@@ -251,5 +294,120 @@ impl SequenceClassifier for Gs {
 
     fn decide(&self, dist: ArrayView2<f64>) -> usize {
         super::argmax_of_last(dist)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::testing::{bits, grasps, load_error, quick_adaptation, round_trip};
+    use super::*;
+
+    fn small(adapting: bool) -> GsParams {
+        GsParams {
+            gp: SogpParams {
+                capacity: 10,
+                tau: 4,
+                adaptation: adapting.then(quick_adaptation),
+                ..GsParams::default().gp
+            },
+        }
+    }
+
+    /// GS trained on three objects until its experts are at their budget (and, adapting,
+    /// have stepped their hyperparameters many times), saved halfway through a grasp
+    /// filtered step by step, and loaded: the filter goes on, a fourth object gets an
+    /// expert, and predicting, the experts' predictions and training give the saved
+    /// learner's values bit for bit, ending in the same state.
+    #[test]
+    fn a_loaded_gs_goes_on_as_the_saved_one_bit_for_bit() {
+        for adapting in [true, false] {
+            let mut a = Gs::new(3, &small(adapting)).unwrap();
+            for _ in 0..3 {
+                a.add_class().unwrap();
+            }
+            // Longer: each step trains one expert only.
+            let s1 = grasps(1, 60, 3, 3);
+            for (c, g) in &s1 {
+                a.train_sequence(g.view(), *c);
+            }
+            let streamed = &s1[1].1;
+            let mut dist = [0.0; 3];
+            a.start_sequence();
+            for o in streamed.rows().into_iter().take(4) {
+                a.predict_step(o.as_slice().unwrap(), &mut dist);
+            }
+            assert!(a.models().iter().all(|m| m.n_basis() == 10));
+            if adapting {
+                assert!(a.models().iter().all(|m| m.hyper_updates() >= 5));
+            }
+            let mut b = round_trip(&a);
+            let (mut da, mut db) = ([0.0; 3], [0.0; 3]);
+            for o in streamed.rows().into_iter().skip(4) {
+                let o = o.as_slice().unwrap();
+                a.predict_step(o, &mut da);
+                b.predict_step(o, &mut db);
+                assert_eq!(bits(&da), bits(&db));
+            }
+            assert_eq!((a.add_class().unwrap(), b.add_class().unwrap()), (3, 3));
+            for (i, (c, g)) in grasps(2, 40, 4, 3).iter().enumerate() {
+                let (pa, pb) = (a.predict_sequence(g.view()), b.predict_sequence(g.view()));
+                assert_eq!(bits(&pa), bits(&pb), "grasp {i}");
+                let (ma, va) = a.expert_predictions(*c, g.view());
+                let (mb, vb) = b.expert_predictions(*c, g.view());
+                assert_eq!((bits(&ma), bits(&va)), (bits(&mb), bits(&vb)), "grasp {i}");
+                if i % 2 == 0 {
+                    a.train_sequence(g.view(), *c);
+                    b.train_sequence(g.view(), *c);
+                } else {
+                    a.start_sequence();
+                    b.start_sequence();
+                    for o in g.rows() {
+                        a.train_step(o.as_slice().unwrap(), *c);
+                        b.train_step(o.as_slice().unwrap(), *c);
+                    }
+                }
+            }
+            let (ja, jb) = (serde_json::to_string(&a), serde_json::to_string(&b));
+            assert_eq!(ja.unwrap(), jb.unwrap());
+        }
+    }
+
+    /// A damaged state is an error naming what is wrong, and nothing panics.
+    #[test]
+    fn a_damaged_gs_state_is_an_error_naming_the_field() {
+        let mut gs = Gs::new(3, &small(false)).unwrap();
+        for _ in 0..2 {
+            gs.add_class().unwrap();
+        }
+        for (c, g) in &grasps(3, 12, 2, 3) {
+            gs.train_sequence(g.view(), *c);
+        }
+        // α holds n_basis × 3 outputs.
+        load_error(&gs, "alpha", |v| {
+            v["models"][1]["alpha"].as_array_mut().unwrap().truncate(6)
+        });
+        load_error(&gs, "models[0].n_out", |v| {
+            let m = &mut v["models"][0];
+            let n = m["n_basis"].as_u64().unwrap() as usize;
+            m["n_out"] = 1.into();
+            m["alpha"] = serde_json::json!(vec![0.0; n]);
+            m["basis_targets"] = serde_json::json!(vec![0.0; n]);
+        });
+        // A probit model has one output.
+        load_error(&gs, "models[1]: invalid state `n_out`", |v| {
+            v["models"][1]["likelihood"] = "probit".into()
+        });
+        load_error(&gs, "log_posterior", |v| {
+            v["log_posterior"].as_array_mut().unwrap().pop();
+        });
+        load_error(&gs, "window: invalid state `inputs`", |v| {
+            v["window"]["inputs"].as_array_mut().unwrap().pop();
+        });
+        load_error(&gs, "kernel.sigma_n", |v| {
+            v["models"][0]["kernel"]["sigma_n"] = (-0.1).into()
+        });
+        load_error(&gs, "params.gp.likelihood", |v| {
+            v["params"]["gp"]["likelihood"] = "probit".into()
+        });
     }
 }

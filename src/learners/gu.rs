@@ -143,7 +143,11 @@ fn log_likelihood_diag(o: &[f64], mean: &[f64], variance: &[f64]) -> f64 {
         .sum()
 }
 
-#[derive(Clone, Debug)]
+/// Saved with serde as its GS learner, its own parameters, the grasps of each cluster and
+/// the per-dimension noise estimates; loading (deserialising) checks them against each
+/// other (see [`super`]). A loaded GU goes on learning: a novel grasp opens a new cluster.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(try_from = "GuState")]
 pub struct Gu {
     gs: Gs,
     threshold: f64,
@@ -152,13 +156,98 @@ pub struct Gu {
     noise: GuNoise,
     noise_floor: f64,
     min_grasps: usize,
+    /// Scratch of the novelty, written before it is read.
+    #[serde(skip)]
     residual: Vec<f64>,
+    #[serde(skip)]
     variance: Vec<f64>,
     /// Grasps trained into each expert.
+    #[serde(rename = "grasps_per_cluster")]
     grasps: Vec<usize>,
     /// Per expert under [`GuNoise::PerDimension`]: the sum of squared training residuals
     /// per output dimension, and the number of steps behind it.
-    squared_residuals: Vec<(Vec<f64>, usize)>,
+    squared_residuals: Vec<ResidualSums>,
+}
+
+/// The squared training residuals of one expert, per output dimension, summed over `steps`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ResidualSums {
+    /// Non-negative; +∞ where a residual overflowed.
+    #[serde(with = "crate::gp::floats")]
+    sums: Vec<f64>,
+    steps: usize,
+}
+
+/// A [`Gu`] as it is saved: the fields of [`Gu`] but its scratch.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GuState {
+    gs: Gs,
+    threshold: f64,
+    aggregate: GuAggregate,
+    draws: EvtDraws,
+    noise: GuNoise,
+    noise_floor: f64,
+    min_grasps: usize,
+    grasps_per_cluster: Vec<usize>,
+    squared_residuals: Vec<ResidualSums>,
+}
+
+impl TryFrom<GuState> for Gu {
+    type Error = LearnerError;
+
+    fn try_from(s: GuState) -> Result<Gu, LearnerError> {
+        let dim = s.gs.dim();
+        let gu = Gu {
+            gs: s.gs,
+            threshold: s.threshold,
+            aggregate: s.aggregate,
+            draws: s.draws,
+            noise: s.noise,
+            noise_floor: s.noise_floor,
+            min_grasps: s.min_grasps,
+            residual: vec![0.0; dim],
+            variance: vec![0.0; dim],
+            grasps: s.grasps_per_cluster,
+            squared_residuals: s.squared_residuals,
+        };
+        gu.params().validate()?;
+        let clusters = gu.n_clusters();
+        super::check_per_class("grasps_per_cluster", gu.grasps.len(), clusters)?;
+        // Every cluster was opened by a grasp trained into it.
+        if let Some(c) = gu.grasps.iter().position(|g| *g == 0) {
+            return Err(LearnerError::state(
+                format!("grasps_per_cluster[{c}]"),
+                "a cluster without grasps",
+            ));
+        }
+        // The estimates grow with the experts trained so far.
+        if gu.squared_residuals.len() > clusters {
+            return Err(LearnerError::state(
+                "squared_residuals",
+                format!(
+                    "{} experts' sums for {clusters} clusters",
+                    gu.squared_residuals.len()
+                ),
+            ));
+        }
+        for (c, r) in gu.squared_residuals.iter().enumerate() {
+            if r.sums.len() != dim {
+                return Err(LearnerError::state(
+                    format!("squared_residuals[{c}].sums"),
+                    format!("{} values for {dim} output dimensions", r.sums.len()),
+                ));
+            }
+            if let Some(d) = r.sums.iter().position(|v| v.is_nan() || *v < 0.0) {
+                return Err(LearnerError::state(
+                    format!("squared_residuals[{c}].sums[{d}]"),
+                    format!("{} is not a sum of squares", r.sums[d]),
+                ));
+            }
+        }
+        Ok(gu)
+    }
 }
 
 impl Gu {
@@ -187,6 +276,24 @@ impl Gu {
         &self.gs
     }
 
+    /// The parameters the learner was built with.
+    pub fn params(&self) -> GuParams {
+        GuParams {
+            gs: self.gs.params().clone(),
+            threshold: self.threshold,
+            aggregate: self.aggregate,
+            draws: self.draws,
+            noise: self.noise,
+            noise_floor: self.noise_floor,
+            min_grasps: self.min_grasps,
+        }
+    }
+
+    /// The grasps trained into each cluster.
+    pub fn grasps_per_cluster(&self) -> &[usize] {
+        &self.grasps
+    }
+
     /// nu_G of a grasp under expert `c`, combined over the steps.
     pub fn novelty(&mut self, c: usize, seq: ArrayView2<f64>) -> f64 {
         let (means, vars) = self.gs.expert_predictions(c, seq);
@@ -209,7 +316,7 @@ impl Gu {
         if self.noise == GuNoise::Shared {
             return None;
         }
-        let (sums, steps) = self.squared_residuals.get(c)?;
+        let ResidualSums { sums, steps } = self.squared_residuals.get(c)?;
         if *steps == 0 {
             return None;
         }
@@ -298,10 +405,15 @@ impl Gu {
         }
         let (means, _) = self.gs.expert_predictions(cluster, seq);
         if cluster >= self.squared_residuals.len() {
-            self.squared_residuals
-                .resize(cluster + 1, (vec![0.0; seq.ncols()], 0));
+            self.squared_residuals.resize(
+                cluster + 1,
+                ResidualSums {
+                    sums: vec![0.0; seq.ncols()],
+                    steps: 0,
+                },
+            );
         }
-        let (sums, steps) = &mut self.squared_residuals[cluster];
+        let ResidualSums { sums, steps } = &mut self.squared_residuals[cluster];
         for (o, mu) in seq.rows().into_iter().zip(means.rows()) {
             for ((s, x), y) in sums.iter_mut().zip(o).zip(mu) {
                 *s += (x - y) * (x - y);
@@ -395,8 +507,111 @@ impl Gu {
 mod tests {
     use ndarray::Array2;
 
+    use super::super::testing::{grasps, load_error, quick_adaptation, round_trip};
     use super::*;
+    use crate::gp::SogpParams;
     use crate::rng::Rng;
+
+    fn small(adapting: bool, noise: GuNoise) -> GuParams {
+        GuParams {
+            gs: GsParams {
+                gp: SogpParams {
+                    capacity: 10,
+                    tau: 4,
+                    adaptation: adapting.then(quick_adaptation),
+                    ..GsParams::default().gp
+                },
+            },
+            threshold: 0.5,
+            noise,
+            min_grasps: 2,
+            ..GuParams::default()
+        }
+    }
+
+    /// GU that clustered grasps of three objects, saved and loaded, goes on learning as
+    /// the saved one: grasps of two more objects open new clusters in both, every
+    /// assignment (cluster, novelty, creation) and re-assignment is the same, bit for bit,
+    /// and both end in the same state; with the shared noise, and with the per-dimension
+    /// noise estimates (which the file carries) in the novelty and the filter.
+    #[test]
+    fn a_loaded_gu_goes_on_as_the_saved_one_bit_for_bit() {
+        for (adapting, noise) in [
+            (true, GuNoise::PerDimensionFilter),
+            (false, GuNoise::Shared),
+        ] {
+            let mut a = Gu::new(3, &small(adapting, noise)).unwrap();
+            for (_, g) in &grasps(1, 40, 3, 3) {
+                a.learn(g.view()).unwrap();
+            }
+            let before = a.n_clusters();
+            if adapting {
+                let m = a.learner().models();
+                assert!(m.iter().any(|m| m.hyper_updates() >= 5));
+            }
+            let mut b = round_trip(&a);
+            assert_eq!(
+                (b.params(), b.grasps_per_cluster()),
+                (a.params(), a.grasps_per_cluster())
+            );
+            let s2 = grasps(2, 30, 5, 3);
+            for (i, (_, g)) in s2.iter().enumerate() {
+                let (la, lb) = (a.learn(g.view()).unwrap(), b.learn(g.view()).unwrap());
+                assert_eq!(
+                    (la.cluster, la.created),
+                    (lb.cluster, lb.created),
+                    "grasp {i}"
+                );
+                assert_eq!(la.novelty.to_bits(), lb.novelty.to_bits(), "grasp {i}");
+            }
+            assert!(
+                a.n_clusters() > before,
+                "{before} clusters before, {} after",
+                a.n_clusters()
+            );
+            for (i, (_, g)) in s2.iter().enumerate() {
+                assert_eq!(a.assign(g.view()), b.assign(g.view()), "grasp {i}");
+            }
+            let (ja, jb) = (serde_json::to_string(&a), serde_json::to_string(&b));
+            assert_eq!(ja.unwrap(), jb.unwrap());
+        }
+    }
+
+    /// A damaged state is an error naming what is wrong, and nothing panics.
+    #[test]
+    fn a_damaged_gu_state_is_an_error_naming_the_field() {
+        let mut gu = Gu::new(3, &small(false, GuNoise::PerDimension)).unwrap();
+        for (_, g) in &grasps(2, 30, 5, 3) {
+            gu.learn(g.view()).unwrap();
+        }
+        assert!(gu.n_clusters() >= 2);
+        load_error(&gu, "grasps_per_cluster", |v| {
+            v["grasps_per_cluster"]
+                .as_array_mut()
+                .unwrap()
+                .push(1.into());
+        });
+        load_error(&gu, "squared_residuals[1].sums", |v| {
+            v["squared_residuals"][1]["sums"]
+                .as_array_mut()
+                .unwrap()
+                .pop();
+        });
+        load_error(&gu, "squared_residuals[0].sums[2]", |v| {
+            v["squared_residuals"][0]["sums"][2] = (-1.0).into()
+        });
+        load_error(&gu, "squared_residuals", |v| {
+            let r = v["squared_residuals"].as_array_mut().unwrap();
+            r.push(r[0].clone());
+        });
+        load_error(&gu, "noise_floor", |v| v["noise_floor"] = 0.0.into());
+        load_error(&gu, "models[0]: invalid state `basis_windows`", |v| {
+            v["gs"]["models"][0]["basis_windows"]
+                .as_array_mut()
+                .unwrap()
+                .pop();
+        });
+    }
 
     /// ln N(o | μ, diag(v)) against the density written out, a product of 1-D normals
     /// (1/√(2π v_k)) exp(−(o_k − μ_k)²/(2 v_k)), at values worked by hand: with o = μ in

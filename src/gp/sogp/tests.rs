@@ -276,3 +276,208 @@ fn a_drifted_inverse_is_detected_and_rebuilt() {
         assert!((v - want).abs() < 1e-6, "QK[{i},{j}] = {v}");
     }
 }
+
+/// A model's input at step `t` (`dim` values) and its target (`n_out` values: ±1 for
+/// probit), with sequences restarting every 9 steps.
+fn stream(t: usize, dim: usize, n_out: usize, probit: bool) -> (Vec<f64>, Vec<f64>) {
+    let f = t as f64;
+    let x: Vec<f64> = (0..dim)
+        .map(|k| (0.37 * f + 1.3 * k as f64).sin() + 0.1 * (0.05 * f).cos())
+        .collect();
+    let y = (0..n_out)
+        .map(|d| {
+            let v = (0.23 * f + d as f64).cos();
+            if probit { v.signum() } else { v }
+        })
+        .collect();
+    (x, y)
+}
+
+fn bits(v: &[f64]) -> Vec<u64> {
+    v.iter().map(|x| x.to_bits()).collect()
+}
+
+/// A model saved and loaded goes on as the one saved, bit for bit: saved after an update
+/// (its evaluation left over from before it) and after an observation (an update may
+/// follow without observing again), before adaptation starts, while adapting and after
+/// adaptation has stopped, at the budget. Every prediction, the posterior and the caches
+/// the next update reads are compared at every step, and both end in the same state.
+#[test]
+fn a_loaded_model_goes_on_as_the_saved_one_bit_for_bit() {
+    let (dim, tau) = (2, 3);
+    for (likelihood, n_out) in [(Likelihood::Probit, 1), (Likelihood::Regression, 2)] {
+        for (stop_threshold, trained) in [(1e-4, 10), (1e-4, 160), (1e3, 160)] {
+            let p = SogpParams {
+                capacity: 7,
+                tau,
+                likelihood,
+                adaptation: Some(SngdParams {
+                    window: 4,
+                    start_after: 30,
+                    stop_threshold,
+                    stop_count: 3,
+                    ..SngdParams::default()
+                }),
+                ..SogpParams::default()
+            };
+            let probit = likelihood == Likelihood::Probit;
+            let mut a = Sogp::new(dim, n_out, &p).unwrap();
+            let mut window = Window::new(dim, tau);
+            for t in 0..trained {
+                if t % 9 == 0 {
+                    window.reset();
+                }
+                let (x, y) = stream(t, dim, n_out, probit);
+                window.push(&x);
+                a.observe_window(&window);
+                a.update(&y);
+            }
+            match (trained, stop_threshold) {
+                (10, _) => assert!(!a.adapting() && !a.adaptation_finished()),
+                (_, 1e3) => assert!(a.adaptation_finished()),
+                _ => assert!(a.adapting() && a.hyper_updates() >= 10),
+            }
+            if trained > 10 {
+                assert_eq!(a.n_basis(), p.capacity);
+            }
+            for observed_last in [false, true] {
+                let mut a = a.clone();
+                let (x, y) = stream(trained, dim, n_out, probit);
+                if observed_last {
+                    window.push(&x);
+                    a.observe_window(&window);
+                }
+                let json = serde_json::to_string(&a).unwrap();
+                let mut b: Sogp = serde_json::from_str(&json).unwrap();
+                assert_eq!(serde_json::to_string(&b).unwrap(), json);
+                if observed_last {
+                    assert_eq!(bits(a.mean()), bits(b.mean()));
+                    let (va, vb) = (a.predictive_variance(), b.predictive_variance());
+                    assert_eq!(va.to_bits(), vb.to_bits());
+                    a.update(&y);
+                    b.update(&y);
+                }
+                let mut wb = window.clone();
+                for t in trained + 1..trained + 200 {
+                    if t % 9 == 0 {
+                        window.reset();
+                        wb.reset();
+                    }
+                    let (x, y) = stream(t, dim, n_out, probit);
+                    window.push(&x);
+                    wb.push(&x);
+                    a.observe_window(&window);
+                    // Now and then by the slice, as a caller without a window does.
+                    if t % 5 == 0 {
+                        b.observe(wb.as_slice());
+                    } else {
+                        b.observe_window(&wb);
+                    }
+                    let n = a.n;
+                    assert_eq!(bits(a.mean()), bits(b.mean()), "step {t}");
+                    let (va, vb) = (a.predictive_variance(), b.predictive_variance());
+                    assert_eq!(va.to_bits(), vb.to_bits(), "step {t}");
+                    assert_eq!(bits(&a.k[..n]), bits(&b.k[..n]), "step {t}");
+                    for lag in 0..tau {
+                        let row = lag * a.basis.stride();
+                        assert_eq!(bits(&a.lag_k[row..row + n]), bits(&b.lag_k[row..row + n]));
+                    }
+                    a.update(&y);
+                    b.update(&y);
+                    assert_eq!(bits(&a.alpha), bits(&b.alpha), "step {t}");
+                }
+                assert_eq!(
+                    serde_json::to_string(&a).unwrap(),
+                    serde_json::to_string(&b).unwrap()
+                );
+            }
+        }
+    }
+}
+
+/// A damaged model state is an error naming what is wrong, and nothing panics.
+#[test]
+fn a_damaged_model_state_is_an_error_naming_the_field() {
+    let p = SogpParams {
+        capacity: 5,
+        tau: 2,
+        adaptation: Some(SngdParams {
+            window: 4,
+            start_after: 10,
+            stop_count: 1000,
+            ..SngdParams::default()
+        }),
+        ..SogpParams::default()
+    };
+    let mut m = Sogp::new(2, 1, &p).unwrap();
+    for t in 0..40 {
+        let (x, y) = stream(t, 4, 1, true);
+        m.observe(&x);
+        m.update(&y);
+    }
+    assert!(m.adapting());
+    let saved = serde_json::to_value(&m).unwrap();
+    let error = |field: &str, edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut v = saved.clone();
+        edit(&mut v);
+        let e = serde_json::from_value::<Sogp>(v).unwrap_err().to_string();
+        assert!(e.contains(field), "`{field}` not named in: {e}");
+    };
+    error("n_basis", &|v| v["n_basis"] = 6.into());
+    error("c", &|v| v["c"].as_array_mut().unwrap().truncate(3));
+    error("last_window", &|v| {
+        v["last_window"].as_array_mut().unwrap().pop();
+    });
+    // Lengthscales for three inputs in a model of two.
+    error("kernel.lengthscales", &|v| v["dim"] = 3.into());
+    error("q[4]", &|v| v["q"][4] = "inf".into());
+    error("tau", &|v| v["tau"] = 100_000.into());
+    // Each within its limit, together far beyond any model.
+    error("would take", &|v| {
+        v["kernel"]["lengthscales"] = serde_json::json!(vec![1.0; 1000]);
+        v["dim"] = 1000.into();
+        v["tau"] = 1000.into();
+        v["capacity"] = 4096.into();
+    });
+    error("sngd", &|v| v["adaptation"] = serde_json::Value::Null);
+    error("sngd", &|v| v["adaptation_finished"] = true.into());
+    error("sngd: invalid state `samples`", &|v| {
+        v["sngd"]["samples"] = 4.into()
+    });
+    error("sngd.theta[4]", &|v| v["sngd"]["theta"][4] = 0.0.into());
+    error("sngd: invalid state `lower[0]`", &|v| {
+        v["sngd"]["lower"][0] = 1e3.into()
+    });
+    error("sngd: invalid state `calm`", &|v| {
+        v["sngd"]["calm"] = 1000.into()
+    });
+    error("sngd.params", &|v| {
+        v["sngd"]["params"]["lambda0"] = 2.0.into()
+    });
+    error("novelty_eps", &|v| v["novelty_eps"] = (-1.0).into());
+    error("n_out", &|v| v["n_out"] = 0.into());
+    error("unknown field `extra`", &|v| v["extra"] = 1.into());
+    error("missing field `alpha`", &|v| {
+        v.as_object_mut().unwrap().remove("alpha");
+    });
+}
+
+/// A window saves its inputs; a damaged one is an error, never a window that panics on
+/// its next input.
+#[test]
+fn a_window_saves_its_inputs_and_a_damaged_one_is_an_error() {
+    let mut w = Window::new(2, 3);
+    w.push(&[1.0, -0.0]);
+    w.push(&[f64::NAN, 2.5]);
+    let back: Window = serde_json::from_str(&serde_json::to_string(&w).unwrap()).unwrap();
+    assert_eq!(bits(back.as_slice()), bits(w.as_slice()));
+    assert_ne!(back.stamp(), w.stamp());
+    for (bad, field) in [
+        (r#"{"dim": 0, "inputs": []}"#, "dim"),
+        (r#"{"dim": 2, "inputs": [1.0, 2.0, 3.0]}"#, "inputs"),
+        (r#"{"dim": 2, "inputs": []}"#, "inputs"),
+    ] {
+        let e = serde_json::from_str::<Window>(bad).unwrap_err().to_string();
+        assert!(e.contains(field), "{e}");
+    }
+}
