@@ -110,6 +110,9 @@ pub enum Command {
     Predict(model::PredictArgs),
     /// A session of some grasps of another (objects, trials, labels).
     Subset(model::SubsetArgs),
+    /// Fit the grasp-stability methods on a training session and evaluate them on held-out
+    /// sessions under each calibration: scores and times (default: BTS3 v2 palm-45).
+    BenchHeldOut(model::BenchHeldOutArgs),
     /// Sharded sweeps for a cluster: plan the shards and a Slurm job array, run a shard,
     /// show their status, merge them into the single-machine result.
     Sweep(sweep::SweepArgs),
@@ -149,5 +152,6 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Evaluate(a) => model::evaluate(a),
         Command::Predict(a) => model::predict(a),
         Command::Subset(a) => model::subset(a),
+        Command::BenchHeldOut(a) => model::bench_held_out(a),
     }
 }
