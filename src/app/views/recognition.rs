@@ -36,7 +36,7 @@ impl Default for RecognitionForm {
     fn default() -> Self {
         RecognitionForm {
             learner: SupervisedLearner::Ds,
-            features: FeatureSet::All,
+            features: FeatureSet::ALL,
             reps: 3,
             noise_variance: 0.0,
             seed: 0,
@@ -170,16 +170,18 @@ impl Room for RecognitionRoom {
                 ui.selectable_value(&mut f.learner, SupervisedLearner::Ds, "DS (discriminative)");
                 ui.selectable_value(&mut f.learner, SupervisedLearner::Gs, "GS (generative)");
             });
+        // The paper's three sets and the per-taxel families; the count is on this session.
+        let session = cx.session().map(|s| &s.session);
         egui::ComboBox::from_label("Features")
             .selected_text(features_text(f.features))
             .show_ui(ui, |ui| {
-                ui.selectable_value(&mut f.features, FeatureSet::All, "all features (34)");
-                ui.selectable_value(
-                    &mut f.features,
-                    FeatureSet::Tactile,
-                    "tactile features (25)",
-                );
-                ui.selectable_value(&mut f.features, FeatureSet::Encoder, "encoder features (9)");
+                for set in FeatureSet::OFFERED {
+                    let dim = session
+                        .and_then(|s| set.dim(s))
+                        .map(|d| format!(" ({d})"))
+                        .unwrap_or_default();
+                    ui.selectable_value(&mut f.features, set, features_text(set) + &dim);
+                }
             });
         ui.add(
             egui::DragValue::new(&mut f.reps)
