@@ -445,3 +445,211 @@ pub fn feature_sequences(
         max,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::session::simulate;
+
+    /// A small recognition session: 3 objects × 20 grasps of 8–18 frames, 5 fingertips of
+    /// 12 taxels, 9 encoders.
+    fn session() -> Session {
+        let mut s = simulate::object_recognition(3);
+        s.grasps.truncate(60);
+        s
+    }
+
+    fn of(s: &Session, features: FeatureSet, noise: f64) -> FeatureSequences {
+        feature_sequences(
+            s,
+            &SequenceParams {
+                features,
+                taxel_noise_variance: noise,
+                seed: 5,
+            },
+        )
+        .unwrap()
+    }
+
+    /// Column `j` of every frame, back in the units before min-max.
+    fn unnormalised(f: &FeatureSequences, g: usize, t: usize, j: usize) -> f64 {
+        f.min[j] + f.sequences[g][[t, j]] * (f.max[j] - f.min[j])
+    }
+
+    fn pressures(s: &Session, g: usize, t: usize) -> Vec<Vec<f64>> {
+        (0..s.sensors.len())
+            .map(|k| s.frame_pressures(&s.grasps[g].frames[t], k))
+            .collect()
+    }
+
+    #[test]
+    fn names_parse_with_the_old_aliases_and_combine_with_plus() {
+        let p = |t: &str| t.parse::<FeatureSet>().unwrap();
+        assert_eq!(p("tactile"), FeatureSet::MOMENTS);
+        assert_eq!(p("encoder"), FeatureSet::ENCODERS);
+        assert_eq!(p("raw+encoders"), p("encoder + raw"));
+        assert_eq!(p("raw+encoders").name(), "raw+encoders");
+        assert_eq!(p("change+moments").name(), "moments+change");
+        assert_eq!(p("all"), FeatureSet::ALL);
+        for bad in ["", "all+raw", "pressure", "raw+"] {
+            let e = bad.parse::<FeatureSet>().unwrap_err().to_string();
+            assert!(
+                e.contains("features") && e.contains("raw+encoders"),
+                "{bad}: {e}"
+            );
+        }
+        // Saved results and projects hold the old names; they load and mean the same.
+        let old: Vec<FeatureSet> =
+            serde_json::from_str(r#"["all", "tactile", "encoder", "raw+encoders"]"#).unwrap();
+        assert_eq!(
+            old,
+            [
+                FeatureSet::ALL,
+                FeatureSet::MOMENTS,
+                FeatureSet::ENCODERS,
+                p("raw+encoders")
+            ]
+        );
+        assert_eq!(
+            serde_json::to_string(&p("encoders+change")).unwrap(),
+            r#""change+encoders""#
+        );
+        assert!(serde_json::from_str::<FeatureSet>(r#""touch""#).is_err());
+    }
+
+    #[test]
+    fn all_is_encoders_then_moments_and_moments_are_the_papers() {
+        let s = session();
+        let all = of(&s, FeatureSet::ALL, 0.0);
+        let enc = of(&s, FeatureSet::ENCODERS, 0.0);
+        let mom = of(&s, "tactile".parse().unwrap(), 0.0);
+        assert_eq!((all.dim(), enc.dim(), mom.dim()), (34, 9, 25));
+        assert_eq!(all.families.name(), "moments+encoders");
+        assert_eq!(&all.names[..9], &enc.names[..]);
+        assert_eq!(&all.names[9..], &mom.names[..]);
+        for g in 0..s.grasps.len() {
+            // Each column is normalised on its own: the split sets are the same numbers.
+            assert_eq!(
+                all.sequences[g].slice(ndarray::s![.., ..9]),
+                enc.sequences[g]
+            );
+            assert_eq!(
+                all.sequences[g].slice(ndarray::s![.., 9..]),
+                mom.sequences[g]
+            );
+            for (t, frame) in s.grasps[g].frames.iter().enumerate() {
+                assert!((unnormalised(&enc, g, t, 4) - frame.encoders[4]).abs() < 1e-9);
+                // Finger k's mean (column 5k) and max (5k + 3), from the pressures.
+                for (k, p) in pressures(&s, g, t).iter().enumerate() {
+                    let mean = p.iter().sum::<f64>() / p.len() as f64;
+                    let max = p.iter().cloned().fold(f64::MIN, f64::max);
+                    assert!((unnormalised(&mom, g, t, 5 * k) - mean).abs() < 1e-9);
+                    assert!((unnormalised(&mom, g, t, 5 * k + 3) - max).abs() < 1e-9);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn raw_is_every_taxel_and_its_z_score_normalises_alike() {
+        let s = session();
+        let raw = of(&s, FeatureSet::RAW, 0.0);
+        assert_eq!(raw.dim(), 5 * 12);
+        assert_eq!(raw.names[13], format!("{}/raw/1", s.sensors[1].name));
+        // Each taxel z-scored over every frame of the session, then min-max as every
+        // column: the same numbers (min-max forgets a per-column affine change).
+        let frames: Vec<(usize, usize)> = (0..s.grasps.len())
+            .flat_map(|g| (0..s.grasps[g].frames.len()).map(move |t| (g, t)))
+            .collect();
+        for j in [0, 13, 59] {
+            let (k, i) = (j / 12, j % 12);
+            let p: Vec<f64> = frames
+                .iter()
+                .map(|&(g, t)| pressures(&s, g, t)[k][i])
+                .collect();
+            let n = p.len() as f64;
+            let mean = p.iter().sum::<f64>() / n;
+            let sd = (p.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt();
+            let z: Vec<f64> = p.iter().map(|v| (v - mean) / sd).collect();
+            assert!(z.iter().sum::<f64>().abs() < 1e-9 * n);
+            let (lo, hi) = z
+                .iter()
+                .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+            for (&(g, t), zv) in frames.iter().zip(&z) {
+                let want = (zv - lo) / (hi - lo);
+                assert!((raw.sequences[g][[t, j]] - want).abs() < 1e-12, "taxel {j}");
+                assert!((unnormalised(&raw, g, t, j) - pressures(&s, g, t)[k][i]).abs() < 1e-9);
+            }
+        }
+    }
+
+    #[test]
+    fn change_is_zero_at_every_grasps_first_frame() {
+        let s = session();
+        for noise in [0.0, 100.0] {
+            let ch = of(&s, FeatureSet::CHANGE, noise);
+            assert_eq!(ch.dim(), 60);
+            for (g, grasp) in s.grasps.iter().enumerate() {
+                for j in 0..60 {
+                    assert!(
+                        unnormalised(&ch, g, 0, j).abs() < 1e-9,
+                        "grasp {g} taxel {j}"
+                    );
+                }
+                if noise == 0.0 {
+                    let (t, (k, i)) = (grasp.frames.len() - 1, (2, 7));
+                    let want = pressures(&s, g, t)[k][i] - pressures(&s, g, 0)[k][i];
+                    assert!((unnormalised(&ch, g, t, 12 * k + i) - want).abs() < 1e-9);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn combinations_join_the_families_columns_and_noise_reaches_taxels_only() {
+        let s = session();
+        let both = of(&s, "raw+encoders".parse().unwrap(), 0.0);
+        let raw = of(&s, FeatureSet::RAW, 0.0);
+        let enc = of(&s, FeatureSet::ENCODERS, 0.0);
+        assert_eq!(both.dim(), 69);
+        assert_eq!(both.names[..9], enc.names[..]);
+        assert_eq!(
+            both.sequences[7].slice(ndarray::s![.., 9..]),
+            raw.sequences[7]
+        );
+        let noisy = of(&s, "raw+encoders".parse().unwrap(), 100.0);
+        assert_eq!(
+            noisy.sequences[7].slice(ndarray::s![.., ..9]),
+            enc.sequences[7]
+        );
+        assert!((noisy.sequences[7][[3, 20]] - both.sequences[7][[3, 20]]).abs() > 1e-6);
+    }
+
+    #[test]
+    fn all_without_encoders_uses_the_moments_and_an_explicit_family_must_exist() {
+        let mut s = session();
+        s.encoders.clear();
+        s.grasps
+            .iter_mut()
+            .flat_map(|g| &mut g.frames)
+            .for_each(|f| f.encoders.clear());
+        let all = of(&s, FeatureSet::ALL, 0.0);
+        assert_eq!(all.families, FeatureSet::MOMENTS);
+        assert_eq!(all.dim(), 25);
+        assert_eq!(FeatureSet::ALL.dim(&s), Some(25));
+        assert_eq!(FeatureSet::ENCODERS.dim(&s), None);
+        let e = feature_sequences(
+            &s,
+            &SequenceParams {
+                features: "raw+encoders".parse().unwrap(),
+                ..SequenceParams::default()
+            },
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("raw+encoders") && e.contains("no joint encoders"),
+            "{e}"
+        );
+    }
+}
