@@ -155,18 +155,21 @@ fn recommended_size(
     }
 }
 
-/// The families `all` stood for, as the result records them.
-fn used_text(used: Option<FeatureSet>) -> String {
-    used.map_or("families not recorded".into(), |f| f.name())
+/// "all features (moments+encoders)": the set asked for and, for `all`, the families it
+/// stood for on the session.
+fn features_used_text(asked: FeatureSet, used: Option<FeatureSet>) -> String {
+    match used {
+        Some(used) if asked.is_all() => format!("all features ({used})"),
+        _ => format!("{asked} features"),
+    }
 }
 
 pub fn print_recognition(r: &RecognitionResult) {
     let s = &r.summary;
     println!(
-        "{:?} / {} features ({}), target {}, {} repetitions, {:.1} s wall, {} s CPU",
+        "{:?} / {}, target {}, {} repetitions, {:.1} s wall, {} s CPU",
         r.params.learner,
-        r.params.features,
-        used_text(r.features_used),
+        features_used_text(r.params.features, r.features_used),
         r.params.label_set,
         r.repetitions.len(),
         r.wall_seconds,
@@ -418,10 +421,9 @@ pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
     let session = open_session(&args.session)?;
     let r = with_progress(args.quiet, |p| run_clustering(&session, &params, p))?;
     println!(
-        "{:?} / {} features ({}), target {}, {} orders per threshold, {:.1} s",
+        "{:?} / {}, target {}, {} orders per threshold, {:.1} s",
         params.learner,
-        params.features,
-        used_text(r.features_used),
+        features_used_text(params.features, r.features_used),
         params.label_set,
         params.reps,
         r.wall_seconds

@@ -315,6 +315,12 @@ pub fn feature_sequences(
             reason: "it has no tactile sensors".into(),
         });
     }
+    if has(Family::Change) && session.grasps.iter().all(|g| g.frames.len() <= 1) {
+        return Err(SequenceError::Session {
+            set,
+            reason: "every grasp has one frame, so every change since the first is 0".into(),
+        });
+    }
     let taxel_counts: Vec<usize> = session
         .sensors
         .iter()
