@@ -7,7 +7,7 @@ use super::{Cx, Room, duration_text, run_button};
 use crate::app::View;
 use crate::app::figure_view::{self, Selection as FigureSelection};
 use crate::app::loader::LoadedSession;
-use crate::app::results::{Analyses, JobOutput, experiment_error, recognition_ready};
+use crate::app::results::{Analyses, JobOutput, experiment_error, sequences_ready};
 use crate::catalogue::MethodId;
 use crate::experiments::recognition::report::{accuracy_comparison, recognition_report};
 use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
@@ -139,7 +139,7 @@ impl Room for RecognitionRoom {
     }
 
     fn run_text(&self, s: &LoadedSession, analyses: &Analyses) -> Option<String> {
-        if !recognition_ready(s) {
+        if !sequences_ready(s) {
             return None;
         }
         let f = &self.form;
@@ -231,8 +231,8 @@ impl Room for RecognitionRoom {
             ui,
             cx,
             AnalysisKind::Recognition,
-            recognition_ready,
-            "(needs an object-recognition session: encoders and `object` labels)",
+            sequences_ready,
+            "(needs an object-recognition session: `object` labels and tactile sensors)",
         ) {
             self.start(cx);
         }
@@ -240,12 +240,12 @@ impl Room for RecognitionRoom {
 
     fn sweep(&self, cx: &Cx) -> Option<Result<Experiment, String>> {
         let s = cx.session()?;
-        Some(if recognition_ready(s) {
+        Some(if sequences_ready(s) {
             Ok(Experiment::Recognition(
                 self.form.params(cx.analyses, &s.session.meta.name),
             ))
         } else {
-            Err("This session has no objects with encoders.".into())
+            Err("This session has no objects or no tactile sensors.".into())
         })
     }
 
