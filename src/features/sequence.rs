@@ -162,6 +162,7 @@ impl FeatureSet {
                 Family::Raw | Family::Change => session.taxel_count(),
             })
             .try_fold(0, |sum, d| (d > 0).then_some(sum + d))
+            .filter(|&d| d > 0)
     }
 
     /// `all` or the families joined by `+` (tactile first: `raw+encoders`).
@@ -644,6 +645,11 @@ mod tests {
         assert_eq!(all.dim(), 25);
         assert_eq!(FeatureSet::ALL.dim(&s), Some(25));
         assert_eq!(FeatureSet::ENCODERS.dim(&s), None);
+        assert_eq!(FeatureSet::of(&[]).dim(&s), None);
+        assert_eq!(
+            FeatureSet::of(&[Family::Raw, Family::Moments]).dim(&s),
+            Some(85)
+        );
         let e = feature_sequences(
             &s,
             &SequenceParams {
