@@ -265,7 +265,7 @@ fn recognition_confusion_cells_lead_to_their_grasps() {
         tactile_workbench::session::open(&common::sample("object-recognition.json")).unwrap();
     let params = RecognitionParams {
         learner: SupervisedLearner::Ds,
-        features: FeatureSet::Tactile,
+        features: FeatureSet::MOMENTS,
         reps: 2,
         seed: 5,
         ..Default::default()
@@ -342,7 +342,7 @@ fn contingency_cells_partition_the_grasps() {
         tactile_workbench::session::open(&common::sample("object-recognition.json")).unwrap();
     let params = ClusteringParams {
         learner: UnsupervisedLearner::Du,
-        features: FeatureSet::Tactile,
+        features: FeatureSet::MOMENTS,
         thresholds: vec![0.4, 0.7],
         reps: 1,
         baseline_max_k: 0,

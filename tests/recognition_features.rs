@@ -23,10 +23,10 @@ fn icub_sequences_have_the_papers_sizes_and_are_normalised() {
         )
         .unwrap()
     };
-    let all = of(FeatureSet::All, 0.0, 0);
+    let all = of(FeatureSet::ALL, 0.0, 0);
     assert_eq!(all.dim(), 34);
-    assert_eq!(of(FeatureSet::Tactile, 0.0, 0).dim(), 25);
-    assert_eq!(of(FeatureSet::Encoder, 0.0, 0).dim(), 9);
+    assert_eq!(of(FeatureSet::MOMENTS, 0.0, 0).dim(), 25);
+    assert_eq!(of(FeatureSet::ENCODERS, 0.0, 0).dim(), 9);
     assert_eq!(all.sequences.len(), 200);
     assert_eq!(all.names[9], "thumb/mean");
     for (g, m) in all.sequences.iter().enumerate() {
@@ -45,8 +45,8 @@ fn icub_sequences_have_the_papers_sizes_and_are_normalised() {
     let norm = (mean - all.min[9]) / (all.max[9] - all.min[9]);
     assert!((all.sequences[0][[0, 9]] - norm).abs() < 1e-12);
     // Noise on the raw taxels moves the tactile features only, reproducibly.
-    let noisy = of(FeatureSet::All, 100.0, 7);
-    let again = of(FeatureSet::All, 100.0, 7);
+    let noisy = of(FeatureSet::ALL, 100.0, 7);
+    let again = of(FeatureSet::ALL, 100.0, 7);
     assert_eq!(noisy, again);
     let raw_enc = |fs: &tactile_workbench::features::FeatureSequences| {
         fs.sequences[3][[2, 4]] * (fs.max[4] - fs.min[4]) + fs.min[4]

@@ -41,7 +41,7 @@ fn run(session: &Session, learner: SupervisedLearner, features: FeatureSet) -> (
 fn table_ii_all_features() {
     let Some(s) = icub() else { return };
     for learner in [SupervisedLearner::Ds, SupervisedLearner::Gs] {
-        let (all, fin) = run(&s, learner, FeatureSet::All);
+        let (all, fin) = run(&s, learner, FeatureSet::ALL);
         assert!(all >= 0.985, "{learner:?} all {all}");
         assert!(fin >= 0.995, "{learner:?} final 20% {fin}");
     }
@@ -50,9 +50,9 @@ fn table_ii_all_features() {
 #[test]
 fn table_ii_encoder_features() {
     let Some(s) = icub() else { return };
-    let (gs, _) = run(&s, SupervisedLearner::Gs, FeatureSet::Encoder);
+    let (gs, _) = run(&s, SupervisedLearner::Gs, FeatureSet::ENCODERS);
     assert!(gs >= 0.92, "GS encoder all {gs}");
-    let (ds, _) = run(&s, SupervisedLearner::Ds, FeatureSet::Encoder);
+    let (ds, _) = run(&s, SupervisedLearner::Ds, FeatureSet::ENCODERS);
     assert!(ds >= 0.90, "DS encoder all {ds}");
 }
 

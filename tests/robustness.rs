@@ -463,7 +463,7 @@ fn recognition_clean_score_is_the_protocols_and_dead_fingers_break_it() {
     p.methods = vec![MethodId::Ds];
     p.reps = 1;
     p.seed = 3;
-    p.recognition.features = FeatureSet::Tactile;
+    p.recognition.features = FeatureSet::MOMENTS;
     p.sweeps = vec![Sweep {
         perturbation: Perturbation::DeadSensor,
         strengths: vec![5.0],
@@ -473,7 +473,7 @@ fn recognition_clean_score_is_the_protocols_and_dead_fingers_break_it() {
         &s,
         &RecognitionParams {
             learner: SupervisedLearner::Ds,
-            features: FeatureSet::Tactile,
+            features: FeatureSet::MOMENTS,
             reps: 1,
             seed: 3,
             ..Default::default()

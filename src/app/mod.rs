@@ -463,7 +463,7 @@ impl WorkbenchApp {
                         sized()
                             && of("learner") == Some(&format!("{learner:?}").to_uppercase())
                             && of("features")
-                                == Some(crate::experiments::result::features_text(*features))
+                                == Some(&crate::experiments::result::features_text(*features))
                     }
                     ModelSpec::Stability(_) => sized(),
                     ModelSpec::Clustering { learner, threshold } => {

@@ -147,6 +147,12 @@ pub(super) fn recognition_ready(s: &LoadedSession) -> bool {
     s.session.label_set("object").is_some() && !s.session.encoders.is_empty()
 }
 
+/// DS and GS need `object` labels and the paper's features: `all` is the moments alone on
+/// a session without encoders.
+pub(super) fn sequences_ready(s: &LoadedSession) -> bool {
+    s.session.label_set("object").is_some() && FeatureSet::ALL.dim(&s.session).is_some()
+}
+
 #[derive(Default)]
 pub struct Analyses {
     pub results: Vec<AnalysisResult>,

@@ -24,8 +24,8 @@ pub struct BaselinesArgs {
     /// Write the machine-readable results here.
     #[arg(long)]
     pub json: Option<PathBuf>,
-    /// Label set holding the true classes.
-    #[arg(long, default_value = "object")]
+    /// Label set holding the true classes (`--target`, as on recognition and clustering).
+    #[arg(long, visible_alias = "target", default_value = "object")]
     pub label_set: String,
     /// Random presentation orders for k-means and the SOM.
     #[arg(long, default_value_t = 50)]
@@ -159,9 +159,14 @@ pub fn run(a: BaselinesArgs) -> anyhow::Result<()> {
         );
     }
     let session = super::recognition::open_session(&a.session)?;
-    let set = session
-        .label_set(&a.label_set)
-        .with_context(|| format!("the session has no label set {:?}", a.label_set))?;
+    let set = session.label_set(&a.label_set).with_context(|| {
+        let names: Vec<&str> = session.label_sets.iter().map(|l| l.name.as_str()).collect();
+        format!(
+            "the session has no label set {:?}; its label sets: {}",
+            a.label_set,
+            names.join(", ")
+        )
+    })?;
     let truth = session.labels_of(set);
     let features = session_features(&session)?;
     let params = BaselinesParams {

@@ -200,11 +200,11 @@ fn experiment_results(
         Experiment::Recognition => {
             let mut settings = Vec::new();
             for learner in [SupervisedLearner::Ds, SupervisedLearner::Gs] {
-                for features in [FeatureSet::All, FeatureSet::Tactile, FeatureSet::Encoder] {
+                for features in [FeatureSet::ALL, FeatureSet::MOMENTS, FeatureSet::ENCODERS] {
                     settings.push((learner, features, 0.0));
                 }
                 for noise in [100.0, 1000.0] {
-                    settings.push((learner, FeatureSet::All, noise));
+                    settings.push((learner, FeatureSet::ALL, noise));
                 }
             }
             for (learner, features, noise) in settings {
@@ -289,18 +289,18 @@ fn experiment_results(
         Experiment::Frontier => {
             let methods: &[(MethodId, FeatureSet)] = if session.label_set("object").is_some() {
                 &[
-                    (MethodId::Ds, FeatureSet::All),
-                    (MethodId::Ds, FeatureSet::Encoder),
-                    (MethodId::Gs, FeatureSet::All),
-                    (MethodId::Gs, FeatureSet::Encoder),
-                    (MethodId::Du, FeatureSet::All),
-                    (MethodId::Gu, FeatureSet::All),
-                    (MethodId::KMeans, FeatureSet::All),
-                    (MethodId::Som, FeatureSet::All),
-                    (MethodId::RbfSvm, FeatureSet::All),
+                    (MethodId::Ds, FeatureSet::ALL),
+                    (MethodId::Ds, FeatureSet::ENCODERS),
+                    (MethodId::Gs, FeatureSet::ALL),
+                    (MethodId::Gs, FeatureSet::ENCODERS),
+                    (MethodId::Du, FeatureSet::ALL),
+                    (MethodId::Gu, FeatureSet::ALL),
+                    (MethodId::KMeans, FeatureSet::ALL),
+                    (MethodId::Som, FeatureSet::ALL),
+                    (MethodId::RbfSvm, FeatureSet::ALL),
                 ]
             } else {
-                &[(MethodId::SparseSvm, FeatureSet::All)]
+                &[(MethodId::SparseSvm, FeatureSet::ALL)]
             };
             for &(method, features) in methods {
                 let params = FrontierParams {

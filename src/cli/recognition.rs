@@ -44,9 +44,13 @@ pub struct RecognitionArgs {
     /// ds (discriminative) or gs (generative).
     #[arg(long, default_value = "gs")]
     pub learner: String,
-    /// all, tactile or encoder.
+    /// Inputs: all (the paper's families the session has), or families moments (alias
+    /// tactile), encoders (alias encoder), raw, change, combined with + (raw+encoders).
     #[arg(long, default_value = "all")]
     pub features: String,
+    /// The label set whose classes are learned and scored.
+    #[arg(long, default_value = "object")]
+    pub target: String,
     /// Repetitions of the protocol (the paper: 50).
     #[arg(long, default_value_t = 50)]
     pub reps: usize,
@@ -85,6 +89,7 @@ impl RecognitionArgs {
         let mut p = RecognitionParams {
             learner: self.learner.parse()?,
             features: self.features.parse::<FeatureSet>()?,
+            label_set: self.target.clone(),
             reps: self.reps,
             seed: self.seed,
             taxel_noise_variance: self.noise,
@@ -150,12 +155,22 @@ fn recommended_size(
     }
 }
 
+/// "all features (moments+encoders)": the set asked for and, for `all`, the families it
+/// stood for on the session.
+fn features_used_text(asked: FeatureSet, used: Option<FeatureSet>) -> String {
+    match used {
+        Some(used) if asked.is_all() => format!("all features ({used})"),
+        _ => format!("{asked} features"),
+    }
+}
+
 pub fn print_recognition(r: &RecognitionResult) {
     let s = &r.summary;
     println!(
-        "{:?} / {:?} features, {} repetitions, {:.1} s wall, {} s CPU",
+        "{:?} / {}, target {}, {} repetitions, {:.1} s wall, {} s CPU",
         r.params.learner,
-        r.params.features,
+        features_used_text(r.params.features, r.features_used),
+        r.params.label_set,
         r.repetitions.len(),
         r.wall_seconds,
         r.cpu_seconds
@@ -223,9 +238,13 @@ pub struct ClusteringArgs {
     pub reps: usize,
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// all, tactile or encoder.
+    /// Inputs: all (the paper's families the session has), or families moments (alias
+    /// tactile), encoders (alias encoder), raw, change, combined with + (raw+encoders).
     #[arg(long, default_value = "all")]
     pub features: String,
+    /// The label set whose classes are learned and scored.
+    #[arg(long, default_value = "object")]
+    pub target: String,
     /// Switch hyperparameter adaptation off.
     #[arg(long)]
     pub no_adapt: bool,
@@ -278,6 +297,7 @@ impl ClusteringArgs {
         let learner = args.learner.parse()?;
         let mut params = ClusteringParams {
             features: args.features.parse::<FeatureSet>()?,
+            label_set: args.target.clone(),
             reps: args.reps,
             seed: args.seed,
             baseline_max_k: args.baseline_max_k,
@@ -401,8 +421,12 @@ pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
     let session = open_session(&args.session)?;
     let r = with_progress(args.quiet, |p| run_clustering(&session, &params, p))?;
     println!(
-        "{:?}, {} orders per threshold, {:.1} s",
-        params.learner, params.reps, r.wall_seconds
+        "{:?} / {}, target {}, {} orders per threshold, {:.1} s",
+        params.learner,
+        features_used_text(params.features, r.features_used),
+        params.label_set,
+        params.reps,
+        r.wall_seconds
     );
     println!("  threshold  clusters  effective  purity   ARI     NMI");
     for t in &r.sweep {

@@ -9,9 +9,17 @@ pub fn session_labels(
     label_set: &str,
 ) -> Result<(Vec<usize>, Vec<String>), ExperimentError> {
     let set = session.label_set(label_set).ok_or_else(|| {
+        let names: Vec<&str> = session.label_sets.iter().map(|l| l.name.as_str()).collect();
         ExperimentError::param(
             "label_set",
-            format!("the session has no label set `{label_set}`"),
+            format!(
+                "the session has no label set `{label_set}`; its label sets: {}",
+                if names.is_empty() {
+                    "none".to_string()
+                } else {
+                    names.join(", ")
+                }
+            ),
         )
     })?;
     let classes = session.label_sets[set].classes.clone();

@@ -434,17 +434,19 @@ pub fn common_parameters(
 ) -> BTreeMap<String, String> {
     BTreeMap::from([
         ("learner".to_string(), learner.to_string()),
-        ("features".to_string(), features_text(features).to_string()),
+        ("features".to_string(), features_text(features)),
         ("repetitions".to_string(), reps.to_string()),
         ("seed".to_string(), seed.to_string()),
     ])
 }
 
-pub fn features_text(f: FeatureSet) -> &'static str {
+/// How results and their cards name the features; the paper's three sets keep the words
+/// saved results already hold ("tactile features"), others read "raw+encoders features".
+pub fn features_text(f: FeatureSet) -> String {
     match f {
-        FeatureSet::All => "all features",
-        FeatureSet::Tactile => "tactile features",
-        FeatureSet::Encoder => "encoder features",
+        FeatureSet::MOMENTS => "tactile features".into(),
+        FeatureSet::ENCODERS => "encoder features".into(),
+        f => format!("{f} features"),
     }
 }
 

@@ -1,55 +1,230 @@
-//! Per-time-step feature sequences of the second paper (Sec. V-C): at every frame the
-//! joint encoders, then for every finger the mean, sd, skewness, max and min of its taxel
-//! pressures (9 + 5 × 5 = 34 on the iCub), each min-max normalised to [0, 1].
+//! Per-time-step feature sequences of the second paper (Sec. V-C) and the researcher's own
+//! inputs. A feature set is a combination of families, in this column order:
 //!
-//! The normalisation range is taken over every frame of every grasp of the session (the
-//! paper normalises the dataset; with a fixed session this is what a deployed robot would
-//! calibrate once). Optional Gaussian noise on the raw taxel readings reproduces the
-//! paper's robustness experiment (Fig. 8: variances 100 and 1000 on the 0–255 readings);
-//! readings are not clipped after the noise, as the paper does not say they were.
+//! - `encoders`: the joint encoders (9 on the iCub);
+//! - `moments`: for every finger the mean, sd, skewness, max and min of its taxel pressures
+//!   (5 × 5 = 25 on the iCub) — the paper's "tactile" features;
+//! - `raw`: every taxel's pressure (where on the finger the contact is, which the moments lose);
+//! - `change`: every taxel's pressure minus its pressure at the grasp's first frame.
+//!
+//! `all` is the paper's 34 (encoders then moments) where the session has encoders and the
+//! moments alone where it has none; `FeatureSequences::families` says which it used.
+//!
+//! Every column is min-max normalised to [0, 1] over every frame of every grasp of the
+//! session, as the paper normalises its dataset (the OIESGP lengthscales start at 1 on that
+//! scale). For `raw` this is also what z-scoring each taxel over the session would give:
+//! min-max is invariant to a per-column affine change, so z-scoring first would change no
+//! bit of meaning, only rounding, and is not done. Optional Gaussian noise on the raw taxel
+//! readings reproduces the paper's robustness experiment (Fig. 8: variances 100 and 1000
+//! on the 0–255 readings) and reaches every tactile family; readings are not clipped after
+//! the noise, as the paper does not say they were.
 
+use std::fmt;
 use std::str::FromStr;
 
 use ndarray::Array2;
-use serde::{Deserialize, Serialize};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::FingerStats;
 use crate::rng::Rng;
 use crate::session::Session;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum FeatureSet {
-    /// Encoders and tactile moments (34 on the iCub).
-    All,
-    /// Tactile moments only (25).
-    Tactile,
-    /// Encoders only (9).
-    Encoder,
+/// One family of per-step inputs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Family {
+    Encoders,
+    Moments,
+    Raw,
+    Change,
+}
+
+impl Family {
+    /// Every family, in the column order of the sequences.
+    pub const COLUMN_ORDER: [Family; 4] = [
+        Family::Encoders,
+        Family::Moments,
+        Family::Raw,
+        Family::Change,
+    ];
+    /// The order of a set's name: tactile families first, as in `raw+encoders`.
+    const NAME_ORDER: [Family; 4] = [
+        Family::Moments,
+        Family::Raw,
+        Family::Change,
+        Family::Encoders,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Family::Encoders => "encoders",
+            Family::Moments => "moments",
+            Family::Raw => "raw",
+            Family::Change => "change",
+        }
+    }
+
+    fn bit(self) -> u8 {
+        match self {
+            Family::Encoders => 1,
+            Family::Moments => 2,
+            Family::Raw => 4,
+            Family::Change => 8,
+        }
+    }
+
+    fn parse(s: &str) -> Option<Family> {
+        match s {
+            "encoders" | "encoder" => Some(Family::Encoders),
+            "moments" | "tactile" => Some(Family::Moments),
+            "raw" => Some(Family::Raw),
+            "change" => Some(Family::Change),
+            _ => None,
+        }
+    }
+
+    fn uses_taxels(self) -> bool {
+        self != Family::Encoders
+    }
+}
+
+/// The inputs of the OIESGP experiments: `all` (the paper's families the session has) or
+/// an explicit combination of families. Saved as its name (`"all"`, `"moments"`,
+/// `"raw+encoders"`); the older names `"tactile"` and `"encoder"` still load.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct FeatureSet {
+    /// Bits of `Family::bit`; `ALL_BIT` alone for `all`.
+    bits: u8,
+}
+
+const ALL_BIT: u8 = 0x80;
+
+impl FeatureSet {
+    /// The paper's families the session has: encoders and moments (34 on the iCub), or the
+    /// moments alone on a session without encoders.
+    pub const ALL: FeatureSet = FeatureSet { bits: ALL_BIT };
+    /// The paper's tactile features (25 on the iCub).
+    pub const MOMENTS: FeatureSet = FeatureSet { bits: 2 };
+    /// The paper's encoder features (9 on the iCub).
+    pub const ENCODERS: FeatureSet = FeatureSet { bits: 1 };
+    pub const RAW: FeatureSet = FeatureSet { bits: 4 };
+    pub const CHANGE: FeatureSet = FeatureSet { bits: 8 };
+    /// The sets the window offers and the paper's figures know by name.
+    pub const OFFERED: [FeatureSet; 7] = [
+        FeatureSet::ALL,
+        FeatureSet::MOMENTS,
+        FeatureSet::ENCODERS,
+        FeatureSet::RAW,
+        FeatureSet::CHANGE,
+        FeatureSet { bits: 4 | 1 },
+        FeatureSet { bits: 8 | 1 },
+    ];
+
+    /// The set of exactly these families (empty: none).
+    pub fn of(families: &[Family]) -> FeatureSet {
+        FeatureSet {
+            bits: families.iter().fold(0, |b, f| b | f.bit()),
+        }
+    }
+
+    pub fn is_all(self) -> bool {
+        self.bits == ALL_BIT
+    }
+
+    /// The explicit families, in column order (empty for `all`, which depends on the session).
+    pub fn families(self) -> Vec<Family> {
+        Family::COLUMN_ORDER
+            .into_iter()
+            .filter(|f| self.bits & f.bit() != 0)
+            .collect()
+    }
+
+    /// What `self` means on `session`: `all` becomes the paper's families it has.
+    pub fn resolve(self, session: &Session) -> FeatureSet {
+        if !self.is_all() {
+            return self;
+        }
+        if session.encoders.is_empty() {
+            FeatureSet::MOMENTS
+        } else {
+            FeatureSet::of(&[Family::Encoders, Family::Moments])
+        }
+    }
+
+    /// The number of columns on `session`, or None where it lacks a family.
+    pub fn dim(self, session: &Session) -> Option<usize> {
+        let sensors = session.sensors.len();
+        self.resolve(session)
+            .families()
+            .into_iter()
+            .map(|f| match f {
+                Family::Encoders => session.encoders.len(),
+                Family::Moments => FingerStats::NAMES.len() * sensors,
+                Family::Raw | Family::Change => session.taxel_count(),
+            })
+            .try_fold(0, |sum, d| (d > 0).then_some(sum + d))
+            .filter(|&d| d > 0)
+    }
+
+    /// `all` or the families joined by `+` (tactile first: `raw+encoders`).
+    pub fn name(self) -> String {
+        if self.is_all() {
+            return "all".into();
+        }
+        Family::NAME_ORDER
+            .into_iter()
+            .filter(|f| self.bits & f.bit() != 0)
+            .map(Family::name)
+            .collect::<Vec<_>>()
+            .join("+")
+    }
+}
+
+impl Default for FeatureSet {
+    fn default() -> Self {
+        FeatureSet::ALL
+    }
+}
+
+impl fmt::Display for FeatureSet {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.name())
+    }
 }
 
 impl FromStr for FeatureSet {
     type Err = SequenceError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s {
-            "all" => Ok(FeatureSet::All),
-            "tactile" => Ok(FeatureSet::Tactile),
-            "encoder" => Ok(FeatureSet::Encoder),
-            other => Err(SequenceError::Parameter {
-                name: "features",
-                reason: format!("`{other}` is not one of all, tactile, encoder"),
-            }),
+        let bad = |reason: String| SequenceError::Parameter {
+            name: "features",
+            reason,
+        };
+        if s.trim() == "all" {
+            return Ok(FeatureSet::ALL);
         }
+        let mut set = FeatureSet { bits: 0 };
+        for part in s.split('+').map(str::trim) {
+            let f = Family::parse(part).ok_or_else(|| {
+                bad(format!(
+                    "`{part}` is not all or a family: moments (or tactile), encoders (or \
+                     encoder), raw, change; combine families with +, e.g. raw+encoders"
+                ))
+            })?;
+            set.bits |= f.bit();
+        }
+        Ok(set)
     }
 }
 
-impl FeatureSet {
-    pub fn name(self) -> &'static str {
-        match self {
-            FeatureSet::All => "all",
-            FeatureSet::Tactile => "tactile",
-            FeatureSet::Encoder => "encoder",
-        }
+impl Serialize for FeatureSet {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.name())
+    }
+}
+
+impl<'de> Deserialize<'de> for FeatureSet {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        s.parse().map_err(serde::de::Error::custom)
     }
 }
 
@@ -58,7 +233,7 @@ pub enum SequenceError {
     #[error("invalid parameter `{name}`: {reason}")]
     Parameter { name: &'static str, reason: String },
     #[error("session cannot give {set} features: {reason}")]
-    Session { set: &'static str, reason: String },
+    Session { set: String, reason: String },
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -73,7 +248,7 @@ pub struct SequenceParams {
 impl Default for SequenceParams {
     fn default() -> Self {
         SequenceParams {
-            features: FeatureSet::All,
+            features: FeatureSet::ALL,
             taxel_noise_variance: 0.0,
             seed: 0,
         }
@@ -88,6 +263,12 @@ impl SequenceParams {
                 reason: "must be finite and non-negative".into(),
             });
         }
+        if self.features.families().is_empty() && !self.features.is_all() {
+            return Err(SequenceError::Parameter {
+                name: "features",
+                reason: "names no family".into(),
+            });
+        }
         Ok(())
     }
 }
@@ -96,6 +277,8 @@ impl SequenceParams {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FeatureSequences {
     pub names: Vec<String>,
+    /// The families the columns hold (`all` resolved on the session).
+    pub families: FeatureSet,
     pub sequences: Vec<Array2<f64>>,
     /// Raw range of each feature before normalisation.
     pub min: Vec<f64>,
@@ -113,30 +296,54 @@ pub fn feature_sequences(
     params: &SequenceParams,
 ) -> Result<FeatureSequences, SequenceError> {
     params.validate()?;
-    let set = params.features.name();
+    let used = params.features.resolve(session);
+    let families = used.families();
+    let set = used.name();
     let n_enc = session.encoders.len();
-    let use_enc = params.features != FeatureSet::Tactile;
-    let use_tac = params.features != FeatureSet::Encoder;
-    if use_enc && n_enc == 0 {
+    let has = |f: Family| families.contains(&f);
+    let tactile = families.iter().any(|f| f.uses_taxels());
+    // Raw and change have one column per taxel, so every frame must have the layout's count.
+    let per_taxel = has(Family::Raw) || has(Family::Change);
+    if has(Family::Encoders) && n_enc == 0 {
         return Err(SequenceError::Session {
             set,
             reason: "it has no joint encoders".into(),
         });
     }
-    if use_tac && session.sensors.is_empty() {
+    if tactile && session.sensors.is_empty() {
         return Err(SequenceError::Session {
             set,
             reason: "it has no tactile sensors".into(),
         });
     }
-    let mut names = Vec::new();
-    if use_enc {
-        names.extend(session.encoders.iter().map(|e| format!("encoder/{e}")));
+    if has(Family::Change) && session.grasps.iter().all(|g| g.frames.len() <= 1) {
+        return Err(SequenceError::Session {
+            set,
+            reason: "every grasp has one frame, so every change since the first is 0".into(),
+        });
     }
-    if use_tac {
-        for s in &session.sensors {
-            for stat in FingerStats::NAMES {
-                names.push(format!("{}/{stat}", s.name));
+    let taxel_counts: Vec<usize> = session
+        .sensors
+        .iter()
+        .map(|s| s.layout.taxel_count())
+        .collect();
+    let mut names = Vec::new();
+    for &f in &families {
+        match f {
+            Family::Encoders => {
+                names.extend(session.encoders.iter().map(|e| format!("encoder/{e}")));
+            }
+            Family::Moments => {
+                for s in &session.sensors {
+                    for stat in FingerStats::NAMES {
+                        names.push(format!("{}/{stat}", s.name));
+                    }
+                }
+            }
+            Family::Raw | Family::Change => {
+                for (s, &n) in session.sensors.iter().zip(&taxel_counts) {
+                    names.extend((0..n).map(|i| format!("{}/{}/{i}", s.name, f.name())));
+                }
             }
         }
     }
@@ -146,46 +353,69 @@ pub fn feature_sequences(
     for (g, grasp) in session.grasps.iter().enumerate() {
         let mut rng = Rng::stream(params.seed, g as u64);
         let mut m = Array2::zeros((grasp.frames.len(), dim));
+        // Pressures of the grasp's first frame (with its noise), for `change`.
+        let mut first: Vec<Vec<f64>> = Vec::new();
         for (t, frame) in grasp.frames.iter().enumerate() {
-            let mut row = m.row_mut(t);
-            let mut c = 0;
-            if use_enc {
-                if frame.encoders.len() != n_enc {
-                    return Err(SequenceError::Session {
-                        set,
-                        reason: format!(
-                            "grasp {g} frame {t} has {} encoders, the session names {n_enc}",
-                            frame.encoders.len()
-                        ),
-                    });
+            let bad_frame = |reason: String| SequenceError::Session {
+                set: set.clone(),
+                reason: format!("grasp {g} frame {t} {reason}"),
+            };
+            if has(Family::Encoders) && frame.encoders.len() != n_enc {
+                return Err(bad_frame(format!(
+                    "has {} encoders, the session names {n_enc}",
+                    frame.encoders.len()
+                )));
+            }
+            let mut pressures: Vec<Vec<f64>> = Vec::new();
+            if tactile {
+                if frame.taxels.len() != session.sensors.len() {
+                    return Err(bad_frame(
+                        "does not have one taxel vector per sensor".into(),
+                    ));
                 }
-                for &e in &frame.encoders {
-                    row[c] = e;
-                    c += 1;
+                for (s, raw) in frame.taxels.iter().enumerate() {
+                    if per_taxel && raw.len() != taxel_counts[s] {
+                        return Err(bad_frame(format!(
+                            "has {} taxels on sensor {}, its layout {}",
+                            raw.len(),
+                            session.sensors[s].name,
+                            taxel_counts[s]
+                        )));
+                    }
+                    pressures.push(
+                        raw.iter()
+                            .enumerate()
+                            .map(|(i, &v)| {
+                                let noisy = if sd > 0.0 { v + sd * rng.normal() } else { v };
+                                session.pressure(s, i, noisy)
+                            })
+                            .collect(),
+                    );
                 }
             }
-            if use_tac {
-                for (s, raw) in frame.taxels.iter().enumerate() {
-                    let p: Vec<f64> = raw
-                        .iter()
-                        .enumerate()
-                        .map(|(i, &v)| {
-                            let noisy = if sd > 0.0 { v + sd * rng.normal() } else { v };
-                            session.pressure(s, i, noisy)
-                        })
-                        .collect();
-                    for v in FingerStats::of(&p).to_array() {
-                        row[c] = v;
-                        c += 1;
+            if t == 0 {
+                first = pressures.clone();
+            }
+            let mut row = m.row_mut(t);
+            let mut c = 0;
+            let mut put = |v: f64| {
+                row[c] = v;
+                c += 1;
+            };
+            for &f in &families {
+                match f {
+                    Family::Encoders => frame.encoders.iter().for_each(|&e| put(e)),
+                    Family::Moments => {
+                        for p in &pressures {
+                            FingerStats::of(p).to_array().into_iter().for_each(&mut put);
+                        }
                     }
-                }
-                if c != dim {
-                    return Err(SequenceError::Session {
-                        set,
-                        reason: format!(
-                            "grasp {g} frame {t} does not have one taxel vector per sensor"
-                        ),
-                    });
+                    Family::Raw => pressures.iter().flatten().for_each(|&p| put(p)),
+                    Family::Change => pressures
+                        .iter()
+                        .flatten()
+                        .zip(first.iter().flatten())
+                        .for_each(|(&p, &p0)| put(p - p0)),
                 }
             }
         }
@@ -216,8 +446,222 @@ pub fn feature_sequences(
     }
     Ok(FeatureSequences {
         names,
+        families: used,
         sequences,
         min,
         max,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::session::simulate;
+
+    /// A small recognition session: 3 objects × 20 grasps of 8–18 frames, 5 fingertips of
+    /// 12 taxels, 9 encoders.
+    fn session() -> Session {
+        let mut s = simulate::object_recognition(3);
+        s.grasps.truncate(60);
+        s
+    }
+
+    fn of(s: &Session, features: FeatureSet, noise: f64) -> FeatureSequences {
+        feature_sequences(
+            s,
+            &SequenceParams {
+                features,
+                taxel_noise_variance: noise,
+                seed: 5,
+            },
+        )
+        .unwrap()
+    }
+
+    /// Column `j` of every frame, back in the units before min-max.
+    fn unnormalised(f: &FeatureSequences, g: usize, t: usize, j: usize) -> f64 {
+        f.min[j] + f.sequences[g][[t, j]] * (f.max[j] - f.min[j])
+    }
+
+    fn pressures(s: &Session, g: usize, t: usize) -> Vec<Vec<f64>> {
+        (0..s.sensors.len())
+            .map(|k| s.frame_pressures(&s.grasps[g].frames[t], k))
+            .collect()
+    }
+
+    #[test]
+    fn names_parse_with_the_old_aliases_and_combine_with_plus() {
+        let p = |t: &str| t.parse::<FeatureSet>().unwrap();
+        assert_eq!(p("tactile"), FeatureSet::MOMENTS);
+        assert_eq!(p("encoder"), FeatureSet::ENCODERS);
+        assert_eq!(p("raw+encoders"), p("encoder + raw"));
+        assert_eq!(p("raw+encoders").name(), "raw+encoders");
+        assert_eq!(p("change+moments").name(), "moments+change");
+        assert_eq!(p("all"), FeatureSet::ALL);
+        for bad in ["", "all+raw", "pressure", "raw+"] {
+            let e = bad.parse::<FeatureSet>().unwrap_err().to_string();
+            assert!(
+                e.contains("features") && e.contains("raw+encoders"),
+                "{bad}: {e}"
+            );
+        }
+        // Saved results and projects hold the old names; they load and mean the same.
+        let old: Vec<FeatureSet> =
+            serde_json::from_str(r#"["all", "tactile", "encoder", "raw+encoders"]"#).unwrap();
+        assert_eq!(
+            old,
+            [
+                FeatureSet::ALL,
+                FeatureSet::MOMENTS,
+                FeatureSet::ENCODERS,
+                p("raw+encoders")
+            ]
+        );
+        assert_eq!(
+            serde_json::to_string(&p("encoders+change")).unwrap(),
+            r#""change+encoders""#
+        );
+        assert!(serde_json::from_str::<FeatureSet>(r#""touch""#).is_err());
+    }
+
+    #[test]
+    fn all_is_encoders_then_moments_and_moments_are_the_papers() {
+        let s = session();
+        let all = of(&s, FeatureSet::ALL, 0.0);
+        let enc = of(&s, FeatureSet::ENCODERS, 0.0);
+        let mom = of(&s, "tactile".parse().unwrap(), 0.0);
+        assert_eq!((all.dim(), enc.dim(), mom.dim()), (34, 9, 25));
+        assert_eq!(all.families.name(), "moments+encoders");
+        assert_eq!(&all.names[..9], &enc.names[..]);
+        assert_eq!(&all.names[9..], &mom.names[..]);
+        for g in 0..s.grasps.len() {
+            // Each column is normalised on its own: the split sets are the same numbers.
+            assert_eq!(
+                all.sequences[g].slice(ndarray::s![.., ..9]),
+                enc.sequences[g]
+            );
+            assert_eq!(
+                all.sequences[g].slice(ndarray::s![.., 9..]),
+                mom.sequences[g]
+            );
+            for (t, frame) in s.grasps[g].frames.iter().enumerate() {
+                assert!((unnormalised(&enc, g, t, 4) - frame.encoders[4]).abs() < 1e-9);
+                // Finger k's mean (column 5k) and max (5k + 3), from the pressures.
+                for (k, p) in pressures(&s, g, t).iter().enumerate() {
+                    let mean = p.iter().sum::<f64>() / p.len() as f64;
+                    let max = p.iter().cloned().fold(f64::MIN, f64::max);
+                    assert!((unnormalised(&mom, g, t, 5 * k) - mean).abs() < 1e-9);
+                    assert!((unnormalised(&mom, g, t, 5 * k + 3) - max).abs() < 1e-9);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn raw_is_every_taxel_and_its_z_score_normalises_alike() {
+        let s = session();
+        let raw = of(&s, FeatureSet::RAW, 0.0);
+        assert_eq!(raw.dim(), 5 * 12);
+        assert_eq!(raw.names[13], format!("{}/raw/1", s.sensors[1].name));
+        // Each taxel z-scored over every frame of the session, then min-max as every
+        // column: the same numbers (min-max forgets a per-column affine change).
+        let frames: Vec<(usize, usize)> = (0..s.grasps.len())
+            .flat_map(|g| (0..s.grasps[g].frames.len()).map(move |t| (g, t)))
+            .collect();
+        for j in [0, 13, 59] {
+            let (k, i) = (j / 12, j % 12);
+            let p: Vec<f64> = frames
+                .iter()
+                .map(|&(g, t)| pressures(&s, g, t)[k][i])
+                .collect();
+            let n = p.len() as f64;
+            let mean = p.iter().sum::<f64>() / n;
+            let sd = (p.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt();
+            let z: Vec<f64> = p.iter().map(|v| (v - mean) / sd).collect();
+            assert!(z.iter().sum::<f64>().abs() < 1e-9 * n);
+            let (lo, hi) = z
+                .iter()
+                .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+            for (&(g, t), zv) in frames.iter().zip(&z) {
+                let want = (zv - lo) / (hi - lo);
+                assert!((raw.sequences[g][[t, j]] - want).abs() < 1e-12, "taxel {j}");
+                assert!((unnormalised(&raw, g, t, j) - pressures(&s, g, t)[k][i]).abs() < 1e-9);
+            }
+        }
+    }
+
+    #[test]
+    fn change_is_zero_at_every_grasps_first_frame() {
+        let s = session();
+        for noise in [0.0, 100.0] {
+            let ch = of(&s, FeatureSet::CHANGE, noise);
+            assert_eq!(ch.dim(), 60);
+            for (g, grasp) in s.grasps.iter().enumerate() {
+                for j in 0..60 {
+                    assert!(
+                        unnormalised(&ch, g, 0, j).abs() < 1e-9,
+                        "grasp {g} taxel {j}"
+                    );
+                }
+                if noise == 0.0 {
+                    let (t, (k, i)) = (grasp.frames.len() - 1, (2, 7));
+                    let want = pressures(&s, g, t)[k][i] - pressures(&s, g, 0)[k][i];
+                    assert!((unnormalised(&ch, g, t, 12 * k + i) - want).abs() < 1e-9);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn combinations_join_the_families_columns_and_noise_reaches_taxels_only() {
+        let s = session();
+        let both = of(&s, "raw+encoders".parse().unwrap(), 0.0);
+        let raw = of(&s, FeatureSet::RAW, 0.0);
+        let enc = of(&s, FeatureSet::ENCODERS, 0.0);
+        assert_eq!(both.dim(), 69);
+        assert_eq!(both.names[..9], enc.names[..]);
+        assert_eq!(
+            both.sequences[7].slice(ndarray::s![.., 9..]),
+            raw.sequences[7]
+        );
+        let noisy = of(&s, "raw+encoders".parse().unwrap(), 100.0);
+        assert_eq!(
+            noisy.sequences[7].slice(ndarray::s![.., ..9]),
+            enc.sequences[7]
+        );
+        assert!((noisy.sequences[7][[3, 20]] - both.sequences[7][[3, 20]]).abs() > 1e-6);
+    }
+
+    #[test]
+    fn all_without_encoders_uses_the_moments_and_an_explicit_family_must_exist() {
+        let mut s = session();
+        s.encoders.clear();
+        s.grasps
+            .iter_mut()
+            .flat_map(|g| &mut g.frames)
+            .for_each(|f| f.encoders.clear());
+        let all = of(&s, FeatureSet::ALL, 0.0);
+        assert_eq!(all.families, FeatureSet::MOMENTS);
+        assert_eq!(all.dim(), 25);
+        assert_eq!(FeatureSet::ALL.dim(&s), Some(25));
+        assert_eq!(FeatureSet::ENCODERS.dim(&s), None);
+        assert_eq!(FeatureSet::of(&[]).dim(&s), None);
+        assert_eq!(
+            FeatureSet::of(&[Family::Raw, Family::Moments]).dim(&s),
+            Some(85)
+        );
+        let e = feature_sequences(
+            &s,
+            &SequenceParams {
+                features: "raw+encoders".parse().unwrap(),
+                ..SequenceParams::default()
+            },
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("raw+encoders") && e.contains("no joint encoders"),
+            "{e}"
+        );
+    }
 }

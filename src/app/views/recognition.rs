@@ -7,7 +7,7 @@ use super::{Cx, Room, duration_text, run_button};
 use crate::app::View;
 use crate::app::figure_view::{self, Selection as FigureSelection};
 use crate::app::loader::LoadedSession;
-use crate::app::results::{Analyses, JobOutput, experiment_error, recognition_ready};
+use crate::app::results::{Analyses, JobOutput, experiment_error, sequences_ready};
 use crate::catalogue::MethodId;
 use crate::experiments::recognition::report::{accuracy_comparison, recognition_report};
 use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
@@ -36,7 +36,7 @@ impl Default for RecognitionForm {
     fn default() -> Self {
         RecognitionForm {
             learner: SupervisedLearner::Ds,
-            features: FeatureSet::All,
+            features: FeatureSet::ALL,
             reps: 3,
             noise_variance: 0.0,
             seed: 0,
@@ -139,7 +139,7 @@ impl Room for RecognitionRoom {
     }
 
     fn run_text(&self, s: &LoadedSession, analyses: &Analyses) -> Option<String> {
-        if !recognition_ready(s) {
+        if !sequences_ready(s) {
             return None;
         }
         let f = &self.form;
@@ -170,16 +170,18 @@ impl Room for RecognitionRoom {
                 ui.selectable_value(&mut f.learner, SupervisedLearner::Ds, "DS (discriminative)");
                 ui.selectable_value(&mut f.learner, SupervisedLearner::Gs, "GS (generative)");
             });
+        // The paper's three sets and the per-taxel families; the count is on this session.
+        let session = cx.session().map(|s| &s.session);
         egui::ComboBox::from_label("Features")
             .selected_text(features_text(f.features))
             .show_ui(ui, |ui| {
-                ui.selectable_value(&mut f.features, FeatureSet::All, "all features (34)");
-                ui.selectable_value(
-                    &mut f.features,
-                    FeatureSet::Tactile,
-                    "tactile features (25)",
-                );
-                ui.selectable_value(&mut f.features, FeatureSet::Encoder, "encoder features (9)");
+                for set in FeatureSet::OFFERED {
+                    let dim = session
+                        .and_then(|s| set.dim(s))
+                        .map(|d| format!(" ({d})"))
+                        .unwrap_or_default();
+                    ui.selectable_value(&mut f.features, set, features_text(set) + &dim);
+                }
             });
         ui.add(
             egui::DragValue::new(&mut f.reps)
@@ -229,8 +231,8 @@ impl Room for RecognitionRoom {
             ui,
             cx,
             AnalysisKind::Recognition,
-            recognition_ready,
-            "(needs an object-recognition session: encoders and `object` labels)",
+            sequences_ready,
+            "(needs an object-recognition session: `object` labels and tactile sensors)",
         ) {
             self.start(cx);
         }
@@ -238,12 +240,12 @@ impl Room for RecognitionRoom {
 
     fn sweep(&self, cx: &Cx) -> Option<Result<Experiment, String>> {
         let s = cx.session()?;
-        Some(if recognition_ready(s) {
+        Some(if sequences_ready(s) {
             Ok(Experiment::Recognition(
                 self.form.params(cx.analyses, &s.session.meta.name),
             ))
         } else {
-            Err("This session has no objects with encoders.".into())
+            Err("This session has no objects or no tactile sensors.".into())
         })
     }
 

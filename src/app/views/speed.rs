@@ -48,7 +48,7 @@ impl Default for FrontierForm {
         let svm_default = FrontierParams::for_method(MethodId::RbfSvm);
         FrontierForm {
             method: MethodId::Ds,
-            features: FeatureSet::All,
+            features: FeatureSet::ALL,
             reps: 3,
             capacities: list_text(&d.capacities),
             taus: list_text(&d.taus),
@@ -126,7 +126,7 @@ impl FrontierForm {
             egui::ComboBox::from_label("Frontier features")
                 .selected_text(self.features.name())
                 .show_ui(ui, |ui| {
-                    for f in [FeatureSet::All, FeatureSet::Tactile, FeatureSet::Encoder] {
+                    for f in FeatureSet::OFFERED {
                         ui.selectable_value(&mut self.features, f, f.name());
                     }
                 });

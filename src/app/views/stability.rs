@@ -60,7 +60,7 @@ impl StabilityForm {
     pub fn size(&self, analyses: &Analyses, session: &str) -> (Config, SizeReason) {
         let paper = StabilityOptions::default().single;
         let recommended = analyses
-            .frontier(session, MethodId::SparseSvm, FeatureSet::All)
+            .frontier(session, MethodId::SparseSvm, FeatureSet::ALL)
             .and_then(|f| {
                 let p = &f.points[f.recommended];
                 Some(Config {

@@ -92,7 +92,7 @@ impl Default for ClusteringParams {
     fn default() -> Self {
         ClusteringParams {
             learner: UnsupervisedLearner::Du,
-            features: FeatureSet::All,
+            features: FeatureSet::ALL,
             thresholds: paper_thresholds(),
             reps: 50,
             seed: 0,
@@ -232,6 +232,9 @@ pub struct ClusteringResult {
     pub labels: Vec<usize>,
     #[serde(default)]
     pub class_names: Vec<String>,
+    /// The families the inputs held (`all` resolved on the session; None in older results).
+    #[serde(default)]
+    pub features_used: Option<FeatureSet>,
 }
 
 enum Learner {
@@ -538,6 +541,7 @@ pub fn assemble_clustering(
         threshold_choice,
         labels: prep.labels,
         class_names: prep.class_names,
+        features_used: Some(prep.feats.families),
     }
 }
 

@@ -389,6 +389,7 @@ mod tests {
             threshold_choice: None,
             labels: labels.clone(),
             class_names: vec!["a".into(), "b".into(), "c".into()],
+            features_used: None,
         };
         let (details, links) = clustering_details(&r);
         let FigureKind::Heatmap(h) = &details[0].items[0].1.kind else {

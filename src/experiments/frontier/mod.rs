@@ -129,7 +129,7 @@ impl FrontierParams {
     pub fn for_method(method: MethodId) -> Self {
         FrontierParams {
             method,
-            features: FeatureSet::All,
+            features: FeatureSet::ALL,
             score: RecognitionScore::All,
             reps: 10,
             seed: 0,

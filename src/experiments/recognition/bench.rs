@@ -213,7 +213,7 @@ pub fn bench_session_steps(
     let feats = feature_sequences(
         session,
         &SequenceParams {
-            features: FeatureSet::All,
+            features: FeatureSet::ALL,
             taxel_noise_variance: 0.0,
             seed: params.seed,
         },
@@ -313,7 +313,7 @@ pub fn anchor_steps(
     let feats = feature_sequences(
         session,
         &SequenceParams {
-            features: FeatureSet::All,
+            features: FeatureSet::ALL,
             taxel_noise_variance: 0.0,
             seed: 0,
         },

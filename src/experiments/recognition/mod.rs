@@ -81,7 +81,7 @@ impl Default for RecognitionParams {
     fn default() -> Self {
         RecognitionParams {
             learner: SupervisedLearner::Gs,
-            features: FeatureSet::All,
+            features: FeatureSet::ALL,
             reps: 50,
             seed: 0,
             test_fraction: 0.2,
@@ -184,6 +184,9 @@ pub struct RecognitionResult {
     pub params: RecognitionParams,
     pub classes: Vec<String>,
     pub feature_names: Vec<String>,
+    /// The families the inputs held (`all` resolved on the session; None in older results).
+    #[serde(default)]
+    pub features_used: Option<FeatureSet>,
     pub summary: RecognitionSummary,
     pub repetitions: Vec<RepetitionResult>,
     pub wall_seconds: f64,
@@ -405,6 +408,7 @@ pub fn assemble_recognition(
     RecognitionResult {
         params: params.clone(),
         classes: prep.classes,
+        features_used: Some(prep.feats.families),
         feature_names: prep.feats.names,
         summary,
         repetitions: reps,

@@ -66,7 +66,7 @@ pub struct RecognitionSetup {
 impl Default for RecognitionSetup {
     fn default() -> Self {
         RecognitionSetup {
-            features: FeatureSet::All,
+            features: FeatureSet::ALL,
             test_fraction: 0.2,
             label_set: "object".into(),
             ds: DsParams::default(),
