@@ -31,6 +31,42 @@ pub enum FitMethod {
     /// The linear SVM on the scaled key-frame values (the first paper's baseline).
     #[command(alias = "linear-svm")]
     RawSvm(FitStabilityArgs),
+    /// Discriminative supervised OIESGP experts (the second paper), taught every grasp in
+    /// the protocol's order; `--from` teaches a saved model further.
+    Ds(FitSequenceArgs),
+    /// Generative supervised OIESGP experts, as DS.
+    Gs(FitSequenceArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct FitSequenceArgs {
+    pub session: PathBuf,
+    /// Feature families per step (`all`, `moments`, `encoders`, `raw`, `change`, or
+    /// combinations such as `raw+encoders`; default `all`).
+    #[arg(long)]
+    pub features: Option<String>,
+    /// The label set to learn (default `object`).
+    #[arg(long)]
+    pub target: Option<String>,
+    /// Seed of the training order.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Basis vectors per expert (default: the paper's 50).
+    #[arg(long)]
+    pub capacity: Option<usize>,
+    /// Steps of input history (default: the paper's 15).
+    #[arg(long)]
+    pub tau: Option<usize>,
+    /// Switch off hyperparameter adaptation.
+    #[arg(long)]
+    pub no_adapt: bool,
+    /// Teach this saved model further on SESSION (its features, target, size and range
+    /// stay; a class it has not seen gets a new expert).
+    #[arg(long, value_name = "MODEL.json")]
+    pub from: Option<PathBuf>,
+    /// The model file to write.
+    #[arg(short, long, value_name = "MODEL.json")]
+    pub output: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -99,6 +135,8 @@ pub fn fit(a: FitArgs) -> anyhow::Result<()> {
     let (method, f) = match a.method {
         FitMethod::SparseSvm(f) => (MethodId::SparseSvm, f),
         FitMethod::RawSvm(f) => (MethodId::RawSvm, f),
+        FitMethod::Ds(f) => return fit_sequences(MethodId::Ds, f),
+        FitMethod::Gs(f) => return fit_sequences(MethodId::Gs, f),
     };
     let s = &f.stability;
     if s.json.is_some() || s.save_model.is_some() || s.nested {
@@ -123,6 +161,91 @@ pub fn fit(a: FitArgs) -> anyhow::Result<()> {
         println!("  {} {:.2} % ({})", s.name, 100.0 * s.value, s.protocol);
     }
     println!("wrote {}", f.output.display());
+    Ok(())
+}
+
+fn fit_sequences(method: MethodId, a: FitSequenceArgs) -> anyhow::Result<()> {
+    let mut inputs = vec![a.session.as_path()];
+    inputs.extend(a.from.as_deref());
+    super::refuse_input_as_output(Some(&a.output), &inputs)?;
+    use super::bounds::{MAX_CAPACITY, MAX_TAU, at_most};
+    at_most("--capacity", a.capacity.unwrap_or(0), MAX_CAPACITY)?;
+    at_most("--tau", a.tau.unwrap_or(0), MAX_TAU)?;
+    let session =
+        session::open(&a.session).with_context(|| format!("opening {}", a.session.display()))?;
+    let file = match &a.from {
+        Some(path) => {
+            if a.features.is_some()
+                || a.target.is_some()
+                || a.capacity.is_some()
+                || a.tau.is_some()
+                || a.no_adapt
+            {
+                bail!(
+                    "--from keeps the saved model's features, target, size and adaptation: leave those options out"
+                );
+            }
+            let old = models::load(path)?;
+            let models::Model::Sequences(m) = &old.model else {
+                bail!(
+                    "{} holds a {} model; --from takes a DS or GS model",
+                    path.display(),
+                    old.provenance.method.key()
+                );
+            };
+            if m.method() != method {
+                bail!(
+                    "{} holds a {} model, not {}",
+                    path.display(),
+                    m.method().key(),
+                    method.key()
+                );
+            }
+            let (next, secs) = models::continue_sequences(m, &session)?;
+            models::sequence_file(
+                next,
+                &session,
+                secs,
+                old.provenance.size_reason,
+                Some(&old.provenance),
+            )
+        }
+        None => {
+            let defaults = crate::experiments::recognition::RecognitionParams::default();
+            let (mut ds, mut gs) = (defaults.ds, defaults.gs);
+            let reason = if a.capacity.is_some() || a.tau.is_some() {
+                crate::experiments::result::SizeReason::User
+            } else {
+                crate::experiments::result::SizeReason::PaperDefault
+            };
+            for gp in [&mut ds.gp, &mut gs.gp] {
+                gp.capacity = a.capacity.unwrap_or(gp.capacity);
+                gp.tau = a.tau.unwrap_or(gp.tau);
+                if a.no_adapt {
+                    gp.adaptation = None;
+                }
+            }
+            let opts = models::SequenceFitOptions {
+                method,
+                features: a.features.as_deref().unwrap_or("all").parse()?,
+                label_set: a.target.clone().unwrap_or_else(|| "object".into()),
+                seed: a.seed,
+                ds,
+                gs,
+            };
+            let (model, secs) = models::fit_sequences(&session, &opts)?;
+            models::sequence_file(model, &session, secs, reason, None)
+        }
+    };
+    models::save(&file, &a.output)?;
+    let p = &file.provenance;
+    println!(
+        "{} in {:.1} s; classes {}",
+        p.summary(),
+        p.train_seconds,
+        p.classes.join(", ")
+    );
+    println!("wrote {}", a.output.display());
     Ok(())
 }
 
@@ -164,6 +287,19 @@ pub fn evaluate(a: EvaluateArgs) -> anyhow::Result<()> {
                 100.0 * failure_recall,
                 100.0 * success_recall
             ),
+            HeldOutScores::Recognition {
+                accuracy, early, ..
+            } => {
+                println!("accuracy {:.2} %", 100.0 * accuracy);
+                let early: Vec<String> = early
+                    .iter()
+                    .map(|(f, a)| format!("{:.0} %: {:.1} %", 100.0 * f, 100.0 * a))
+                    .collect();
+                println!(
+                    "early classification (share observed: accuracy) {}",
+                    early.join(", ")
+                );
+            }
         }
     }
     if let Some(path) = &a.json {
@@ -341,7 +477,10 @@ pub fn bench_held_out(a: BenchHeldOutArgs) -> anyhow::Result<()> {
                     weighted_success_rate,
                     failure_recall,
                     ..
-                } = r.scores;
+                } = r.scores
+                else {
+                    bail!("{} is not a grasp-stability model", method.key());
+                };
                 println!(
                     "| {} | {} | {:.3} | {:.3} | {:.2} | {} | {c} | {:.3} | {:.3} | {:.3} |",
                     p.summary().split(", trained on").next().unwrap_or_default(),

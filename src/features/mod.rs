@@ -10,7 +10,10 @@ pub mod table_one;
 pub use moments::FingerStats;
 pub use normalise::{Normalisation, Normaliser, Standardizer};
 pub use patches::{KeyFramePatches, PatchError, PatchScaling};
-pub use sequence::{Family, FeatureSequences, FeatureSet, SequenceParams, feature_sequences};
+pub use sequence::{
+    Family, FeatureSequences, FeatureSet, SequenceParams, SequenceRange, feature_sequences,
+    feature_sequences_in,
+};
 
 /// Features that cannot be computed or scaled from the data given.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

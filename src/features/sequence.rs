@@ -291,9 +291,31 @@ impl FeatureSequences {
     }
 }
 
+/// Where the min-max range of each feature comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SequenceRange<'a> {
+    /// Every frame of every grasp of the session (the paper's normalisation).
+    Session,
+    /// Every frame of these grasps of the session (a model reading a new session by the
+    /// statistics of its first grasps).
+    Grasps(std::ops::Range<usize>),
+    /// A range known already (a model's training range).
+    Given { min: &'a [f64], max: &'a [f64] },
+}
+
 pub fn feature_sequences(
     session: &Session,
     params: &SequenceParams,
+) -> Result<FeatureSequences, SequenceError> {
+    feature_sequences_in(session, params, SequenceRange::Session)
+}
+
+/// The sequences normalised to the min-max range `range` gives (values of a new session
+/// may fall outside [0, 1] on a range it did not set).
+pub fn feature_sequences_in(
+    session: &Session,
+    params: &SequenceParams,
+    range: SequenceRange,
 ) -> Result<FeatureSequences, SequenceError> {
     params.validate()?;
     let used = params.features.resolve(session);
@@ -421,16 +443,36 @@ pub fn feature_sequences(
         }
         sequences.push(m);
     }
-    let mut min = vec![f64::INFINITY; dim];
-    let mut max = vec![f64::NEG_INFINITY; dim];
-    for m in &sequences {
-        for row in m.rows() {
-            for (j, &v) in row.iter().enumerate() {
-                min[j] = min[j].min(v);
-                max[j] = max[j].max(v);
-            }
+    let (min, max) = match range {
+        SequenceRange::Session => range_of(&sequences, dim),
+        SequenceRange::Grasps(r) => {
+            let Some(part) = sequences.get(r.clone()).filter(|p| !p.is_empty()) else {
+                return Err(SequenceError::Parameter {
+                    name: "range",
+                    reason: format!(
+                        "grasps {}..{} of a session of {}",
+                        r.start,
+                        r.end,
+                        sequences.len()
+                    ),
+                });
+            };
+            range_of(part, dim)
         }
-    }
+        SequenceRange::Given { min, max } => {
+            if min.len() != dim || max.len() != dim {
+                return Err(SequenceError::Parameter {
+                    name: "range",
+                    reason: format!(
+                        "{} minima and {} maxima for {dim} features",
+                        min.len(),
+                        max.len()
+                    ),
+                });
+            }
+            (min.to_vec(), max.to_vec())
+        }
+    };
     for m in &mut sequences {
         for mut row in m.rows_mut() {
             for (j, v) in row.iter_mut().enumerate() {
@@ -451,6 +493,21 @@ pub fn feature_sequences(
         min,
         max,
     })
+}
+
+/// Each feature's least and greatest value over every frame of `sequences`.
+fn range_of(sequences: &[Array2<f64>], dim: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut min = vec![f64::INFINITY; dim];
+    let mut max = vec![f64::NEG_INFINITY; dim];
+    for m in sequences {
+        for row in m.rows() {
+            for (j, &v) in row.iter().enumerate() {
+                min[j] = min[j].min(v);
+                max[j] = max[j].max(v);
+            }
+        }
+    }
+    (min, max)
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@ use std::time::SystemTime;
 
 use serde::{Deserialize, Serialize};
 
-use super::{ModelError, StabilityClassifier};
+use super::{ModelError, SequenceModel, StabilityClassifier};
 use crate::catalogue::MethodId;
 use crate::experiments::result::SizeReason;
 use crate::session::Session;
@@ -100,18 +100,22 @@ impl Provenance {
 pub enum Model {
     /// Sparse coding + linear SVM, or the raw linear SVM.
     Stability(StabilityClassifier),
+    /// DS or GS experts over per-step feature sequences.
+    Sequences(SequenceModel),
 }
 
 impl Model {
     pub fn method(&self) -> MethodId {
         match self {
             Model::Stability(c) => c.method(),
+            Model::Sequences(m) => m.method(),
         }
     }
 
     fn validate(&self) -> Result<(), ModelError> {
         match self {
             Model::Stability(c) => c.validate(),
+            Model::Sequences(m) => m.validate(),
         }
     }
 }

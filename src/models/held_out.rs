@@ -8,12 +8,15 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use super::{Calibration, Model, ModelError, ModelFile, SessionRef};
+use super::recognition::EARLY_FRACTIONS;
+use super::{Calibration, Model, ModelError, ModelFile, SequenceModel, SessionRef};
 use crate::catalogue::MethodId;
 use crate::experiments::links::{GraspLinks, grasps_text};
 use crate::experiments::result::{AnalysisKind, AnalysisResult, HeldOut};
 use crate::experiments::stability::report::confusion_map;
-use crate::figures::{Axis, AxisTitle, BarGroup, Figure, csv_row};
+use crate::figures::{
+    Axis, AxisTitle, BarGroup, ColorScale, Figure, FigureKind, Heatmap, Series, csv_row,
+};
 use crate::session::Session;
 use crate::svm::Confusion;
 
@@ -27,7 +30,8 @@ pub struct GraspPrediction {
     /// The true class, when the session has the model's label set.
     pub truth: Option<String>,
     pub predicted: String,
-    /// Grasp stability: the SVM's decision value, positive for failure.
+    /// Grasp stability: the SVM's decision value, positive for failure. DS/GS: the
+    /// decided class's probability at the grasp's last step.
     pub decision: f64,
 }
 
@@ -41,6 +45,14 @@ pub enum HeldOutScores {
         success_recall: f64,
         /// Rows: true success, failure; columns: predicted success, failure.
         confusion: Confusion,
+    },
+    Recognition {
+        /// Share of grasps whose class is decided right from the whole grasp.
+        accuracy: f64,
+        /// Accuracy of the decision from the first ⌈f·T⌉ steps, per fraction f.
+        early: Vec<(f64, f64)>,
+        /// Counts: rows the true class, columns the decided class (the model's classes).
+        confusion: Vec<Vec<usize>>,
     },
 }
 
@@ -80,10 +92,7 @@ pub fn predict(
                     grasp: g,
                     object: grasp.object.clone(),
                     trial: grasp.trial,
-                    truth: set.and_then(|s| {
-                        let class = grasp.labels.get(s)?;
-                        session.label_sets[s].classes.get(*class).cloned()
-                    }),
+                    truth: truth_of(session, set, g),
                     predicted: if decision > 0.0 {
                         c.failure_class.clone()
                     } else {
@@ -93,7 +102,35 @@ pub fn predict(
                 })
                 .collect())
         }
+        Model::Sequences(m) => {
+            let set = session.label_set(&m.label_set);
+            Ok(m.predict(session, calibration)?
+                .iter()
+                .zip(&session.grasps)
+                .enumerate()
+                .map(|(g, (p, grasp))| GraspPrediction {
+                    grasp: g,
+                    object: grasp.object.clone(),
+                    trial: grasp.trial,
+                    truth: truth_of(session, set, g),
+                    predicted: m.classes[p.class].clone(),
+                    decision: p
+                        .distributions
+                        .rows()
+                        .into_iter()
+                        .next_back()
+                        .map_or(f64::NAN, |r| r[p.class]),
+                })
+                .collect())
+        }
     }
+}
+
+/// Grasp `g`'s class name under label set `set`, if it has one.
+fn truth_of(session: &Session, set: Option<usize>, g: usize) -> Option<String> {
+    let s = set?;
+    let class = session.grasps[g].labels.get(s)?;
+    session.label_sets[s].classes.get(*class).cloned()
 }
 
 /// Predictions as CSV: one row per grasp.
@@ -126,21 +163,55 @@ pub fn evaluate(
     calibration: Calibration,
 ) -> Result<HeldOutResult, ModelError> {
     let t0 = Instant::now();
-    let predictions = predict(file, session, calibration)?;
-    let Model::Stability(c) = &file.model;
+    let (label_set, classes, scores, predictions) = match &file.model {
+        Model::Stability(c) => {
+            let predictions = predict(file, session, calibration)?;
+            let scores = stability_scores(c, session, &predictions)?;
+            let classes = vec![c.success_class.clone(), c.failure_class.clone()];
+            (c.label_set.clone(), classes, scores, predictions)
+        }
+        Model::Sequences(m) => {
+            let predictions = predict(file, session, calibration)?;
+            let scores = sequence_scores(m, session, calibration, &predictions)?;
+            (m.label_set.clone(), m.classes.clone(), scores, predictions)
+        }
+    };
+    Ok(HeldOutResult {
+        method: file.provenance.method,
+        model: file.provenance.summary(),
+        trained_on: file.provenance.session.clone(),
+        tested_on: SessionRef::of(session),
+        calibration,
+        calibration_text: calibration.describe(),
+        label_set,
+        classes,
+        scores,
+        predictions,
+        secs: t0.elapsed().as_secs_f64(),
+    })
+}
+
+fn no_label_set(label_set: &str, session: &Session) -> ModelError {
+    ModelError::Mismatch(format!(
+        "the model predicts label set {label_set:?}; the session has {:?}",
+        session
+            .label_sets
+            .iter()
+            .map(|l| &l.name)
+            .collect::<Vec<_>>()
+    ))
+}
+
+fn stability_scores(
+    c: &super::StabilityClassifier,
+    session: &Session,
+    predictions: &[GraspPrediction],
+) -> Result<HeldOutScores, ModelError> {
     let Some(set) = session.label_set(&c.label_set) else {
-        return Err(ModelError::Mismatch(format!(
-            "the model predicts label set {:?}; the session has {:?}",
-            c.label_set,
-            session
-                .label_sets
-                .iter()
-                .map(|l| &l.name)
-                .collect::<Vec<_>>()
-        )));
+        return Err(no_label_set(&c.label_set, session));
     };
     let mut truth = Vec::with_capacity(predictions.len());
-    for p in &predictions {
+    for p in predictions {
         let t = p.truth.as_deref().unwrap_or_default();
         if t == c.failure_class {
             truth.push(true);
@@ -169,36 +240,74 @@ pub fn evaluate(
             c.failure_class
         )));
     };
-    Ok(HeldOutResult {
-        method: file.provenance.method,
-        model: file.provenance.summary(),
-        trained_on: file.provenance.session.clone(),
-        tested_on: SessionRef::of(session),
-        calibration,
-        calibration_text: calibration.describe(),
-        label_set: c.label_set.clone(),
-        classes: vec![c.success_class.clone(), c.failure_class.clone()],
-        scores: HeldOutScores::Stability {
-            weighted_success_rate: wsr,
-            failure_recall,
-            success_recall,
-            confusion,
-        },
-        predictions,
-        secs: t0.elapsed().as_secs_f64(),
-    })
-}
-
-/// The held-out result as an analysis: scores, the confusion map and the share correct
-/// per object, linked to the tested session's grasps.
-pub fn held_out_report(r: &HeldOutResult) -> AnalysisResult {
-    let HeldOutScores::Stability {
-        weighted_success_rate,
+    Ok(HeldOutScores::Stability {
+        weighted_success_rate: wsr,
         failure_recall,
         success_recall,
         confusion,
-    } = &r.scores;
-    let (ok, bad) = (&r.classes[0], &r.classes[1]);
+    })
+}
+
+fn sequence_scores(
+    m: &SequenceModel,
+    session: &Session,
+    calibration: Calibration,
+    predictions: &[GraspPrediction],
+) -> Result<HeldOutScores, ModelError> {
+    if session.label_set(&m.label_set).is_none() {
+        return Err(no_label_set(&m.label_set, session));
+    }
+    let mut truth = Vec::with_capacity(predictions.len());
+    for p in predictions {
+        let t = p.truth.as_deref().unwrap_or_default();
+        let class = m.classes.iter().position(|c| c == t).ok_or_else(|| {
+            ModelError::Mismatch(format!(
+                "grasp {} is of class {t:?}, which the model has no expert for (it knows {}); \
+                 teach it the class with `fit {} SESSION --from MODEL`",
+                p.grasp,
+                m.classes.join(", "),
+                m.method().key()
+            ))
+        })?;
+        truth.push(class);
+    }
+    let steps = m.predict(session, calibration)?;
+    let n = m.classes.len();
+    let mut confusion = vec![vec![0; n]; n];
+    for (t, p) in truth.iter().zip(&steps) {
+        confusion[*t][p.class] += 1;
+    }
+    let share = |right: usize| right as f64 / truth.len().max(1) as f64;
+    let accuracy = share(
+        truth
+            .iter()
+            .zip(&steps)
+            .filter(|(t, p)| **t == p.class)
+            .count(),
+    );
+    let early = EARLY_FRACTIONS
+        .iter()
+        .enumerate()
+        .map(|(i, &f)| {
+            let right = truth
+                .iter()
+                .zip(&steps)
+                .filter(|(t, p)| **t == p.early[i])
+                .count();
+            (f, share(right))
+        })
+        .collect();
+    Ok(HeldOutScores::Recognition {
+        accuracy,
+        early,
+        confusion,
+    })
+}
+
+/// The held-out result as an analysis: scores, the confusion map (linked to the tested
+/// session's grasps) and, per kind, the share correct per object (stability) or the
+/// accuracy of early decisions (recognition).
+pub fn held_out_report(r: &HeldOutResult) -> AnalysisResult {
     let held_out = HeldOut {
         trained_on: r.trained_on.name.clone(),
         trained_grasps: r.trained_on.grasps,
@@ -206,66 +315,69 @@ pub fn held_out_report(r: &HeldOutResult) -> AnalysisResult {
         tested_grasps: r.tested_on.grasps,
         calibration: r.calibration.to_string(),
     };
-    let confusion_fig = confusion_map(
-        &format!("Confusion map, held out on {}", r.tested_on.name),
-        confusion,
-        ok,
-        bad,
-    )
-    .subtitle(format!(
-        "weighted success rate {:.1}%, failure recall {:.1}%; calibration {}",
-        100.0 * weighted_success_rate,
-        100.0 * failure_recall,
-        r.calibration
-    ));
-    let failure = |c: &str| usize::from(c == bad);
+    let class_of = |name: &str| r.classes.iter().position(|c| c == name);
     let links = GraspLinks::from_observations(
         "confusion",
         None,
         r.predictions.iter().filter_map(|p| {
-            let t = p.truth.as_deref()?;
-            Some(([failure(t), failure(&p.predicted)], p.grasp))
+            let t = class_of(p.truth.as_deref()?)?;
+            Some(([t, class_of(&p.predicted)?], p.grasp))
         }),
         |[t, p], grasps, _| {
-            let class = |f: usize| if f == 1 { bad } else { ok };
             format!(
                 "true {}, predicted {}: {}",
-                class(t),
-                class(p),
+                r.classes[t],
+                r.classes[p],
                 grasps_text(grasps)
             )
         },
     );
-    let mut per_object: Vec<(String, usize, usize)> = Vec::new();
-    for p in &r.predictions {
-        let Some(t) = &p.truth else { continue };
-        let i = match per_object.iter().position(|(o, _, _)| *o == p.object) {
-            Some(i) => i,
-            None => {
-                per_object.push((p.object.clone(), 0, 0));
-                per_object.len() - 1
-            }
-        };
-        per_object[i].1 += usize::from(*t == p.predicted);
-        per_object[i].2 += 1;
-    }
-    let objects = Figure::bars(
-        format!("Share correct per object, held out on {}", r.tested_on.name),
-        AxisTitle {
-            title: "object".into(),
-            unit: String::new(),
-        },
-        Axis::new("share correct", "").including(0.0, 1.0),
-        per_object.iter().map(|(o, _, _)| o.clone()).collect(),
-        vec![BarGroup::new(
-            "grasps",
-            per_object
-                .iter()
-                .map(|(_, right, n)| *right as f64 / *n as f64)
-                .collect(),
-        )],
-    )
-    .subtitle(held_out.text());
+    let title = format!("Confusion map, held out on {}", r.tested_on.name);
+    let (scores, confusion_fig, second) = match &r.scores {
+        HeldOutScores::Stability {
+            weighted_success_rate,
+            failure_recall,
+            success_recall,
+            confusion,
+        } => {
+            let fig =
+                confusion_map(&title, confusion, &r.classes[0], &r.classes[1]).subtitle(format!(
+                    "weighted success rate {:.1}%, failure recall {:.1}%; calibration {}",
+                    100.0 * weighted_success_rate,
+                    100.0 * failure_recall,
+                    r.calibration
+                ));
+            let scores = vec![
+                ("weighted success rate".into(), *weighted_success_rate),
+                ("failure recall".into(), *failure_recall),
+                ("success recall".into(), *success_recall),
+            ];
+            (scores, fig, ("objects", per_object(r, &held_out)))
+        }
+        HeldOutScores::Recognition {
+            accuracy,
+            early,
+            confusion,
+        } => {
+            let fig = class_confusion(&title, confusion, &r.classes).subtitle(format!(
+                "accuracy {:.1}%; calibration {}",
+                100.0 * accuracy,
+                r.calibration
+            ));
+            let chart = Figure::chart(
+                format!("Early classification, held out on {}", r.tested_on.name),
+                Axis::new("share of the grasp observed", "").including(0.0, 1.0),
+                Axis::new("accuracy", "").including(0.0, 1.0),
+                vec![Series::new(
+                    r.method.title(),
+                    early.iter().map(|(f, _)| *f).collect(),
+                    early.iter().map(|(_, a)| *a).collect(),
+                )],
+            )
+            .subtitle(held_out.text());
+            (vec![("accuracy".into(), *accuracy)], fig, ("early", chart))
+        }
+    };
     let parameters = BTreeMap::from([
         ("model".to_string(), r.model.clone()),
         ("trained on".to_string(), r.trained_on.name.clone()),
@@ -289,11 +401,7 @@ pub fn held_out_report(r: &HeldOutResult) -> AnalysisResult {
         ),
         session: r.tested_on.name.clone(),
         parameters,
-        scores: vec![
-            ("weighted success rate".into(), *weighted_success_rate),
-            ("failure recall".into(), *failure_recall),
-            ("success recall".into(), *success_recall),
-        ],
+        scores,
         headline: None,
         train_seconds: 0.0,
         predict_seconds_per_sample: Some(r.secs / r.predictions.len().max(1) as f64),
@@ -302,7 +410,7 @@ pub fn held_out_report(r: &HeldOutResult) -> AnalysisResult {
             .map_or(0, |d| d.as_secs()),
         figures: vec![
             ("confusion".into(), confusion_fig),
-            ("objects".into(), objects),
+            (second.0.into(), second.1),
         ],
         details: Vec::new(),
         links: vec![links],
@@ -310,4 +418,75 @@ pub fn held_out_report(r: &HeldOutResult) -> AnalysisResult {
         model_size: None,
         held_out: Some(held_out),
     }
+}
+
+/// The share of each true class decided as each class.
+fn class_confusion(title: &str, counts: &[Vec<usize>], classes: &[String]) -> Figure {
+    let values = counts
+        .iter()
+        .map(|row| {
+            let total: usize = row.iter().sum();
+            row.iter()
+                .map(|&c| {
+                    if total == 0 {
+                        f64::NAN
+                    } else {
+                        c as f64 / total as f64
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let mut heat = Heatmap {
+        x: AxisTitle {
+            title: "predicted".into(),
+            unit: String::new(),
+        },
+        y: AxisTitle {
+            title: "true class".into(),
+            unit: String::new(),
+        },
+        columns: classes.to_vec(),
+        rows: classes.to_vec(),
+        values,
+        colors: ColorScale::viridis("share of the true class", ""),
+        annotate: true,
+        marked: Vec::new(),
+    };
+    heat.colors.limits = Some([0.0, 1.0]);
+    Figure::new(title, FigureKind::Heatmap(heat))
+}
+
+/// The share of each object's grasps decided right.
+fn per_object(r: &HeldOutResult, held_out: &HeldOut) -> Figure {
+    let mut per_object: Vec<(String, usize, usize)> = Vec::new();
+    for p in &r.predictions {
+        let Some(t) = &p.truth else { continue };
+        let i = match per_object.iter().position(|(o, _, _)| *o == p.object) {
+            Some(i) => i,
+            None => {
+                per_object.push((p.object.clone(), 0, 0));
+                per_object.len() - 1
+            }
+        };
+        per_object[i].1 += usize::from(*t == p.predicted);
+        per_object[i].2 += 1;
+    }
+    Figure::bars(
+        format!("Share correct per object, held out on {}", r.tested_on.name),
+        AxisTitle {
+            title: "object".into(),
+            unit: String::new(),
+        },
+        Axis::new("share correct", "").including(0.0, 1.0),
+        per_object.iter().map(|(o, _, _)| o.clone()).collect(),
+        vec![BarGroup::new(
+            "grasps",
+            per_object
+                .iter()
+                .map(|(_, right, n)| *right as f64 / *n as f64)
+                .collect(),
+        )],
+    )
+    .subtitle(held_out.text())
 }

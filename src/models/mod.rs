@@ -7,11 +7,14 @@
 //! - [`calibration`]: which per-taxel statistics stand for a new recording;
 //! - [`stability`]: the grasp-stability classifiers (sparse coding + linear SVM, the raw
 //!   linear SVM): fitting, the session checks, decision values;
+//! - [`recognition`]: the supervised OIESGP experts (DS, GS): fitting, teaching further on a
+//!   new session, per-step predictions;
 //! - [`held_out`]: scores, predictions and figures on a session the model did not train on.
 
 pub mod calibration;
 pub mod file;
 pub mod held_out;
+pub mod recognition;
 pub mod stability;
 #[cfg(test)]
 mod tests;
@@ -22,6 +25,9 @@ pub use file::{
 };
 pub use held_out::{
     GraspPrediction, HeldOutResult, HeldOutScores, evaluate, held_out_report, predict,
+};
+pub use recognition::{
+    SequenceFitOptions, SequenceModel, continue_sequences, fit_sequences, sequence_file,
 };
 pub use stability::{SensorShape, SparseCodes, StabilityClassifier, fit_stability};
 
@@ -42,6 +48,8 @@ pub enum ModelError {
     Param(String),
     #[error(transparent)]
     Stability(#[from] StabilityError),
+    #[error(transparent)]
+    Learner(#[from] crate::learners::LearnerError),
 }
 
 impl ModelError {

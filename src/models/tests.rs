@@ -33,11 +33,13 @@ fn fitted(method: MethodId) -> (Session, ModelFile) {
 }
 
 fn wsr(r: &HeldOutResult) -> f64 {
-    let HeldOutScores::Stability {
-        weighted_success_rate,
-        ..
-    } = r.scores;
-    weighted_success_rate
+    match r.scores {
+        HeldOutScores::Stability {
+            weighted_success_rate,
+            ..
+        } => weighted_success_rate,
+        HeldOutScores::Recognition { .. } => panic!("a stability result"),
+    }
 }
 
 #[test]
@@ -49,7 +51,9 @@ fn a_saved_model_predicts_bit_for_bit_as_the_model_in_memory() {
         .into_file(&session, &data);
     let loaded = ModelFile::from_json(&file.to_json(), "m.json").unwrap();
     assert_eq!(loaded, file);
-    let Model::Stability(back) = &loaded.model;
+    let Model::Stability(back) = &loaded.model else {
+        panic!("a stability model")
+    };
     let before = classifier.decisions(&session, Calibration::None).unwrap();
     let after = back.decisions(&session, Calibration::None).unwrap();
     let bits = |v: &[f64]| v.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
@@ -84,7 +88,9 @@ fn shifted(session: &Session, shift: f64) -> Session {
 fn a_drifted_session_needs_its_own_statistics() {
     for method in [MethodId::RawSvm, MethodId::SparseSvm] {
         let (session, file) = fitted(method);
-        let Model::Stability(c) = &file.model;
+        let Model::Stability(c) = &file.model else {
+            panic!("a stability model")
+        };
         // Five times the widest taxel's spread: a baseline drift as between recording days.
         let spread = c.taxel_stats.sd.iter().fold(0.0f64, |a, b| a.max(*b));
         let drifted = shifted(&session, 5.0 * spread);
@@ -190,7 +196,9 @@ fn a_session_of_other_sensors_or_classes_is_refused_by_name() {
         e.contains("sensors") && e.contains(&session.sensors[0].name),
         "{e}"
     );
-    let Model::Stability(c) = &file.model;
+    let Model::Stability(c) = &file.model else {
+        panic!("a stability model")
+    };
     let mut renamed = session.clone();
     let i = renamed.label_set(&c.label_set).unwrap();
     let set = &mut renamed.label_sets[i];
@@ -200,4 +208,123 @@ fn a_session_of_other_sensors_or_classes_is_refused_by_name() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("wobbly") && e.contains(&old), "{e}");
+}
+
+mod sequences {
+    use super::*;
+    use crate::features::FeatureSet;
+    use crate::session::{SubsetSpec, subset};
+
+    fn part(
+        session: &Session,
+        trials: std::ops::RangeInclusive<u32>,
+        objects: &[String],
+    ) -> Session {
+        let spec = SubsetSpec {
+            objects: objects.to_vec(),
+            trials: trials.collect(),
+            labels: Vec::new(),
+        };
+        subset(session, &spec, "part").unwrap()
+    }
+
+    fn options(method: MethodId) -> SequenceFitOptions {
+        let defaults = crate::experiments::recognition::RecognitionParams::default();
+        let (ds, gs) = (defaults.ds, defaults.gs);
+        SequenceFitOptions {
+            method,
+            features: FeatureSet::ALL,
+            label_set: "object".into(),
+            seed: 3,
+            ds,
+            gs,
+        }
+    }
+
+    fn accuracy(r: &HeldOutResult) -> f64 {
+        match r.scores {
+            HeldOutScores::Recognition { accuracy, .. } => accuracy,
+            HeldOutScores::Stability { .. } => panic!("a recognition result"),
+        }
+    }
+
+    #[test]
+    fn a_model_taught_further_from_its_file_equals_one_taught_in_one_run() {
+        let session = simulate::object_recognition(1);
+        let objects = session.objects();
+        let a = part(&session, 1..=3, &objects);
+        let b = part(&session, 4..=6, &objects);
+        let test = part(&session, 7..=10, &objects);
+        for method in [MethodId::Ds, MethodId::Gs] {
+            let (model, secs) = fit_sequences(&a, &options(method)).unwrap();
+            let file = sequence_file(model.clone(), &a, secs, Default::default(), None);
+            let loaded = ModelFile::from_json(&file.to_json(), "m.json").unwrap();
+            let Model::Sequences(saved) = &loaded.model else {
+                panic!("a sequence model")
+            };
+            // Before teaching: the experts on file decide as those in memory, bit for bit.
+            let bits = |m: &SequenceModel| -> Vec<u64> {
+                m.predict(&test, Calibration::None)
+                    .unwrap()
+                    .iter()
+                    .flat_map(|p| {
+                        p.distributions
+                            .iter()
+                            .map(|v| v.to_bits())
+                            .collect::<Vec<_>>()
+                    })
+                    .collect()
+            };
+            assert_eq!(bits(&model), bits(saved), "{method:?}");
+            // Taught the next trials from the file and in one run alike.
+            let (from_file, _) = continue_sequences(saved, &b).unwrap();
+            let (one_run, _) = continue_sequences(&model, &b).unwrap();
+            assert_eq!(from_file, one_run, "{method:?}");
+            assert_eq!(bits(&from_file), bits(&one_run), "{method:?}");
+            // Ten objects, chance 0.1: on trials they never saw, the experts taught twice
+            // tell them apart as well as experts taught both parts at once (within 4 of
+            // the 40 test grasps).
+            let taught = sequence_file(
+                from_file,
+                &b,
+                0.0,
+                Default::default(),
+                Some(&file.provenance),
+            );
+            let (at_once, _) =
+                fit_sequences(&part(&session, 1..=6, &objects), &options(method)).unwrap();
+            let at_once = sequence_file(at_once, &session, 0.0, Default::default(), None);
+            let continued = accuracy(&evaluate(&taught, &test, Calibration::None).unwrap());
+            let reference = accuracy(&evaluate(&at_once, &test, Calibration::None).unwrap());
+            assert!(reference > 0.6, "{method:?} at once {reference}");
+            assert!(
+                continued >= reference - 0.1,
+                "{method:?} {continued} against {reference}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_class_without_an_expert_is_named() {
+        let session = simulate::object_recognition(1);
+        let objects = session.objects();
+        let a = part(&session, 1..=4, &objects[..3]);
+        let (model, _) = fit_sequences(&a, &options(MethodId::Ds)).unwrap();
+        assert_eq!(model.classes, objects[..3].to_vec());
+        let file = sequence_file(model, &a, 0.0, Default::default(), None);
+        let e = evaluate(
+            &file,
+            &part(&session, 5..=6, &objects[..4]),
+            Calibration::None,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains(&objects[3]) && e.contains("--from"), "{e}");
+        // Taught a session with the new object, the model gets an expert for it.
+        let Model::Sequences(m) = &file.model else {
+            panic!("a sequence model")
+        };
+        let (taught, _) = continue_sequences(m, &part(&session, 1..=4, &objects[2..4])).unwrap();
+        assert_eq!(taught.classes, objects[..4].to_vec());
+    }
 }
