@@ -36,6 +36,35 @@ pub enum FitMethod {
     Ds(FitSequenceArgs),
     /// Generative supervised OIESGP experts, as DS.
     Gs(FitSequenceArgs),
+    /// Discriminative unsupervised experts: online clusters at a novelty threshold;
+    /// `--from` learns a saved model further (novel objects open clusters).
+    Du(FitClusterArgs),
+    /// Generative unsupervised experts with the extreme-value novelty, as DU.
+    Gu(FitClusterArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct FitClusterArgs {
+    pub session: PathBuf,
+    /// The novelty threshold (e.g. the one `clustering --choose-threshold stability`
+    /// chose without labels); required unless --from.
+    #[arg(long)]
+    pub threshold: Option<f64>,
+    /// Feature families per step, as for `fit ds` (default `all`).
+    #[arg(long)]
+    pub features: Option<String>,
+    /// The label set clusters are scored against by `evaluate` (default `object`; never
+    /// read while learning).
+    #[arg(long)]
+    pub target: Option<String>,
+    /// Seed of the learning order.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Learn this saved model further on SESSION.
+    #[arg(long, value_name = "MODEL.json")]
+    pub from: Option<PathBuf>,
+    #[arg(short, long, value_name = "MODEL.json")]
+    pub output: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -137,6 +166,8 @@ pub fn fit(a: FitArgs) -> anyhow::Result<()> {
         FitMethod::RawSvm(f) => (MethodId::RawSvm, f),
         FitMethod::Ds(f) => return fit_sequences(MethodId::Ds, f),
         FitMethod::Gs(f) => return fit_sequences(MethodId::Gs, f),
+        FitMethod::Du(f) => return fit_clusters(MethodId::Du, f),
+        FitMethod::Gu(f) => return fit_clusters(MethodId::Gu, f),
     };
     let s = &f.stability;
     if s.json.is_some() || s.save_model.is_some() || s.nested {
@@ -249,6 +280,70 @@ fn fit_sequences(method: MethodId, a: FitSequenceArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+fn fit_clusters(method: MethodId, a: FitClusterArgs) -> anyhow::Result<()> {
+    let mut inputs = vec![a.session.as_path()];
+    inputs.extend(a.from.as_deref());
+    super::refuse_input_as_output(Some(&a.output), &inputs)?;
+    let session =
+        session::open(&a.session).with_context(|| format!("opening {}", a.session.display()))?;
+    let file = match &a.from {
+        Some(path) => {
+            if a.features.is_some() || a.target.is_some() || a.threshold.is_some() {
+                bail!(
+                    "--from keeps the saved model's features, target and threshold: leave those options out"
+                );
+            }
+            let old = models::load(path)?;
+            let models::Model::Clusters(m) = &old.model else {
+                bail!(
+                    "{} holds a {} model; --from takes a DU or GU model",
+                    path.display(),
+                    old.provenance.method.key()
+                );
+            };
+            if m.method() != method {
+                bail!(
+                    "{} holds a {} model, not {}",
+                    path.display(),
+                    m.method().key(),
+                    method.key()
+                );
+            }
+            let (next, secs) = models::continue_clusters(m, &session)?;
+            models::cluster_file(next, &session, secs, Some(&old.provenance))
+        }
+        None => {
+            let Some(threshold) = a.threshold else {
+                bail!(
+                    "--threshold: the novelty threshold the model opens clusters at (`clustering --choose-threshold stability` chooses one without labels)"
+                );
+            };
+            let learner = models::clustering::learner_of(method)
+                .with_context(|| format!("{} is not du or gu", method.key()))?;
+            let opts = models::ClusterFitOptions {
+                method,
+                features: a.features.as_deref().unwrap_or("all").parse()?,
+                label_set: a.target.clone().unwrap_or_else(|| "object".into()),
+                threshold,
+                seed: a.seed,
+                params: crate::experiments::clustering::ClusteringParams::for_learner(learner),
+            };
+            let (model, secs) = models::fit_clusters(&session, &opts)?;
+            models::cluster_file(model, &session, secs, None)
+        }
+    };
+    models::save(&file, &a.output)?;
+    let p = &file.provenance;
+    println!(
+        "{} in {:.1} s; {} clusters",
+        p.summary(),
+        p.train_seconds,
+        p.classes.len()
+    );
+    println!("wrote {}", a.output.display());
+    Ok(())
+}
+
 fn load_pair(model: &Path, session: &Path) -> anyhow::Result<(ModelFile, Session)> {
     let file = models::load(model)?;
     let session =
@@ -300,6 +395,16 @@ pub fn evaluate(a: EvaluateArgs) -> anyhow::Result<()> {
                     early.join(", ")
                 );
             }
+            HeldOutScores::Clustering {
+                purity,
+                ari,
+                nmi,
+                clusters,
+                effective,
+                ..
+            } => println!(
+                "purity {purity:.3}, ARI {ari:.3}, NMI {nmi:.3}; the grasps fall in {effective} of the model's {clusters} clusters"
+            ),
         }
     }
     if let Some(path) = &a.json {

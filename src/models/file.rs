@@ -10,7 +10,7 @@ use std::time::SystemTime;
 
 use serde::{Deserialize, Serialize};
 
-use super::{ModelError, SequenceModel, StabilityClassifier};
+use super::{ClusterModel, ModelError, SequenceModel, StabilityClassifier};
 use crate::catalogue::MethodId;
 use crate::experiments::result::SizeReason;
 use crate::session::Session;
@@ -102,6 +102,8 @@ pub enum Model {
     Stability(StabilityClassifier),
     /// DS or GS experts over per-step feature sequences.
     Sequences(SequenceModel),
+    /// DU or GU experts: online clusters of grasps.
+    Clusters(ClusterModel),
 }
 
 impl Model {
@@ -109,6 +111,7 @@ impl Model {
         match self {
             Model::Stability(c) => c.method(),
             Model::Sequences(m) => m.method(),
+            Model::Clusters(m) => m.method(),
         }
     }
 
@@ -116,6 +119,7 @@ impl Model {
         match self {
             Model::Stability(c) => c.validate(),
             Model::Sequences(m) => m.validate(),
+            Model::Clusters(m) => m.validate(),
         }
     }
 }

@@ -9,7 +9,7 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use super::recognition::EARLY_FRACTIONS;
-use super::{Calibration, Model, ModelError, ModelFile, SequenceModel, SessionRef};
+use super::{Calibration, ClusterModel, Model, ModelError, ModelFile, SequenceModel, SessionRef};
 use crate::catalogue::MethodId;
 use crate::experiments::links::{GraspLinks, grasps_text};
 use crate::experiments::result::{AnalysisKind, AnalysisResult, HeldOut};
@@ -53,6 +53,18 @@ pub enum HeldOutScores {
         early: Vec<(f64, f64)>,
         /// Counts: rows the true class, columns the decided class (the model's classes).
         confusion: Vec<Vec<usize>>,
+    },
+    Clustering {
+        purity: f64,
+        ari: f64,
+        nmi: f64,
+        /// Clusters the model holds, and how many of them the session's grasps fall in.
+        clusters: usize,
+        effective: usize,
+        /// The session's classes under the label set scored against (rows of the
+        /// contingency table; its columns are the clusters).
+        truth_classes: Vec<String>,
+        contingency: Vec<Vec<usize>>,
     },
 }
 
@@ -123,7 +135,28 @@ pub fn predict(
                 })
                 .collect())
         }
+        Model::Clusters(m) => {
+            let set = session.label_set(&m.label_set);
+            Ok(m.assign(session, calibration)?
+                .into_iter()
+                .zip(&session.grasps)
+                .enumerate()
+                .map(|(g, (cluster, grasp))| GraspPrediction {
+                    grasp: g,
+                    object: grasp.object.clone(),
+                    trial: grasp.trial,
+                    truth: truth_of(session, set, g),
+                    predicted: cluster_name(cluster),
+                    decision: f64::NAN,
+                })
+                .collect())
+        }
     }
+}
+
+/// How a cluster is named in predictions and figures (1-based, as the window counts).
+pub fn cluster_name(c: usize) -> String {
+    format!("cluster {}", c + 1)
 }
 
 /// Grasp `g`'s class name under label set `set`, if it has one.
@@ -174,6 +207,12 @@ pub fn evaluate(
             let predictions = predict(file, session, calibration)?;
             let scores = sequence_scores(m, session, calibration, &predictions)?;
             (m.label_set.clone(), m.classes.clone(), scores, predictions)
+        }
+        Model::Clusters(m) => {
+            let predictions = predict(file, session, calibration)?;
+            let scores = cluster_scores(m, session, calibration)?;
+            let classes = (0..m.clusters()).map(cluster_name).collect();
+            (m.label_set.clone(), classes, scores, predictions)
         }
     };
     Ok(HeldOutResult {
@@ -248,6 +287,29 @@ fn stability_scores(
     })
 }
 
+fn cluster_scores(
+    m: &ClusterModel,
+    session: &Session,
+    calibration: Calibration,
+) -> Result<HeldOutScores, ModelError> {
+    let (truth, truth_classes) = super::recognition::labels(session, &m.label_set)?;
+    let pred = m.assign(session, calibration)?;
+    let sc = crate::cluster::scores(&truth, &pred);
+    let mut contingency = vec![vec![0; m.clusters()]; truth_classes.len()];
+    for (t, p) in truth.iter().zip(&pred) {
+        contingency[*t][*p] += 1;
+    }
+    Ok(HeldOutScores::Clustering {
+        purity: sc.purity,
+        ari: sc.ari,
+        nmi: sc.nmi,
+        clusters: m.clusters(),
+        effective: crate::experiments::clustering::distinct(&pred),
+        truth_classes,
+        contingency,
+    })
+}
+
 fn sequence_scores(
     m: &SequenceModel,
     session: &Session,
@@ -316,17 +378,23 @@ pub fn held_out_report(r: &HeldOutResult) -> AnalysisResult {
         calibration: r.calibration.to_string(),
     };
     let class_of = |name: &str| r.classes.iter().position(|c| c == name);
+    // Rows: the true classes (the model's own, or for clusters the session's).
+    let rows = match &r.scores {
+        HeldOutScores::Clustering { truth_classes, .. } => truth_classes,
+        _ => &r.classes,
+    };
+    let row_of = |name: &str| rows.iter().position(|c| c == name);
     let links = GraspLinks::from_observations(
         "confusion",
         None,
         r.predictions.iter().filter_map(|p| {
-            let t = class_of(p.truth.as_deref()?)?;
+            let t = row_of(p.truth.as_deref()?)?;
             Some(([t, class_of(&p.predicted)?], p.grasp))
         }),
         |[t, p], grasps, _| {
             format!(
                 "true {}, predicted {}: {}",
-                r.classes[t],
+                rows[t],
                 r.classes[p],
                 grasps_text(grasps)
             )
@@ -376,6 +444,50 @@ pub fn held_out_report(r: &HeldOutResult) -> AnalysisResult {
             )
             .subtitle(held_out.text());
             (vec![("accuracy".into(), *accuracy)], fig, ("early", chart))
+        }
+        HeldOutScores::Clustering {
+            purity,
+            ari,
+            nmi,
+            clusters,
+            effective,
+            truth_classes,
+            contingency,
+        } => {
+            let mut fig = class_confusion(&title, contingency, &r.classes).subtitle(format!(
+                "purity {purity:.2}, ARI {ari:.2}, NMI {nmi:.2}; {effective} of {clusters} clusters hold grasps; calibration {}",
+                r.calibration
+            ));
+            if let FigureKind::Heatmap(h) = &mut fig.kind {
+                h.rows = truth_classes.clone();
+                h.y.title = format!("true {}", r.label_set);
+                h.x.title = "cluster".into();
+            }
+            let sizes = Figure::bars(
+                format!("Grasps per cluster, held out on {}", r.tested_on.name),
+                AxisTitle {
+                    title: "cluster".into(),
+                    unit: String::new(),
+                },
+                Axis::new("grasps", ""),
+                r.classes.clone(),
+                vec![BarGroup::new(
+                    "grasps",
+                    (0..*clusters)
+                        .map(|c| contingency.iter().map(|row| row[c]).sum::<usize>() as f64)
+                        .collect(),
+                )],
+            )
+            .subtitle(held_out.text());
+            (
+                vec![
+                    ("purity".into(), *purity),
+                    ("ARI".into(), *ari),
+                    ("NMI".into(), *nmi),
+                ],
+                fig,
+                ("clusters", sizes),
+            )
         }
     };
     let parameters = BTreeMap::from([

@@ -9,9 +9,12 @@
 //!   linear SVM): fitting, the session checks, decision values;
 //! - [`recognition`]: the supervised OIESGP experts (DS, GS): fitting, teaching further on a
 //!   new session, per-step predictions;
+//! - [`clustering`]: the unsupervised OIESGP experts (DU, GU): learning, learning further,
+//!   assigning a new session's grasps to clusters;
 //! - [`held_out`]: scores, predictions and figures on a session the model did not train on.
 
 pub mod calibration;
+pub mod clustering;
 pub mod file;
 pub mod held_out;
 pub mod recognition;
@@ -20,6 +23,9 @@ pub mod stability;
 mod tests;
 
 pub use calibration::Calibration;
+pub use clustering::{
+    ClusterFitOptions, ClusterModel, cluster_file, continue_clusters, fit_clusters,
+};
 pub use file::{
     FORMAT, Model, ModelFile, Provenance, SelectionScore, SessionRef, VERSION, load, save,
 };

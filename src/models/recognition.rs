@@ -87,11 +87,14 @@ pub struct SequenceFitOptions {
 }
 
 /// The classes of `session` under `label_set` and every grasp's class index.
-fn labels(session: &Session, label_set: &str) -> Result<(Vec<usize>, Vec<String>), ModelError> {
+pub(super) fn labels(
+    session: &Session,
+    label_set: &str,
+) -> Result<(Vec<usize>, Vec<String>), ModelError> {
     session_labels(session, label_set).map_err(|e| ModelError::Mismatch(e.to_string()))
 }
 
-fn sequences(
+pub(super) fn sequences(
     session: &Session,
     features: FeatureSet,
     range: SequenceRange,

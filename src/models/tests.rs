@@ -38,7 +38,7 @@ fn wsr(r: &HeldOutResult) -> f64 {
             weighted_success_rate,
             ..
         } => weighted_success_rate,
-        HeldOutScores::Recognition { .. } => panic!("a stability result"),
+        _ => panic!("a stability result"),
     }
 }
 
@@ -244,7 +244,7 @@ mod sequences {
     fn accuracy(r: &HeldOutResult) -> f64 {
         match r.scores {
             HeldOutScores::Recognition { accuracy, .. } => accuracy,
-            HeldOutScores::Stability { .. } => panic!("a recognition result"),
+            _ => panic!("a recognition result"),
         }
     }
 
@@ -326,5 +326,66 @@ mod sequences {
         };
         let (taught, _) = continue_sequences(m, &part(&session, 1..=4, &objects[2..4])).unwrap();
         assert_eq!(taught.classes, objects[..4].to_vec());
+    }
+}
+
+mod clusters {
+    use super::*;
+    use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner};
+    use crate::features::FeatureSet;
+    use crate::session::{SubsetSpec, subset};
+
+    #[test]
+    fn clusters_learned_further_from_the_file_equal_those_learned_in_one_run() {
+        let session = simulate::object_recognition(1);
+        let objects = session.objects();
+        let part = |objects: &[String]| {
+            let spec = SubsetSpec {
+                objects: objects.to_vec(),
+                trials: (1..=5).collect(),
+                labels: Vec::new(),
+            };
+            subset(&session, &spec, "part").unwrap()
+        };
+        let (a, b) = (part(&objects[..3]), part(&objects[3..6]));
+        for (method, learner, threshold) in [
+            (MethodId::Du, UnsupervisedLearner::Du, 0.4),
+            (MethodId::Gu, UnsupervisedLearner::Gu, 0.2),
+        ] {
+            let opts = ClusterFitOptions {
+                method,
+                features: FeatureSet::ALL,
+                label_set: "object".into(),
+                threshold,
+                seed: 2,
+                params: ClusteringParams::for_learner(learner),
+            };
+            let (model, _) = fit_clusters(&a, &opts).unwrap();
+            let file = cluster_file(model.clone(), &a, 0.0, None);
+            let loaded = ModelFile::from_json(&file.to_json(), "m.json").unwrap();
+            let Model::Clusters(saved) = &loaded.model else {
+                panic!("a cluster model")
+            };
+            assert_eq!(
+                saved.assign(&b, Calibration::None).unwrap(),
+                model.assign(&b, Calibration::None).unwrap()
+            );
+            let (from_file, _) = continue_clusters(saved, &b).unwrap();
+            let (one_run, _) = continue_clusters(&model, &b).unwrap();
+            assert_eq!(from_file, one_run, "{method:?}");
+            // Three objects it never saw: novel grasps open clusters.
+            assert!(from_file.clusters() > model.clusters(), "{method:?}");
+            let r = evaluate(
+                &cluster_file(from_file, &b, 0.0, None),
+                &b,
+                Calibration::None,
+            )
+            .unwrap();
+            let HeldOutScores::Clustering { purity, .. } = r.scores else {
+                panic!("a clustering result")
+            };
+            // Three objects: chance purity is about 1/3.
+            assert!(purity > 0.6, "{method:?} purity {purity}");
+        }
     }
 }

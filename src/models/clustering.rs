@@ -1,0 +1,296 @@
+//! The unsupervised OIESGP experts (DU, GU) as models that leave their session: grasps are
+//! learned one at a time in a seeded random order, a novel grasp (novelty above the
+//! threshold) opening a new cluster; the model keeps every expert's state, so that a new
+//! session is clustered by the experts as they are (`evaluate`, `predict`) or learned
+//! further (`fit du|gu --from`), where its novel objects open clusters of their own.
+//! Sequences are read as for DS and GS (`super::recognition`).
+
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+
+use super::recognition::sequences;
+use super::{Calibration, Model, ModelError, ModelFile, Provenance, SessionRef};
+use crate::catalogue::MethodId;
+use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner};
+use crate::experiments::result::SizeReason;
+use crate::features::{FeatureSet, SequenceRange};
+use crate::learners::{Du, DuParams, Gu, GuParams};
+use crate::rng::Rng;
+use crate::session::Session;
+
+/// The experts of an unsupervised learner with their whole state.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(tag = "learner", content = "state", rename_all = "snake_case")]
+pub enum Clusterer {
+    Du(Du),
+    Gu(Gu),
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ClusterModel {
+    pub clusterer: Clusterer,
+    pub features: FeatureSet,
+    pub feature_names: Vec<String>,
+    /// The training session's range of each feature.
+    pub min: Vec<f64>,
+    pub max: Vec<f64>,
+    /// The label set clusters are scored against (never read while learning).
+    pub label_set: String,
+    pub threshold: f64,
+    /// Seed of the learning order.
+    pub seed: u64,
+    pub grasps_taught: usize,
+}
+
+impl PartialEq for ClusterModel {
+    /// Equal when their saved states are: the learners hold caches that rebuild on load.
+    fn eq(&self, other: &Self) -> bool {
+        serde_json::to_string(self).ok() == serde_json::to_string(other).ok()
+    }
+}
+
+/// How an unsupervised model is fitted.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClusterFitOptions {
+    pub method: MethodId,
+    pub features: FeatureSet,
+    pub label_set: String,
+    pub threshold: f64,
+    pub seed: u64,
+    /// The experts' and the novelty's settings (its `threshold` is replaced).
+    pub params: ClusteringParams,
+}
+
+impl ClusterModel {
+    pub fn method(&self) -> MethodId {
+        match self.clusterer {
+            Clusterer::Du(_) => MethodId::Du,
+            Clusterer::Gu(_) => MethodId::Gu,
+        }
+    }
+
+    pub fn clusters(&self) -> usize {
+        match &self.clusterer {
+            Clusterer::Du(l) => l.n_clusters(),
+            Clusterer::Gu(l) => l.n_clusters(),
+        }
+    }
+
+    fn dim(&self) -> usize {
+        match &self.clusterer {
+            Clusterer::Du(l) => crate::learners::SequenceClassifier::dim(l.learner()),
+            Clusterer::Gu(l) => crate::learners::SequenceClassifier::dim(l.learner()),
+        }
+    }
+
+    /// The cluster of every grasp of `session` (the experts are not changed).
+    pub fn assign(
+        &self,
+        session: &Session,
+        calibration: Calibration,
+    ) -> Result<Vec<usize>, ModelError> {
+        let range = match calibration.grasps(session.grasps.len())? {
+            None => SequenceRange::Given {
+                min: &self.min,
+                max: &self.max,
+            },
+            Some(r) => SequenceRange::Grasps(r),
+        };
+        let feats = sequences(session, self.features, range)?;
+        self.check_names(&feats.names)?;
+        let mut c = self.clusterer.clone();
+        Ok(feats
+            .sequences
+            .iter()
+            .map(|seq| match &mut c {
+                Clusterer::Du(l) => l.assign(seq.view()),
+                Clusterer::Gu(l) => l.assign(seq.view()),
+            })
+            .collect())
+    }
+
+    fn check_names(&self, names: &[String]) -> Result<(), ModelError> {
+        if names != self.feature_names {
+            return Err(ModelError::Mismatch(format!(
+                "the model reads features {}; the session gives {}",
+                self.feature_names.join(", "),
+                names.join(", ")
+            )));
+        }
+        Ok(())
+    }
+
+    /// Learn every grasp of `session` in a seeded random order, on the model's range.
+    fn learn(&mut self, session: &Session) -> Result<(), ModelError> {
+        let feats = sequences(
+            session,
+            self.features,
+            SequenceRange::Given {
+                min: &self.min,
+                max: &self.max,
+            },
+        )?;
+        self.check_names(&feats.names)?;
+        let order =
+            Rng::stream(self.seed, self.grasps_taught as u64).permutation(session.grasps.len());
+        for g in order {
+            let seq = feats.sequences[g].view();
+            match &mut self.clusterer {
+                Clusterer::Du(l) => l.learn(seq)?,
+                Clusterer::Gu(l) => l.learn(seq)?,
+            };
+        }
+        self.grasps_taught += session.grasps.len();
+        Ok(())
+    }
+
+    pub fn validate(&self) -> Result<(), ModelError> {
+        let n = self.feature_names.len();
+        if n == 0 || self.min.len() != n || self.max.len() != n {
+            return Err(ModelError::field(
+                "model.min",
+                format!(
+                    "{} minima and {} maxima for {n} features",
+                    self.min.len(),
+                    self.max.len()
+                ),
+            ));
+        }
+        if self.min.iter().chain(&self.max).any(|v| !v.is_finite()) {
+            return Err(ModelError::field("model.min", "ranges must be finite"));
+        }
+        if self.dim() != n {
+            return Err(ModelError::field(
+                "model.clusterer",
+                format!("experts of {} inputs for {n} features", self.dim()),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Fit DU or GU on every grasp of `session`.
+pub fn fit_clusters(
+    session: &Session,
+    opts: &ClusterFitOptions,
+) -> Result<(ClusterModel, f64), ModelError> {
+    let t0 = Instant::now();
+    let feats = sequences(session, opts.features, SequenceRange::Session)?;
+    let dim = feats.dim();
+    let p = &opts.params;
+    let clusterer = match opts.method {
+        MethodId::Du => Clusterer::Du(Du::new(
+            dim,
+            &DuParams {
+                ds: p.ds.clone(),
+                threshold: opts.threshold,
+                min_grasps: p.du_min_grasps,
+            },
+        )?),
+        MethodId::Gu => Clusterer::Gu(Gu::new(
+            dim,
+            &GuParams {
+                gs: p.gs.clone(),
+                threshold: opts.threshold,
+                aggregate: p.gu_aggregate,
+                draws: p.gu_draws,
+                noise: p.gu_noise,
+                noise_floor: p.gu_noise_floor,
+                min_grasps: p.gu_min_grasps,
+            },
+        )?),
+        other => {
+            return Err(ModelError::Param(format!(
+                "{} is not an online clustering method (du, gu)",
+                other.key()
+            )));
+        }
+    };
+    let mut model = ClusterModel {
+        clusterer,
+        features: feats.families,
+        feature_names: feats.names,
+        min: feats.min,
+        max: feats.max,
+        label_set: opts.label_set.clone(),
+        threshold: opts.threshold,
+        seed: opts.seed,
+        grasps_taught: 0,
+    };
+    model.learn(session)?;
+    Ok((model, t0.elapsed().as_secs_f64()))
+}
+
+/// Learn a saved model further on a new session.
+pub fn continue_clusters(
+    model: &ClusterModel,
+    session: &Session,
+) -> Result<(ClusterModel, f64), ModelError> {
+    let t0 = Instant::now();
+    let mut next = model.clone();
+    next.learn(session)?;
+    Ok((next, t0.elapsed().as_secs_f64()))
+}
+
+/// The learner the catalogue names `method`, for the clustering protocol's defaults.
+pub fn learner_of(method: MethodId) -> Option<UnsupervisedLearner> {
+    match method {
+        MethodId::Du => Some(UnsupervisedLearner::Du),
+        MethodId::Gu => Some(UnsupervisedLearner::Gu),
+        _ => None,
+    }
+}
+
+/// The model file of an unsupervised model learned (or learned further) on `session`.
+pub fn cluster_file(
+    model: ClusterModel,
+    session: &Session,
+    secs: f64,
+    previous: Option<&Provenance>,
+) -> ModelFile {
+    let gp = match &model.clusterer {
+        Clusterer::Du(l) => l.params().ds.gp,
+        Clusterer::Gu(l) => l.params().gs.gp,
+    };
+    let mut parameters = vec![
+        ("features".to_string(), model.features.to_string()),
+        ("threshold".to_string(), model.threshold.to_string()),
+        ("scored against".to_string(), model.label_set.clone()),
+        ("order seed".to_string(), model.seed.to_string()),
+        ("clusters".to_string(), model.clusters().to_string()),
+        (
+            "grasps learned".to_string(),
+            model.grasps_taught.to_string(),
+        ),
+    ];
+    if let Some(p) = previous {
+        parameters.push((
+            "continued from".to_string(),
+            format!("{} [{}]", p.summary(), p.session.hash),
+        ));
+    }
+    let provenance = Provenance {
+        method: model.method(),
+        parameters,
+        size: vec![("capacity".into(), gp.capacity), ("tau".into(), gp.tau)],
+        size_reason: SizeReason::PaperDefault,
+        session: SessionRef::of(session),
+        features: format!(
+            "{} per step: {}",
+            model.feature_names.len(),
+            model.feature_names.join(", ")
+        ),
+        normalisation: "each feature min-max scaled over every frame of the training session \
+                        (a new session: see its calibration; learning further keeps this range)"
+            .into(),
+        label_set: model.label_set.clone(),
+        classes: (1..=model.clusters())
+            .map(|c| format!("cluster {c}"))
+            .collect(),
+        trained_at: Provenance::now(),
+        train_seconds: secs,
+        selection: Vec::new(),
+    };
+    ModelFile::new(provenance, Model::Clusters(model))
+}
