@@ -138,6 +138,9 @@ pub struct PredictArgs {
     /// One row per grasp: grasp, object, trial, truth (when labelled), predicted, decision.
     #[arg(short, long, value_name = "predictions.csv")]
     pub output: PathBuf,
+    /// DS/GS: also every step of every grasp with the class distribution after it.
+    #[arg(long, value_name = "STEPS.csv")]
+    pub steps: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]
@@ -430,9 +433,19 @@ pub fn evaluate(a: EvaluateArgs) -> anyhow::Result<()> {
 
 pub fn predict(a: PredictArgs) -> anyhow::Result<()> {
     super::refuse_input_as_output(Some(&a.output), &[&a.model, &a.session])?;
+    super::refuse_input_as_output(a.steps.as_deref(), &[&a.model, &a.session])?;
     let calibration: Calibration = a.calibration.parse()?;
     let (file, session) = load_pair(&a.model, &a.session)?;
     let rows = models::predict(&file, &session, calibration)?;
+    if let Some(path) = &a.steps {
+        let models::Model::Sequences(m) = &file.model else {
+            bail!("--steps: only DS and GS models decide step by step");
+        };
+        let text = models::held_out::steps_csv(m, &session, calibration)?;
+        crate::fsutil::write_atomic(path, text.as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
     crate::fsutil::write_atomic(
         &a.output,
         models::held_out::predictions_csv(&rows).as_bytes(),

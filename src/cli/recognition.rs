@@ -75,6 +75,10 @@ pub struct RecognitionArgs {
     /// Write the full result here as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Also teach the learner every grasp of the session (the protocol's order, `--seed`)
+    /// and save it as a model file (`evaluate`, `predict`, `fit --from`).
+    #[arg(long, value_name = "MODEL.json")]
+    pub save_model: Option<PathBuf>,
     /// Print no progress.
     #[arg(long, short)]
     pub quiet: bool,
@@ -217,9 +221,29 @@ pub fn recognition(args: RecognitionArgs) -> anyhow::Result<()> {
     super::refuse_input_as_output(args.json.as_deref(), &inputs)?;
     let params = args.params()?;
     let session = open_session(&args.session)?;
+    super::refuse_input_as_output(args.save_model.as_deref(), &inputs)?;
     let result = with_progress(args.quiet, |p| run_recognition(&session, &params, p))?;
     print_recognition(&result);
-    write_json(&result, args.json.as_deref())
+    write_json(&result, args.json.as_deref())?;
+    if let Some(path) = &args.save_model {
+        let method = match params.learner {
+            SupervisedLearner::Ds => MethodId::Ds,
+            SupervisedLearner::Gs => MethodId::Gs,
+        };
+        let opts = crate::models::SequenceFitOptions {
+            method,
+            features: params.features,
+            label_set: params.label_set.clone(),
+            seed: params.seed,
+            ds: params.ds.clone(),
+            gs: params.gs.clone(),
+        };
+        let (model, secs) = crate::models::fit_sequences(&session, &opts)?;
+        let file = crate::models::sequence_file(model, &session, secs, params.size_reason, None);
+        crate::models::save(&file, path)?;
+        println!("wrote {} ({})", path.display(), file.provenance.summary());
+    }
+    Ok(())
 }
 
 #[derive(Args, Debug)]

@@ -213,6 +213,9 @@ fn experiment_of(e: &PlanExperiment) -> anyhow::Result<(Experiment, Session, &Pa
         }
         PlanExperiment::Recognition { args, .. } => {
             no_json(&args.json)?;
+            if args.save_model.is_some() {
+                bail!("a plan saves no model: `fit ds|gs` on the session does");
+            }
             (
                 Experiment::Recognition(args.params()?),
                 open_session(&args.session)?,

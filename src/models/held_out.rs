@@ -602,3 +602,28 @@ fn per_object(r: &HeldOutResult, held_out: &HeldOut) -> Figure {
     )
     .subtitle(held_out.text())
 }
+
+/// DS/GS: every step of every grasp with the class distribution after it, as CSV (one
+/// column per class of the model).
+pub fn steps_csv(
+    m: &SequenceModel,
+    session: &Session,
+    calibration: Calibration,
+) -> Result<String, ModelError> {
+    let mut out = String::new();
+    let mut header = vec!["grasp".to_string(), "object".into(), "step".into()];
+    header.extend(m.classes.iter().cloned());
+    csv_row(&mut out, header);
+    for (g, p) in m.predict(session, calibration)?.iter().enumerate() {
+        for (t, row) in p.distributions.rows().into_iter().enumerate() {
+            let mut cells = vec![
+                g.to_string(),
+                session.grasps[g].object.clone(),
+                (t + 1).to_string(),
+            ];
+            cells.extend(row.iter().map(f64::to_string));
+            csv_row(&mut out, cells);
+        }
+    }
+    Ok(out)
+}
