@@ -434,10 +434,16 @@ fn grasp_pane(ui: &mut egui::Ui, cx: &mut Cx, i: usize) {
             "decision value {:+.3} (> 0 predicts failure, ≤ 0 success)",
             code.decision
         ))
-        .on_hover_text(
-            "The linear SVM's decision value from the 10-fold fold that tested this grasp",
-        );
+        .on_hover_text(if r.held_out.is_some() {
+            "The model's decision value for this grasp of the session it did not train on"
+        } else {
+            "The linear SVM's decision value from the 10-fold fold that tested this grasp"
+        });
     });
+    // A held-out result keeps decisions only (its model's codes are not recomputed).
+    if code.patches.is_empty() {
+        return;
+    }
     // Patch and reconstruction side by side for every sensor, fitted to the tile's width
     // (and wrapped onto more rows when even the smallest heatmaps do not fit).
     let n_sensors = code.patches.len().max(1) as f32;
@@ -564,6 +570,9 @@ pub fn card(ui: &mut egui::Ui, cx: &mut Cx, i: usize, reset: &mut bool) {
             *reset = true;
         }
     });
+    if let Some(h) = &cx.analyses.results[i].held_out {
+        ui.label(RichText::new(format!("Held out: {}", h.text())).strong());
+    }
     selection_line(ui, cx);
 }
 
@@ -587,6 +596,13 @@ pub fn selection_line(ui: &mut egui::Ui, cx: &mut Cx) {
         }
         if ui.small_button("Clear selection").clicked() {
             cx.commands.push(Command::ClearSelection);
+        }
+        if ui
+            .small_button("Save selection as session…")
+            .on_hover_text("These grasps as a session file of their own (a test set)")
+            .clicked()
+        {
+            cx.commands.push(Command::SaveSelection);
         }
     });
 }
