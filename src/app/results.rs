@@ -241,8 +241,8 @@ impl Analyses {
                         .first()
                         .map(|(n, v)| format!(": {n} {v:.3}"))
                         .unwrap_or_default();
-                    let text = r.held_out.as_ref().map(|h| h.text()).unwrap_or_default();
-                    self.notes.info(format!("{}{score} ({text})", r.label));
+                    self.notes
+                        .info(format!("{} on {}{score}", r.label, r.session));
                     self.add_result(*r);
                     self.reveal = Some(self.results.len() - 1);
                 }

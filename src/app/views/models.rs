@@ -42,12 +42,14 @@ pub fn section(ui: &mut egui::Ui, cx: &mut Cx, task: Task) {
                     others.len()
                 ))
                 .id_salt("models-others")
+                .default_open(mine.is_empty())
                 .show(ui, |ui| {
                     for &i in &others {
                         row(ui, cx, i);
                     }
                 });
             }
+            ui.add_space(4.0);
             if ui
                 .small_button("Load model…")
                 .on_hover_text("Add a model file (tactile-workbench-model) to the list")
@@ -71,7 +73,7 @@ fn row(ui: &mut egui::Ui, cx: &mut Cx, i: usize) {
     let score = p
         .selection
         .first()
-        .map(|s| format!("{} {}", s.name, number(s.value)));
+        .map(|s| format!("{} {} ({})", s.name, number(s.value), s.protocol));
     let scores_hover = p
         .selection
         .iter()
@@ -81,10 +83,10 @@ fn row(ui: &mut egui::Ui, cx: &mut Cx, i: usize) {
     ui.add_space(2.0);
     ui.label(RichText::new(title).strong());
     let mut line = format!(
-        "on {} ({} grasps), {}",
+        "trained {} on {} ({} grasps)",
+        trained_when(file),
         p.session.name,
         p.session.grasps,
-        trained_when(file)
     );
     if let Some(s) = score {
         line = format!("{s}; {line}");
@@ -140,6 +142,8 @@ pub fn evaluate_window(ctx: &egui::Context, cx: &mut Cx) {
     let mut go = false;
     let mut cancel = false;
     egui::Window::new("Evaluate on session")
+        .pivot(egui::Align2::CENTER_TOP)
+        .default_pos(ctx.content_rect().center_top() + egui::vec2(0.0, 120.0))
         .open(&mut open)
         .collapsible(false)
         .resizable(false)
