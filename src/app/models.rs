@@ -139,3 +139,73 @@ pub fn read_dir(dir: &Path) -> (Vec<(PathBuf, ModelFile)>, Vec<String>) {
     }
     (ok, bad)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::catalogue::MethodId;
+    use crate::experiments::stability::{DataOptions, StabilityData, StabilityOptions};
+    use crate::jobs::Progress;
+    use crate::models::fit_stability;
+
+    fn raw_svm() -> ModelFile {
+        let session = crate::session::simulate::grasp_stability(0);
+        let data = StabilityData::from_session(&session, &DataOptions::default()).unwrap();
+        let opts = StabilityOptions::default();
+        fit_stability(MethodId::RawSvm, &session, &data, &opts, &Progress::new())
+            .unwrap()
+            .into_file(&session, &data)
+    }
+
+    #[test]
+    fn each_model_gets_a_file_of_its_own_and_a_bad_file_is_named() {
+        let dir = std::env::temp_dir().join(format!("tw-app-models-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut list = Models {
+            dir: Some(dir.clone()),
+            ..Default::default()
+        };
+        let a = raw_svm();
+        assert!(list.add(a.clone()));
+        assert!(!list.add(a.clone()), "an equal model is listed once");
+        // Another model trained in the same second on the same session: numbered.
+        let mut b = a.clone();
+        b.provenance.train_seconds += 1.0;
+        assert!(list.add(b));
+        let names: Vec<String> = list
+            .list
+            .iter()
+            .map(|m| {
+                m.kept
+                    .as_ref()
+                    .unwrap()
+                    .file_name()
+                    .unwrap()
+                    .to_string_lossy()
+                    .into()
+            })
+            .collect();
+        let first = file_name(&a);
+        assert!(
+            first.starts_with("raw-svm-simulated-grasp-stability-"),
+            "{first}"
+        );
+        assert_eq!(names, [first.clone(), first.replace(".json", "-2.json")]);
+
+        // Read back: the good file, and the bad one named in its error.
+        crate::models::save(&a, list.list[0].kept.as_ref().unwrap()).unwrap();
+        std::fs::write(
+            dir.join("torn.json"),
+            "{\"format\": \"tactile-workbench-model\"",
+        )
+        .unwrap();
+        std::fs::write(dir.join("notes.txt"), "not a model").unwrap();
+        let (ok, bad) = read_dir(&dir);
+        assert_eq!(ok.len(), 1);
+        assert_eq!(ok[0].1, a);
+        assert_eq!(bad.len(), 1);
+        assert!(bad[0].contains("torn.json"), "{bad:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
