@@ -14,6 +14,11 @@ pub enum Purpose {
     Folder,
     OpenProject,
     SaveProject,
+    /// Model `0` of the Models list.
+    SaveModel(usize),
+    LoadModel,
+    /// The selected grasps as a session.
+    SaveSelection,
 }
 
 impl Purpose {
@@ -23,18 +28,32 @@ impl Purpose {
             Purpose::Folder => "Open folder",
             Purpose::OpenProject => "Open project",
             Purpose::SaveProject => "Save project",
+            Purpose::SaveModel(_) => "Save model",
+            Purpose::LoadModel => "Load model",
+            Purpose::SaveSelection => "Save selection as session",
         }
+    }
+
+    /// A save (else an open).
+    pub fn saves(self) -> bool {
+        matches!(
+            self,
+            Purpose::SaveProject | Purpose::SaveModel(_) | Purpose::SaveSelection
+        )
     }
 
     fn action(self) -> &'static str {
-        match self {
-            Purpose::SaveProject => "Save",
-            _ => "Open",
-        }
+        if self.saves() { "Save" } else { "Open" }
     }
 
     /// The file a save names when the path field holds only a folder.
-    const SAVE_NAME: &'static str = "project.json";
+    fn save_name(self) -> &'static str {
+        match self {
+            Purpose::SaveModel(_) => "model.json",
+            Purpose::SaveSelection => "selection.json",
+            _ => "project.json",
+        }
+    }
 }
 
 /// One line of the folder listing.
@@ -105,9 +124,9 @@ impl FilePicker {
             return Err("type a path first".into());
         }
         match self.purpose {
-            Purpose::SaveProject => {
+            purpose if purpose.saves() => {
                 let p = if p.is_dir() {
-                    p.join(Purpose::SAVE_NAME)
+                    p.join(purpose.save_name())
                 } else {
                     p
                 };
@@ -122,7 +141,7 @@ impl FilePicker {
                 }
             }
             Purpose::Folder if !p.is_dir() => Err(format!("{} is not a folder", p.display())),
-            Purpose::OpenProject if !p.is_file() => {
+            Purpose::OpenProject | Purpose::LoadModel if !p.is_file() => {
                 Err(format!("cannot open {}: no such file", p.display()))
             }
             Purpose::Sessions if !p.exists() => {

@@ -9,6 +9,7 @@ pub mod files;
 pub mod heatmap;
 pub mod import;
 pub mod loader;
+pub mod models;
 pub mod notify;
 pub mod replay;
 pub mod results;
@@ -297,6 +298,7 @@ impl WorkbenchApp {
             self.analyses.restore_results(ctx, path.clone());
         }
         self.analyses.keep = Some(path);
+        self.analyses.keep_models_in(ctx, &dir);
     }
 
     fn close(&mut self, i: usize) {
@@ -434,6 +436,9 @@ impl WorkbenchApp {
                 }
                 Command::Open(v) => self.view = v,
                 Command::TrainModel(spec) => self.train_model(spec, ctx),
+                Command::SaveModel(i) => self.open_picker(Purpose::SaveModel(i)),
+                Command::LoadModel => self.open_picker(Purpose::LoadModel),
+                Command::SaveSelection => self.open_picker(Purpose::SaveSelection),
             }
         }
     }
@@ -613,6 +618,11 @@ impl WorkbenchApp {
         if self.analyses.poll() {
             ctx.request_repaint();
         }
+        if let Some(i) = self.analyses.reveal.take() {
+            self.commands.push(Command::OpenResult(i));
+            self.apply_commands(ctx);
+        }
+        self.analyses.keep_models(ctx);
         self.scope_selection();
         let sessions = self.sessions.iter().map(|s| s.source.label()).collect();
         self.analyses.keep_if_changed(ctx, sessions);
@@ -693,6 +703,17 @@ impl WorkbenchApp {
                     let sessions = self.sessions.iter().map(|s| s.source.label()).collect();
                     self.analyses.save_project(ctx, p, sessions);
                 }
+                Purpose::SaveModel(i) => self.analyses.save_model(ctx, i, p),
+                Purpose::LoadModel => self.analyses.load_model(ctx, p),
+                Purpose::SaveSelection => match self.selection.session {
+                    Some(s) if !self.selection.grasps.is_empty() => {
+                        let grasps = self.selection.grasps.clone();
+                        if let Some(ls) = self.sessions.get(s) {
+                            self.analyses.save_selection(ctx, ls, grasps, p);
+                        }
+                    }
+                    _ => self.analyses.notes.error("no grasps are selected"),
+                },
             }
         }
     }
@@ -707,13 +728,27 @@ impl WorkbenchApp {
             .map(|p| p.to_path_buf());
         let folder = match purpose {
             Purpose::Sessions | Purpose::Folder => recent.or_else(|| self.last_folder.clone()),
-            Purpose::OpenProject | Purpose::SaveProject => self.last_folder.clone().or(recent),
+            _ => self.last_folder.clone().or(recent),
         }
         .filter(|d| d.is_dir())
         .or_else(|| std::env::current_dir().ok())
         .unwrap_or_else(|| PathBuf::from("."));
         let start = match purpose {
             Purpose::SaveProject => folder.join("project.json"),
+            Purpose::SaveModel(i) => match self.analyses.models.list.get(i) {
+                Some(m) => folder.join(models::file_name(&m.file)),
+                None => folder.join("model.json"),
+            },
+            Purpose::SaveSelection => {
+                let name = self
+                    .selection
+                    .session
+                    .and_then(|s| self.sessions.get(s))
+                    .map_or("session".into(), |s| {
+                        crate::experiments::result::slug(&s.session.meta.name)
+                    });
+                folder.join(format!("{name}-selection.json"))
+            }
             _ => folder,
         };
         self.picker = Some(FilePicker::new(purpose, start));
@@ -742,6 +777,14 @@ impl WorkbenchApp {
                     .add_filter("Projects", &["json"])
                     .set_file_name("project.json")
                     .save_file()
+                    .map(|p| vec![p]),
+                Purpose::SaveModel(_) | Purpose::SaveSelection => dialog
+                    .add_filter("JSON", &["json"])
+                    .save_file()
+                    .map(|p| vec![p]),
+                Purpose::LoadModel => dialog
+                    .add_filter("Models", &["json"])
+                    .pick_file()
                     .map(|p| vec![p]),
             };
             let _ = tx.send(picked.unwrap_or_default());
@@ -897,6 +940,7 @@ impl WorkbenchApp {
             views::central_ui(ui, room, layouts, &mut cx);
         });
         let now = ctx.input(|i| i.time);
+        views::models::evaluate_window(&ctx, &mut cx);
         cx.analyses.notes.ui(&ctx, now);
         if let Some(source) = self.import.show(&ctx) {
             self.open(source, &ctx);

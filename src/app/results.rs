@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use egui::ProgressBar;
 
 use super::loader::LoadedSession;
+use super::models::{KEPT_MODELS, Models};
 use super::notify::Notifications;
 use crate::catalogue::MethodId;
 use crate::experiments::ExperimentError;
@@ -20,6 +21,7 @@ use crate::features::FeatureSet;
 use crate::figures::{self, Format, RenderOptions};
 use crate::jobs::estimate::Timings;
 use crate::jobs::{Job, JobError, Outcome};
+use crate::models::{self, Calibration, ModelFile};
 
 /// How a frontier job's title starts (one frontier runs at a time).
 pub const FRONTIER_JOB: &str = "Frontier of ";
@@ -44,6 +46,18 @@ pub enum JobOutput {
     /// The results were written to the data folder.
     Kept,
     Trace(Box<ReplayTrace>),
+    /// A result and the model it trained (for the Models list).
+    Trained {
+        result: Box<AnalysisResult>,
+        model: Box<ModelFile>,
+    },
+    /// A model of the list on another session: shown at once.
+    HeldOut(Box<AnalysisResult>),
+    /// A model file read from disk for the list.
+    ModelLoaded(Box<ModelFile>),
+    /// The models kept by an earlier run, and the files of their folder that could not be
+    /// read.
+    ModelsRestored(Vec<(PathBuf, ModelFile)>, Vec<String>),
 }
 
 /// The class distribution at every step of one grasp, for the replay view.
@@ -180,6 +194,10 @@ pub struct Analyses {
     pub keep: Option<PathBuf>,
     /// The results changed since they were last kept.
     keep_pending: bool,
+    /// Every model trained here or loaded, kept beside the results.
+    pub models: Models,
+    /// A result to show at once (a held-out result just computed): the app opens it.
+    pub reveal: Option<usize>,
 }
 
 /// The title of the job that keeps the results in the data folder.
@@ -212,11 +230,38 @@ impl Analyses {
                     .record(kind, *modelled, rj.job.progress.elapsed_secs());
             }
             match outcome {
-                Some(Outcome::Done(JobOutput::Result(r))) => {
-                    let kind = r.kind;
-                    self.results.push(*r);
-                    self.shown.insert(kind, self.results.len() - 1);
-                    self.keep_pending = true;
+                Some(Outcome::Done(JobOutput::Result(r))) => self.add_result(*r),
+                Some(Outcome::Done(JobOutput::Trained { result, model })) => {
+                    self.add_result(*result);
+                    self.models.add(*model);
+                }
+                Some(Outcome::Done(JobOutput::HeldOut(r))) => {
+                    let score = r
+                        .scores
+                        .first()
+                        .map(|(n, v)| format!(": {n} {v:.3}"))
+                        .unwrap_or_default();
+                    self.notes
+                        .info(format!("{} on {}{score}", r.label, r.session));
+                    self.add_result(*r);
+                    self.reveal = Some(self.results.len() - 1);
+                }
+                Some(Outcome::Done(JobOutput::ModelLoaded(m))) => {
+                    let summary = m.provenance.summary();
+                    if self.models.add(*m) {
+                        self.notes.info(format!("model loaded: {summary}"));
+                    } else {
+                        self.notes.info(format!("already in the list: {summary}"));
+                    }
+                }
+                Some(Outcome::Done(JobOutput::ModelsRestored(ok, bad))) => {
+                    for (path, file) in ok {
+                        self.models.add_kept(file, path);
+                    }
+                    for e in bad {
+                        self.notes
+                            .error(format!("a kept model could not be read: {e}"));
+                    }
                 }
                 Some(Outcome::Done(JobOutput::Kept)) => {}
                 Some(Outcome::Done(JobOutput::Restored(p))) => {
@@ -277,6 +322,169 @@ impl Analyses {
             }
         }
         changed
+    }
+
+    fn add_result(&mut self, r: AnalysisResult) {
+        let kind = r.kind;
+        self.results.push(r);
+        self.shown.insert(kind, self.results.len() - 1);
+        self.keep_pending = true;
+    }
+
+    /// Keep the models in `dir` from now on, and read back those an earlier run kept
+    /// there (in the background).
+    pub fn keep_models_in(&mut self, ctx: &egui::Context, data: &std::path::Path) {
+        let dir = data.join(KEPT_MODELS);
+        self.models.dir = Some(dir.clone());
+        if !dir.is_dir() {
+            return;
+        }
+        self.spawn(ctx, None, "Reopening the kept models".into(), move |_| {
+            let (ok, bad) = super::models::read_dir(&dir);
+            Ok(JobOutput::ModelsRestored(ok, bad))
+        });
+    }
+
+    /// Write the models not yet kept (each atomically, in the background).
+    pub fn keep_models(&mut self, ctx: &egui::Context) {
+        let mut writes = Vec::new();
+        for m in &mut self.models.list {
+            if let (Some(path), false) = (&m.kept, m.written) {
+                m.written = true;
+                writes.push((path.clone(), m.file.clone()));
+            }
+        }
+        for (path, file) in writes {
+            self.spawn(ctx, None, "Keeping a model".into(), move |_| {
+                if let Some(dir) = path.parent() {
+                    std::fs::create_dir_all(dir)
+                        .map_err(|e| JobError::failed(format!("{}: {e}", dir.display())))?;
+                }
+                models::save(&file, &path).map_err(JobError::failed)?;
+                Ok(JobOutput::Kept)
+            });
+        }
+    }
+
+    /// Remove model `i` from the list and its kept copy from the data folder.
+    pub fn remove_model(&mut self, i: usize) {
+        if i >= self.models.list.len() {
+            return;
+        }
+        let m = self.models.list.remove(i);
+        if let Some(p) = m.kept.filter(|p| p.is_file())
+            && let Err(e) = std::fs::remove_file(&p)
+        {
+            self.notes.error(format!("{}: {e}", p.display()));
+        }
+        self.models.evaluate = None;
+    }
+
+    /// Write model `i` to `path` (in the background).
+    pub fn save_model(&mut self, ctx: &egui::Context, i: usize, path: PathBuf) {
+        let Some(m) = self.models.list.get(i) else {
+            return;
+        };
+        let file = m.file.clone();
+        self.spawn(
+            ctx,
+            None,
+            format!("Save model {}", path.display()),
+            move |_| {
+                models::save(&file, &path).map_err(JobError::failed)?;
+                Ok(JobOutput::Message(format!(
+                    "model saved to {}",
+                    path.display()
+                )))
+            },
+        );
+    }
+
+    /// Read a model file into the list (in the background); a bad file is a toast.
+    pub fn load_model(&mut self, ctx: &egui::Context, path: PathBuf) {
+        self.spawn(
+            ctx,
+            None,
+            format!("Load model {}", path.display()),
+            move |_| {
+                let file = models::load(&path).map_err(JobError::failed)?;
+                Ok(JobOutput::ModelLoaded(Box::new(file)))
+            },
+        );
+    }
+
+    /// Model `i` on session `s` under `calibration`, as a held-out result of `s` (in the
+    /// background); a session the model cannot read fails with the reason.
+    pub fn evaluate_model(
+        &mut self,
+        ctx: &egui::Context,
+        i: usize,
+        s: &LoadedSession,
+        calibration: Calibration,
+    ) {
+        let Some(m) = self.models.list.get(i) else {
+            return;
+        };
+        let file = m.file.clone();
+        let session = s.session.clone();
+        let title = format!(
+            "Evaluate {} on {}",
+            file.provenance.method.title(),
+            session.meta.name
+        );
+        self.spawn(ctx, None, title, move |p| {
+            p.set(0.1, "the model's features and decisions on every grasp");
+            let r = models::evaluate(&file, &session, calibration).map_err(JobError::failed)?;
+            let mut report = models::held_out_report(&r);
+            if r.method.task() == crate::catalogue::Task::Stability {
+                // The decision value of every grasp, for the focused grasp's tile.
+                report.grasp_codes = r
+                    .predictions
+                    .iter()
+                    .filter_map(|g| {
+                        Some(crate::experiments::links::GraspCode {
+                            grasp: g.grasp,
+                            truth: g.truth.clone()?,
+                            predicted: g.predicted.clone(),
+                            decision: g.decision,
+                            patches: Vec::new(),
+                        })
+                    })
+                    .collect();
+            }
+            Ok(JobOutput::HeldOut(Box::new(report)))
+        });
+    }
+
+    /// Save `grasps` of `s` as a native session file at `path` (in the background), named
+    /// after the file.
+    pub fn save_selection(
+        &mut self,
+        ctx: &egui::Context,
+        s: &LoadedSession,
+        grasps: Vec<usize>,
+        path: PathBuf,
+    ) {
+        let session = s.session.clone();
+        let name = path
+            .file_stem()
+            .map_or_else(|| "selection".into(), |n| n.to_string_lossy().into_owned());
+        self.spawn(
+            ctx,
+            None,
+            format!("Save selection as {}", path.display()),
+            move |_| {
+                let sub = crate::session::subset_grasps(&session, &grasps, &name)
+                    .map_err(JobError::failed)?;
+                crate::session::save(&sub, &path).map_err(JobError::failed)?;
+                Ok(JobOutput::Message(format!(
+                    "{} grasps of {} saved as the session {name} ({})",
+                    sub.grasps.len(),
+                    session.meta.name,
+                    path.display()
+                )))
+            },
+        );
     }
 
     /// Read the results an earlier run kept in `path` (in the background).

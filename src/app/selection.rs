@@ -105,6 +105,12 @@ pub enum Command {
     /// Open the result of this model on the active session, or train it if there is none
     /// (a point of a frontier).
     TrainModel(ModelSpec),
+    /// "Save model…": model `0` of the Models list to a file the user picks.
+    SaveModel(usize),
+    /// "Load model…": a model file into the Models list.
+    LoadModel,
+    /// "Save selection as session…": the selected grasps as a session file.
+    SaveSelection,
 }
 
 /// A model of a given size: what a frontier's point stands for.

@@ -101,13 +101,48 @@ pub fn subset(session: &Session, spec: &SubsetSpec, name: &str) -> Result<Sessio
             spec.describe()
         )));
     }
+    Ok(with_grasps(session, grasps, &spec.describe(), name))
+}
+
+/// The grasps of `session` at `indices` (any order, repeats kept once), as a session of
+/// their own named `name`: a selection made in the window saved as a test set.
+pub fn subset_grasps(
+    session: &Session,
+    indices: &[usize],
+    name: &str,
+) -> Result<Session, SubsetError> {
+    let n = session.grasps.len();
+    if let Some(&g) = indices.iter().find(|&&g| g >= n) {
+        return Err(SubsetError(format!(
+            "no grasp {} in {}: it has {n}",
+            g + 1,
+            session.meta.name
+        )));
+    }
+    let mut keep = indices.to_vec();
+    keep.sort_unstable();
+    keep.dedup();
+    if keep.is_empty() {
+        return Err(SubsetError("no grasps chosen".into()));
+    }
+    // One-based, as the browser numbers grasps.
+    let mut listed: Vec<String> = keep.iter().take(10).map(|g| (g + 1).to_string()).collect();
+    if keep.len() > 10 {
+        listed.push("…".into());
+    }
+    let what = format!("grasps {}", listed.join(", "));
+    let grasps = keep.iter().map(|&g| session.grasps[g].clone()).collect();
+    Ok(with_grasps(session, grasps, &what, name))
+}
+
+/// `session` with only `grasps`, named `name`, its notes saying which (`what`).
+fn with_grasps(session: &Session, grasps: Vec<super::Grasp>, what: &str, name: &str) -> Session {
     let mut meta = session.meta.clone();
     let note = format!(
-        "{} of the {} grasps of {} ({})",
+        "{} of the {} grasps of {} ({what})",
         grasps.len(),
         session.grasps.len(),
         session.meta.name,
-        spec.describe()
     );
     meta.notes = if meta.notes.is_empty() {
         note
@@ -115,11 +150,11 @@ pub fn subset(session: &Session, spec: &SubsetSpec, name: &str) -> Result<Sessio
         format!("{}\n{note}", meta.notes)
     };
     meta.name = name.to_string();
-    Ok(Session {
+    Session {
         meta,
         grasps,
         ..session.clone()
-    })
+    }
 }
 
 #[cfg(test)]
@@ -157,6 +192,24 @@ mod tests {
         )));
         assert_eq!(sub.sensors, s.sensors);
         assert_eq!(sub.label_sets, s.label_sets);
+    }
+
+    #[test]
+    fn chosen_grasps_keep_their_session_order_once_each() {
+        let s = session();
+        let sub = subset_grasps(&s, &[7, 2, 7], "chosen").unwrap();
+        assert_eq!(sub.meta.name, "chosen");
+        assert_eq!(sub.grasps, vec![s.grasps[2].clone(), s.grasps[7].clone()]);
+        assert!(sub.meta.notes.contains("grasps 3, 8"), "{}", sub.meta.notes);
+        assert_eq!(sub.sensors, s.sensors);
+        let past = s.grasps.len();
+        assert!(
+            subset_grasps(&s, &[past], "x")
+                .unwrap_err()
+                .to_string()
+                .contains(&format!("no grasp {}", past + 1))
+        );
+        assert!(subset_grasps(&s, &[], "x").is_err());
     }
 
     #[test]

@@ -5,6 +5,7 @@
 pub mod baselines;
 pub mod cluster;
 pub mod clustering;
+pub mod models;
 pub mod pane;
 pub mod panes;
 pub mod recognition;

@@ -382,9 +382,11 @@ pub fn scores_pane(ui: &mut egui::Ui, r: &AnalysisResult) {
                     ui.label(RichText::new(format!("{v:.4}")).strong());
                     ui.end_row();
                 }
-                ui.label("training time");
-                ui.label(format!("{:.2} s", r.train_seconds));
-                ui.end_row();
+                if r.held_out.is_none() {
+                    ui.label("training time");
+                    ui.label(format!("{:.2} s", r.train_seconds));
+                    ui.end_row();
+                }
                 for (k, v) in &r.parameters {
                     ui.label(k);
                     ui.label(v);
@@ -434,10 +436,16 @@ fn grasp_pane(ui: &mut egui::Ui, cx: &mut Cx, i: usize) {
             "decision value {:+.3} (> 0 predicts failure, ≤ 0 success)",
             code.decision
         ))
-        .on_hover_text(
-            "The linear SVM's decision value from the 10-fold fold that tested this grasp",
-        );
+        .on_hover_text(if r.held_out.is_some() {
+            "The model's decision value for this grasp of the session it did not train on"
+        } else {
+            "The linear SVM's decision value from the 10-fold fold that tested this grasp"
+        });
     });
+    // A held-out result keeps decisions only (its model's codes are not recomputed).
+    if code.patches.is_empty() {
+        return;
+    }
     // Patch and reconstruction side by side for every sensor, fitted to the tile's width
     // (and wrapped onto more rows when even the smallest heatmaps do not fit).
     let n_sensors = code.patches.len().max(1) as f32;
@@ -534,18 +542,29 @@ pub fn card(ui: &mut egui::Ui, cx: &mut Cx, i: usize, reset: &mut bool) {
     ui.horizontal_wrapped(|ui| {
         let r = &cx.analyses.results[i];
         let mut chosen = i;
-        egui::ComboBox::from_label("Result")
-            .selected_text(format!("{} ({})", r.label, date_text(r.created)))
-            .show_ui(ui, |ui| {
-                for &k in &mine {
-                    let x = &cx.analyses.results[k];
-                    ui.selectable_value(
-                        &mut chosen,
-                        k,
-                        format!("{} ({})", x.label, date_text(x.created)),
-                    );
-                }
-            });
+        // A long label (a held-out result's) is cut to the card's width rather than
+        // wrapped down it.
+        let caption = ui.label("Result");
+        let width = (ui.available_width() - 8.0).clamp(120.0, 520.0);
+        ui.scope(|ui| {
+            ui.set_max_width(width);
+            egui::ComboBox::from_id_salt(("result", kind))
+                .truncate()
+                .selected_text(format!("{} ({})", r.label, date_text(r.created)))
+                .show_ui(ui, |ui| {
+                    for &k in &mine {
+                        let x = &cx.analyses.results[k];
+                        ui.selectable_value(
+                            &mut chosen,
+                            k,
+                            format!("{} ({})", x.label, date_text(x.created)),
+                        );
+                    }
+                })
+                .response
+                .labelled_by(caption.id)
+                .on_hover_text(&r.label);
+        });
         if chosen != i {
             cx.analyses.shown.insert(kind, chosen);
         }
@@ -564,6 +583,9 @@ pub fn card(ui: &mut egui::Ui, cx: &mut Cx, i: usize, reset: &mut bool) {
             *reset = true;
         }
     });
+    if let Some(h) = &cx.analyses.results[i].held_out {
+        ui.label(RichText::new(format!("Held out: {}", h.text())).strong());
+    }
     selection_line(ui, cx);
 }
 
@@ -587,6 +609,13 @@ pub fn selection_line(ui: &mut egui::Ui, cx: &mut Cx) {
         }
         if ui.small_button("Clear selection").clicked() {
             cx.commands.push(Command::ClearSelection);
+        }
+        if ui
+            .small_button("Save selection as session…")
+            .on_hover_text("These grasps as a session file of their own (a test set)")
+            .clicked()
+        {
+            cx.commands.push(Command::SaveSelection);
         }
     });
 }
@@ -612,6 +641,9 @@ pub fn headline(r: &AnalysisResult) -> Vec<(String, f64)> {
             out.push((n.clone(), *v));
         }
     }
-    out.push(("training time (s)".into(), r.train_seconds));
+    // A held-out result trained nothing: its model's training is in its provenance.
+    if r.held_out.is_none() {
+        out.push(("training time (s)".into(), r.train_seconds));
+    }
     out
 }

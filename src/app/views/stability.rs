@@ -8,7 +8,7 @@ use crate::app::View;
 use crate::app::loader::LoadedSession;
 use crate::app::results::Analyses;
 use crate::app::results::JobOutput;
-use crate::catalogue::MethodId;
+use crate::catalogue::{MethodId, Task};
 use crate::experiments::result::{AnalysisKind, SizeReason};
 use crate::experiments::stability::report::stability_report;
 use crate::experiments::stability::{
@@ -16,6 +16,7 @@ use crate::experiments::stability::{
 };
 use crate::features::FeatureSet;
 use crate::jobs::JobError;
+use crate::models::stability::StabilityFit;
 use crate::sweep::{Experiment, StabilitySweep};
 
 /// Grasp-stability form: one configuration, or a grid search with the parsimony rule.
@@ -250,6 +251,7 @@ impl Room for StabilityRoom {
         ) {
             self.start(cx);
         }
+        super::models::section(ui, cx, Task::Stability);
     }
 
     fn sweep(&self, cx: &Cx) -> Option<Result<Experiment, String>> {
@@ -284,7 +286,13 @@ impl Room for StabilityRoom {
                         other => JobError::failed(other),
                     },
                 )?;
-                Ok(JobOutput::Result(Box::new(stability_report(&r))))
+                // The recommended model leaves the session as a model file (Models list).
+                let model = StabilityFit::from_report(&session, &data, &options, &r)
+                    .into_file(&session, &data);
+                Ok(JobOutput::Trained {
+                    result: Box::new(stability_report(&r)),
+                    model: Box::new(model),
+                })
             },
         );
     }
