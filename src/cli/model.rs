@@ -41,6 +41,29 @@ pub enum FitMethod {
     Du(FitClusterArgs),
     /// Generative unsupervised experts with the extreme-value novelty, as DU.
     Gu(FitClusterArgs),
+    /// Sequential k-means on the per-grasp Table I features (the paper's baseline).
+    #[command(name = "kmeans", alias = "k-means")]
+    KMeans(FitTableOneArgs),
+    /// The sequential self-organising map on the Table I features.
+    Som(FitTableOneArgs),
+    /// The RBF SVM on the Table I features, C and gamma chosen by the `baselines` grid
+    /// (repeated 5-fold cross validation).
+    RbfSvm(FitTableOneArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct FitTableOneArgs {
+    pub session: PathBuf,
+    /// Centres (k-means) or units (SOM); the paper's 10.
+    #[arg(long, default_value_t = 10)]
+    pub k: usize,
+    /// The label set learned (RBF SVM) or scored against (k-means, SOM).
+    #[arg(long, default_value = "object")]
+    pub target: String,
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    #[arg(short, long, value_name = "MODEL.json")]
+    pub output: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -171,6 +194,9 @@ pub fn fit(a: FitArgs) -> anyhow::Result<()> {
         FitMethod::Gs(f) => return fit_sequences(MethodId::Gs, f),
         FitMethod::Du(f) => return fit_clusters(MethodId::Du, f),
         FitMethod::Gu(f) => return fit_clusters(MethodId::Gu, f),
+        FitMethod::KMeans(f) => return fit_table_one(MethodId::KMeans, f),
+        FitMethod::Som(f) => return fit_table_one(MethodId::Som, f),
+        FitMethod::RbfSvm(f) => return fit_table_one(MethodId::RbfSvm, f),
     };
     let s = &f.stability;
     if s.json.is_some() || s.save_model.is_some() || s.nested {
@@ -343,6 +369,29 @@ fn fit_clusters(method: MethodId, a: FitClusterArgs) -> anyhow::Result<()> {
         p.train_seconds,
         p.classes.len()
     );
+    println!("wrote {}", a.output.display());
+    Ok(())
+}
+
+fn fit_table_one(method: MethodId, a: FitTableOneArgs) -> anyhow::Result<()> {
+    super::refuse_input_as_output(Some(&a.output), &[&a.session])?;
+    super::bounds::at_most("--k", a.k, super::bounds::MAX_K)?;
+    let session =
+        session::open(&a.session).with_context(|| format!("opening {}", a.session.display()))?;
+    let opts = models::TableOneFitOptions {
+        method,
+        k: a.k,
+        label_set: a.target.clone(),
+        seed: a.seed,
+    };
+    let (model, fit) = models::fit_table_one(&session, &opts)?;
+    let file = models::table_one_file(model, &session, fit);
+    models::save(&file, &a.output)?;
+    let p = &file.provenance;
+    println!("{} in {:.1} s", p.summary(), p.train_seconds);
+    for s in &p.selection {
+        println!("  {} {:.2} % ({})", s.name, 100.0 * s.value, s.protocol);
+    }
     println!("wrote {}", a.output.display());
     Ok(())
 }

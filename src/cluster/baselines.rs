@@ -315,7 +315,9 @@ pub fn run_baselines(
     })
 }
 
-fn svm_grid(
+/// The RBF SVM's C × gamma grid, each cell scored by repeated stratified cross validation;
+/// the best is the first of the highest mean accuracy.
+pub fn svm_grid(
     features: ArrayView2<f64>,
     truth: &[usize],
     params: &BaselinesParams,

@@ -233,6 +233,11 @@ pub fn continue_clusters(
     Ok((next, t0.elapsed().as_secs_f64()))
 }
 
+/// How a cluster is named in predictions and figures (1-based, as the window counts).
+pub fn cluster_name(c: usize) -> String {
+    format!("cluster {}", c + 1)
+}
+
 /// The learner the catalogue names `method`, for the clustering protocol's defaults.
 pub fn learner_of(method: MethodId) -> Option<UnsupervisedLearner> {
     match method {

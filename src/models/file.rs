@@ -10,7 +10,7 @@ use std::time::SystemTime;
 
 use serde::{Deserialize, Serialize};
 
-use super::{ClusterModel, ModelError, SequenceModel, StabilityClassifier};
+use super::{ClusterModel, ModelError, SequenceModel, StabilityClassifier, TableOneModel};
 use crate::catalogue::MethodId;
 use crate::experiments::result::SizeReason;
 use crate::session::Session;
@@ -104,6 +104,8 @@ pub enum Model {
     Sequences(SequenceModel),
     /// DU or GU experts: online clusters of grasps.
     Clusters(ClusterModel),
+    /// k-means, the SOM or the RBF SVM on the Table I features.
+    TableOne(TableOneModel),
 }
 
 impl Model {
@@ -112,6 +114,7 @@ impl Model {
             Model::Stability(c) => c.method(),
             Model::Sequences(m) => m.method(),
             Model::Clusters(m) => m.method(),
+            Model::TableOne(m) => m.method(),
         }
     }
 
@@ -120,6 +123,7 @@ impl Model {
             Model::Stability(c) => c.validate(),
             Model::Sequences(m) => m.validate(),
             Model::Clusters(m) => m.validate(),
+            Model::TableOne(m) => m.validate(),
         }
     }
 }

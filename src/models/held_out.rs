@@ -9,7 +9,9 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use super::recognition::EARLY_FRACTIONS;
-use super::{Calibration, ClusterModel, Model, ModelError, ModelFile, SequenceModel, SessionRef};
+use super::clustering::cluster_name;
+use super::table_one::TableOneLearner;
+use super::{Calibration, Model, ModelError, ModelFile, SequenceModel, SessionRef};
 use crate::catalogue::MethodId;
 use crate::experiments::links::{GraspLinks, grasps_text};
 use crate::experiments::result::{AnalysisKind, AnalysisResult, HeldOut};
@@ -151,12 +153,28 @@ pub fn predict(
                 })
                 .collect())
         }
+        Model::TableOne(m) => {
+            let set = session.label_set(&m.label_set);
+            let classify = matches!(m.learner, TableOneLearner::RbfSvm(_));
+            Ok(m.assign(session, calibration)?
+                .into_iter()
+                .zip(&session.grasps)
+                .enumerate()
+                .map(|(g, (id, grasp))| GraspPrediction {
+                    grasp: g,
+                    object: grasp.object.clone(),
+                    trial: grasp.trial,
+                    truth: truth_of(session, set, g),
+                    predicted: if classify {
+                        m.classes.get(id).cloned().unwrap_or_default()
+                    } else {
+                        cluster_name(id)
+                    },
+                    decision: f64::NAN,
+                })
+                .collect())
+        }
     }
-}
-
-/// How a cluster is named in predictions and figures (1-based, as the window counts).
-pub fn cluster_name(c: usize) -> String {
-    format!("cluster {}", c + 1)
 }
 
 /// Grasp `g`'s class name under label set `set`, if it has one.
@@ -210,9 +228,22 @@ pub fn evaluate(
         }
         Model::Clusters(m) => {
             let predictions = predict(file, session, calibration)?;
-            let scores = cluster_scores(m, session, calibration)?;
+            let pred = m.assign(session, calibration)?;
+            let scores = cluster_scores(&m.label_set, session, &pred, m.clusters())?;
             let classes = (0..m.clusters()).map(cluster_name).collect();
             (m.label_set.clone(), classes, scores, predictions)
+        }
+        Model::TableOne(m) => {
+            let predictions = predict(file, session, calibration)?;
+            let pred = m.assign(session, calibration)?;
+            if matches!(m.learner, TableOneLearner::RbfSvm(_)) {
+                let scores = class_scores(&m.classes, "rbf-svm", &predictions, &pred, &[])?;
+                (m.label_set.clone(), m.classes.clone(), scores, predictions)
+            } else {
+                let scores = cluster_scores(&m.label_set, session, &pred, m.outputs())?;
+                let classes = (0..m.outputs()).map(cluster_name).collect();
+                (m.label_set.clone(), classes, scores, predictions)
+            }
         }
     };
     Ok(HeldOutResult {
@@ -288,23 +319,23 @@ fn stability_scores(
 }
 
 fn cluster_scores(
-    m: &ClusterModel,
+    label_set: &str,
     session: &Session,
-    calibration: Calibration,
+    pred: &[usize],
+    clusters: usize,
 ) -> Result<HeldOutScores, ModelError> {
-    let (truth, truth_classes) = super::recognition::labels(session, &m.label_set)?;
-    let pred = m.assign(session, calibration)?;
-    let sc = crate::cluster::scores(&truth, &pred);
-    let mut contingency = vec![vec![0; m.clusters()]; truth_classes.len()];
-    for (t, p) in truth.iter().zip(&pred) {
+    let (truth, truth_classes) = super::recognition::labels(session, label_set)?;
+    let sc = crate::cluster::scores(&truth, pred);
+    let mut contingency = vec![vec![0; clusters]; truth_classes.len()];
+    for (t, p) in truth.iter().zip(pred) {
         contingency[*t][*p] += 1;
     }
     Ok(HeldOutScores::Clustering {
         purity: sc.purity,
         ari: sc.ari,
         nmi: sc.nmi,
-        clusters: m.clusters(),
-        effective: crate::experiments::clustering::distinct(&pred),
+        clusters,
+        effective: crate::experiments::clustering::distinct(pred),
         truth_classes,
         contingency,
     })
@@ -319,46 +350,58 @@ fn sequence_scores(
     if session.label_set(&m.label_set).is_none() {
         return Err(no_label_set(&m.label_set, session));
     }
+    let steps = m.predict(session, calibration)?;
+    let decided: Vec<usize> = steps.iter().map(|p| p.class).collect();
+    let early: Vec<Vec<usize>> = steps.iter().map(|p| p.early.clone()).collect();
+    class_scores(&m.classes, m.method().key(), predictions, &decided, &early)
+}
+
+/// Accuracy, early decisions (per grasp, one class per fraction of `EARLY_FRACTIONS`;
+/// none for a method that decides from the whole grasp) and the confusion counts of a
+/// classifier whose classes are `classes`.
+fn class_scores(
+    classes: &[String],
+    method: &str,
+    predictions: &[GraspPrediction],
+    decided: &[usize],
+    early: &[Vec<usize>],
+) -> Result<HeldOutScores, ModelError> {
     let mut truth = Vec::with_capacity(predictions.len());
     for p in predictions {
         let t = p.truth.as_deref().unwrap_or_default();
-        let class = m.classes.iter().position(|c| c == t).ok_or_else(|| {
+        let class = classes.iter().position(|c| c == t).ok_or_else(|| {
             ModelError::Mismatch(format!(
                 "grasp {} is of class {t:?}, which the model has no expert for (it knows {}); \
-                 teach it the class with `fit {} SESSION --from MODEL`",
+                 teach it the class with `fit {method} SESSION --from MODEL` or fit it anew",
                 p.grasp,
-                m.classes.join(", "),
-                m.method().key()
+                classes.join(", "),
             ))
         })?;
         truth.push(class);
     }
-    let steps = m.predict(session, calibration)?;
-    let n = m.classes.len();
+    let n = classes.len();
     let mut confusion = vec![vec![0; n]; n];
-    for (t, p) in truth.iter().zip(&steps) {
-        confusion[*t][p.class] += 1;
+    for (t, d) in truth.iter().zip(decided) {
+        confusion[*t][*d] += 1;
     }
     let share = |right: usize| right as f64 / truth.len().max(1) as f64;
-    let accuracy = share(
-        truth
+    let accuracy = share(truth.iter().zip(decided).filter(|(t, d)| t == d).count());
+    let early = if early.is_empty() {
+        Vec::new()
+    } else {
+        EARLY_FRACTIONS
             .iter()
-            .zip(&steps)
-            .filter(|(t, p)| **t == p.class)
-            .count(),
-    );
-    let early = EARLY_FRACTIONS
-        .iter()
-        .enumerate()
-        .map(|(i, &f)| {
-            let right = truth
-                .iter()
-                .zip(&steps)
-                .filter(|(t, p)| **t == p.early[i])
-                .count();
-            (f, share(right))
-        })
-        .collect();
+            .enumerate()
+            .map(|(i, &f)| {
+                let right = truth
+                    .iter()
+                    .zip(early)
+                    .filter(|(t, e)| e.get(i) == Some(*t))
+                    .count();
+                (f, share(right))
+            })
+            .collect()
+    };
     Ok(HeldOutScores::Recognition {
         accuracy,
         early,
@@ -432,18 +475,27 @@ pub fn held_out_report(r: &HeldOutResult) -> AnalysisResult {
                 100.0 * accuracy,
                 r.calibration
             ));
-            let chart = Figure::chart(
-                format!("Early classification, held out on {}", r.tested_on.name),
-                Axis::new("share of the grasp observed", "").including(0.0, 1.0),
-                Axis::new("accuracy", "").including(0.0, 1.0),
-                vec![Series::new(
-                    r.method.title(),
-                    early.iter().map(|(f, _)| *f).collect(),
-                    early.iter().map(|(_, a)| *a).collect(),
-                )],
-            )
-            .subtitle(held_out.text());
-            (vec![("accuracy".into(), *accuracy)], fig, ("early", chart))
+            if early.is_empty() {
+                let objects = per_object(r, &held_out);
+                (
+                    vec![("accuracy".into(), *accuracy)],
+                    fig,
+                    ("objects", objects),
+                )
+            } else {
+                let chart = Figure::chart(
+                    format!("Early classification, held out on {}", r.tested_on.name),
+                    Axis::new("share of the grasp observed", "").including(0.0, 1.0),
+                    Axis::new("accuracy", "").including(0.0, 1.0),
+                    vec![Series::new(
+                        r.method.title(),
+                        early.iter().map(|(f, _)| *f).collect(),
+                        early.iter().map(|(_, a)| *a).collect(),
+                    )],
+                )
+                .subtitle(held_out.text());
+                (vec![("accuracy".into(), *accuracy)], fig, ("early", chart))
+            }
         }
         HeldOutScores::Clustering {
             purity,

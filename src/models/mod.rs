@@ -11,6 +11,7 @@
 //!   new session, per-step predictions;
 //! - [`clustering`]: the unsupervised OIESGP experts (DU, GU): learning, learning further,
 //!   assigning a new session's grasps to clusters;
+//! - [`table_one`]: the offline baselines on the Table I features (k-means, SOM, RBF SVM);
 //! - [`held_out`]: scores, predictions and figures on a session the model did not train on.
 
 pub mod calibration;
@@ -19,6 +20,7 @@ pub mod file;
 pub mod held_out;
 pub mod recognition;
 pub mod stability;
+pub mod table_one;
 #[cfg(test)]
 mod tests;
 
@@ -36,6 +38,7 @@ pub use recognition::{
     SequenceFitOptions, SequenceModel, continue_sequences, fit_sequences, sequence_file,
 };
 pub use stability::{SensorShape, SparseCodes, StabilityClassifier, fit_stability};
+pub use table_one::{TableOneFitOptions, TableOneModel, fit_table_one, table_one_file};
 
 use crate::experiments::stability::StabilityError;
 

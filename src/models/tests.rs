@@ -389,3 +389,51 @@ mod clusters {
         }
     }
 }
+
+mod table_one {
+    use super::*;
+    use crate::session::{SubsetSpec, subset};
+
+    #[test]
+    fn the_table_one_baselines_predict_from_their_files_as_in_memory() {
+        let session = simulate::object_recognition(1);
+        let part = |trials: std::ops::RangeInclusive<u32>| {
+            let spec = SubsetSpec {
+                trials: trials.collect(),
+                ..Default::default()
+            };
+            subset(&session, &spec, "part").unwrap()
+        };
+        let (train, test) = (part(1..=6), part(7..=10));
+        for method in [MethodId::KMeans, MethodId::Som, MethodId::RbfSvm] {
+            let opts = TableOneFitOptions {
+                method,
+                k: 10,
+                label_set: "object".into(),
+                seed: 4,
+            };
+            let (model, fit) = fit_table_one(&train, &opts).unwrap();
+            let file = table_one_file(model.clone(), &train, fit);
+            let loaded = ModelFile::from_json(&file.to_json(), "m.json").unwrap();
+            let Model::TableOne(saved) = &loaded.model else {
+                panic!("a Table I model")
+            };
+            assert_eq!(
+                saved.assign(&test, Calibration::None).unwrap(),
+                model.assign(&test, Calibration::None).unwrap(),
+                "{method:?}"
+            );
+            // Ten objects on trials never seen: chance accuracy 0.1, chance purity about
+            // 0.1 for ten balanced objects.
+            match evaluate(&loaded, &test, Calibration::None).unwrap().scores {
+                HeldOutScores::Recognition { accuracy, .. } => {
+                    assert!(accuracy > 0.6, "{method:?} accuracy {accuracy}")
+                }
+                HeldOutScores::Clustering { purity, .. } => {
+                    assert!(purity > 0.4, "{method:?} purity {purity}")
+                }
+                HeldOutScores::Stability { .. } => panic!("not a stability model"),
+            }
+        }
+    }
+}

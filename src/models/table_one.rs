@@ -1,0 +1,326 @@
+//! The offline baselines of the second paper on the per-grasp Table I features as models:
+//! sequential k-means and the SOM (clusters of grasps) and the RBF SVM (the object of a
+//! grasp), fitted on every grasp of a session as `baselines` fits them. A calibration
+//! decides whose statistics put a new session's features on the model's scale: the
+//! min-max map of k-means and the SOM, the RBF SVM's z-scoring.
+
+use std::time::Instant;
+
+use ndarray::{Array2, ArrayView2, s};
+use serde::{Deserialize, Serialize};
+
+use super::{Calibration, Model, ModelError, ModelFile, Provenance, SelectionScore, SessionRef};
+use crate::catalogue::MethodId;
+use crate::cluster::baselines::{BaselinesParams, svm_grid};
+use crate::cluster::{SelfOrganisingMap, SequentialKMeans, SequentialKMeansParams};
+use crate::experiments::clustering::som_setup;
+use crate::experiments::result::SizeReason;
+use crate::features::table_one::{feature_names, session_features};
+use crate::features::{Normalisation, Normaliser};
+use crate::jobs::Progress;
+use crate::session::Session;
+use crate::svm::kernel_svm::{KernelSvm, KernelSvmParams};
+
+/// A fitted baseline.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "learner", content = "state", rename_all = "snake_case")]
+pub enum TableOneLearner {
+    KMeans(SequentialKMeans),
+    Som(SelfOrganisingMap),
+    RbfSvm(KernelSvm),
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TableOneModel {
+    pub learner: TableOneLearner,
+    pub feature_names: Vec<String>,
+    /// k-means and SOM: the training session's min-max map of the features (the RBF SVM
+    /// carries its own z-scoring).
+    pub normaliser: Normaliser,
+    /// The label set learned (RBF SVM) or scored against (k-means, SOM).
+    pub label_set: String,
+    /// RBF SVM: the name of each class id.
+    pub classes: Vec<String>,
+}
+
+fn err(e: impl std::fmt::Display) -> ModelError {
+    ModelError::Mismatch(e.to_string())
+}
+
+/// The session's Table I features, checked against the model's names.
+fn features(session: &Session, names: Option<&[String]>) -> Result<Array2<f64>, ModelError> {
+    let found = feature_names(session);
+    if let Some(names) = names
+        && found != names
+    {
+        return Err(ModelError::Mismatch(format!(
+            "the model reads {} Table I features ({}); the session gives {} ({})",
+            names.len(),
+            names.join(", "),
+            found.len(),
+            found.join(", ")
+        )));
+    }
+    session_features(session).map_err(err)
+}
+
+/// The rows whose statistics stand for the session under `calibration` (None: the
+/// model's own).
+fn rows(
+    x: ArrayView2<f64>,
+    calibration: Calibration,
+) -> Result<Option<ArrayView2<f64>>, ModelError> {
+    Ok(calibration
+        .grasps(x.nrows())?
+        .map(|r| x.slice_move(s![r, ..])))
+}
+
+impl TableOneModel {
+    pub fn method(&self) -> MethodId {
+        match self.learner {
+            TableOneLearner::KMeans(_) => MethodId::KMeans,
+            TableOneLearner::Som(_) => MethodId::Som,
+            TableOneLearner::RbfSvm(_) => MethodId::RbfSvm,
+        }
+    }
+
+    /// Clusters (k-means centres, SOM units) or classes (RBF SVM).
+    pub fn outputs(&self) -> usize {
+        match &self.learner {
+            TableOneLearner::KMeans(k) => k.centres.nrows(),
+            TableOneLearner::Som(m) => m.weights.nrows(),
+            TableOneLearner::RbfSvm(_) => self.classes.len(),
+        }
+    }
+
+    /// The cluster (k-means, SOM) or class id (RBF SVM) of every grasp of `session`.
+    pub fn assign(
+        &self,
+        session: &Session,
+        calibration: Calibration,
+    ) -> Result<Vec<usize>, ModelError> {
+        let x = features(session, Some(&self.feature_names))?;
+        match &self.learner {
+            TableOneLearner::RbfSvm(svm) => {
+                let mut svm = svm.clone();
+                if let (Some(part), Some(own)) = (rows(x.view(), calibration)?, &svm.scaler) {
+                    svm.scaler = Some(Normaliser::fit(own.kind, part).map_err(err)?);
+                }
+                svm.predict(x.view()).map_err(err)
+            }
+            learner => {
+                let normaliser = match rows(x.view(), calibration)? {
+                    Some(part) => Normaliser::fit(self.normaliser.kind, part).map_err(err)?,
+                    None => self.normaliser.clone(),
+                };
+                let data = normaliser.transform(x.view()).map_err(err)?;
+                match learner {
+                    TableOneLearner::KMeans(k) => k.assign(data.view()).map_err(err),
+                    TableOneLearner::Som(m) => m.assign(data.view()).map_err(err),
+                    TableOneLearner::RbfSvm(_) => unreachable!("handled above"),
+                }
+            }
+        }
+    }
+
+    pub fn validate(&self) -> Result<(), ModelError> {
+        let n = self.feature_names.len();
+        let f = |name: &str| format!("model.{name}");
+        if n == 0 || self.normaliser.offset.len() != n || self.normaliser.scale.len() != n {
+            return Err(ModelError::field(
+                f("normaliser"),
+                format!("{} offsets for {n} features", self.normaliser.offset.len()),
+            ));
+        }
+        let width = |w: usize, field: &str| {
+            if w == n {
+                Ok(())
+            } else {
+                Err(ModelError::field(
+                    f(field),
+                    format!("{w} columns for {n} features"),
+                ))
+            }
+        };
+        match &self.learner {
+            TableOneLearner::KMeans(k) => {
+                if k.centres.nrows() == 0 {
+                    return Err(ModelError::field(f("learner.centres"), "no centres"));
+                }
+                width(k.centres.ncols(), "learner.centres")
+            }
+            TableOneLearner::Som(m) => {
+                if m.weights.nrows() == 0 || m.weights.nrows() != m.rows * m.cols {
+                    return Err(ModelError::field(
+                        f("learner.weights"),
+                        format!(
+                            "{} units for a {} × {} map",
+                            m.weights.nrows(),
+                            m.rows,
+                            m.cols
+                        ),
+                    ));
+                }
+                width(m.weights.ncols(), "learner.weights")
+            }
+            TableOneLearner::RbfSvm(svm) => {
+                for m in &svm.machines {
+                    width(
+                        m.support_vectors.ncols(),
+                        "learner.machines.support_vectors",
+                    )?;
+                    if m.coef.len() != m.support_vectors.nrows() {
+                        return Err(ModelError::field(
+                            f("learner.machines.coef"),
+                            "one coefficient per support vector",
+                        ));
+                    }
+                }
+                if let Some(s) = &svm.scaler
+                    && s.offset.len() != n
+                {
+                    width(s.offset.len(), "learner.scaler")?;
+                }
+                if svm.classes.iter().any(|&c| c >= self.classes.len()) {
+                    return Err(ModelError::field(
+                        f("classes"),
+                        format!(
+                            "{} class names for class ids up to {:?}",
+                            self.classes.len(),
+                            svm.classes.last()
+                        ),
+                    ));
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// What fitting leaves besides the model.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TableOneFit {
+    pub selection: Vec<SelectionScore>,
+    pub parameters: Vec<(String, String)>,
+    pub secs: f64,
+}
+
+/// How a Table I baseline is fitted.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TableOneFitOptions {
+    pub method: MethodId,
+    /// Centres (k-means) or units (SOM); the paper's 10.
+    pub k: usize,
+    pub label_set: String,
+    pub seed: u64,
+}
+
+/// Fit k-means, the SOM or the RBF SVM on every grasp of `session`; the RBF SVM's C and
+/// gamma are chosen by the `baselines` grid search (repeated 5-fold cross validation).
+pub fn fit_table_one(
+    session: &Session,
+    opts: &TableOneFitOptions,
+) -> Result<(TableOneModel, TableOneFit), ModelError> {
+    let t0 = Instant::now();
+    let mut parameters = vec![("seed".to_string(), opts.seed.to_string())];
+    let x = features(session, None)?;
+    let normaliser = Normaliser::fit(Normalisation::MinMax, x.view()).map_err(err)?;
+    let data = normaliser.transform(x.view()).map_err(err)?;
+    let (labels, classes) = super::recognition::labels(session, &opts.label_set)?;
+    let mut selection = Vec::new();
+    let learner = match opts.method {
+        MethodId::KMeans => TableOneLearner::KMeans(
+            SequentialKMeansParams {
+                k: opts.k,
+                passes: 1,
+                seed: opts.seed,
+            }
+            .fit(data.view())
+            .map_err(err)?,
+        ),
+        MethodId::Som => {
+            TableOneLearner::Som(som_setup(opts.k, opts.seed).fit(data.view()).map_err(err)?)
+        }
+        MethodId::RbfSvm => {
+            let params = BaselinesParams {
+                seed: opts.seed,
+                ..Default::default()
+            };
+            let grid = svm_grid(x.view(), &labels, &params, &Progress::new()).map_err(err)?;
+            selection.push(SelectionScore {
+                protocol: format!("{} × {}-fold cross validation", grid.repeats, grid.folds),
+                name: "accuracy".into(),
+                value: grid.best.accuracy_mean,
+            });
+            parameters.push(("C".into(), grid.best.c.to_string()));
+            let p = KernelSvmParams {
+                c: grid.best.c,
+                gamma: grid.best.gamma,
+                ..Default::default()
+            };
+            TableOneLearner::RbfSvm(p.fit(x.view(), &labels).map_err(err)?)
+        }
+        other => {
+            return Err(ModelError::Param(format!(
+                "{} is not a Table I baseline (kmeans, som, rbf-svm)",
+                other.key()
+            )));
+        }
+    };
+    let model = TableOneModel {
+        learner,
+        feature_names: feature_names(session),
+        normaliser,
+        label_set: opts.label_set.clone(),
+        classes,
+    };
+    let fit = TableOneFit {
+        selection,
+        parameters,
+        secs: t0.elapsed().as_secs_f64(),
+    };
+    Ok((model, fit))
+}
+
+/// The model file of a Table I baseline fitted on `session`.
+pub fn table_one_file(model: TableOneModel, session: &Session, fit: TableOneFit) -> ModelFile {
+    let TableOneFit {
+        selection,
+        mut parameters,
+        secs,
+    } = fit;
+    parameters.push(("label set".to_string(), model.label_set.clone()));
+    let size = match &model.learner {
+        TableOneLearner::RbfSvm(svm) => {
+            parameters.push(("gamma".into(), svm.gamma.to_string()));
+            Vec::new()
+        }
+        TableOneLearner::KMeans(k) => vec![("k".to_string(), k.centres.nrows())],
+        TableOneLearner::Som(m) => vec![("units".to_string(), m.weights.nrows())],
+    };
+    let classes = match &model.learner {
+        TableOneLearner::RbfSvm(_) => model.classes.clone(),
+        _ => (0..model.outputs())
+            .map(super::clustering::cluster_name)
+            .collect(),
+    };
+    let provenance = Provenance {
+        method: model.method(),
+        parameters,
+        size,
+        size_reason: SizeReason::PaperDefault,
+        session: SessionRef::of(session),
+        features: format!("{} Table I features per grasp: {}", model.feature_names.len(), model.feature_names.join(", ")),
+        normalisation: match model.learner {
+            TableOneLearner::RbfSvm(_) => "each feature z-scored over the training grasps (a new session: see its calibration)",
+            _ => "each feature min-max scaled over the training grasps (a new session: see its calibration)",
+        }
+        .into(),
+        label_set: model.label_set.clone(),
+        classes,
+        trained_at: Provenance::now(),
+        train_seconds: secs,
+        selection,
+    };
+    ModelFile::new(provenance, Model::TableOne(model))
+}
