@@ -9,12 +9,12 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use super::recognition::sequences;
+use super::inputs::SequenceInputs;
 use super::{Calibration, Model, ModelError, ModelFile, Provenance, SessionRef};
 use crate::catalogue::MethodId;
 use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner};
 use crate::experiments::result::SizeReason;
-use crate::features::{FeatureSet, SequenceRange};
+use crate::features::FeatureSet;
 use crate::learners::{Du, DuParams, Gu, GuParams};
 use crate::rng::Rng;
 use crate::session::Session;
@@ -30,11 +30,8 @@ pub enum Clusterer {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct ClusterModel {
     pub clusterer: Clusterer,
-    pub features: FeatureSet,
-    pub feature_names: Vec<String>,
-    /// The training session's range of each feature.
-    pub min: Vec<f64>,
-    pub max: Vec<f64>,
+    #[serde(flatten)]
+    pub inputs: SequenceInputs,
     /// The label set clusters are scored against (never read while learning).
     pub label_set: String,
     pub threshold: f64,
@@ -90,15 +87,7 @@ impl ClusterModel {
         session: &Session,
         calibration: Calibration,
     ) -> Result<Vec<usize>, ModelError> {
-        let range = match calibration.grasps(session.grasps.len())? {
-            None => SequenceRange::Given {
-                min: &self.min,
-                max: &self.max,
-            },
-            Some(r) => SequenceRange::Grasps(r),
-        };
-        let feats = sequences(session, self.features, range)?;
-        self.check_names(&feats.names)?;
+        let feats = self.inputs.read(session, Some(calibration))?;
         let mut c = self.clusterer.clone();
         Ok(feats
             .sequences
@@ -110,28 +99,9 @@ impl ClusterModel {
             .collect())
     }
 
-    fn check_names(&self, names: &[String]) -> Result<(), ModelError> {
-        if names != self.feature_names {
-            return Err(ModelError::Mismatch(format!(
-                "the model reads features {}; the session gives {}",
-                self.feature_names.join(", "),
-                names.join(", ")
-            )));
-        }
-        Ok(())
-    }
-
     /// Learn every grasp of `session` in a seeded random order, on the model's range.
     fn learn(&mut self, session: &Session) -> Result<(), ModelError> {
-        let feats = sequences(
-            session,
-            self.features,
-            SequenceRange::Given {
-                min: &self.min,
-                max: &self.max,
-            },
-        )?;
-        self.check_names(&feats.names)?;
+        let feats = self.inputs.read(session, None)?;
         let order =
             Rng::stream(self.seed, self.grasps_taught as u64).permutation(session.grasps.len());
         for g in order {
@@ -146,27 +116,7 @@ impl ClusterModel {
     }
 
     pub fn validate(&self) -> Result<(), ModelError> {
-        let n = self.feature_names.len();
-        if n == 0 || self.min.len() != n || self.max.len() != n {
-            return Err(ModelError::field(
-                "model.min",
-                format!(
-                    "{} minima and {} maxima for {n} features",
-                    self.min.len(),
-                    self.max.len()
-                ),
-            ));
-        }
-        if self.min.iter().chain(&self.max).any(|v| !v.is_finite()) {
-            return Err(ModelError::field("model.min", "ranges must be finite"));
-        }
-        if self.dim() != n {
-            return Err(ModelError::field(
-                "model.clusterer",
-                format!("experts of {} inputs for {n} features", self.dim()),
-            ));
-        }
-        Ok(())
+        self.inputs.validate(self.dim())
     }
 }
 
@@ -176,8 +126,8 @@ pub fn fit_clusters(
     opts: &ClusterFitOptions,
 ) -> Result<(ClusterModel, f64), ModelError> {
     let t0 = Instant::now();
-    let feats = sequences(session, opts.features, SequenceRange::Session)?;
-    let dim = feats.dim();
+    let inputs = SequenceInputs::fit(session, opts.features)?;
+    let dim = inputs.feature_names.len();
     let p = &opts.params;
     let clusterer = match opts.method {
         MethodId::Du => Clusterer::Du(Du::new(
@@ -209,10 +159,7 @@ pub fn fit_clusters(
     };
     let mut model = ClusterModel {
         clusterer,
-        features: feats.families,
-        feature_names: feats.names,
-        min: feats.min,
-        max: feats.max,
+        inputs,
         label_set: opts.label_set.clone(),
         threshold: opts.threshold,
         seed: opts.seed,
@@ -259,7 +206,7 @@ pub fn cluster_file(
         Clusterer::Gu(l) => l.params().gs.gp,
     };
     let mut parameters = vec![
-        ("features".to_string(), model.features.to_string()),
+        ("features".to_string(), model.inputs.features.to_string()),
         ("threshold".to_string(), model.threshold.to_string()),
         ("scored against".to_string(), model.label_set.clone()),
         ("order seed".to_string(), model.seed.to_string()),
@@ -281,11 +228,7 @@ pub fn cluster_file(
         size: vec![("capacity".into(), gp.capacity), ("tau".into(), gp.tau)],
         size_reason: SizeReason::PaperDefault,
         session: SessionRef::of(session),
-        features: format!(
-            "{} per step: {}",
-            model.feature_names.len(),
-            model.feature_names.join(", ")
-        ),
+        features: model.inputs.describe(),
         normalisation: "each feature min-max scaled over every frame of the training session \
                         (a new session: see its calibration; learning further keeps this range)"
             .into(),

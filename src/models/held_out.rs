@@ -8,8 +8,8 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use super::recognition::EARLY_FRACTIONS;
 use super::clustering::cluster_name;
+use super::recognition::EARLY_FRACTIONS;
 use super::table_one::TableOneLearner;
 use super::{Calibration, Model, ModelError, ModelFile, SequenceModel, SessionRef};
 use crate::catalogue::MethodId;

@@ -7,6 +7,7 @@
 //! - [`calibration`]: which per-taxel statistics stand for a new recording;
 //! - [`stability`]: the grasp-stability classifiers (sparse coding + linear SVM, the raw
 //!   linear SVM): fitting, the session checks, decision values;
+//! - [`inputs`]: what the sequence models read, and how a session is read on their range;
 //! - [`recognition`]: the supervised OIESGP experts (DS, GS): fitting, teaching further on a
 //!   new session, per-step predictions;
 //! - [`clustering`]: the unsupervised OIESGP experts (DU, GU): learning, learning further,
@@ -18,6 +19,7 @@ pub mod calibration;
 pub mod clustering;
 pub mod file;
 pub mod held_out;
+pub mod inputs;
 pub mod recognition;
 pub mod stability;
 pub mod table_one;

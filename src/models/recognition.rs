@@ -14,14 +14,13 @@ use std::time::Instant;
 use ndarray::{Array2, s};
 use serde::{Deserialize, Serialize};
 
+use super::inputs::SequenceInputs;
 use super::{Calibration, Model, ModelError, ModelFile, Provenance, SessionRef};
 use crate::catalogue::MethodId;
 use crate::experiments::labels::session_labels;
 use crate::experiments::recognition::{prefix_len, protocol_order};
 use crate::experiments::result::SizeReason;
-use crate::features::{
-    FeatureSequences, FeatureSet, SequenceParams, SequenceRange, feature_sequences_in,
-};
+use crate::features::FeatureSet;
 use crate::learners::{Ds, DsParams, Gs, GsParams, SequenceClassifier};
 use crate::rng::Rng;
 use crate::session::Session;
@@ -60,12 +59,8 @@ impl Experts {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SequenceModel {
     pub experts: Experts,
-    /// The families the columns hold (resolved on the training session).
-    pub features: FeatureSet,
-    pub feature_names: Vec<String>,
-    /// The training session's range of each feature.
-    pub min: Vec<f64>,
-    pub max: Vec<f64>,
+    #[serde(flatten)]
+    pub inputs: SequenceInputs,
     pub label_set: String,
     /// The class of each expert.
     pub classes: Vec<String>,
@@ -94,44 +89,11 @@ pub(super) fn labels(
     session_labels(session, label_set).map_err(|e| ModelError::Mismatch(e.to_string()))
 }
 
-pub(super) fn sequences(
-    session: &Session,
-    features: FeatureSet,
-    range: SequenceRange,
-) -> Result<FeatureSequences, ModelError> {
-    feature_sequences_in(
-        session,
-        &SequenceParams {
-            features,
-            taxel_noise_variance: 0.0,
-            seed: 0,
-        },
-        range,
-    )
-    .map_err(|e| ModelError::Mismatch(e.to_string()))
-}
-
 /// Teach `model` every grasp of `session` in the protocol's order (one grasp per class
 /// first, then stratified random rounds), reading it on the model's range. A class the
 /// model has not seen gets a new expert.
 fn teach(model: &mut SequenceModel, session: &Session) -> Result<(), ModelError> {
-    let feats = sequences(
-        session,
-        model.features,
-        SequenceRange::Given {
-            min: &model.min,
-            max: &model.max,
-        },
-    )?;
-    if feats.names != model.feature_names {
-        return Err(ModelError::Mismatch(format!(
-            "the model reads {} features ({}); the session gives {} ({})",
-            model.feature_names.len(),
-            model.features,
-            feats.names.len(),
-            feats.families
-        )));
-    }
+    let feats = model.inputs.read(session, None)?;
     let (labels, classes) = labels(session, &model.label_set)?;
     // The model's expert for each class the session's grasps have, new ones added (a
     // class a label set names but no grasp has gets no expert: it would never be taught).
@@ -165,8 +127,8 @@ pub fn fit_sequences(
     opts: &SequenceFitOptions,
 ) -> Result<(SequenceModel, f64), ModelError> {
     let t0 = Instant::now();
-    let feats = sequences(session, opts.features, SequenceRange::Session)?;
-    let dim = feats.dim();
+    let inputs = SequenceInputs::fit(session, opts.features)?;
+    let dim = inputs.feature_names.len();
     let experts = match opts.method {
         MethodId::Ds => Experts::Ds(Ds::new(dim, &opts.ds)?),
         MethodId::Gs => Experts::Gs(Gs::new(dim, &opts.gs)?),
@@ -179,10 +141,7 @@ pub fn fit_sequences(
     };
     let mut model = SequenceModel {
         experts,
-        features: feats.families,
-        feature_names: feats.names,
-        min: feats.min,
-        max: feats.max,
+        inputs,
         label_set: opts.label_set.clone(),
         classes: Vec::new(),
         seed: opts.seed,
@@ -229,21 +188,7 @@ impl SequenceModel {
         session: &Session,
         calibration: Calibration,
     ) -> Result<Vec<SequencePrediction>, ModelError> {
-        let range = match calibration.grasps(session.grasps.len())? {
-            None => SequenceRange::Given {
-                min: &self.min,
-                max: &self.max,
-            },
-            Some(r) => SequenceRange::Grasps(r),
-        };
-        let feats = sequences(session, self.features, range)?;
-        if feats.names != self.feature_names {
-            return Err(ModelError::Mismatch(format!(
-                "the model reads features {}; the session gives {}",
-                self.feature_names.join(", "),
-                feats.names.join(", ")
-            )));
-        }
+        let feats = self.inputs.read(session, Some(calibration))?;
         let mut experts = self.experts.clone();
         Ok(feats
             .sequences
@@ -266,27 +211,8 @@ impl SequenceModel {
     }
 
     pub fn validate(&self) -> Result<(), ModelError> {
-        let n = self.feature_names.len();
-        if n == 0 || self.min.len() != n || self.max.len() != n {
-            return Err(ModelError::field(
-                "model.min",
-                format!(
-                    "{} minima and {} maxima for {n} features",
-                    self.min.len(),
-                    self.max.len()
-                ),
-            ));
-        }
-        if self.min.iter().chain(&self.max).any(|v| !v.is_finite()) {
-            return Err(ModelError::field("model.min", "ranges must be finite"));
-        }
         let l = self.experts.view();
-        if l.dim() != n {
-            return Err(ModelError::field(
-                "model.experts",
-                format!("experts of {} inputs for {n} features", l.dim()),
-            ));
-        }
+        self.inputs.validate(l.dim())?;
         if l.n_classes() != self.classes.len() {
             return Err(ModelError::field(
                 "model.classes",
@@ -315,7 +241,7 @@ pub fn sequence_file(
         Experts::Gs(l) => l.params().gp.clone(),
     };
     let mut parameters = vec![
-        ("features".to_string(), model.features.to_string()),
+        ("features".to_string(), model.inputs.features.to_string()),
         ("target".to_string(), model.label_set.clone()),
         ("order seed".to_string(), model.seed.to_string()),
         (
@@ -336,11 +262,7 @@ pub fn sequence_file(
         size: vec![("capacity".into(), gp.capacity), ("tau".into(), gp.tau)],
         size_reason,
         session: SessionRef::of(session),
-        features: format!(
-            "{} per step: {}",
-            model.feature_names.len(),
-            model.feature_names.join(", ")
-        ),
+        features: model.inputs.describe(),
         normalisation: "each feature min-max scaled over every frame of the training session \
                         (a new session: see its calibration; teaching further keeps this range)"
             .into(),
