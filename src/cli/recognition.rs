@@ -308,6 +308,10 @@ pub struct ClusteringArgs {
     /// Write the full result here as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Also learn every grasp at the threshold chosen without labels and save the model
+    /// (`evaluate`, `predict`, `fit du|gu --from`).
+    #[arg(long, value_name = "MODEL.json")]
+    pub save_model: Option<PathBuf>,
     /// Print no progress.
     #[arg(long, short)]
     pub quiet: bool,
@@ -441,6 +445,7 @@ fn print_choice(r: &crate::experiments::clustering::ClusteringResult) {
 
 pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
     super::refuse_input_as_output(args.json.as_deref(), &[&args.session])?;
+    super::refuse_input_as_output(args.save_model.as_deref(), &[&args.session])?;
     let params = args.params()?;
     let session = open_session(&args.session)?;
     let r = with_progress(args.quiet, |p| run_clustering(&session, &params, p))?;
@@ -465,5 +470,34 @@ pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
     print_choice(&r);
     let us = r.runs.iter().map(|x| x.learn_step_us).sum::<f64>() / r.runs.len().max(1) as f64;
     println!("  learning phase {us:.1} µs per observation (threads share the cores)");
-    write_json(&r, args.json.as_deref())
+    write_json(&r, args.json.as_deref())?;
+    if let Some(path) = &args.save_model {
+        let Some(choice) = &r.threshold_choice else {
+            anyhow::bail!(
+                "--save-model learns at the threshold chosen without labels: give --choose-threshold stability"
+            );
+        };
+        let method = match params.learner {
+            crate::experiments::clustering::UnsupervisedLearner::Du => MethodId::Du,
+            crate::experiments::clustering::UnsupervisedLearner::Gu => MethodId::Gu,
+        };
+        let opts = crate::models::ClusterFitOptions {
+            method,
+            features: params.features,
+            label_set: params.label_set.clone(),
+            threshold: choice.threshold,
+            seed: params.seed,
+            params: params.clone(),
+        };
+        let (model, secs) = crate::models::fit_clusters(&session, &opts)?;
+        let file = crate::models::cluster_file(model, &session, secs, None);
+        crate::models::save(&file, path)?;
+        println!(
+            "wrote {} ({}, threshold {})",
+            path.display(),
+            file.provenance.summary(),
+            choice.threshold
+        );
+    }
+    Ok(())
 }

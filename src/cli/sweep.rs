@@ -205,6 +205,9 @@ fn experiment_of(e: &PlanExperiment) -> anyhow::Result<(Experiment, Session, &Pa
         }
         PlanExperiment::Clustering { args, .. } => {
             no_json(&args.json)?;
+            if args.save_model.is_some() {
+                bail!("a plan saves no model: `fit du|gu --threshold T` on the session does");
+            }
             (
                 Experiment::Clustering(args.params()?),
                 open_session(&args.session)?,
