@@ -224,6 +224,21 @@ pub fn fit(a: FitArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The model file at `path`, which must hold a model of `method` (`--from`). Loading
+/// checks that the model's kind is the one its provenance names.
+fn saved_model_of(path: &Path, method: MethodId) -> anyhow::Result<ModelFile> {
+    let old = models::load(path)?;
+    if old.provenance.method != method {
+        bail!(
+            "{} holds a {} model; --from takes a {} model",
+            path.display(),
+            old.provenance.method.key(),
+            method.key()
+        );
+    }
+    Ok(old)
+}
+
 fn fit_sequences(method: MethodId, a: FitSequenceArgs) -> anyhow::Result<()> {
     let mut inputs = vec![a.session.as_path()];
     inputs.extend(a.from.as_deref());
@@ -245,22 +260,10 @@ fn fit_sequences(method: MethodId, a: FitSequenceArgs) -> anyhow::Result<()> {
                     "--from keeps the saved model's features, target, size and adaptation: leave those options out"
                 );
             }
-            let old = models::load(path)?;
+            let old = saved_model_of(path, method)?;
             let models::Model::Sequences(m) = &old.model else {
-                bail!(
-                    "{} holds a {} model; --from takes a DS or GS model",
-                    path.display(),
-                    old.provenance.method.key()
-                );
+                unreachable!("a {} model file holds DS or GS experts", method.key());
             };
-            if m.method() != method {
-                bail!(
-                    "{} holds a {} model, not {}",
-                    path.display(),
-                    m.method().key(),
-                    method.key()
-                );
-            }
             let (next, secs) = models::continue_sequences(m, &session)?;
             models::sequence_file(
                 next,
@@ -322,22 +325,10 @@ fn fit_clusters(method: MethodId, a: FitClusterArgs) -> anyhow::Result<()> {
                     "--from keeps the saved model's features, target and threshold: leave those options out"
                 );
             }
-            let old = models::load(path)?;
+            let old = saved_model_of(path, method)?;
             let models::Model::Clusters(m) = &old.model else {
-                bail!(
-                    "{} holds a {} model; --from takes a DU or GU model",
-                    path.display(),
-                    old.provenance.method.key()
-                );
+                unreachable!("a {} model file holds DU or GU experts", method.key());
             };
-            if m.method() != method {
-                bail!(
-                    "{} holds a {} model, not {}",
-                    path.display(),
-                    m.method().key(),
-                    method.key()
-                );
-            }
             let (next, secs) = models::continue_clusters(m, &session)?;
             models::cluster_file(next, &session, secs, Some(&old.provenance))
         }

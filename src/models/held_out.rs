@@ -9,7 +9,7 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use super::clustering::cluster_name;
-use super::recognition::EARLY_FRACTIONS;
+use super::recognition::{EARLY_FRACTIONS, SequencePrediction};
 use super::table_one::TableOneLearner;
 use super::{Calibration, Model, ModelError, ModelFile, SequenceModel, SessionRef};
 use crate::catalogue::MethodId;
@@ -87,94 +87,98 @@ pub struct HeldOutResult {
     pub secs: f64,
 }
 
+/// What a model gives every grasp of a session, before it is named.
+enum Outputs {
+    /// Grasp stability: the SVM's decision values.
+    Decisions(Vec<f64>),
+    /// DS/GS: the class distributions after every step, and the decisions.
+    Steps(Vec<SequencePrediction>),
+    /// DU/GU, k-means, SOM: a cluster; RBF SVM: a class id.
+    Ids(Vec<usize>),
+}
+
+fn outputs(
+    model: &Model,
+    session: &Session,
+    calibration: Calibration,
+) -> Result<Outputs, ModelError> {
+    Ok(match model {
+        Model::Stability(c) => Outputs::Decisions(c.decisions(session, calibration)?),
+        Model::Sequences(m) => Outputs::Steps(m.predict(session, calibration)?),
+        Model::Clusters(m) => Outputs::Ids(m.assign(session, calibration)?),
+        Model::TableOne(m) => Outputs::Ids(m.assign(session, calibration)?),
+    })
+}
+
+/// Every grasp's predicted name and decision value, with its truth under the model's
+/// label set where the session has it.
+fn rows(model: &Model, session: &Session, out: &Outputs) -> Vec<GraspPrediction> {
+    let named: Vec<(String, f64)> = match (model, out) {
+        (Model::Stability(c), Outputs::Decisions(d)) => d
+            .iter()
+            .map(|&v| {
+                let class = if v > 0.0 {
+                    &c.failure_class
+                } else {
+                    &c.success_class
+                };
+                (class.clone(), v)
+            })
+            .collect(),
+        (Model::Sequences(m), Outputs::Steps(steps)) => steps
+            .iter()
+            .map(|p| {
+                let last = p.distributions.rows().into_iter().next_back();
+                (
+                    m.classes[p.class].clone(),
+                    last.map_or(f64::NAN, |r| r[p.class]),
+                )
+            })
+            .collect(),
+        (Model::TableOne(m), Outputs::Ids(ids))
+            if matches!(m.learner, TableOneLearner::RbfSvm(_)) =>
+        {
+            ids.iter()
+                .map(|&id| (m.classes.get(id).cloned().unwrap_or_default(), f64::NAN))
+                .collect()
+        }
+        (_, Outputs::Ids(ids)) => ids.iter().map(|&c| (cluster_name(c), f64::NAN)).collect(),
+        _ => unreachable!("outputs() gives each model its kind of output"),
+    };
+    let set = session.label_set(label_set_of(model));
+    session
+        .grasps
+        .iter()
+        .zip(named)
+        .enumerate()
+        .map(|(g, (grasp, (predicted, decision)))| GraspPrediction {
+            grasp: g,
+            object: grasp.object.clone(),
+            trial: grasp.trial,
+            truth: truth_of(session, set, g),
+            predicted,
+            decision,
+        })
+        .collect()
+}
+
+fn label_set_of(model: &Model) -> &str {
+    match model {
+        Model::Stability(c) => &c.label_set,
+        Model::Sequences(m) => &m.label_set,
+        Model::Clusters(m) => &m.label_set,
+        Model::TableOne(m) => &m.label_set,
+    }
+}
+
 /// Every grasp's prediction (labels are read only to fill `truth`).
 pub fn predict(
     file: &ModelFile,
     session: &Session,
     calibration: Calibration,
 ) -> Result<Vec<GraspPrediction>, ModelError> {
-    match &file.model {
-        Model::Stability(c) => {
-            let decisions = c.decisions(session, calibration)?;
-            let set = session.label_set(&c.label_set);
-            Ok(session
-                .grasps
-                .iter()
-                .zip(decisions)
-                .enumerate()
-                .map(|(g, (grasp, decision))| GraspPrediction {
-                    grasp: g,
-                    object: grasp.object.clone(),
-                    trial: grasp.trial,
-                    truth: truth_of(session, set, g),
-                    predicted: if decision > 0.0 {
-                        c.failure_class.clone()
-                    } else {
-                        c.success_class.clone()
-                    },
-                    decision,
-                })
-                .collect())
-        }
-        Model::Sequences(m) => {
-            let set = session.label_set(&m.label_set);
-            Ok(m.predict(session, calibration)?
-                .iter()
-                .zip(&session.grasps)
-                .enumerate()
-                .map(|(g, (p, grasp))| GraspPrediction {
-                    grasp: g,
-                    object: grasp.object.clone(),
-                    trial: grasp.trial,
-                    truth: truth_of(session, set, g),
-                    predicted: m.classes[p.class].clone(),
-                    decision: p
-                        .distributions
-                        .rows()
-                        .into_iter()
-                        .next_back()
-                        .map_or(f64::NAN, |r| r[p.class]),
-                })
-                .collect())
-        }
-        Model::Clusters(m) => {
-            let set = session.label_set(&m.label_set);
-            Ok(m.assign(session, calibration)?
-                .into_iter()
-                .zip(&session.grasps)
-                .enumerate()
-                .map(|(g, (cluster, grasp))| GraspPrediction {
-                    grasp: g,
-                    object: grasp.object.clone(),
-                    trial: grasp.trial,
-                    truth: truth_of(session, set, g),
-                    predicted: cluster_name(cluster),
-                    decision: f64::NAN,
-                })
-                .collect())
-        }
-        Model::TableOne(m) => {
-            let set = session.label_set(&m.label_set);
-            let classify = matches!(m.learner, TableOneLearner::RbfSvm(_));
-            Ok(m.assign(session, calibration)?
-                .into_iter()
-                .zip(&session.grasps)
-                .enumerate()
-                .map(|(g, (id, grasp))| GraspPrediction {
-                    grasp: g,
-                    object: grasp.object.clone(),
-                    trial: grasp.trial,
-                    truth: truth_of(session, set, g),
-                    predicted: if classify {
-                        m.classes.get(id).cloned().unwrap_or_default()
-                    } else {
-                        cluster_name(id)
-                    },
-                    decision: f64::NAN,
-                })
-                .collect())
-        }
-    }
+    let out = outputs(&file.model, session, calibration)?;
+    Ok(rows(&file.model, session, &out))
 }
 
 /// Grasp `g`'s class name under label set `set`, if it has one.
@@ -214,37 +218,44 @@ pub fn evaluate(
     calibration: Calibration,
 ) -> Result<HeldOutResult, ModelError> {
     let t0 = Instant::now();
-    let (label_set, classes, scores, predictions) = match &file.model {
-        Model::Stability(c) => {
-            let predictions = predict(file, session, calibration)?;
-            let scores = stability_scores(c, session, &predictions)?;
-            let classes = vec![c.success_class.clone(), c.failure_class.clone()];
-            (c.label_set.clone(), classes, scores, predictions)
-        }
-        Model::Sequences(m) => {
-            let predictions = predict(file, session, calibration)?;
-            let scores = sequence_scores(m, session, calibration, &predictions)?;
-            (m.label_set.clone(), m.classes.clone(), scores, predictions)
-        }
-        Model::Clusters(m) => {
-            let predictions = predict(file, session, calibration)?;
-            let pred = m.assign(session, calibration)?;
-            let scores = cluster_scores(&m.label_set, session, &pred, m.clusters())?;
-            let classes = (0..m.clusters()).map(cluster_name).collect();
-            (m.label_set.clone(), classes, scores, predictions)
-        }
-        Model::TableOne(m) => {
-            let predictions = predict(file, session, calibration)?;
-            let pred = m.assign(session, calibration)?;
-            if matches!(m.learner, TableOneLearner::RbfSvm(_)) {
-                let scores = class_scores(&m.classes, "rbf-svm", &predictions, &pred, &[])?;
-                (m.label_set.clone(), m.classes.clone(), scores, predictions)
-            } else {
-                let scores = cluster_scores(&m.label_set, session, &pred, m.outputs())?;
-                let classes = (0..m.outputs()).map(cluster_name).collect();
-                (m.label_set.clone(), classes, scores, predictions)
+    let out = outputs(&file.model, session, calibration)?;
+    let predictions = rows(&file.model, session, &out);
+    let label_set = label_set_of(&file.model).to_string();
+    let (classes, scores) = match (&file.model, &out) {
+        (Model::Stability(c), _) => (
+            vec![c.success_class.clone(), c.failure_class.clone()],
+            stability_scores(c, session, &predictions)?,
+        ),
+        (Model::Sequences(m), Outputs::Steps(steps)) => {
+            if session.label_set(&m.label_set).is_none() {
+                return Err(no_label_set(&m.label_set, session));
             }
+            let decided: Vec<usize> = steps.iter().map(|p| p.class).collect();
+            let early: Vec<Vec<usize>> = steps.iter().map(|p| p.early.clone()).collect();
+            let scores =
+                class_scores(&m.classes, m.method().key(), &predictions, &decided, &early)?;
+            (m.classes.clone(), scores)
         }
+        (Model::TableOne(m), Outputs::Ids(ids))
+            if matches!(m.learner, TableOneLearner::RbfSvm(_)) =>
+        {
+            (
+                m.classes.clone(),
+                class_scores(&m.classes, m.method().key(), &predictions, ids, &[])?,
+            )
+        }
+        (model, Outputs::Ids(ids)) => {
+            let clusters = match model {
+                Model::Clusters(m) => m.clusters(),
+                Model::TableOne(m) => m.outputs(),
+                _ => 0,
+            };
+            (
+                (0..clusters).map(cluster_name).collect(),
+                cluster_scores(&label_set, session, ids, clusters)?,
+            )
+        }
+        _ => unreachable!("outputs() gives each model its kind of output"),
     };
     Ok(HeldOutResult {
         method: file.provenance.method,
@@ -339,21 +350,6 @@ fn cluster_scores(
         truth_classes,
         contingency,
     })
-}
-
-fn sequence_scores(
-    m: &SequenceModel,
-    session: &Session,
-    calibration: Calibration,
-    predictions: &[GraspPrediction],
-) -> Result<HeldOutScores, ModelError> {
-    if session.label_set(&m.label_set).is_none() {
-        return Err(no_label_set(&m.label_set, session));
-    }
-    let steps = m.predict(session, calibration)?;
-    let decided: Vec<usize> = steps.iter().map(|p| p.class).collect();
-    let early: Vec<Vec<usize>> = steps.iter().map(|p| p.early.clone()).collect();
-    class_scores(&m.classes, m.method().key(), predictions, &decided, &early)
 }
 
 /// Accuracy, early decisions (per grasp, one class per fraction of `EARLY_FRACTIONS`;
