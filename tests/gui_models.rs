@@ -288,3 +288,96 @@ fn a_bad_model_file_in_the_data_folder_is_a_toast() {
     h.get_by_label("Models (0)");
     let _ = std::fs::remove_dir_all(data);
 }
+
+/// The recognition sample's later trials, a session of their own.
+const LATER_TRIALS: &str = "Simulated object recognition, trials 16-20";
+
+#[test]
+fn recognition_and_clustering_runs_leave_models_that_test_on_another_session() {
+    let dir = common::temp_dir("gui-models-sequences");
+    // The sample split by trial: the window trains on trials 1-15 and tests on 16-20.
+    let sample = session::open(&common::sample("object-recognition.json")).unwrap();
+    let split = |trials: std::ops::RangeInclusive<u32>, name: &str| {
+        let spec = session::subset::SubsetSpec {
+            trials: trials.collect(),
+            ..Default::default()
+        };
+        let s = session::subset::subset(&sample, &spec, name).unwrap();
+        let path = dir.join(format!("{}.json", s.grasps.len()));
+        session::save(&s, &path).unwrap();
+        path
+    };
+    let first = split(1..=15, "Simulated object recognition, trials 1-15");
+    let later = split(16..=20, LATER_TRIALS);
+    let mut h = common::gui::workbench_opening(vec![first, later], 1400.0, 1000.0);
+    assert_eq!(h.state().browser.active, 0);
+
+    // A DS run of one order: its experts, taught every grasp, join the Recognition list.
+    h.get_by_label("Recognition").click();
+    h.run_ok();
+    h.get_by_label("repetitions").set_value_accesskit(1.0);
+    h.run_ok();
+    h.get_by_label("Run").click();
+    h.step();
+    h.step();
+    wait_for_jobs(&mut h, Duration::from_secs(300));
+    let models = &h.state().analyses.models.list;
+    assert_eq!(models.len(), 1, "{:?}", h.state().analyses.notes.texts());
+    let p = &models[0].file.provenance;
+    assert_eq!(p.method.key(), "ds");
+    assert_eq!(p.session.grasps, h.state().sessions[0].session.grasps.len());
+    // Selected by the run's own protocol accuracy.
+    let acc = h.state().analyses.results[0]
+        .score("accuracy (all)")
+        .unwrap();
+    assert_eq!(p.selection[0].value, acc);
+    h.get_by_label("Models (1)");
+    h.get_by_label("DS · capacity 50, tau 15");
+
+    // Tested on the later trials (every object was taught): a held-out recognition result
+    // there, well above the 1-in-10 chance of the sample's ten objects.
+    h.get_by_label("Evaluate on session…").click();
+    h.run_ok();
+    h.get_by_label("Evaluate").click();
+    h.step();
+    wait_for_jobs(&mut h, Duration::from_secs(120));
+    let results = &h.state().analyses.results;
+    assert_eq!(results.len(), 2, "{:?}", h.state().analyses.notes.texts());
+    let held = results[1].held_out.clone().expect("a held-out result");
+    assert_eq!(held.tested_on, LATER_TRIALS);
+    assert_eq!(h.state().view, View::Recognition);
+    assert!(
+        results[1].score("accuracy").unwrap() > 0.5,
+        "{:?} {:?}",
+        results[1].scores,
+        results[0].scores
+    );
+
+    // A DU sweep of two orders chooses its threshold without labels; its model, learned
+    // at that threshold, joins the Clustering list (not the Recognition one).
+    h.state_mut().browser.active = 0;
+    h.get_by_label("Clustering").click();
+    h.run_ok();
+    h.get_by_label("repetitions").set_value_accesskit(2.0);
+    h.get_by_label("from").set_value_accesskit(0.3);
+    h.get_by_label("to").set_value_accesskit(0.4);
+    h.get_by_label("step").set_value_accesskit(0.1);
+    h.run_ok();
+    h.get_by_label("Run").click();
+    h.step();
+    h.step();
+    wait_for_jobs(&mut h, Duration::from_secs(600));
+    let models = &h.state().analyses.models.list;
+    assert_eq!(models.len(), 2, "{:?}", h.state().analyses.notes.texts());
+    let p = &models[1].file.provenance;
+    assert_eq!(p.method.key(), "du");
+    let threshold = p
+        .parameters
+        .iter()
+        .find(|(k, _)| k == "threshold")
+        .map(|(_, v)| v.parse::<f64>().unwrap())
+        .unwrap();
+    assert!([0.3, 0.4].contains(&threshold), "{threshold}");
+    h.get_by_label("Models (1)");
+    let _ = std::fs::remove_dir_all(dir);
+}

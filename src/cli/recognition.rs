@@ -226,20 +226,7 @@ pub fn recognition(args: RecognitionArgs) -> anyhow::Result<()> {
     print_recognition(&result);
     write_json(&result, args.json.as_deref())?;
     if let Some(path) = &args.save_model {
-        let method = match params.learner {
-            SupervisedLearner::Ds => MethodId::Ds,
-            SupervisedLearner::Gs => MethodId::Gs,
-        };
-        let opts = crate::models::SequenceFitOptions {
-            method,
-            features: params.features,
-            label_set: params.label_set.clone(),
-            seed: params.seed,
-            ds: params.ds.clone(),
-            gs: params.gs.clone(),
-        };
-        let (model, secs) = crate::models::fit_sequences(&session, &opts)?;
-        let file = crate::models::sequence_file(model, &session, secs, params.size_reason, None);
+        let file = crate::models::sequence_file_of_run(&session, &result)?;
         crate::models::save(&file, path)?;
         println!("wrote {} ({})", path.display(), file.provenance.summary());
     }
@@ -472,32 +459,13 @@ pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
     println!("  learning phase {us:.1} µs per observation (threads share the cores)");
     write_json(&r, args.json.as_deref())?;
     if let Some(path) = &args.save_model {
-        let Some(choice) = &r.threshold_choice else {
+        let Some(file) = crate::models::cluster_file_of_run(&session, &r)? else {
             anyhow::bail!(
                 "--save-model learns at the threshold chosen without labels: give --choose-threshold stability"
             );
         };
-        let method = match params.learner {
-            crate::experiments::clustering::UnsupervisedLearner::Du => MethodId::Du,
-            crate::experiments::clustering::UnsupervisedLearner::Gu => MethodId::Gu,
-        };
-        let opts = crate::models::ClusterFitOptions {
-            method,
-            features: params.features,
-            label_set: params.label_set.clone(),
-            threshold: choice.threshold,
-            seed: params.seed,
-            params: params.clone(),
-        };
-        let (model, secs) = crate::models::fit_clusters(&session, &opts)?;
-        let file = crate::models::cluster_file(model, &session, secs, None);
         crate::models::save(&file, path)?;
-        println!(
-            "wrote {} ({}, threshold {})",
-            path.display(),
-            file.provenance.summary(),
-            choice.threshold
-        );
+        println!("wrote {} ({})", path.display(), file.provenance.summary());
     }
     Ok(())
 }

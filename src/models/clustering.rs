@@ -10,9 +10,9 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use super::inputs::SequenceInputs;
-use super::{Calibration, Model, ModelError, ModelFile, Provenance, SessionRef};
+use super::{Calibration, Model, ModelError, ModelFile, Provenance, SelectionScore, SessionRef};
 use crate::catalogue::MethodId;
-use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner};
+use crate::experiments::clustering::{ClusteringParams, ClusteringResult, UnsupervisedLearner};
 use crate::experiments::result::SizeReason;
 use crate::features::FeatureSet;
 use crate::learners::{Du, DuParams, Gu, GuParams};
@@ -167,6 +167,39 @@ pub fn fit_clusters(
     };
     model.learn(session)?;
     Ok((model, t0.elapsed().as_secs_f64()))
+}
+
+/// The model a `clustering` run leaves: DU or GU learned on every grasp of `session` at the
+/// threshold the run chose without labels (None when the run chose none), selected by the
+/// agreement of its random orders.
+pub fn cluster_file_of_run(
+    session: &Session,
+    run: &ClusteringResult,
+) -> Result<Option<ModelFile>, ModelError> {
+    let Some(choice) = &run.threshold_choice else {
+        return Ok(None);
+    };
+    let params = &run.params;
+    let method = match params.learner {
+        UnsupervisedLearner::Du => MethodId::Du,
+        UnsupervisedLearner::Gu => MethodId::Gu,
+    };
+    let opts = ClusterFitOptions {
+        method,
+        features: params.features,
+        label_set: params.label_set.clone(),
+        threshold: choice.threshold,
+        seed: params.seed,
+        params: params.clone(),
+    };
+    let (model, secs) = fit_clusters(session, &opts)?;
+    let mut file = cluster_file(model, session, secs, None);
+    file.provenance.selection = vec![SelectionScore {
+        protocol: format!("{}, {} orders", choice.criterion.text(), params.reps),
+        name: "mean pairwise ARI".into(),
+        value: choice.agreement,
+    }];
+    Ok(Some(file))
 }
 
 /// Learn a saved model further on a new session.

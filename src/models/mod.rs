@@ -28,7 +28,8 @@ mod tests;
 
 pub use calibration::Calibration;
 pub use clustering::{
-    ClusterFitOptions, ClusterModel, cluster_file, continue_clusters, fit_clusters,
+    ClusterFitOptions, ClusterModel, cluster_file, cluster_file_of_run, continue_clusters,
+    fit_clusters,
 };
 pub use file::{
     FORMAT, Model, ModelFile, Provenance, SelectionScore, SessionRef, VERSION, load, save,
@@ -38,6 +39,7 @@ pub use held_out::{
 };
 pub use recognition::{
     SequenceFitOptions, SequenceModel, continue_sequences, fit_sequences, sequence_file,
+    sequence_file_of_run,
 };
 pub use stability::{SensorShape, SparseCodes, StabilityClassifier, fit_stability};
 pub use table_one::{TableOneFitOptions, TableOneModel, fit_table_one, table_one_file};

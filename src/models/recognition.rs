@@ -15,10 +15,12 @@ use ndarray::{Array2, s};
 use serde::{Deserialize, Serialize};
 
 use super::inputs::SequenceInputs;
-use super::{Calibration, Model, ModelError, ModelFile, Provenance, SessionRef};
+use super::{Calibration, Model, ModelError, ModelFile, Provenance, SelectionScore, SessionRef};
 use crate::catalogue::MethodId;
 use crate::experiments::labels::session_labels;
-use crate::experiments::recognition::{prefix_len, protocol_order};
+use crate::experiments::recognition::{
+    RecognitionResult, SupervisedLearner, prefix_len, protocol_order,
+};
 use crate::experiments::result::SizeReason;
 use crate::features::FeatureSet;
 use crate::learners::{Ds, DsParams, Gs, GsParams, SequenceClassifier};
@@ -149,6 +151,42 @@ pub fn fit_sequences(
     };
     teach(&mut model, session)?;
     Ok((model, t0.elapsed().as_secs_f64()))
+}
+
+/// The model a `recognition` run leaves: DS or GS fitted on every grasp of `session` with
+/// the run's settings, selected by the run's online-protocol accuracies.
+pub fn sequence_file_of_run(
+    session: &Session,
+    run: &RecognitionResult,
+) -> Result<ModelFile, ModelError> {
+    let params = &run.params;
+    let method = match params.learner {
+        SupervisedLearner::Ds => MethodId::Ds,
+        SupervisedLearner::Gs => MethodId::Gs,
+    };
+    let opts = SequenceFitOptions {
+        method,
+        features: params.features,
+        label_set: params.label_set.clone(),
+        seed: params.seed,
+        ds: params.ds.clone(),
+        gs: params.gs.clone(),
+    };
+    let (model, secs) = fit_sequences(session, &opts)?;
+    let mut file = sequence_file(model, session, secs, params.size_reason, None);
+    let protocol = format!("online protocol, {} orders", params.reps);
+    file.provenance.selection = [
+        ("accuracy", run.summary.all.mean),
+        ("accuracy, final 20 %", run.summary.final_20.mean),
+    ]
+    .into_iter()
+    .map(|(name, value)| SelectionScore {
+        protocol: protocol.clone(),
+        name: name.into(),
+        value,
+    })
+    .collect();
+    Ok(file)
 }
 
 /// Teach a saved model further on a new session.

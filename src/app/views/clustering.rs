@@ -8,9 +8,11 @@ use crate::app::View;
 use crate::app::loader::LoadedSession;
 use crate::app::results::Analyses;
 use crate::app::results::{JobOutput, experiment_error, recognition_ready};
+use crate::catalogue::Task;
 use crate::experiments::clustering::report::clustering_report;
 use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_clustering};
 use crate::experiments::result::AnalysisKind;
+use crate::jobs::JobError;
 use crate::sweep::Experiment;
 
 /// Unsupervised clustering form.
@@ -215,6 +217,7 @@ impl Room for ClusteringRoom {
         ) {
             self.start(cx);
         }
+        super::models::section(ui, cx, Task::Clustering);
     }
 
     fn sweep(&self, cx: &Cx) -> Option<Result<Experiment, String>> {
@@ -233,10 +236,20 @@ impl Room for ClusteringRoom {
             timing,
             move |p| {
                 let r = run_clustering(&session, &f.params(), p).map_err(experiment_error)?;
-                Ok(JobOutput::Result(Box::new(clustering_report(
-                    &session.meta.name,
-                    &r,
-                ))))
+                let result = Box::new(clustering_report(&session.meta.name, &r));
+                // Learned at the threshold chosen without labels, the experts leave the
+                // session as a model file.
+                Ok(
+                    match crate::models::cluster_file_of_run(&session, &r)
+                        .map_err(JobError::failed)?
+                    {
+                        Some(model) => JobOutput::Trained {
+                            result,
+                            model: Box::new(model),
+                        },
+                        None => JobOutput::Result(result),
+                    },
+                )
             },
         );
     }

@@ -8,12 +8,13 @@ use crate::app::View;
 use crate::app::figure_view::{self, Selection as FigureSelection};
 use crate::app::loader::LoadedSession;
 use crate::app::results::{Analyses, JobOutput, experiment_error, sequences_ready};
-use crate::catalogue::MethodId;
+use crate::catalogue::{MethodId, Task};
 use crate::experiments::recognition::report::{accuracy_comparison, recognition_report};
 use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
 use crate::experiments::result::features_text;
 use crate::experiments::result::{AnalysisKind, SizeReason};
 use crate::features::sequence::FeatureSet;
+use crate::jobs::JobError;
 use crate::sweep::Experiment;
 
 /// Supervised recognition form: a few repetitions by default so the view answers quickly;
@@ -236,6 +237,7 @@ impl Room for RecognitionRoom {
         ) {
             self.start(cx);
         }
+        super::models::section(ui, cx, Task::Recognition);
     }
 
     fn sweep(&self, cx: &Cx) -> Option<Result<Experiment, String>> {
@@ -260,10 +262,13 @@ impl Room for RecognitionRoom {
             timing,
             move |p| {
                 let r = run_recognition(&session, &params, p).map_err(experiment_error)?;
-                Ok(JobOutput::Result(Box::new(recognition_report(
-                    &session.meta.name,
-                    &r,
-                ))))
+                // The experts trained on every grasp leave the session as a model file.
+                let model =
+                    crate::models::sequence_file_of_run(&session, &r).map_err(JobError::failed)?;
+                Ok(JobOutput::Trained {
+                    result: Box::new(recognition_report(&session.meta.name, &r)),
+                    model: Box::new(model),
+                })
             },
         );
     }
