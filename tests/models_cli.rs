@@ -128,3 +128,74 @@ fn a_model_fitted_on_some_objects_is_evaluated_on_the_others() {
     assert!(!out.status.success() && err.contains("test.json"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn baselines_save_each_baseline_fitted_with_the_runs_settings() {
+    let dir = common::temp_dir("models-cli-baselines");
+    let sample = common::sample("object-recognition.json");
+    let (train, test) = (dir.join("train.json"), dir.join("test.json"));
+    for (file, trials) in [(&train, "1..15"), (&test, "16..20")] {
+        ok(&run(&[
+            "subset",
+            s(&sample),
+            "--trials",
+            trials,
+            "-o",
+            s(file),
+        ]));
+    }
+    let model = dir.join("table-one.json");
+    let json = dir.join("baselines.json");
+    let stdout = ok(&run(&[
+        "baselines",
+        s(&train),
+        "--orders",
+        "3",
+        "--no-sweep",
+        "--cv-repeats",
+        "1",
+        "--json",
+        s(&json),
+        "--save-model",
+        s(&model),
+    ]));
+    let run_json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    for (key, scores) in [("kmeans", "kmeans"), ("som", "som"), ("rbf-svm", "svm")] {
+        let path = dir.join(format!("table-one.{key}.json"));
+        assert!(stdout.contains(s(&path)), "{stdout}");
+        let file: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        let p = &file["provenance"];
+        assert_eq!(p["method"], key.replace('-', "_"));
+        // Selected by the run's own scores.
+        let first = &p["selection"][0];
+        let want = if key == "rbf-svm" {
+            &run_json[scores]["best"]["accuracy_mean"]
+        } else {
+            &run_json[scores]["mean"]["purity"]
+        };
+        assert_eq!(&first["value"], want, "{key}");
+        // Tested on the later trials: the RBF SVM well above the 1-in-10 chance, the
+        // clusterers scored.
+        let eval = ok(&run(&["evaluate", s(&path), s(&test)]));
+        let score = if key == "rbf-svm" {
+            "accuracy"
+        } else {
+            "purity"
+        };
+        assert!(eval.contains(score), "{eval}");
+    }
+    let svm = dir.join("svm-eval.json");
+    ok(&run(&[
+        "evaluate",
+        s(&dir.join("table-one.rbf-svm.json")),
+        s(&test),
+        "--json",
+        s(&svm),
+    ]));
+    let held: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&svm).unwrap()).unwrap();
+    assert!(held["accuracy"].as_f64().unwrap() > 0.5, "{held}");
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -46,10 +46,10 @@ pub enum JobOutput {
     /// The results were written to the data folder.
     Kept,
     Trace(Box<ReplayTrace>),
-    /// A result and the model it trained (for the Models list).
+    /// A result and the models it trained (for the Models list).
     Trained {
         result: Box<AnalysisResult>,
-        model: Box<ModelFile>,
+        models: Vec<ModelFile>,
     },
     /// A model of the list on another session: shown at once.
     HeldOut(Box<AnalysisResult>),
@@ -231,9 +231,11 @@ impl Analyses {
             }
             match outcome {
                 Some(Outcome::Done(JobOutput::Result(r))) => self.add_result(*r),
-                Some(Outcome::Done(JobOutput::Trained { result, model })) => {
+                Some(Outcome::Done(JobOutput::Trained { result, models })) => {
                     self.add_result(*result);
-                    self.models.add(*model);
+                    for m in models {
+                        self.models.add(m);
+                    }
                 }
                 Some(Outcome::Done(JobOutput::HeldOut(r))) => {
                     let score = r

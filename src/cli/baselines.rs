@@ -78,6 +78,20 @@ pub struct BaselinesArgs {
     /// Repetitions of the SVM's 5-fold cross-validation (0: skip the SVM).
     #[arg(long, default_value_t = 10)]
     pub cv_repeats: usize,
+    /// Save each baseline fitted on every grasp with the run's settings as a model file:
+    /// MODEL.json gives MODEL.kmeans.json, MODEL.som.json and MODEL.rbf-svm.json.
+    #[arg(long, value_name = "MODEL.json")]
+    pub save_model: Option<PathBuf>,
+}
+
+/// Where `--save-model PATH` puts the model of `method`: PATH with the method's key before
+/// its extension.
+fn model_path(path: &std::path::Path, method: crate::catalogue::MethodId) -> PathBuf {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!("{stem}.{}.json", method.key()))
 }
 
 fn line(name: &str, s: &ScoreSummary) -> String {
@@ -141,6 +155,12 @@ pub fn report(r: &BaselinesResult) -> String {
 
 pub fn run(a: BaselinesArgs) -> anyhow::Result<()> {
     super::refuse_input_as_output(a.json.as_deref(), &[&a.session])?;
+    if let Some(path) = &a.save_model {
+        use crate::catalogue::MethodId;
+        for m in [MethodId::KMeans, MethodId::Som, MethodId::RbfSvm] {
+            super::refuse_input_as_output(Some(&model_path(path, m)), &[&a.session])?;
+        }
+    }
     {
         use super::bounds::{MAX_K, MAX_REPS, all_at_most, at_most};
         at_most("--k", a.k, MAX_K)?;
@@ -206,6 +226,13 @@ pub fn run(a: BaselinesArgs) -> anyhow::Result<()> {
         let text = serde_json::to_string_pretty(&result)?;
         crate::fsutil::write_atomic(path, text.as_bytes())
             .with_context(|| format!("writing {}", path.display()))?;
+    }
+    if let Some(path) = &a.save_model {
+        for file in crate::models::table_one_files_of_run(&session, &a.label_set, &result)? {
+            let out = model_path(path, file.provenance.method);
+            crate::models::save(&file, &out)?;
+            println!("wrote {} ({})", out.display(), file.provenance.summary());
+        }
     }
     Ok(())
 }

@@ -369,13 +369,8 @@ fn fit_table_one(method: MethodId, a: FitTableOneArgs) -> anyhow::Result<()> {
     super::bounds::at_most("--k", a.k, super::bounds::MAX_K)?;
     let session =
         session::open(&a.session).with_context(|| format!("opening {}", a.session.display()))?;
-    let opts = models::TableOneFitOptions {
-        method,
-        k: a.k,
-        label_set: a.target.clone(),
-        seed: a.seed,
-    };
-    let (model, fit) = models::fit_table_one(&session, &opts)?;
+    let opts = models::TableOneFitOptions::new(method, &a.target, a.k, a.seed);
+    let (model, fit) = models::fit_table_one(&session, &opts, None)?;
     let file = models::table_one_file(model, &session, fit);
     models::save(&file, &a.output)?;
     let p = &file.provenance;

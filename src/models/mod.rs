@@ -42,7 +42,9 @@ pub use recognition::{
     sequence_file_of_run,
 };
 pub use stability::{SensorShape, SparseCodes, StabilityClassifier, fit_stability};
-pub use table_one::{TableOneFitOptions, TableOneModel, fit_table_one, table_one_file};
+pub use table_one::{
+    TableOneFitOptions, TableOneModel, fit_table_one, table_one_file, table_one_files_of_run,
+};
 
 use crate::experiments::stability::StabilityError;
 

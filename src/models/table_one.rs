@@ -11,12 +11,12 @@ use serde::{Deserialize, Serialize};
 
 use super::{Calibration, Model, ModelError, ModelFile, Provenance, SelectionScore, SessionRef};
 use crate::catalogue::MethodId;
-use crate::cluster::baselines::{BaselinesParams, svm_grid};
-use crate::cluster::{SelfOrganisingMap, SequentialKMeans, SequentialKMeansParams};
+use crate::cluster::baselines::{BaselinesParams, BaselinesResult, SvmSummary, svm_grid};
+use crate::cluster::{SelfOrganisingMap, SequentialKMeans, SequentialKMeansParams, SomParams};
 use crate::experiments::clustering::som_setup;
 use crate::experiments::result::SizeReason;
+use crate::features::Normaliser;
 use crate::features::table_one::{feature_names, session_features};
-use crate::features::{Normalisation, Normaliser};
 use crate::jobs::Progress;
 use crate::session::Session;
 use crate::svm::kernel_svm::{KernelSvm, KernelSvmParams};
@@ -209,44 +209,72 @@ pub struct TableOneFit {
 #[derive(Clone, Debug, PartialEq)]
 pub struct TableOneFitOptions {
     pub method: MethodId,
-    /// Centres (k-means) or units (SOM); the paper's 10.
-    pub k: usize,
     pub label_set: String,
-    pub seed: u64,
+    /// k, seed, normalisation, k-means passes, the SOM and the RBF grid, as `baselines`
+    /// runs them.
+    pub params: BaselinesParams,
 }
 
-/// Fit k-means, the SOM or the RBF SVM on every grasp of `session`; the RBF SVM's C and
-/// gamma are chosen by the `baselines` grid search (repeated 5-fold cross validation).
+impl TableOneFitOptions {
+    /// `fit`'s settings: k centres or units (the paper's 10) on the SOM grid of the
+    /// clustering comparison, the `baselines` defaults otherwise.
+    pub fn new(method: MethodId, label_set: &str, k: usize, seed: u64) -> TableOneFitOptions {
+        TableOneFitOptions {
+            method,
+            label_set: label_set.into(),
+            params: BaselinesParams {
+                k,
+                seed,
+                som: som_setup(k, seed),
+                ..Default::default()
+            },
+        }
+    }
+}
+
+/// Fit k-means, the SOM or the RBF SVM on every grasp of `session`. The RBF SVM takes the
+/// C and gamma of `grid` (a `baselines` run's search), else runs the search (repeated
+/// 5-fold cross validation).
 pub fn fit_table_one(
     session: &Session,
     opts: &TableOneFitOptions,
+    grid: Option<&SvmSummary>,
 ) -> Result<(TableOneModel, TableOneFit), ModelError> {
     let t0 = Instant::now();
-    let mut parameters = vec![("seed".to_string(), opts.seed.to_string())];
+    let params = &opts.params;
+    let mut parameters = vec![("seed".to_string(), params.seed.to_string())];
     let x = features(session, None)?;
-    let normaliser = Normaliser::fit(Normalisation::MinMax, x.view()).map_err(err)?;
+    let normaliser = Normaliser::fit(params.normalisation, x.view()).map_err(err)?;
     let data = normaliser.transform(x.view()).map_err(err)?;
     let (labels, classes) = super::recognition::labels(session, &opts.label_set)?;
     let mut selection = Vec::new();
     let learner = match opts.method {
         MethodId::KMeans => TableOneLearner::KMeans(
             SequentialKMeansParams {
-                k: opts.k,
-                passes: 1,
-                seed: opts.seed,
+                k: params.k,
+                passes: params.kmeans_passes,
+                seed: params.seed,
             }
             .fit(data.view())
             .map_err(err)?,
         ),
         MethodId::Som => {
-            TableOneLearner::Som(som_setup(opts.k, opts.seed).fit(data.view()).map_err(err)?)
+            let som = SomParams {
+                seed: params.seed,
+                ..params.som.clone()
+            };
+            TableOneLearner::Som(som.fit(data.view()).map_err(err)?)
         }
         MethodId::RbfSvm => {
-            let params = BaselinesParams {
-                seed: opts.seed,
-                ..Default::default()
+            let searched;
+            let grid = match grid {
+                Some(g) => g,
+                None => {
+                    searched =
+                        svm_grid(x.view(), &labels, params, &Progress::new()).map_err(err)?;
+                    &searched
+                }
             };
-            let grid = svm_grid(x.view(), &labels, &params, &Progress::new()).map_err(err)?;
             selection.push(SelectionScore {
                 protocol: format!("{} × {}-fold cross validation", grid.repeats, grid.folds),
                 name: "accuracy".into(),
@@ -323,4 +351,50 @@ pub fn table_one_file(model: TableOneModel, session: &Session, fit: TableOneFit)
         selection,
     };
     ModelFile::new(provenance, Model::TableOne(model))
+}
+
+/// The models a `baselines` run leaves: k-means, the SOM and (when the run searched its
+/// grid) the RBF SVM, each fitted on every grasp of `session` with the run's settings, the
+/// clusterers selected by the run's mean scores over its orders.
+pub fn table_one_files_of_run(
+    session: &Session,
+    label_set: &str,
+    run: &BaselinesResult,
+) -> Result<Vec<ModelFile>, ModelError> {
+    let mut methods = vec![MethodId::KMeans, MethodId::Som];
+    if run.svm.is_some() {
+        methods.push(MethodId::RbfSvm);
+    }
+    methods
+        .into_iter()
+        .map(|method| {
+            let opts = TableOneFitOptions {
+                method,
+                label_set: label_set.into(),
+                params: run.params.clone(),
+            };
+            let (model, mut fit) = fit_table_one(session, &opts, run.svm.as_ref())?;
+            let scores = match method {
+                MethodId::KMeans => Some(&run.kmeans),
+                MethodId::Som => Some(&run.som),
+                _ => None,
+            };
+            if let Some(s) = scores {
+                let protocol = format!("{} random orders", run.params.orders);
+                fit.selection = [
+                    ("purity", s.mean.purity),
+                    ("ARI", s.mean.ari),
+                    ("NMI", s.mean.nmi),
+                ]
+                .into_iter()
+                .map(|(name, value)| SelectionScore {
+                    protocol: protocol.clone(),
+                    name: name.into(),
+                    value,
+                })
+                .collect();
+            }
+            Ok(table_one_file(model, session, fit))
+        })
+        .collect()
 }

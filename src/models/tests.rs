@@ -406,13 +406,8 @@ mod table_one {
         };
         let (train, test) = (part(1..=6), part(7..=10));
         for method in [MethodId::KMeans, MethodId::Som, MethodId::RbfSvm] {
-            let opts = TableOneFitOptions {
-                method,
-                k: 10,
-                label_set: "object".into(),
-                seed: 4,
-            };
-            let (model, fit) = fit_table_one(&train, &opts).unwrap();
+            let opts = TableOneFitOptions::new(method, "object", 10, 4);
+            let (model, fit) = fit_table_one(&train, &opts, None).unwrap();
             let file = table_one_file(model.clone(), &train, fit);
             let loaded = ModelFile::from_json(&file.to_json(), "m.json").unwrap();
             let Model::TableOne(saved) = &loaded.model else {

@@ -6,6 +6,7 @@ use crate::app::View;
 use crate::app::loader::LoadedSession;
 use crate::app::results::Analyses;
 use crate::app::results::{JobOutput, recognition_ready};
+use crate::catalogue::Input;
 use crate::cluster::baselines::{BaselinesParams, run_baselines};
 use crate::experiments::baselines::baselines_report;
 use crate::experiments::result::AnalysisKind;
@@ -115,6 +116,7 @@ impl Room for BaselinesRoom {
         ) {
             self.start(cx);
         }
+        super::models::section(ui, cx, |m| m.input() == Input::TableOne);
     }
 
     fn start(&mut self, cx: &mut Cx) {
@@ -151,11 +153,15 @@ impl Room for BaselinesRoom {
                         }
                         other => JobError::failed(other),
                     })?;
-                Ok(JobOutput::Result(Box::new(baselines_report(
+                let result = Box::new(baselines_report(
                     &session.meta.name,
                     &r,
                     t0.elapsed().as_secs_f64(),
-                ))))
+                ));
+                // Each baseline fitted on every grasp leaves the session as a model file.
+                let models = crate::models::table_one_files_of_run(&session, "object", &r)
+                    .map_err(JobError::failed)?;
+                Ok(JobOutput::Trained { result, models })
             },
         );
     }

@@ -217,7 +217,7 @@ impl Room for ClusteringRoom {
         ) {
             self.start(cx);
         }
-        super::models::section(ui, cx, Task::Clustering);
+        super::models::section(ui, cx, |m| m.task() == Task::Clustering);
     }
 
     fn sweep(&self, cx: &Cx) -> Option<Result<Experiment, String>> {
@@ -237,19 +237,13 @@ impl Room for ClusteringRoom {
             move |p| {
                 let r = run_clustering(&session, &f.params(), p).map_err(experiment_error)?;
                 let result = Box::new(clustering_report(&session.meta.name, &r));
-                // Learned at the threshold chosen without labels, the experts leave the
-                // session as a model file.
-                Ok(
-                    match crate::models::cluster_file_of_run(&session, &r)
-                        .map_err(JobError::failed)?
-                    {
-                        Some(model) => JobOutput::Trained {
-                            result,
-                            model: Box::new(model),
-                        },
-                        None => JobOutput::Result(result),
-                    },
-                )
+                // Learned at the threshold chosen without labels (when the run chose one),
+                // the experts leave the session as a model file.
+                let models = crate::models::cluster_file_of_run(&session, &r)
+                    .map_err(JobError::failed)?
+                    .into_iter()
+                    .collect();
+                Ok(JobOutput::Trained { result, models })
             },
         );
     }

@@ -1,4 +1,4 @@
-//! The Models list in a room's form panel (the models of the room's task, those trained on
+//! The Models list in a room's form panel (the models of the room's methods, those trained on
 //! the active session first) and the "Evaluate on session…" window. The list speaks of a
 //! model only through its provenance (method, size, score, training session, when), so
 //! every method's model shows the same way.
@@ -8,17 +8,17 @@ use egui::RichText;
 use super::{Cx, number};
 use crate::app::models::{EvaluateForm, KeptModel, trained_when};
 use crate::app::selection::Command;
-use crate::catalogue::Task;
+use crate::catalogue::MethodId;
 use crate::models::Calibration;
 
-/// The collapsible Models section of a form panel: the models of `task`.
-pub fn section(ui: &mut egui::Ui, cx: &mut Cx, task: Task) {
+/// The collapsible Models section of a form panel: the models whose method `shows`.
+pub fn section(ui: &mut egui::Ui, cx: &mut Cx, shows: impl Fn(MethodId) -> bool) {
     let active = cx
         .session()
         .map(|s| s.session.meta.name.clone())
         .unwrap_or_default();
     let of_task: Vec<usize> = (0..cx.analyses.models.list.len())
-        .filter(|&i| cx.analyses.models.list[i].file.provenance.method.task() == task)
+        .filter(|&i| shows(cx.analyses.models.list[i].file.provenance.method))
         .collect();
     let (mine, others): (Vec<usize>, Vec<usize>) = of_task
         .iter()

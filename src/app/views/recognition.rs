@@ -237,7 +237,7 @@ impl Room for RecognitionRoom {
         ) {
             self.start(cx);
         }
-        super::models::section(ui, cx, Task::Recognition);
+        super::models::section(ui, cx, |m| m.task() == Task::Recognition);
     }
 
     fn sweep(&self, cx: &Cx) -> Option<Result<Experiment, String>> {
@@ -267,7 +267,7 @@ impl Room for RecognitionRoom {
                     crate::models::sequence_file_of_run(&session, &r).map_err(JobError::failed)?;
                 Ok(JobOutput::Trained {
                     result: Box::new(recognition_report(&session.meta.name, &r)),
-                    model: Box::new(model),
+                    models: vec![model],
                 })
             },
         );

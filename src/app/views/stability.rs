@@ -251,7 +251,7 @@ impl Room for StabilityRoom {
         ) {
             self.start(cx);
         }
-        super::models::section(ui, cx, Task::Stability);
+        super::models::section(ui, cx, |m| m.task() == Task::Stability);
     }
 
     fn sweep(&self, cx: &Cx) -> Option<Result<Experiment, String>> {
@@ -291,7 +291,7 @@ impl Room for StabilityRoom {
                     .into_file(&session, &data);
                 Ok(JobOutput::Trained {
                     result: Box::new(stability_report(&r)),
-                    model: Box::new(model),
+                    models: vec![model],
                 })
             },
         );
