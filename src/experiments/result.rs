@@ -321,62 +321,115 @@ impl TimeAxis {
     }
 }
 
-/// (time, headline score, score name) of a result the chart can place.
+/// (time, score, score name) of a result the chart can place: its headline, or for a
+/// held-out result its first score (weighted success rate, accuracy or purity).
 fn charted(r: &AnalysisResult, axis: TimeAxis) -> Option<(f64, f64, &str)> {
-    let (name, score) = r.headline.as_ref()?;
+    let (name, score) = match (&r.headline, &r.held_out) {
+        (Some((n, v)), _) => (n.as_str(), *v),
+        (None, Some(_)) => r.scores.first().map(|(n, v)| (n.as_str(), *v))?,
+        (None, None) => return None,
+    };
     let t = axis.seconds(r)?;
-    (t > 0.0 && t.is_finite() && score.is_finite()).then_some((t, *score, name))
+    (t > 0.0 && t.is_finite() && score.is_finite()).then_some((t, score, name))
 }
 
-/// Indices into `results` of the speed-against-accuracy chart's points, in series order.
-pub fn speed_accuracy_sources(results: &[AnalysisResult], axis: TimeAxis) -> Vec<usize> {
-    (0..results.len())
-        .filter(|&i| charted(&results[i], axis).is_some())
-        .collect()
+/// The speed-against-accuracy chart and, for each of its series, the results its points
+/// stand for (none for a front).
+pub struct SpeedChart {
+    pub figure: Figure,
+    pub sources: Vec<Vec<usize>>,
 }
 
 /// Speed against accuracy: every result with a headline score and a time on `axis` (log
-/// scale), the Pareto front drawn, each point labelled with its method and session.
-pub fn speed_accuracy(results: &[AnalysisResult], axis: TimeAxis) -> Option<Figure> {
-    use crate::figures::{Axis, Series};
-    let rows: Vec<(f64, f64, String)> = results
-        .iter()
-        .filter_map(|r| {
-            let (t, score, name) = charted(r, axis)?;
-            Some((t, score, format!("{} ({name})", r.label)))
-        })
-        .collect();
-    if rows.is_empty() {
+/// scale), each point labelled with its method. Only like is compared with like: each
+/// score kind of each session is a series with its own Pareto front, and held-out scores
+/// (a model tested on a session it did not train on) are series of their own, never
+/// joined to a front.
+pub fn speed_accuracy(results: &[AnalysisResult], axis: TimeAxis) -> Option<SpeedChart> {
+    use crate::figures::{Axis, Series, pareto_front, series_color};
+    /// Points that may share a front: (session, score name, held out).
+    type Group<'a> = (&'a str, &'a str, bool);
+    // Each group's result indices, in order of first appearance.
+    let mut groups: Vec<(Group, Vec<usize>)> = Vec::new();
+    for (i, r) in results.iter().enumerate() {
+        let Some((_, _, name)) = charted(r, axis) else {
+            continue;
+        };
+        let key = (r.session.as_str(), name, r.held_out.is_some());
+        match groups.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, members)) => members.push(i),
+            None => groups.push((key, vec![i])),
+        }
+    }
+    if groups.is_empty() {
         return None;
     }
-    let points = Series::new(
-        "trained models",
-        rows.iter().map(|r| r.0).collect(),
-        rows.iter().map(|r| r.1).collect(),
-    )
-    .labels(rows.iter().map(|r| r.2.clone()).collect());
+    let sessions: std::collections::BTreeSet<&str> =
+        groups.iter().map(|((s, _, _), _)| *s).collect();
+    let mut series = Vec::new();
+    let mut sources = Vec::new();
+    for (g, ((session, score, held_out), members)) in groups.iter().enumerate() {
+        let mut name = if *held_out {
+            format!("{score}, held out")
+        } else {
+            score.to_string()
+        };
+        if sessions.len() > 1 {
+            name = format!("{name} · {session}");
+        }
+        let color = series_color(g);
+        let points: Vec<(f64, f64)> = members
+            .iter()
+            .filter_map(|&i| charted(&results[i], axis).map(|(t, v, _)| (t, v)))
+            .collect();
+        let (x, y): (Vec<f64>, Vec<f64>) = points.iter().copied().unzip();
+        if !held_out && members.len() > 1 {
+            let front = pareto_front(&x, &y);
+            series.push(
+                Series::new(
+                    format!("{name}: Pareto front"),
+                    front.iter().map(|&i| x[i]).collect(),
+                    front.iter().map(|&i| y[i]).collect(),
+                )
+                .color(color),
+            );
+            sources.push(Vec::new());
+        }
+        let labels = members
+            .iter()
+            .map(|&i| {
+                let r = &results[i];
+                match &r.held_out {
+                    Some(h) => format!("{} (trained on {})", r.label, h.trained_on),
+                    None => r.label.clone(),
+                }
+            })
+            .collect();
+        series.push(
+            Series::new(name, x, y)
+                .style(SeriesStyle::Markers)
+                .color(color)
+                .labels(labels),
+        );
+        sources.push(members.clone());
+    }
     let (title, x, subtitle) = match axis {
         TimeAxis::Training => (
             "Speed against accuracy",
             Axis::new("training time", "s"),
-            "each model's headline score (accuracy, weighted success rate or NMI)",
+            "each model's headline score; a front per score and session, held-out scores apart",
         ),
         TimeAxis::Prediction => (
             "Prediction speed against accuracy",
             Axis::new("prediction time per step or sample", "s"),
-            "models that time their predictions; each model's headline score",
+            "models that time their predictions; a front per score and session, held-out \
+             scores apart",
         ),
     };
-    Some(
-        Figure::pareto(
-            title,
-            x.log(),
-            Axis::new("score", ""),
-            points,
-            "Pareto front",
-        )
-        .subtitle(subtitle),
-    )
+    Some(SpeedChart {
+        figure: Figure::chart(title, x.log(), Axis::new("score", ""), series).subtitle(subtitle),
+        sources,
+    })
 }
 
 /// The speed-against-accuracy charts that have points, with their figure names.
@@ -386,7 +439,7 @@ pub fn speed_accuracy_figures(results: &[AnalysisResult]) -> Vec<(String, Figure
         (TimeAxis::Prediction, "prediction-speed-against-accuracy"),
     ]
     .into_iter()
-    .filter_map(|(axis, name)| Some((name.to_string(), speed_accuracy(results, axis)?)))
+    .filter_map(|(axis, name)| Some((name.to_string(), speed_accuracy(results, axis)?.figure)))
     .collect()
 }
 
@@ -502,39 +555,106 @@ pub(crate) mod tests {
         );
     }
 
+    /// Every point's series name and result index, read from a chart and its sources.
+    fn placed(chart: &SpeedChart) -> Vec<(String, usize)> {
+        let crate::figures::FigureKind::Chart(c) = &chart.figure.kind else {
+            panic!("a chart");
+        };
+        assert_eq!(c.series.len(), chart.sources.len());
+        c.series
+            .iter()
+            .zip(&chart.sources)
+            .flat_map(|(s, src)| {
+                assert!(src.is_empty() || src.len() == s.x.len(), "{}", s.name);
+                src.iter().map(|&i| (s.name.clone(), i))
+            })
+            .collect()
+    }
+
     #[test]
-    fn speed_accuracy_sources_follow_the_charted_points() {
+    fn speed_accuracy_places_timed_scored_results_and_names_their_sources() {
         let mut untimed = result();
         untimed.train_seconds = 0.0;
         let mut headless = result();
         headless.headline = None;
         let results = vec![untimed, result(), headless, result()];
+        let chart = speed_accuracy(&results, TimeAxis::Training).unwrap();
         assert_eq!(
-            speed_accuracy_sources(&results, TimeAxis::Training),
-            vec![1, 3]
+            placed(&chart),
+            [
+                ("accuracy (all)".to_string(), 1),
+                ("accuracy (all)".into(), 3)
+            ]
         );
         let mut untimed_prediction = result();
         untimed_prediction.predict_seconds_per_sample = None;
         let mixed = vec![untimed_prediction, result()];
-        assert_eq!(
-            speed_accuracy_sources(&mixed, TimeAxis::Prediction),
-            vec![1]
-        );
-        assert_eq!(
-            speed_accuracy_sources(&mixed, TimeAxis::Training),
-            vec![0, 1]
-        );
+        let on = |axis| -> Vec<usize> {
+            placed(&speed_accuracy(&mixed, axis).unwrap())
+                .into_iter()
+                .map(|(_, i)| i)
+                .collect()
+        };
+        assert_eq!(on(TimeAxis::Prediction), [1]);
+        assert_eq!(on(TimeAxis::Training), [0, 1]);
         assert_eq!(speed_accuracy_figures(&mixed).len(), 2);
         assert_eq!(speed_accuracy_figures(&results[2..3]).len(), 0);
-        let f = speed_accuracy(&results, TimeAxis::Training).unwrap();
-        let crate::figures::FigureKind::Chart(c) = &f.kind else {
+    }
+
+    #[test]
+    fn speed_accuracy_fronts_join_only_like_scores_and_never_held_out_ones() {
+        let at = |session: &str, score: &str, secs: f64, value: f64| {
+            let mut r = result();
+            r.session = session.into();
+            r.headline = Some((score.into(), value));
+            r.scores = vec![(score.into(), value)];
+            r.train_seconds = secs;
+            r
+        };
+        let mut held = at("BTS3 test", "weighted success rate", 0.2, 0.77);
+        held.headline = None;
+        held.held_out = Some(HeldOut {
+            trained_on: "BTS3 train".into(),
+            trained_grasps: 2133,
+            tested_on: "BTS3 test".into(),
+            tested_grasps: 511,
+            calibration: "none".into(),
+        });
+        let mut held_later = held.clone();
+        held_later.train_seconds = 0.4;
+        let results = vec![
+            at("iCub", "accuracy (all)", 1.0, 0.9),
+            at("BTS3 train", "weighted success rate", 2.0, 0.88),
+            at("iCub", "accuracy (all)", 4.0, 0.99),
+            held,
+            held_later,
+            // Faster and better than every held-out and BTS3 point: on a front of its own.
+            at("iCub", "accuracy (all)", 0.1, 1.0),
+        ];
+        let chart = speed_accuracy(&results, TimeAxis::Training).unwrap();
+        let crate::figures::FigureKind::Chart(c) = &chart.figure.kind else {
             panic!("a chart");
         };
-        let points = c
-            .series
-            .iter()
-            .find(|s| s.name == "trained models")
-            .unwrap();
-        assert_eq!(points.x.len(), 2);
+        let names: Vec<&str> = c.series.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "accuracy (all) · iCub: Pareto front",
+                "accuracy (all) · iCub",
+                "weighted success rate · BTS3 train",
+                "weighted success rate, held out · BTS3 test",
+            ]
+        );
+        // iCub's front: the 0.1 s model dominates the others.
+        assert_eq!(
+            (c.series[0].x.clone(), c.series[0].y.clone()),
+            (vec![0.1], vec![1.0])
+        );
+        assert_eq!(chart.sources, [vec![], vec![0, 2, 5], vec![1], vec![3, 4]]);
+        // The held-out point is labelled with where its model trained.
+        assert_eq!(
+            c.series[3].point_labels,
+            ["DS, all features (trained on BTS3 train)"; 2]
+        );
     }
 }

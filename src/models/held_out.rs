@@ -84,7 +84,11 @@ pub struct HeldOutResult {
     #[serde(flatten)]
     pub scores: HeldOutScores,
     pub predictions: Vec<GraspPrediction>,
+    /// Seconds to evaluate (every grasp's prediction and the scores).
     pub secs: f64,
+    /// Seconds the model took to train (its provenance's), for the speed chart.
+    #[serde(default)]
+    pub train_seconds: f64,
 }
 
 /// What a model gives every grasp of a session, before it is named.
@@ -269,6 +273,7 @@ pub fn evaluate(
         scores,
         predictions,
         secs: t0.elapsed().as_secs_f64(),
+        train_seconds: file.provenance.train_seconds,
     })
 }
 
@@ -562,8 +567,9 @@ pub fn held_out_report(r: &HeldOutResult) -> AnalysisResult {
         session: r.tested_on.name.clone(),
         parameters,
         scores,
+        // No headline: a held-out score is never joined to cross-validated ones.
         headline: None,
-        train_seconds: 0.0,
+        train_seconds: r.train_seconds,
         predict_seconds_per_sample: Some(r.secs / r.predictions.len().max(1) as f64),
         created: std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)

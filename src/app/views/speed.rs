@@ -334,7 +334,7 @@ impl SpeedRoom {
     fn chart(&self, ui: &mut egui::Ui, cx: &mut Cx) {
         let axis = self.time_axis;
         let results = &cx.analyses.results;
-        let Some(fig) = result::speed_accuracy(results, axis) else {
+        let Some(chart) = result::speed_accuracy(results, axis) else {
             if axis == TimeAxis::Prediction && !results.is_empty() {
                 ui.label("None of the results times its predictions (the OIESGP learners do).");
             } else {
@@ -351,16 +351,21 @@ impl SpeedRoom {
             .on_hover_text("SVG, PNG and CSV into the export folder")
             .clicked()
         {
-            cx.analyses.export.write(&fig, file, &mut cx.analyses.notes);
+            cx.analyses
+                .export
+                .write(&chart.figure, file, &mut cx.analyses.notes);
         }
         let height = (ui.available_height() - 40.0).max(160.0);
-        let act = figure_view::show(ui, "speed-accuracy", &fig, height, FigureSelection::None);
+        let act = figure_view::show(
+            ui,
+            "speed-accuracy",
+            &chart.figure,
+            height,
+            FigureSelection::None,
+        );
         // Clicking a model's point opens its view, like its button.
-        let sources = result::speed_accuracy_sources(&cx.analyses.results, axis);
         if let Some((series, k)) = act.clicked_point
-            && let figures::FigureKind::Chart(c) = &fig.kind
-            && c.series.get(series).is_some_and(|s| s.name == TRAINED)
-            && let Some(&i) = sources.get(k)
+            && let Some(&i) = chart.sources.get(series).and_then(|s| s.get(k))
         {
             cx.commands.push(Command::OpenResult(i));
         }

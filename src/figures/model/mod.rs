@@ -19,7 +19,6 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use super::FigureError;
-use super::colormap::Rgb;
 pub use axis::{Axis, AxisTitle, Scale};
 pub use bars::{BarChart, BarGroup};
 pub use chart::{
@@ -71,26 +70,6 @@ impl Figure {
                 ref_lines: Vec::new(),
             }),
         )
-    }
-
-    /// A chart of labelled points with their Pareto front (less x and more y is better),
-    /// e.g. training time (log axis) against accuracy, one point per model.
-    pub fn pareto(
-        title: impl Into<String>,
-        x: Axis,
-        y: Axis,
-        points: Series,
-        front_name: impl Into<String>,
-    ) -> Self {
-        let front = pareto_front(&points.x, &points.y);
-        let front = Series::new(
-            front_name,
-            front.iter().map(|&i| points.x[i]).collect(),
-            front.iter().map(|&i| points.y[i]).collect(),
-        )
-        // A neutral line, so that the coloured points stand out.
-        .color(Rgb(0x55, 0x55, 0x55));
-        Figure::chart(title, x, y, vec![front, points.style(SeriesStyle::Markers)])
     }
 
     /// Grouped bars.
