@@ -45,7 +45,7 @@ pub struct RecognitionArgs {
     #[arg(long, default_value = "gs")]
     pub learner: String,
     /// Inputs: all (the paper's families the session has), or families moments (alias
-    /// tactile), encoders (alias encoder), raw, change, combined with + (raw+encoders).
+    /// tactile), encoders (alias encoder), raw, change, codes, combined with + (raw+encoders).
     #[arg(long, default_value = "all")]
     pub features: String,
     /// The label set whose classes are learned and scored.
@@ -250,7 +250,7 @@ pub struct ClusteringArgs {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Inputs: all (the paper's families the session has), or families moments (alias
-    /// tactile), encoders (alias encoder), raw, change, combined with + (raw+encoders).
+    /// tactile), encoders (alias encoder), raw, change, codes, combined with + (raw+encoders).
     #[arg(long, default_value = "all")]
     pub features: String,
     /// The label set whose classes are learned and scored.

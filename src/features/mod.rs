@@ -1,12 +1,14 @@
 //! Features computed from sessions: per-finger moments, per-step feature sequences,
 //! patches, normalisation.
 
+pub mod codes;
 mod moments;
 pub mod normalise;
 mod patches;
 pub mod sequence;
 pub mod table_one;
 
+pub use codes::FrameCodes;
 pub use moments::FingerStats;
 pub use normalise::{Normalisation, Normaliser, Standardizer};
 pub use patches::{KeyFramePatches, PatchError, PatchScaling};

@@ -5,7 +5,9 @@
 //! - `moments`: for every finger the mean, sd, skewness, max and min of its taxel pressures
 //!   (5 × 5 = 25 on the iCub) — the paper's "tactile" features;
 //! - `raw`: every taxel's pressure (where on the finger the contact is, which the moments lose);
-//! - `change`: every taxel's pressure minus its pressure at the grasp's first frame.
+//! - `change`: every taxel's pressure minus its pressure at the grasp's first frame;
+//! - `codes`: the first paper's sparse codes of every frame, one complete dictionary per
+//!   sensor learned on the session's frames without labels (`super::codes`).
 //!
 //! `all` is the paper's 34 (encoders then moments) where the session has encoders and the
 //! moments alone where it has none; `FeatureSequences::families` says which it used.
@@ -26,6 +28,7 @@ use ndarray::Array2;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::FingerStats;
+use super::codes::FrameCodes;
 use crate::rng::Rng;
 use crate::session::Session;
 
@@ -36,21 +39,24 @@ pub enum Family {
     Moments,
     Raw,
     Change,
+    Codes,
 }
 
 impl Family {
     /// Every family, in the column order of the sequences.
-    pub const COLUMN_ORDER: [Family; 4] = [
+    pub const COLUMN_ORDER: [Family; 5] = [
         Family::Encoders,
         Family::Moments,
         Family::Raw,
         Family::Change,
+        Family::Codes,
     ];
     /// The order of a set's name: tactile families first, as in `raw+encoders`.
-    const NAME_ORDER: [Family; 4] = [
+    const NAME_ORDER: [Family; 5] = [
         Family::Moments,
         Family::Raw,
         Family::Change,
+        Family::Codes,
         Family::Encoders,
     ];
 
@@ -60,6 +66,7 @@ impl Family {
             Family::Moments => "moments",
             Family::Raw => "raw",
             Family::Change => "change",
+            Family::Codes => "codes",
         }
     }
 
@@ -69,6 +76,7 @@ impl Family {
             Family::Moments => 2,
             Family::Raw => 4,
             Family::Change => 8,
+            Family::Codes => 16,
         }
     }
 
@@ -78,6 +86,7 @@ impl Family {
             "moments" | "tactile" => Some(Family::Moments),
             "raw" => Some(Family::Raw),
             "change" => Some(Family::Change),
+            "codes" => Some(Family::Codes),
             _ => None,
         }
     }
@@ -108,8 +117,10 @@ impl FeatureSet {
     pub const ENCODERS: FeatureSet = FeatureSet { bits: 1 };
     pub const RAW: FeatureSet = FeatureSet { bits: 4 };
     pub const CHANGE: FeatureSet = FeatureSet { bits: 8 };
+    /// The first paper's sparse codes of every frame.
+    pub const CODES: FeatureSet = FeatureSet { bits: 16 };
     /// The sets the window offers and the paper's figures know by name.
-    pub const OFFERED: [FeatureSet; 7] = [
+    pub const OFFERED: [FeatureSet; 9] = [
         FeatureSet::ALL,
         FeatureSet::MOMENTS,
         FeatureSet::ENCODERS,
@@ -117,6 +128,8 @@ impl FeatureSet {
         FeatureSet::CHANGE,
         FeatureSet { bits: 4 | 1 },
         FeatureSet { bits: 8 | 1 },
+        FeatureSet::CODES,
+        FeatureSet { bits: 16 | 1 },
     ];
 
     /// The set of exactly these families (empty: none).
@@ -159,7 +172,7 @@ impl FeatureSet {
             .map(|f| match f {
                 Family::Encoders => session.encoders.len(),
                 Family::Moments => FingerStats::NAMES.len() * sensors,
-                Family::Raw | Family::Change => session.taxel_count(),
+                Family::Raw | Family::Change | Family::Codes => session.taxel_count(),
             })
             .try_fold(0, |sum, d| (d > 0).then_some(sum + d))
             .filter(|&d| d > 0)
@@ -206,7 +219,7 @@ impl FromStr for FeatureSet {
             let f = Family::parse(part).ok_or_else(|| {
                 bad(format!(
                     "`{part}` is not all or a family: moments (or tactile), encoders (or \
-                     encoder), raw, change; combine families with +, e.g. raw+encoders"
+                     encoder), raw, change, codes; combine families with +, e.g. raw+encoders"
                 ))
             })?;
             set.bits |= f.bit();
@@ -283,6 +296,9 @@ pub struct FeatureSequences {
     /// Raw range of each feature before normalisation.
     pub min: Vec<f64>,
     pub max: Vec<f64>,
+    /// The dictionaries of the `codes` family (None without it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub codes: Option<FrameCodes>,
 }
 
 impl FeatureSequences {
@@ -307,15 +323,17 @@ pub fn feature_sequences(
     session: &Session,
     params: &SequenceParams,
 ) -> Result<FeatureSequences, SequenceError> {
-    feature_sequences_in(session, params, SequenceRange::Session)
+    feature_sequences_in(session, params, SequenceRange::Session, None)
 }
 
 /// The sequences normalised to the min-max range `range` gives (values of a new session
-/// may fall outside [0, 1] on a range it did not set).
+/// may fall outside [0, 1] on a range it did not set); `codes` are coded on `codes`'
+/// dictionaries (a model's), else on dictionaries learned on the session.
 pub fn feature_sequences_in(
     session: &Session,
     params: &SequenceParams,
     range: SequenceRange,
+    codes: Option<&FrameCodes>,
 ) -> Result<FeatureSequences, SequenceError> {
     params.validate()?;
     let used = params.features.resolve(session);
@@ -324,8 +342,8 @@ pub fn feature_sequences_in(
     let n_enc = session.encoders.len();
     let has = |f: Family| families.contains(&f);
     let tactile = families.iter().any(|f| f.uses_taxels());
-    // Raw and change have one column per taxel, so every frame must have the layout's count.
-    let per_taxel = has(Family::Raw) || has(Family::Change);
+    // Raw, change and codes read every taxel, so every frame must have the layout's count.
+    let per_taxel = has(Family::Raw) || has(Family::Change) || has(Family::Codes);
     if has(Family::Encoders) && n_enc == 0 {
         return Err(SequenceError::Session {
             set,
@@ -367,8 +385,43 @@ pub fn feature_sequences_in(
                     names.extend((0..n).map(|i| format!("{}/{}/{i}", s.name, f.name())));
                 }
             }
+            Family::Codes => {}
         }
     }
+    // The codes' dictionaries: the model's, else learned on every frame of the session.
+    let codes = if has(Family::Codes) {
+        let book = match codes {
+            Some(book) => {
+                if book.widths().len() != taxel_counts.len()
+                    || book
+                        .sensors
+                        .iter()
+                        .zip(&taxel_counts)
+                        .any(|(c, &n)| c.mean.len() != n)
+                {
+                    return Err(SequenceError::Session {
+                        set,
+                        reason: "its sensors' taxels are not those of the codes' dictionaries"
+                            .into(),
+                    });
+                }
+                book.clone()
+            }
+            None => {
+                learn_codes(session, params, &taxel_counts).map_err(|e| SequenceError::Session {
+                    set: set.clone(),
+                    reason: format!("learning the codes' dictionaries: {e}"),
+                })?
+            }
+        };
+        for (s, width) in session.sensors.iter().zip(book.widths()) {
+            names.extend((0..width).map(|k| format!("{}/codes/{k}", s.name)));
+        }
+        Some(book)
+    } else {
+        None
+    };
+    let codes_from = names.len() - codes.as_ref().map_or(0, |c| c.widths().iter().sum());
     let dim = names.len();
     let sd = params.taxel_noise_variance.sqrt();
     let mut sequences = Vec::with_capacity(session.grasps.len());
@@ -377,6 +430,8 @@ pub fn feature_sequences_in(
         let mut m = Array2::zeros((grasp.frames.len(), dim));
         // Pressures of the grasp's first frame (with its noise), for `change`.
         let mut first: Vec<Vec<f64>> = Vec::new();
+        // Every frame's pressures per sensor, for `codes` (coded once per grasp).
+        let mut by_sensor: Vec<Vec<f64>> = vec![Vec::new(); session.sensors.len()];
         for (t, frame) in grasp.frames.iter().enumerate() {
             let bad_frame = |reason: String| SequenceError::Session {
                 set: set.clone(),
@@ -418,6 +473,11 @@ pub fn feature_sequences_in(
             if t == 0 {
                 first = pressures.clone();
             }
+            if codes.is_some() {
+                for (all, p) in by_sensor.iter_mut().zip(&pressures) {
+                    all.extend_from_slice(p);
+                }
+            }
             let mut row = m.row_mut(t);
             let mut c = 0;
             let mut put = |v: f64| {
@@ -438,7 +498,27 @@ pub fn feature_sequences_in(
                         .flatten()
                         .zip(first.iter().flatten())
                         .for_each(|(&p, &p0)| put(p - p0)),
+                    Family::Codes => {}
                 }
+            }
+        }
+        if let Some(book) = &codes {
+            let mut col = codes_from;
+            for (s, all) in by_sensor.into_iter().enumerate() {
+                let frames = Array2::from_shape_vec((grasp.frames.len(), taxel_counts[s]), all)
+                    .map_err(|e| SequenceError::Session {
+                        set: set.clone(),
+                        reason: format!("grasp {g}: {e}"),
+                    })?;
+                let coded = book
+                    .encode(s, frames.view())
+                    .map_err(|e| SequenceError::Session {
+                        set: set.clone(),
+                        reason: format!("grasp {g}: {e}"),
+                    })?;
+                m.slice_mut(ndarray::s![.., col..col + coded.ncols()])
+                    .assign(&coded);
+                col += coded.ncols();
             }
         }
         sequences.push(m);
@@ -492,7 +572,47 @@ pub fn feature_sequences_in(
         sequences,
         min,
         max,
+        codes,
     })
+}
+
+/// One dictionary per sensor, learned on every frame's pressures (with the session's noise).
+fn learn_codes(
+    session: &Session,
+    params: &SequenceParams,
+    taxel_counts: &[usize],
+) -> Result<FrameCodes, crate::sparse::SparseError> {
+    let sd = params.taxel_noise_variance.sqrt();
+    let mut frames: Vec<Vec<f64>> = vec![Vec::new(); taxel_counts.len()];
+    let mut rows = 0;
+    for (g, grasp) in session.grasps.iter().enumerate() {
+        let mut rng = Rng::stream(params.seed, g as u64);
+        for (t, frame) in grasp.frames.iter().enumerate() {
+            rows += 1;
+            let counts: Vec<usize> = frame.taxels.iter().map(Vec::len).collect();
+            if counts != taxel_counts {
+                return Err(crate::sparse::SparseError::Data(format!(
+                    "grasp {g} frame {t} has {counts:?} taxels per sensor, the layouts \
+                     {taxel_counts:?}"
+                )));
+            }
+            for (s, raw) in frame.taxels.iter().enumerate() {
+                frames[s].extend(raw.iter().enumerate().map(|(i, &v)| {
+                    let noisy = if sd > 0.0 { v + sd * rng.normal() } else { v };
+                    session.pressure(s, i, noisy)
+                }));
+            }
+        }
+    }
+    let frames: Vec<Array2<f64>> = frames
+        .into_iter()
+        .zip(taxel_counts)
+        .map(|(v, &n)| {
+            Array2::from_shape_vec((rows, n), v)
+                .map_err(|e| crate::sparse::SparseError::Data(e.to_string()))
+        })
+        .collect::<Result<_, _>>()?;
+    FrameCodes::learn(&frames, params.seed)
 }
 
 /// Each feature's least and greatest value over every frame of `sequences`.
@@ -667,6 +787,65 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn codes_are_each_frames_optimal_sparse_code_on_the_sessions_dictionaries() {
+        let s = session();
+        let codes = of(&s, FeatureSet::CODES, 0.0);
+        assert_eq!(codes.dim(), 5 * 12, "a complete dictionary per fingertip");
+        assert_eq!(codes.names[14], format!("{}/codes/2", s.sensors[1].name));
+        let book = codes.codes.clone().expect("the dictionaries used");
+        let (mut zeros, mut total) = (0, 0);
+        for (g, t) in [(0, 0), (7, 5), (59, 3)] {
+            for (k, p) in pressures(&s, g, t).iter().enumerate() {
+                let c = &book.sensors[k];
+                let x: Vec<f64> = p
+                    .iter()
+                    .zip(c.mean.iter().zip(&c.sd))
+                    .map(|(v, (m, sd))| (v - m) / sd)
+                    .collect();
+                let d = &c.dictionary.atoms;
+                // (Undoing the min-max leaves rounding where a code is 0.)
+                let a: Vec<f64> = (0..12)
+                    .map(|j| unnormalised(&codes, g, t, 12 * k + j))
+                    .map(|v| if v.abs() < 1e-12 { 0.0 } else { v })
+                    .collect();
+                // The L1 optimality conditions of eq. 3 (γ = 1) at the column's values.
+                let gram: Vec<f64> = d.dot(&d.t()).iter().copied().collect();
+                let dx: Vec<f64> = d.dot(&ndarray::Array1::from(x.clone())).to_vec();
+                let violation = crate::sparse::l1_optimality_violation(&gram, &dx, 1.0, &a);
+
+                assert!(
+                    violation < 1e-6,
+                    "grasp {g} frame {t} sensor {k}: {violation}"
+                );
+                zeros += a.iter().filter(|v| v.abs() < 1e-9).count();
+                total += a.len();
+            }
+        }
+        assert!(zeros > total / 4, "sparse: {zeros} of {total} zero");
+        // A model's dictionaries code another session; taxels it does not know are refused.
+        let other = simulate::object_recognition(4);
+        let params = SequenceParams {
+            features: FeatureSet::CODES,
+            ..SequenceParams::default()
+        };
+        let on_book =
+            feature_sequences_in(&other, &params, SequenceRange::Session, Some(&book)).unwrap();
+        assert_eq!(on_book.codes.as_ref(), Some(&book));
+        let own = feature_sequences(&other, &params).unwrap();
+        assert_ne!(
+            own.codes.as_ref(),
+            Some(&book),
+            "learned on the other session"
+        );
+        let mut narrow = book.clone();
+        narrow.sensors[2].mean.pop();
+        let e = feature_sequences_in(&other, &params, SequenceRange::Session, Some(&narrow))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("codes' dictionaries"), "{e}");
     }
 
     #[test]

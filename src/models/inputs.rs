@@ -1,12 +1,15 @@
 //! What a model of per-step sequences (DS, GS, DU, GU) reads: its feature families, their
 //! column names and the training session's min-max range of each, and how a session is
-//! read on that range, on its own, or on its first grasps' (the calibration).
+//! read on that range, on its own, or on its first grasps' (the calibration). With the
+//! `codes` family it also keeps the training session's dictionaries: a new session is coded
+//! on the training session's atoms.
 
 use serde::{Deserialize, Serialize};
 
 use super::{Calibration, ModelError};
 use crate::features::{
-    FeatureSequences, FeatureSet, SequenceParams, SequenceRange, feature_sequences_in,
+    Family, FeatureSequences, FeatureSet, FrameCodes, SequenceParams, SequenceRange,
+    feature_sequences_in,
 };
 use crate::session::Session;
 
@@ -18,6 +21,9 @@ pub struct SequenceInputs {
     /// The training session's range of each feature.
     pub min: Vec<f64>,
     pub max: Vec<f64>,
+    /// The `codes` family's dictionaries, learned on the training session.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub codes: Option<FrameCodes>,
 }
 
 /// The session's sequences of `features`, normalised on `range`.
@@ -25,6 +31,7 @@ pub(super) fn sequences(
     session: &Session,
     features: FeatureSet,
     range: SequenceRange,
+    codes: Option<&FrameCodes>,
 ) -> Result<FeatureSequences, ModelError> {
     feature_sequences_in(
         session,
@@ -34,6 +41,7 @@ pub(super) fn sequences(
             seed: 0,
         },
         range,
+        codes,
     )
     .map_err(|e| ModelError::Mismatch(e.to_string()))
 }
@@ -44,12 +52,13 @@ impl SequenceInputs {
         session: &Session,
         features: FeatureSet,
     ) -> Result<SequenceInputs, ModelError> {
-        let feats = sequences(session, features, SequenceRange::Session)?;
+        let feats = sequences(session, features, SequenceRange::Session, None)?;
         Ok(SequenceInputs {
             features: feats.families,
             feature_names: feats.names,
             min: feats.min,
             max: feats.max,
+            codes: feats.codes,
         })
     }
 
@@ -71,7 +80,7 @@ impl SequenceInputs {
                 Some(r) => SequenceRange::Grasps(r),
             },
         };
-        let feats = sequences(session, self.features, range)?;
+        let feats = sequences(session, self.features, range, self.codes.as_ref())?;
         if feats.names != self.feature_names {
             return Err(ModelError::Mismatch(format!(
                 "the model reads {} features ({}); the session gives {} ({})",
@@ -106,7 +115,21 @@ impl SequenceInputs {
                 format!("experts of {dim} inputs for {n} features"),
             ));
         }
-        Ok(())
+        let coded = self.features.families().contains(&Family::Codes);
+        match &self.codes {
+            None if coded => Err(ModelError::field(
+                "model.codes",
+                "the codes family needs its dictionaries",
+            )),
+            Some(_) if !coded => Err(ModelError::field(
+                "model.codes",
+                format!("dictionaries for features {} without codes", self.features),
+            )),
+            Some(c) => c
+                .validate()
+                .map_err(|e| ModelError::field("model.codes", e)),
+            None => Ok(()),
+        }
     }
 
     /// The provenance's description of the features.

@@ -305,6 +305,50 @@ mod sequences {
     }
 
     #[test]
+    fn a_model_of_sparse_codes_codes_new_sessions_on_its_own_dictionaries() {
+        let session = simulate::object_recognition(1);
+        let objects = session.objects();
+        let (train, test) = (
+            part(&session, 1..=5, &objects),
+            part(&session, 6..=10, &objects),
+        );
+        let opts = SequenceFitOptions {
+            features: FeatureSet::CODES,
+            ..options(MethodId::Gs)
+        };
+        let (model, secs) = fit_sequences(&train, &opts).unwrap();
+        let book = model
+            .inputs
+            .codes
+            .clone()
+            .expect("the training dictionaries");
+        let file = sequence_file(model.clone(), &train, secs, Default::default(), None);
+        let loaded = ModelFile::from_json(&file.to_json(), "m.json").unwrap();
+        let Model::Sequences(saved) = &loaded.model else {
+            panic!("a sequence model")
+        };
+        assert_eq!(saved.inputs.codes.as_ref(), Some(&book));
+        // Unseen trials, coded on the training atoms: well above the 1-in-10 chance.
+        let r = evaluate(&loaded, &test, Calibration::None).unwrap();
+        assert!(accuracy(&r) > 0.6, "{}", accuracy(&r));
+        assert_eq!(
+            accuracy(&r),
+            accuracy(&evaluate(&file, &test, Calibration::None).unwrap())
+        );
+        // A file whose dictionaries are gone names the field.
+        let mut json: serde_json::Value = serde_json::from_str(&file.to_json()).unwrap();
+        json["model"]
+            .as_object_mut()
+            .unwrap()
+            .remove("codes")
+            .expect("the codes are saved beside the range");
+        let e = ModelFile::from_json(&json.to_string(), "m.json")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("model.codes"), "{e}");
+    }
+
+    #[test]
     fn a_class_without_an_expert_is_named() {
         let session = simulate::object_recognition(1);
         let objects = session.objects();
