@@ -17,6 +17,7 @@ pub mod learners;
 pub mod linalg;
 pub mod models;
 pub mod perturb;
+pub mod project;
 pub mod rng;
 pub mod session;
 pub mod sparse;

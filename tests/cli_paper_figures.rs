@@ -68,7 +68,7 @@ fn stability_figures_and_project_regenerate_the_first_paper() {
         assert!(index.contains(title), "index lacks {title}");
     }
     // The project re-opens with the figures and the per-basis details.
-    let p = tactile_workbench::experiments::project::Project::load(&project).unwrap();
+    let p = tactile_workbench::project::Project::load(&project).unwrap();
     let r = &p.results[0];
     let bases = r.details_of("bases-raw").expect("basis details");
     assert_eq!(
@@ -97,7 +97,7 @@ fn a_frontier_project_carries_its_frontiers() {
     })
     .expect("paper-figures");
     // The workbench shows a project's frontiers in its speed view: they must be in it.
-    let p = tactile_workbench::experiments::project::Project::load(&project).unwrap();
+    let p = tactile_workbench::project::Project::load(&project).unwrap();
     assert_eq!(p.frontiers.len(), 1);
     assert_eq!(p.frontiers[0].params.method, MethodId::SparseSvm);
     let _ = std::fs::remove_dir_all(out);

@@ -15,17 +15,15 @@ use tactile_workbench::experiments::recognition::report::recognition_report;
 use tactile_workbench::experiments::recognition::{
     RecognitionParams, SupervisedLearner, run_recognition,
 };
+use tactile_workbench::experiments::result::{AnalysisResult, GraspLinks};
 use tactile_workbench::experiments::stability::report::stability_report;
 use tactile_workbench::experiments::stability::{
     self, Config, DataOptions, PipelineSettings, StabilityData, StabilityOptions, StabilityReport,
 };
-use tactile_workbench::experiments::{
-    project::Project,
-    result::{AnalysisResult, GraspLinks},
-};
 use tactile_workbench::features::FeatureSet;
 use tactile_workbench::figures::{FigureKind, Heatmap, ImageGrid};
 use tactile_workbench::jobs::Progress;
+use tactile_workbench::project::Project;
 use tactile_workbench::session::Session;
 use tactile_workbench::sparse::DictionaryParams;
 use tactile_workbench::svm::CvResult;

@@ -442,11 +442,9 @@ fn stability_view_shows_the_first_papers_figures() {
 
 #[test]
 fn a_project_on_the_command_line_reopens_its_sessions_and_shows_its_results() {
-    use tactile_workbench::experiments::{
-        project::Project,
-        result::{AnalysisKind, AnalysisResult},
-    };
+    use tactile_workbench::experiments::result::{AnalysisKind, AnalysisResult};
     use tactile_workbench::figures::{Axis, Figure, Series};
+    use tactile_workbench::project::Project;
     let session = tactile_workbench::session::open(&common::sample("grasp-stability.json"))
         .unwrap()
         .meta

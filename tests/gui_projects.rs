@@ -88,6 +88,20 @@ fn save_and_open_a_project_through_the_path_field_and_keep_results_across_a_rest
     through_the_picker(&mut h, "Save project…", &saved, "Save");
     wait_for_jobs(&mut h, Duration::from_secs(60));
     assert!(saved.is_file(), "{:?}", h.state().analyses.notes.texts());
+    // The project carries the run's models (k-means and the SOM at least) ...
+    let models = h.state().analyses.models.list.len();
+    assert!(models >= 2, "{models} models");
+    let project = tactile_workbench::project::Project::load(&saved).unwrap();
+    assert_eq!(project.models.len(), models);
+    // ... and brings them to a workbench that has never seen them.
+    let elsewhere = common::temp_dir("gui-project-elsewhere");
+    let mut other = workbench(&elsewhere, None);
+    assert!(other.state().analyses.models.list.is_empty());
+    through_the_picker(&mut other, "Open project…", &saved, "Open");
+    wait_for_jobs(&mut other, Duration::from_secs(60));
+    assert_eq!(other.state().analyses.models.list.len(), models);
+    drop(other);
+    let _ = std::fs::remove_dir_all(elsewhere);
 
     // A path that cannot be used is a toast, and the picker stays for another try.
     h.get_by_label("File").click();

@@ -229,7 +229,7 @@ impl WorkbenchApp {
     /// Open a session file, or a project file (which reopens its sessions); a recording
     /// that needs an import spec waits in the import dialog.
     pub fn open_path(&mut self, path: PathBuf, ctx: &egui::Context) {
-        if crate::experiments::project::is_project(&path) {
+        if crate::project::is_project(&path) {
             self.analyses.open_project(ctx, path);
         } else if crate::session::needs_spec(&path) {
             self.import.push(path);

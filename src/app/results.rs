@@ -40,9 +40,9 @@ pub enum JobOutput {
     Result(Box<AnalysisResult>),
     Frontier(Box<Frontier>),
     Message(String),
-    Project(crate::experiments::project::Project),
+    Project(crate::project::Project),
     /// The results kept by an earlier run, back.
-    Restored(crate::experiments::project::Project),
+    Restored(crate::project::Project),
     /// The results were written to the data folder.
     Kept,
     Trace(Box<ReplayTrace>),
@@ -305,15 +305,20 @@ impl Analyses {
                 Some(Outcome::Done(JobOutput::Trace(t))) => self.trace = Some(*t),
                 Some(Outcome::Done(JobOutput::Project(p))) => {
                     let n = p.results.len();
+                    let models = p.models.len();
                     self.notes.info(format!(
-                        "opened a project with {n} result{} (sessions: {})",
+                        "opened a project with {n} result{} and {models} model{} (sessions: {})",
                         if n == 1 { "" } else { "s" },
+                        if models == 1 { "" } else { "s" },
                         p.sessions.join(", ")
                     ));
                     let first = p.results.first().map(|r| r.session.clone());
                     self.results.extend(p.results);
                     for f in p.frontiers {
                         self.add_frontier(f);
+                    }
+                    for m in p.models {
+                        self.models.add(m);
                     }
                     self.opened_projects.push((p.sessions, first));
                     self.keep_pending = true;
@@ -496,8 +501,7 @@ impl Analyses {
             None,
             "Reopening the last run's results".into(),
             move |_| {
-                let project =
-                    crate::experiments::project::Project::load(&path).map_err(JobError::failed)?;
+                let project = crate::project::Project::load(&path).map_err(JobError::failed)?;
                 Ok(JobOutput::Restored(project))
             },
         );
@@ -515,7 +519,7 @@ impl Analyses {
             return;
         }
         self.keep_pending = false;
-        let project = crate::experiments::project::Project::new(sessions, self.results.clone())
+        let project = crate::project::Project::new(sessions, self.results.clone())
             .with_frontiers(self.frontiers.clone());
         self.spawn(ctx, None, KEEP_JOB.into(), move |_| {
             if let Some(dir) = path.parent() {
@@ -678,10 +682,13 @@ impl Analyses {
         });
     }
 
-    /// Save the results and the sessions they came from as a project file (in the background).
+    /// Save the results, their models and the sessions they came from as a project file (in
+    /// the background).
     pub fn save_project(&mut self, ctx: &egui::Context, path: PathBuf, sessions: Vec<String>) {
-        let project = crate::experiments::project::Project::new(sessions, self.results.clone())
-            .with_frontiers(self.frontiers.clone());
+        let models = self.models.list.iter().map(|m| m.file.clone()).collect();
+        let project = crate::project::Project::new(sessions, self.results.clone())
+            .with_frontiers(self.frontiers.clone())
+            .with_models(models);
         self.spawn(
             ctx,
             None,
@@ -703,8 +710,7 @@ impl Analyses {
             None,
             format!("Open project {}", path.display()),
             move |_| {
-                let project =
-                    crate::experiments::project::Project::load(&path).map_err(JobError::failed)?;
+                let project = crate::project::Project::load(&path).map_err(JobError::failed)?;
                 Ok(JobOutput::Project(project))
             },
         );

@@ -15,7 +15,6 @@ use crate::experiments::clustering::report::clustering_report;
 use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_clustering};
 use crate::experiments::frontier::report::frontier_figures;
 use crate::experiments::frontier::{Frontier, FrontierParams, run_frontier};
-use crate::experiments::project::Project;
 use crate::experiments::recognition::report::{comparison_figures, recognition_report};
 use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
 use crate::experiments::result::{AnalysisResult, figure_set, speed_accuracy_figures};
@@ -29,6 +28,7 @@ use crate::features::FeatureSet;
 use crate::features::table_one::session_features;
 use crate::figures::{FigureEntry, FigureSet, Format, RenderOptions, export_all};
 use crate::jobs::Progress;
+use crate::project::Project;
 use crate::session::Session;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

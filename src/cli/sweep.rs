@@ -11,8 +11,8 @@ use super::progress::with_progress;
 use super::recognition::{ClusteringArgs, RecognitionArgs, open_session};
 use super::robustness::{RobustnessArgs, params_of};
 use super::stability::{StabilityArgs, data_options, in_pool, options_from};
-use crate::experiments::project::Project;
 use crate::experiments::stability::StabilityData;
+use crate::project::Project;
 use crate::session::Session;
 use crate::sweep::{
     self, Experiment, FrontierSweep, PlanRequest, ShardRun, ShardState, StabilitySweep, describe,

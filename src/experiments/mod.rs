@@ -8,7 +8,6 @@ pub mod frontier;
 pub mod labels;
 pub mod links;
 pub mod parallel;
-pub mod project;
 pub mod recognition;
 pub mod result;
 pub mod robustness;

@@ -1,14 +1,15 @@
-//! A saved project: the sessions it used, the results computed on them and the frontiers.
-//! The only place that knows frontiers beside the results, so the result layer stays below
-//! the experiments.
+//! A saved project: the sessions it used, the results computed on them, the frontiers and
+//! the models the results trained. It sits above the experiments and the models, so that
+//! neither needs to know of the other's kept state.
 
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use super::frontier::Frontier;
-use super::result::AnalysisResult;
+use crate::experiments::frontier::Frontier;
+use crate::experiments::result::AnalysisResult;
 use crate::fsutil;
+use crate::models::ModelFile;
 
 pub const PROJECT_TAG: &str = "tactile-workbench-project";
 pub const PROJECT_VERSION: u32 = 1;
@@ -25,6 +26,10 @@ pub struct Project {
     /// were kept have none).
     #[serde(default)]
     pub frontiers: Vec<Frontier>,
+    /// The models trained or loaded beside the results, each a whole model file (projects
+    /// saved before models were kept have none).
+    #[serde(default)]
+    pub models: Vec<ModelFile>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -57,7 +62,13 @@ impl Project {
             sessions,
             results,
             frontiers: Vec::new(),
+            models: Vec::new(),
         }
+    }
+
+    pub fn with_models(mut self, models: Vec<ModelFile>) -> Self {
+        self.models = models;
+        self
     }
 
     pub fn with_frontiers(mut self, frontiers: Vec<Frontier>) -> Self {
@@ -119,6 +130,10 @@ impl Project {
             r.check_links()
                 .map_err(|e| read(format!("`results[{i}]` ({}): {e}", r.label)))?;
         }
+        for (i, m) in project.models.iter().enumerate() {
+            m.validate()
+                .map_err(|e| read(format!("`models[{i}]`: {e}")))?;
+        }
         Ok(project)
     }
 }
@@ -154,6 +169,41 @@ mod tests {
         let set = figure_set(&back.results);
         assert_eq!(set.entries[0].name, "01-ds-all-features-accuracy");
         let _ = std::fs::remove_dir_all(dir);
+    }
+
+    #[test]
+    fn a_project_keeps_its_models_and_names_a_damaged_one() {
+        let session = crate::session::simulate::grasp_stability(0);
+        let data = crate::experiments::stability::StabilityData::from_session(
+            &session,
+            &Default::default(),
+        )
+        .unwrap();
+        let file = crate::models::fit_stability(
+            crate::catalogue::MethodId::RawSvm,
+            &session,
+            &data,
+            &Default::default(),
+            &crate::jobs::Progress::new(),
+        )
+        .unwrap()
+        .into_file(&session, &data);
+        let project = Project::new(Vec::new(), vec![result()]).with_models(vec![file.clone()]);
+        let text = serde_json::to_string(&project).unwrap();
+        let back = Project::parse(&text, Path::new("p.json")).unwrap();
+        assert_eq!(back.models, [file]);
+        // An older project (no models) loads with none.
+        let mut old: serde_json::Value = serde_json::from_str(&text).unwrap();
+        old.as_object_mut().unwrap().remove("models");
+        let back = Project::parse(&old.to_string(), Path::new("p.json")).unwrap();
+        assert!(back.models.is_empty());
+        // A model that fails its checks is named by its place.
+        let mut bad: serde_json::Value = serde_json::from_str(&text).unwrap();
+        bad["models"][0]["version"] = 7.into();
+        let e = Project::parse(&bad.to_string(), Path::new("p.json"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("p.json: `models[0]`"), "{e}");
     }
 
     #[test]
