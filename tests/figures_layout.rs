@@ -69,15 +69,9 @@ fn legibility_problems(fig: &Figure, opts: &RenderOptions) -> Vec<String> {
 fn check_all(set: &FigureSet) {
     assert!(!set.entries.is_empty());
     let mut report = Vec::new();
-    // The speed charts' time axes are this run's measured times: their ticks differ from
-    // run to run (and a rare span left two labels at the column preset), so a check of
-    // them here could pass or fail by the machine's load. The tick rules they rely on are
-    // tested on fixed spans in `figures::render::scale`.
-    for e in set
-        .entries
-        .iter()
-        .filter(|e| !e.name.contains("speed-against-accuracy"))
-    {
+    // The speed charts' time axes are this run's measured times: any span must read, as
+    // `every_log_time_span_reads_at_every_size` checks over a grid of spans.
+    for e in &set.entries {
         for (size, opts) in sizes() {
             for p in legibility_problems(&e.figure, &opts) {
                 report.push(format!("{} at {size}: {p}", e.name));
@@ -201,4 +195,43 @@ fn a_range_below_resolution_gets_few_ticks() {
         let y = l.axes.iter().find(|a| a.title == "y").expect("a y axis");
         assert!(y.labels.len() <= 20, "{:?}", y.labels);
     }
+}
+
+/// Times on a log axis, as the speed charts draw them: whatever span the measured times
+/// happen to cover (from microseconds to hours, from a tenth of a decade to many), every
+/// size shows at least three tick labels and nothing overprints.
+#[test]
+fn every_log_time_span_reads_at_every_size() {
+    let mut report = Vec::new();
+    let starts = (-96..=48).map(|k| 10f64.powf(k as f64 / 16.0));
+    for lo in starts {
+        for ratio in (1..=48).map(|k| 10f64.powf(k as f64 / 8.0)) {
+            let hi = lo * ratio;
+            let mut fig = Figure::chart(
+                "Speed against accuracy",
+                Axis::new("training time", "s").log(),
+                Axis::new("score", ""),
+                vec![
+                    Series::new(
+                        "models",
+                        vec![lo, (lo * hi).sqrt(), hi],
+                        vec![0.7, 0.8, 0.9],
+                    )
+                    .style(tactile_workbench::figures::SeriesStyle::Markers)
+                    .labels(vec![
+                        "DS".into(),
+                        "GS".into(),
+                        "sparse coding + SVM".into(),
+                    ]),
+                ],
+            );
+            fig.subtitle = None;
+            for (size, opts) in sizes() {
+                for p in legibility_problems(&fig, &opts) {
+                    report.push(format!("{lo:.3e}..{hi:.3e} at {size}: {p}"));
+                }
+            }
+        }
+    }
+    assert!(report.is_empty(), "{}\n{}", report.len(), report.join("\n"));
 }

@@ -3,7 +3,7 @@
 use plotters::prelude::DrawingBackend;
 use plotters::style::text_anchor::HPos;
 
-use super::scale::{Span, Ticks, ticks_for};
+use super::scale::{Span, Ticks, linear_on_log, ticks_for};
 use super::{AXIS_TITLE_EM, Rect, TICK_EM, fitting_em, truncated};
 use crate::figures::FigureError;
 use crate::figures::canvas::{AXIS, Canvas, GRID, TEXT};
@@ -45,6 +45,7 @@ pub(super) fn frame<DB: DrawingBackend>(
         ticks_for(ylo, yhi, y_log, y_max),
         &y_span(top, bottom),
         |_| Ok(label_h * 1.15),
+        None,
     )?;
     let mut label_w: f64 = 0.0;
     for l in &yt.labels {
@@ -69,9 +70,18 @@ pub(super) fn frame<DB: DrawingBackend>(
             };
             let max = (plot.w() / c.px(55.0)).floor().clamp(3.0, 10.0) as usize;
             let gap = c.px(10.0);
-            let xt = thinned(ticks_for(lo, hi, x.log, max), &x, |l| {
-                Ok(c.text_size(l, TICK_EM)?.0 + gap)
-            })?;
+            let room = |l: &str| Ok(c.text_size(l, TICK_EM)?.0 + gap);
+            // A label centred on its tick stays on the image (the plot reaches its edge).
+            let image = Some((-gap / 2.0, c.size().0 + gap / 2.0));
+            let mut xt = thinned(ticks_for(lo, hi, x.log, max), &x, room, image)?;
+            if x.log && xt.values.len() < 3 {
+                // Round log values bunched in one corner of a narrow span (8e-6, 9e-6,
+                // 1e-5 on 7.5e-6 … 1.8e-5): round linear values spread across it.
+                let spread = thinned(linear_on_log(lo, hi, max), &x, room, image)?;
+                if spread.values.len() > xt.values.len() {
+                    xt = spread;
+                }
+            }
             (x, xt)
         }
         None => (
@@ -93,17 +103,30 @@ pub(super) fn frame<DB: DrawingBackend>(
 
 /// Drop tick labels that would touch their neighbour (`room` is the extent a label needs
 /// along the axis): every other one until none touch, so that the kept ones stay evenly
-/// spaced; never below three when three fit at all.
+/// spaced; never below three when three fit at all. With `within` (pixels along the axis),
+/// first drop the labels that would reach beyond it.
 fn thinned(
     ticks: Ticks,
     span: &Span,
     room: impl Fn(&str) -> Result<f64, FigureError>,
+    within: Option<(f64, f64)>,
 ) -> Result<Ticks, FigureError> {
-    let pos: Vec<f64> = ticks.values.iter().map(|&v| span.map(v)).collect();
-    let mut need = Vec::with_capacity(pos.len());
+    let mut need = Vec::with_capacity(ticks.labels.len());
     for l in &ticks.labels {
         need.push(room(l)?);
     }
+    let inside: Vec<usize> = (0..need.len())
+        .filter(|&i| {
+            let p = span.map(ticks.values[i]);
+            within.is_none_or(|(a, b)| p - need[i] / 2.0 >= a && p + need[i] / 2.0 <= b)
+        })
+        .collect();
+    let ticks = Ticks {
+        values: inside.iter().map(|&i| ticks.values[i]).collect(),
+        labels: inside.iter().map(|&i| ticks.labels[i].clone()).collect(),
+    };
+    let need: Vec<f64> = inside.iter().map(|&i| need[i]).collect();
+    let pos: Vec<f64> = ticks.values.iter().map(|&v| span.map(v)).collect();
     let fits = |keep: &[usize]| {
         keep.windows(2)
             .all(|w| (pos[w[1]] - pos[w[0]]).abs() >= (need[w[0]] + need[w[1]]) / 2.0)
@@ -233,14 +256,14 @@ mod tests {
             p0: 0.0,
             p1: 300.0,
         };
-        let kept = thinned(ticks, &span, |_| Ok(85.0)).unwrap();
+        let kept = thinned(ticks, &span, |_| Ok(85.0), None).unwrap();
         assert_eq!(kept.values, vec![4e-5, 5e-5, 7e-5]);
         // When no three fit, the ends.
         let ticks = Ticks {
             values: vec![4e-5, 5e-5, 6e-5, 7e-5],
             labels: vec!["a".into(), "b".into(), "c".into(), "d".into()],
         };
-        let kept = thinned(ticks, &span, |_| Ok(150.0)).unwrap();
+        let kept = thinned(ticks, &span, |_| Ok(150.0), None).unwrap();
         assert_eq!(kept.labels, vec!["a", "d"]);
     }
 }

@@ -210,6 +210,14 @@ pub(super) struct Ticks {
     pub(super) labels: Vec<String>,
 }
 
+/// Round linear values on a log axis (labelled as log ticks): where the log ticks bunch
+/// into a corner of a narrow span, these spread across it.
+pub(super) fn linear_on_log(lo: f64, hi: f64, max: usize) -> Ticks {
+    let values = linear_ticks(lo, hi, max).0;
+    let labels = values.iter().map(|&v| format_log_tick(v)).collect();
+    Ticks { values, labels }
+}
+
 pub(super) fn ticks_for(lo: f64, hi: f64, log: bool, max: usize) -> Ticks {
     if log {
         let values = log_ticks(lo, hi);
