@@ -395,13 +395,19 @@ pub fn speed_accuracy(results: &[AnalysisResult], axis: TimeAxis) -> Option<Spee
             );
             sources.push(Vec::new());
         }
+        // Each point says what it is: method, size (two runs of one method differ by it)
+        // and, held out, where its model trained.
         let labels = members
             .iter()
             .map(|&i| {
                 let r = &results[i];
+                let mut text = r.label.clone();
+                if let Some(m) = &r.model_size {
+                    text = format!("{text}, {}", m.knobs);
+                }
                 match &r.held_out {
-                    Some(h) => format!("{} (trained on {})", r.label, h.trained_on),
-                    None => r.label.clone(),
+                    Some(h) => format!("{text} (trained on {})", h.trained_on),
+                    None => text,
                 }
             })
             .collect();
@@ -620,6 +626,10 @@ pub(crate) mod tests {
             tested_grasps: 511,
             calibration: "none".into(),
         });
+        held.model_size = Some(ModelSize {
+            knobs: "num_bases 29".into(),
+            reason: SizeReason::PaperDefault,
+        });
         let mut held_later = held.clone();
         held_later.train_seconds = 0.4;
         let results = vec![
@@ -654,7 +664,7 @@ pub(crate) mod tests {
         // The held-out point is labelled with where its model trained.
         assert_eq!(
             c.series[3].point_labels,
-            ["DS, all features (trained on BTS3 train)"; 2]
+            ["DS, all features, num_bases 29 (trained on BTS3 train)"; 2]
         );
     }
 }
