@@ -4,7 +4,7 @@
 
 use ndarray::Array2;
 
-use super::super::kernel::dot;
+use super::super::kernel::{LANES, dot};
 use super::super::wide::dispatch_wide;
 use super::gram::tri;
 use super::{DRIFT_TOL, Sogp};
@@ -277,9 +277,10 @@ impl Sogp {
     ///
     /// Both increments of an entry (j, m), `q_j q_m / Q_ii` and `(q_j + c_j)(q_m + c_m) /
     /// (Q_ii + C_ii)`, are symmetric in (j, m) to the last bit (the products commute), so
-    /// they are computed once for m ≤ j, added to row j where they stand and to column j
-    /// as they are: half the divisions, which bound the removal. Row i is skipped: the
-    /// last BV's overwrites it.
+    /// they are computed once for m below j's block of [`LANES`] BVs, added to row j where
+    /// they stand and to column j as they are: nearly half the divisions, which bound the
+    /// removal. Within the block a row takes all of it (whole vectors, no scalar tail).
+    /// Row i is skipped: the last BV's overwrites it.
     #[inline(always)]
     fn remove_portable(&mut self, i: usize) {
         let (s, no, n) = (self.stride, self.n_out, self.n);
@@ -301,9 +302,10 @@ impl Sogp {
         let (dq, dc) = (&mut self.del_q[..n], &mut self.del_c[..n]);
         for j in (0..n).filter(|&j| j != i) {
             let (qj, qcj) = (cq[j], cqc[j]);
-            // Row j up to the diagonal; column i among them is overwritten later.
-            let crow = &mut self.c[j * s..j * s + j + 1];
-            let qrow = &mut self.q[j * s..j * s + j + 1];
+            // Row j to the end of its block; column i among them is overwritten later.
+            let end = (j + 1).next_multiple_of(LANES).min(n);
+            let crow = &mut self.c[j * s..j * s + end];
+            let qrow = &mut self.q[j * s..j * s + end];
             for ((((c, q), (qm, qcm)), dqm), dcm) in crow
                 .iter_mut()
                 .zip(qrow.iter_mut())
@@ -318,9 +320,10 @@ impl Sogp {
                 *dqm = d1;
                 *dcm = d;
             }
-            // The same increments into column j above the diagonal.
+            // The same increments into column j of the rows before its block.
+            let before = j / LANES * LANES;
             let rows = self.c.chunks_exact_mut(s).zip(self.q.chunks_exact_mut(s));
-            for ((crow, qrow), (dcm, dqm)) in rows.zip(dc[..j].iter().zip(&dq[..j])) {
+            for ((crow, qrow), (dcm, dqm)) in rows.zip(dc[..before].iter().zip(&dq[..before])) {
                 crow[j] += dcm;
                 qrow[j] -= dqm;
             }
