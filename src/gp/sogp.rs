@@ -164,9 +164,12 @@ pub struct Sogp {
     /// old slots of the BVs kept so far.
     gram_new: Vec<f64>,
     retained: Vec<usize>,
-    /// Scratch: the column of Q and C of a BV being deleted.
+    /// Scratch of a deletion: column i of Q and of Q + C for the BV i being deleted, and
+    /// one row's increments of Q and C.
     col_q: Vec<f64>,
-    col_c: Vec<f64>,
+    col_qc: Vec<f64>,
+    del_q: Vec<f64>,
+    del_c: Vec<f64>,
     observed: Option<u64>,
     version: u64,
     seen: usize,
@@ -222,7 +225,9 @@ impl Sogp {
             gram_new: vec![0.0; stride * stride],
             retained: Vec::with_capacity(stride),
             col_q: vec![0.0; stride],
-            col_c: vec![0.0; stride],
+            col_qc: vec![0.0; stride],
+            del_q: vec![0.0; stride],
+            del_c: vec![0.0; stride],
             observed: None,
             version: 0,
             seen: 0,
@@ -466,10 +471,12 @@ impl Sogp {
                 self.adapt = Some(ad);
             }
         }
-        self.posterior_update(r);
+        let added = self.posterior_update(r);
         self.seen += 1;
-        if self.n > self.cap {
+        if added && self.n > self.cap {
             self.delete_least_informative();
+        } else if added {
+            self.store_new_bv();
         }
         if self.seen.is_multiple_of(DRIFT_CHECK_EVERY) {
             self.check_inverse();

@@ -167,12 +167,11 @@ impl Sogp {
                 *k = self.gram_new[i * s + r] * sf2;
             }
             self.refresh_posterior();
-            if let Some((r, _, _)) = self.likelihood_terms() {
-                let before = self.n;
-                self.posterior_update(r);
-                if self.n > before {
-                    self.retained.push(i);
-                }
+            if let Some((r, _, _)) = self.likelihood_terms()
+                && self.posterior_update(r)
+            {
+                self.store_new_bv();
+                self.retained.push(i);
             }
         }
         self.x_raw = saved_x;

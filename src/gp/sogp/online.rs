@@ -4,7 +4,7 @@
 
 use ndarray::Array2;
 
-use super::super::kernel::dot;
+use super::super::kernel::{LANES, dot};
 use super::super::wide::dispatch_wide;
 use super::gram::tri;
 use super::{DRIFT_TOL, Sogp};
@@ -79,16 +79,20 @@ impl Sogp {
         }
     }
 
-    pub(super) fn posterior_update(&mut self, r: f64) {
+    /// The posterior update at the observed window with likelihood term `r`. Returns true
+    /// when the point became BV n − 1 (a full update): C, Q and α already hold it, but
+    /// its window is stored by the caller ([`Sogp::store_bv`]), which at the budget first
+    /// learns whether the deletion that follows removes it again.
+    pub(super) fn posterior_update(&mut self, r: f64) -> bool {
         // The O(n²) updates, in wide vectors where available.
         dispatch_wide!(["avx512f", "avx2"] Sogp::posterior_update_portable, (
             this: &mut Sogp = self,
             r: f64 = r,
-        ))
+        ) -> bool)
     }
 
     #[inline(always)]
-    pub(super) fn posterior_update_portable(&mut self, r: f64) {
+    pub(super) fn posterior_update_portable(&mut self, r: f64) -> bool {
         let (n, s, no) = (self.n, self.stride, self.n_out);
         let k = &self.k[..n];
         for (e, qrow) in self.ehat[..n].iter_mut().zip(self.q.chunks_exact(s)) {
@@ -137,13 +141,14 @@ impl Sogp {
                 *c = 0.0 + r * sj;
             }
             row[n] = 0.0 + r;
-            self.store_bv(n);
             self.n += 1;
+            self.version += 1;
+            true
         } else {
             // Projected update onto the current BVs, with Csató's η = 1/(1 + γ r).
             let eta = 1.0 / (1.0 + gamma * r);
             if !(eta.is_finite() && eta > 0.0) {
-                return;
+                return false;
             }
             for (e, ck) in self.ehat[..n].iter_mut().zip(&self.ck[..n]) {
                 *e += ck;
@@ -163,37 +168,48 @@ impl Sogp {
                     *c += g * ej;
                 }
             }
+            self.version += 1;
+            false
         }
-        self.version += 1;
     }
 
     /// Store the observed window, its target and (when adapting) its kernel derivatives
-    /// as BV `n`.
-    fn store_bv(&mut self, n: usize) {
+    /// as BV `slot`. The derivatives in `kx` are against BVs 0..`others` as they stood
+    /// before the window became a BV, `slot` among them when it replaces a deleted BV.
+    /// The distinct inputs are the caller's.
+    pub(super) fn store_bv(&mut self, slot: usize, others: usize) {
         let (w, no) = (self.wlen, self.n_out);
-        self.bv_raw[n * w..(n + 1) * w].copy_from_slice(&self.x_raw);
-        self.bv_scaled[n * w..(n + 1) * w].copy_from_slice(&self.x_scaled);
-        if self.adapt.is_some() {
-            self.basis.set(n, &self.x_scaled);
-        }
-        let inv_rho = 1.0 / self.kernel.params().sigma_rho;
-        self.inputs.add_bv(n, &self.x_raw, &self.x_scaled, inv_rho);
-        self.bv_y[n * no..(n + 1) * no].copy_from_slice(&self.y_tmp);
+        self.bv_raw[slot * w..(slot + 1) * w].copy_from_slice(&self.x_raw);
+        self.bv_scaled[slot * w..(slot + 1) * w].copy_from_slice(&self.x_scaled);
+        self.bv_y[slot * no..(slot + 1) * no].copy_from_slice(&self.y_tmp);
         if let Some(a) = self.adapt.as_mut() {
+            self.basis.set(slot, &self.x_scaled);
             let (pk, lanes) = (a.buf.pk, a.buf.lanes);
-            let row = &mut a.buf.kb[tri(n, 0) * pk..tri(n, n) * pk];
-            for (j, pair) in row.chunks_exact_mut(pk).enumerate() {
+            for j in (0..others).filter(|&j| j != slot) {
+                let pair = &mut a.buf.kb[tri(slot, j) * pk..(tri(slot, j) + 1) * pk];
                 for (p, v) in pair.iter_mut().enumerate() {
                     *v = a.buf.kx[p * lanes + j];
                 }
             }
-            let diag = &mut a.buf.kb[tri(n, n) * pk..(tri(n, n) + 1) * pk];
+            let diag = &mut a.buf.kb[tri(slot, slot) * pk..(tri(slot, slot) + 1) * pk];
             diag.fill(0.0);
             diag[pk - 1] = 1.0;
         }
     }
 
-    /// Remove the BV with the lowest |α_i|²/(Q_ii + C_ii) (paper eq. 10).
+    /// Store the observed window as the new BV n − 1 (a full update below the budget).
+    pub(super) fn store_new_bv(&mut self) {
+        let slot = self.n - 1;
+        let inv_rho = 1.0 / self.kernel.params().sigma_rho;
+        self.inputs
+            .add_bv(slot, &self.x_raw, &self.x_scaled, inv_rho);
+        self.store_bv(slot, slot);
+    }
+
+    /// After a full update past the budget: remove the BV with the lowest
+    /// |α_i|²/(Q_ii + C_ii) (paper eq. 10). The new BV n − 1 is not stored yet: when it
+    /// is the one removed, it never is (most of the time at the budget); otherwise it is
+    /// stored straight into the slot of the BV removed, where the last BV would move.
     pub(super) fn delete_least_informative(&mut self) {
         let (s, no) = (self.stride, self.n_out);
         let mut best = 0;
@@ -207,78 +223,118 @@ impl Sogp {
                 best = i;
             }
         }
-        self.delete(best);
+        let last = self.n - 1;
+        self.remove(best);
+        if best != last {
+            // The inputs change as they did when the new BV was stored before the
+            // deletion: acquired, then BV `best`'s released, then moved into its slot.
+            let inv_rho = 1.0 / self.kernel.params().sigma_rho;
+            self.inputs
+                .add_bv(last, &self.x_raw, &self.x_scaled, inv_rho);
+            self.inputs.release_bv(best);
+            self.inputs.move_bv(last, best);
+            self.store_bv(best, last);
+            self.move_posterior(last, best);
+        }
+        self.drop_last();
     }
 
-    /// Remove BV `i` with the (Q + C) removal of Csató & Opper.
+    /// Remove BV `i` with the (Q + C) removal of Csató & Opper; the last BV moves into
+    /// its slot.
     pub fn delete(&mut self, i: usize) {
         if i >= self.n {
             return;
         }
-        dispatch_wide!(["avx512f", "avx2"] Sogp::delete_portable, (this: &mut Sogp = self, i: usize = i))
-    }
-
-    /// The removal runs on BV i's column where it stands; then the last BV moves into
-    /// slot i. This is the order a swap of i with the last BV followed by the removal of
-    /// the last gives (every entry is updated on its own, so the results are the same to
-    /// the last bit), without moving the other rows.
-    #[inline(always)]
-    pub(super) fn delete_portable(&mut self, i: usize) {
-        let (s, no, n) = (self.stride, self.n_out, self.n);
-        let last = n - 1;
-        let qs = self.q[i * s + i].max(1e-300);
-        let den = (self.q[i * s + i] + self.c[i * s + i]).max(1e-300);
-        // Column i copied out so that the rank-one updates run over contiguous rows.
-        for j in 0..n {
-            self.col_q[j] = self.q[j * s + i];
-            self.col_c[j] = self.c[j * s + i];
-        }
-        let (cq, cc) = (&self.col_q[..n], &self.col_c[..n]);
-        for d in 0..no {
-            let a_star = self.alpha[i * no + d];
-            for ((a, qm), cm) in self.alpha.iter_mut().skip(d).step_by(no).zip(cq).zip(cc) {
-                let qc = qm + cm;
-                *a -= a_star * qc / den;
-            }
-        }
-        // Row and column i are updated too and then overwritten by the last BV's.
-        for ((crow, qrow), (&qj, &cj)) in self
-            .c
-            .chunks_exact_mut(s)
-            .zip(self.q.chunks_exact_mut(s))
-            .zip(cq.iter().zip(cc))
-        {
-            let crow = &mut crow[..n];
-            let qrow = &mut qrow[..n];
-            for (((c, q), qm), cm) in crow.iter_mut().zip(qrow.iter_mut()).zip(cq).zip(cc) {
-                *c += qj * qm / qs - (qj + cj) * (qm + cm) / den;
-                *q -= qj * qm / qs;
-            }
-        }
+        let last = self.n - 1;
+        self.remove(i);
         self.inputs.release_bv(i);
         if i != last {
             self.move_bv(last, i);
         }
-        for a in &mut self.alpha[last * no..n * no] {
+        self.drop_last();
+    }
+
+    /// The last BV's α is cleared and the BV count falls by one.
+    fn drop_last(&mut self) {
+        let (no, n) = (self.n_out, self.n);
+        for a in &mut self.alpha[(n - 1) * no..n * no] {
             *a = 0.0;
         }
         self.n -= 1;
         self.version += 1;
     }
 
-    /// Move BV `from` (the last) into slot `to`, whose BV is gone: its row and column of C
-    /// and Q (the pair with itself to the diagonal), window, target, weights and Gram
-    /// derivatives.
-    fn move_bv(&mut self, from: usize, to: usize) {
-        let (s, w, no) = (self.stride, self.wlen, self.n_out);
-        for m in [&mut self.c, &mut self.q] {
-            let diag = m[from * s + from];
-            m.copy_within(from * s..from * s + from, to * s);
-            m[to * s + to] = diag;
-            for r in (0..from).filter(|&r| r != to) {
-                m[r * s + to] = m[r * s + from];
+    /// The (Q + C) removal of BV `i` from C, Q and α, which leaves its row and column
+    /// stale (the last BV's replace them, or the BV count falls).
+    fn remove(&mut self, i: usize) {
+        dispatch_wide!(["avx512f", "avx2"] Sogp::remove_portable, (this: &mut Sogp = self, i: usize = i))
+    }
+
+    /// The removal runs on BV i's column where it stands; then the last BV moves into
+    /// slot i. This is the order a swap of i with the last BV followed by the removal of
+    /// the last gives (every entry is updated on its own, so the results are the same to
+    /// the last bit), without moving the other rows.
+    ///
+    /// Both increments of an entry (j, m), `q_j q_m / Q_ii` and `(q_j + c_j)(q_m + c_m) /
+    /// (Q_ii + C_ii)`, are symmetric in (j, m) to the last bit (the products commute), so
+    /// they are computed once for m below j's block of [`LANES`] BVs, added to row j where
+    /// they stand and to column j as they are: nearly half the divisions, which bound the
+    /// removal. Within the block a row takes all of it (whole vectors, no scalar tail).
+    /// Row i is skipped: the last BV's overwrites it.
+    #[inline(always)]
+    fn remove_portable(&mut self, i: usize) {
+        let (s, no, n) = (self.stride, self.n_out, self.n);
+        let qs = self.q[i * s + i].max(1e-300);
+        let den = (self.q[i * s + i] + self.c[i * s + i]).max(1e-300);
+        // Column i copied out (with q_m + c_m) so that the updates run over contiguous rows.
+        for j in 0..n {
+            let (qj, cj) = (self.q[j * s + i], self.c[j * s + i]);
+            self.col_q[j] = qj;
+            self.col_qc[j] = qj + cj;
+        }
+        let (cq, cqc) = (&self.col_q[..n], &self.col_qc[..n]);
+        for d in 0..no {
+            let a_star = self.alpha[i * no + d];
+            for (a, qc) in self.alpha.iter_mut().skip(d).step_by(no).zip(cqc) {
+                *a -= a_star * qc / den;
             }
         }
+        let (dq, dc) = (&mut self.del_q[..n], &mut self.del_c[..n]);
+        for j in (0..n).filter(|&j| j != i) {
+            let (qj, qcj) = (cq[j], cqc[j]);
+            // Row j to the end of its block; column i among them is overwritten later.
+            let end = (j + 1).next_multiple_of(LANES).min(n);
+            let crow = &mut self.c[j * s..j * s + end];
+            let qrow = &mut self.q[j * s..j * s + end];
+            for ((((c, q), (qm, qcm)), dqm), dcm) in crow
+                .iter_mut()
+                .zip(qrow.iter_mut())
+                .zip(cq.iter().zip(cqc))
+                .zip(dq.iter_mut())
+                .zip(dc.iter_mut())
+            {
+                let d1 = qj * qm / qs;
+                let d = d1 - qcj * qcm / den;
+                *c += d;
+                *q -= d1;
+                *dqm = d1;
+                *dcm = d;
+            }
+            // The same increments into column j of the rows before its block.
+            let before = j / LANES * LANES;
+            let rows = self.c.chunks_exact_mut(s).zip(self.q.chunks_exact_mut(s));
+            for ((crow, qrow), (dcm, dqm)) in rows.zip(dc[..before].iter().zip(&dq[..before])) {
+                crow[j] += dcm;
+                qrow[j] -= dqm;
+            }
+        }
+    }
+
+    /// Move BV `from` (the last) into slot `to`, whose BV is gone: its row and column of C
+    /// and Q, α, window, target, inputs and Gram derivatives.
+    fn move_bv(&mut self, from: usize, to: usize) {
+        let (w, no) = (self.wlen, self.n_out);
+        self.move_posterior(from, to);
         self.bv_raw.copy_within(from * w..(from + 1) * w, to * w);
         self.bv_scaled.copy_within(from * w..(from + 1) * w, to * w);
         if self.adapt.is_some() {
@@ -286,7 +342,6 @@ impl Sogp {
         }
         self.inputs.move_bv(from, to);
         self.bv_y.copy_within(from * no..(from + 1) * no, to * no);
-        self.alpha.copy_within(from * no..(from + 1) * no, to * no);
         if let Some(a) = self.adapt.as_mut() {
             let pk = a.buf.pk;
             let kb = &mut a.buf.kb;
@@ -298,5 +353,20 @@ impl Sogp {
                 tri(to, to) * pk,
             );
         }
+    }
+
+    /// Move the last BV's row and column of C and Q (the pair with itself to the
+    /// diagonal) and its α into slot `to`.
+    fn move_posterior(&mut self, from: usize, to: usize) {
+        let (s, no) = (self.stride, self.n_out);
+        for m in [&mut self.c, &mut self.q] {
+            let diag = m[from * s + from];
+            m.copy_within(from * s..from * s + from, to * s);
+            m[to * s + to] = diag;
+            for r in (0..from).filter(|&r| r != to) {
+                m[r * s + to] = m[r * s + from];
+            }
+        }
+        self.alpha.copy_within(from * no..(from + 1) * no, to * no);
     }
 }

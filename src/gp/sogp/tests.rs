@@ -481,3 +481,80 @@ fn a_window_saves_its_inputs_and_a_damaged_one_is_an_error() {
         assert!(e.contains(field), "{e}");
     }
 }
+
+/// At the budget, an update stores the new BV only when the deletion keeps it, straight
+/// into the slot it frees. It must leave what storing the BV first and then deleting
+/// the least informative one leaves (a model with room for one more BV, then
+/// [`Sogp::delete`] of the BV with the lowest |α_i|²/(Q_ii + C_ii), paper eq. 10): the
+/// same posterior, BVs, Gram derivatives and observations, bit for bit, with and
+/// without adaptation.
+#[test]
+fn at_the_budget_an_update_equals_storing_then_deleting_the_least_informative() {
+    let (dim, tau, cap) = (2, 3, 6);
+    for (likelihood, n_out) in [(Likelihood::Probit, 1), (Likelihood::Regression, 2)] {
+        for adaptation in [false, true] {
+            let params = |capacity| SogpParams {
+                capacity,
+                tau,
+                likelihood,
+                adaptation: adaptation.then_some(SngdParams {
+                    window: 4,
+                    start_after: 20,
+                    stop_count: 1000,
+                    ..SngdParams::default()
+                }),
+                ..SogpParams::default()
+            };
+            let probit = likelihood == Likelihood::Probit;
+            let mut a = Sogp::new(dim, n_out, &params(cap)).unwrap();
+            let mut b = Sogp::new(dim, n_out, &params(cap + 1)).unwrap();
+            let mut window = Window::new(dim, tau);
+            let (mut kept, mut dropped) = (0, 0);
+            for t in 0..300 {
+                if t % 9 == 0 {
+                    window.reset();
+                }
+                let (x, y) = stream(t, dim, n_out, probit);
+                window.push(&x);
+                a.observe_window(&window);
+                b.observe_window(&window);
+                assert_eq!(bits(a.mean()), bits(b.mean()), "step {t}");
+                let (va, vb) = (a.predictive_variance(), b.predictive_variance());
+                assert_eq!(va.to_bits(), vb.to_bits(), "step {t}");
+                a.update(&y);
+                b.update(&y);
+                let (n, s) = (b.n, b.stride);
+                if n > cap {
+                    let score = |i: usize| {
+                        let a2: f64 = (0..n_out).map(|d| b.alpha[i * n_out + d].powi(2)).sum();
+                        a2 / (b.q[i * s + i] + b.c[i * s + i]).max(1e-300)
+                    };
+                    let worst = (0..n).fold(0, |w, i| if score(i) < score(w) { i } else { w });
+                    if worst == n - 1 {
+                        dropped += 1
+                    } else {
+                        kept += 1
+                    }
+                    b.delete(worst);
+                }
+                let (n, sa) = (a.n, a.stride);
+                assert_eq!(n, b.n, "step {t}");
+                assert_eq!(bits(&a.alpha[..n * n_out]), bits(&b.alpha[..n * n_out]));
+                for i in 0..n {
+                    assert_eq!(bits(&a.c[i * sa..i * sa + n]), bits(&b.c[i * s..i * s + n]));
+                    assert_eq!(bits(&a.q[i * sa..i * sa + n]), bits(&b.q[i * s..i * s + n]));
+                }
+                let (ba, bb) = (a.basis(), b.basis());
+                assert_eq!(ba, bb, "step {t}");
+                assert_eq!(a.kernel_params(), b.kernel_params(), "step {t}");
+                if let (Some(da), Some(db)) = (a.adapt.as_ref(), b.adapt.as_ref()) {
+                    let len = tri(n, 0) * da.buf.pk;
+                    assert_eq!(bits(&da.buf.kb[..len]), bits(&db.buf.kb[..len]), "step {t}");
+                }
+            }
+            assert!(a.adapting() == adaptation && (!adaptation || a.hyper_updates() > 10));
+            // Both ways through the budget were taken, many times.
+            assert!(kept > 20 && dropped > 20, "kept {kept}, dropped {dropped}");
+        }
+    }
+}
