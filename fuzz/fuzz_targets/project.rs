@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use libfuzzer_sys::fuzz_target;
-use tactile_workbench::experiments::report::Project;
+use tactile_workbench::experiments::project::Project;
 
 #[path = "common.rs"]
 mod common;
