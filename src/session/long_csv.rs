@@ -6,6 +6,9 @@
 //! decreasing within a grasp), `object`, one column per label set of the spec, the taxels
 //! `<sensor>_1` … `<sensor>_<n>` of each sensor, one column per joint name, and optionally
 //! `key` (1 on a grasp's key frame). A frame's `t` is its time from the grasp's first row.
+//!
+//! Its header and row parser (`table`, `FrameColumns`, `GraspRows`) also reads each
+//! file of a folder of trial files (`trial_folder`), one grasp per file.
 
 use std::borrow::Cow;
 use std::path::Path;
