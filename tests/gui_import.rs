@@ -1,5 +1,5 @@
-//! A researcher's own recordings in the window: a dropped ROS 2 bag or a long-format CSV
-//! given on the command line waits in the import dialog for its spec, then opens as a
+//! A researcher's own recordings in the window: a dropped ROS 2 bag or folder of trial
+//! files, or a long-format CSV given on the command line, waits in the import dialog for its spec, then opens as a
 //! session that replays like any other. A spec that does not read is refused in the dialog
 //! with its error, and nothing is opened.
 #![cfg(feature = "gui")]
@@ -97,6 +97,23 @@ fn a_dropped_bag_is_imported_with_the_spec_beside_it_and_replays() {
     for sensor in ["left", "right", "palm"] {
         h.get_by_label_contains(&format!("{sensor} ("));
     }
+}
+
+/// A dropped folder of trial files waits for its spec like a bag, is offered the spec named
+/// after it, and imports one grasp per file.
+#[test]
+fn a_dropped_folder_of_trial_files_is_imported_with_the_spec_beside_it() {
+    let mut h = common::gui::workbench(1400.0, 900.0);
+    drop_file(&mut h, &fixtures().join("trials/by-name"));
+    h.get_by_label_contains("by-name needs an import spec");
+    assert_eq!(h.state().sessions.len(), 2);
+    h.get_by_label("Import").click();
+    h.run_ok();
+    wait_for_sessions(&mut h, 3);
+    let s = &h.state().sessions[2].session;
+    assert_eq!(s.meta.name, "Trials by file name");
+    // The eight grasps of the long CSV the folder was split from.
+    assert_eq!(s.grasps.len(), scripted_grasps("long-grasps.json"));
 }
 
 #[test]

@@ -804,3 +804,90 @@ fn an_output_that_is_an_input_is_refused() {
     assert_eq!(std::fs::read(&session).unwrap(), saved);
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// The windows fixture's messages rewritten with zstd chunks, with camera images in a chunk
+/// of their own between two tactile chunks (as large images fill chunks alone in real bags);
+/// then the camera chunk, or else the last tactile chunk, damaged at the start of its
+/// compressed records (the zstd magic number), so that decompressing it must fail.
+fn bag_with_a_damaged_chunk(path: &Path, damage_camera: bool) {
+    use std::collections::BTreeMap;
+    let original = std::fs::read(windows_bag().0).unwrap();
+    let messages: Vec<mcap::Message> = mcap::MessageStream::new(&original)
+        .unwrap()
+        .collect::<Result<_, _>>()
+        .unwrap();
+    let half = messages.len() / 2;
+    let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    let mut w = mcap::WriteOptions::new()
+        .compression(Some(mcap::Compression::Zstd))
+        .chunk_size(None)
+        .create(file)
+        .unwrap();
+    for m in &messages[..half] {
+        w.write(m).unwrap();
+    }
+    w.flush().unwrap();
+    let schema = w
+        .add_schema(
+            "sensor_msgs/msg/Image",
+            "ros2msg",
+            b"uint32 height\nuint32 width",
+        )
+        .unwrap();
+    let camera = w
+        .add_channel(schema, "/camera/image_raw", "cdr", &BTreeMap::new())
+        .unwrap();
+    let t = messages[half - 1].log_time;
+    for i in 0..5u32 {
+        let header = mcap::records::MessageHeader {
+            channel_id: camera,
+            sequence: i,
+            log_time: t + u64::from(i),
+            publish_time: t + u64::from(i),
+        };
+        w.write_to_known_channel(&header, &[i as u8; 4096]).unwrap();
+    }
+    w.flush().unwrap();
+    for m in &messages[half..] {
+        w.write(m).unwrap();
+    }
+    w.finish().unwrap();
+    drop(w);
+    let mut bytes = std::fs::read(path).unwrap();
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    let chunks = &summary.chunk_indexes;
+    assert_eq!(chunks.len(), 3, "tactile, camera, tactile");
+    let has_camera = |c: &mcap::records::ChunkIndex| c.message_index_offsets.contains_key(&camera);
+    assert!(has_camera(&chunks[1]) && chunks[1].message_index_offsets.len() == 1);
+    let target = if damage_camera {
+        &chunks[1]
+    } else {
+        &chunks[2]
+    };
+    // Opcode, record length, start and end time, uncompressed size, CRC, "zstd" with its
+    // length, the records' length: then the zstd frame, whose magic number is overwritten.
+    let records = (target.chunk_start_offset + 1 + 8 + 8 + 8 + 8 + 4 + 4 + 4 + 8) as usize;
+    assert_eq!(&bytes[records..records + 4], &[0x28, 0xb5, 0x2f, 0xfd]);
+    bytes[records..records + 4].copy_from_slice(b"XXXX");
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// The importer reads only the chunks that hold one of the spec's channels (the summary's
+/// message indexes say which): a damaged camera chunk it never decompresses does not stop
+/// the import, which gives exactly the original bag's session, while the same damage in a
+/// tactile chunk is reported.
+#[test]
+fn chunks_without_the_specs_channels_are_never_read() {
+    let dir = common::temp_dir("skipped-chunk");
+    let (_, spec) = windows_bag();
+    let camera = dir.join("camera-damaged.mcap");
+    bag_with_a_damaged_chunk(&camera, true);
+    let s = session::import_with_spec(&camera, &spec).unwrap();
+    let original = import(&windows_bag()).unwrap();
+    assert_eq!(s.grasps, original.grasps);
+    let tactile = dir.join("tactile-damaged.mcap");
+    bag_with_a_damaged_chunk(&tactile, false);
+    let e = error_of(&tactile, &spec);
+    assert_has(&e, &[&tactile.display().to_string(), "damaged"]);
+    let _ = std::fs::remove_dir_all(dir);
+}

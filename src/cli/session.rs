@@ -58,9 +58,10 @@ pub enum ImportSource {
         #[arg(long)]
         spec: PathBuf,
     },
-    /// A long-format CSV (one row per frame) described by an import spec (docs/import.md).
+    /// A long-format CSV (one row per frame), or a folder of trial files (one CSV per grasp),
+    /// described by an import spec (docs/import.md).
     Csv {
-        /// The CSV file.
+        /// The CSV file, or the folder of trial files.
         file: PathBuf,
         /// Write the native session here.
         #[arg(short, long)]
@@ -207,6 +208,17 @@ pub fn import(args: ImportArgs) -> anyhow::Result<()> {
             output,
             spec: spec_path,
         } => {
+            if file.is_dir() {
+                // The folder, the spec and every trial file.
+                let files = session::trial_folder::trial_files(&file).unwrap_or_default();
+                let mut inputs: Vec<&Path> = vec![&file, &spec_path];
+                inputs.extend(files.iter().map(|f| f.path.as_path()));
+                refuse(&output, &inputs)?;
+                let spec = session::ImportSpec::load(&spec_path)?;
+                let s = session::trial_folder::import_trial_folder(&file, &spec)
+                    .with_context(|| format!("importing the trial folder {}", file.display()))?;
+                return write(&s, &output);
+            }
             refuse(&output, &[&file, &spec_path])?;
             let spec = session::ImportSpec::load(&spec_path)?;
             let s = session::long_csv::import_long_csv(&file, &spec)

@@ -6,6 +6,9 @@
 //! decreasing within a grasp), `object`, one column per label set of the spec, the taxels
 //! `<sensor>_1` … `<sensor>_<n>` of each sensor, one column per joint name, and optionally
 //! `key` (1 on a grasp's key frame). A frame's `t` is its time from the grasp's first row.
+//!
+//! Its header and row parser (`table`, `FrameColumns`, `GraspRows`) also reads each
+//! file of a folder of trial files (`trial_folder`), one grasp per file.
 
 use std::borrow::Cow;
 use std::path::Path;
@@ -60,18 +63,6 @@ pub fn split_line(line: &str) -> Result<Vec<Cow<'_, str>>, String> {
     }
 }
 
-/// Where each spec field is in the header.
-struct Columns {
-    grasp: usize,
-    time: usize,
-    object: usize,
-    labels: Vec<usize>,
-    /// Per sensor, the column of each taxel.
-    taxels: Vec<Vec<usize>>,
-    joints: Vec<usize>,
-    key: Option<usize>,
-}
-
 /// A header naming one column twice: found by name, the second would be silently ignored.
 /// Names both columns (1-based) of the first repeated name; empty names are not compared.
 pub fn duplicate_column<S: AsRef<str>>(names: &[S]) -> Result<(), String> {
@@ -92,179 +83,150 @@ pub fn duplicate_column<S: AsRef<str>>(names: &[S]) -> Result<(), String> {
     Ok(())
 }
 
-fn columns(names: &[Cow<'_, str>], spec: &ImportSpec) -> Result<Columns, String> {
-    duplicate_column(names)?;
-    let find = |name: &str| names.iter().position(|n| n.trim() == name);
-    let need = |name: &str| find(name).ok_or_else(|| format!("no `{name}` column"));
-    Ok(Columns {
-        grasp: need("grasp")?,
-        time: need("time")?,
-        object: need("object")?,
-        labels: spec
-            .recorded_label_sets()
-            .iter()
-            .map(|l| need(&l.name))
-            .collect::<Result<_, _>>()?,
-        taxels: spec
-            .sensors
-            .iter()
-            .map(|s| {
-                (1..=s.sensor.layout.taxel_count())
-                    .map(|k| need(&format!("{}_{k}", s.sensor.name)))
-                    .collect::<Result<_, _>>()
-            })
-            .collect::<Result<_, _>>()?,
-        joints: spec
-            .encoder_names()
-            .iter()
-            .map(|j| need(j))
-            .collect::<Result<_, _>>()?,
-        key: find("key"),
-    })
+/// The non-empty lines of a text, numbered from 1.
+pub(crate) struct Lines<'a>(std::iter::Enumerate<std::str::Lines<'a>>);
+
+impl<'a> Iterator for Lines<'a> {
+    type Item = (usize, &'a str);
+
+    fn next(&mut self) -> Option<Self::Item> {
+        self.0
+            .by_ref()
+            .map(|(i, l)| (i + 1, l))
+            .find(|(_, l)| !l.trim().is_empty())
+    }
 }
 
-/// The grasp being read: its id, labels and first line, and its frames so far.
-struct Open {
-    id: String,
-    line: usize,
-    origin: f64,
-    grasp: RawGrasp,
-    key_line: Option<usize>,
+/// A CSV of frames: its header's line number and column names, and its other lines.
+pub(crate) struct Table<'a> {
+    pub header_line: usize,
+    pub names: Vec<Cow<'a, str>>,
+    pub rows: Lines<'a>,
 }
 
-/// Import a long-format CSV as the spec describes.
-pub fn import_long_csv(path: &Path, spec: &ImportSpec) -> Result<Session, SessionError> {
-    parse_long_csv(&read_text(path)?, path, spec)
-}
-
-/// Parse long-format CSV text (`path` names it in errors).
-pub fn parse_long_csv(text: &str, path: &Path, spec: &ImportSpec) -> Result<Session, SessionError> {
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l))
-        .filter(|(_, l)| !l.trim().is_empty());
-    let Some((header_no, header)) = lines.next() else {
+/// Split a CSV of frames into its header (a byte-order mark removed) and rows.
+pub(crate) fn table<'a>(text: &'a str, path: &Path) -> Result<Table<'a>, SessionError> {
+    let mut lines = Lines(text.lines().enumerate());
+    let Some((header_line, header)) = lines.next() else {
         return Err(SessionError::file(path, "the file is empty"));
     };
     let names = split_line(header.trim_start_matches('\u{feff}'))
-        .map_err(|m| SessionError::line(path, header_no, m))?;
-    let cols = columns(&names, spec).map_err(|m| SessionError::line(path, header_no, m))?;
-    let sets = spec.recorded_label_sets();
-    let mut done: Vec<RawGrasp> = Vec::new();
-    let mut done_ids: Vec<String> = Vec::new();
-    let mut open: Option<Open> = None;
-    for (no, line) in lines {
-        let fields = split_line(line).map_err(|m| SessionError::line(path, no, m))?;
-        if fields.len() != names.len() {
-            return Err(SessionError::line(
-                path,
-                no,
-                format!("{} values, expected {}", fields.len(), names.len()),
-            ));
-        }
-        let field = |c: usize| fields[c].trim();
-        let name = |c: usize| names[c].trim().to_string();
-        let number = |c: usize| parse_number(path, no, &name(c), field(c));
-        let id = field(cols.grasp);
-        if id.is_empty() {
-            return Err(SessionError::line_field(
-                path,
-                no,
-                "grasp",
-                "empty grasp id",
-            ));
-        }
-        let object = field(cols.object);
-        let classes = sets
-            .iter()
-            .zip(&cols.labels)
-            .map(|(set, &c)| {
-                spec.class_index(set, field(c))
-                    .map_err(|m| SessionError::line_field(path, no, &set.name, m))
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        let time = number(cols.time)?;
-        if open.as_ref().is_none_or(|o| o.id != id) {
-            if done_ids.iter().any(|d| d == id) {
-                return Err(SessionError::line_field(
-                    path,
-                    no,
-                    "grasp",
-                    format!(
-                        "grasp `{}` appears again after other grasps (a grasp's rows must be \
-                         consecutive)",
-                        shorten(id)
-                    ),
+        .map_err(|m| SessionError::line(path, header_line, m))?;
+    Ok(Table {
+        header_line,
+        names,
+        rows: lines,
+    })
+}
+
+/// A row's fields, as many as the header has columns.
+pub(crate) fn row_fields<'a>(
+    path: &Path,
+    no: usize,
+    line: &'a str,
+    columns: usize,
+) -> Result<Vec<Cow<'a, str>>, SessionError> {
+    let fields = split_line(line).map_err(|m| SessionError::line(path, no, m))?;
+    if fields.len() != columns {
+        return Err(SessionError::line(
+            path,
+            no,
+            format!("{} values, expected {columns}", fields.len()),
+        ));
+    }
+    Ok(fields)
+}
+
+/// Where a frame's values are in the header: `time` (if there is one), each sensor's
+/// taxels, each joint, and `key` (if there is one).
+pub(crate) struct FrameColumns {
+    pub time: Option<usize>,
+    /// Per sensor, the column of each taxel.
+    taxels: Vec<Vec<usize>>,
+    joints: Vec<usize>,
+    key: Option<usize>,
+}
+
+/// One row's frame values.
+pub(crate) struct Row {
+    pub time: Option<f64>,
+    pub taxels: Vec<Vec<f64>>,
+    pub encoders: Vec<f64>,
+    /// `key` is 1 on this row.
+    pub key: bool,
+}
+
+/// The column index of `name`.
+pub(crate) fn find_column(names: &[Cow<'_, str>], name: &str) -> Option<usize> {
+    names.iter().position(|n| n.trim() == name)
+}
+
+/// The column index of `name`, or an error saying it is missing.
+pub(crate) fn need_column(names: &[Cow<'_, str>], name: &str) -> Result<usize, String> {
+    find_column(names, name).ok_or_else(|| format!("no `{name}` column"))
+}
+
+impl FrameColumns {
+    /// Find the spec's columns. A column named like a taxel of a spec sensor that the
+    /// layout does not have (`ff_7` for six taxels) is an error: a recording with more
+    /// taxels than the spec says would otherwise lose them silently.
+    pub(crate) fn find(names: &[Cow<'_, str>], spec: &ImportSpec) -> Result<Self, String> {
+        duplicate_column(names)?;
+        for name in names {
+            let name = name.trim();
+            let Some((sensor, k)) = name.rsplit_once('_') else {
+                continue;
+            };
+            let Some(s) = spec.sensors.iter().find(|s| s.sensor.name == sensor) else {
+                continue;
+            };
+            let n = s.sensor.layout.taxel_count();
+            let is_taxel = k.parse::<usize>().is_ok_and(|k| (1..=n).contains(&k))
+                && !k.starts_with(['0', '+']);
+            if !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()) && !is_taxel {
+                return Err(format!(
+                    "column `{}` is not a taxel of sensor `{sensor}`, whose layout has {n} \
+                     (`{sensor}_1` … `{sensor}_{n}`)",
+                    shorten(name)
                 ));
             }
-            spec.check_object(object)
-                .map_err(|m| SessionError::line_field(path, no, "object", m))?;
-            if let Some(o) = open.take() {
-                done_ids.push(o.id);
-                done.push(o.grasp);
-            }
-            open = Some(Open {
-                id: id.to_string(),
-                line: no,
-                origin: time,
-                grasp: RawGrasp {
-                    object: object.to_string(),
-                    classes: classes.clone(),
-                    frames: Vec::new(),
-                    key_frame: None,
-                },
-                key_line: None,
-            });
         }
-        let Some(o) = open.as_mut() else {
-            continue;
-        };
-        if object != o.grasp.object {
-            return Err(SessionError::line_field(
-                path,
-                no,
-                "object",
-                format!(
-                    "`{}` differs from `{}` on the grasp's first line ({})",
-                    shorten(object),
-                    o.grasp.object,
-                    o.line
-                ),
-            ));
-        }
-        if let Some(k) = classes
-            .iter()
-            .zip(&o.grasp.classes)
-            .position(|(a, b)| a != b)
-        {
-            return Err(SessionError::line_field(
-                path,
-                no,
-                &sets[k].name,
-                format!(
-                    "the label changes within grasp `{}` (line {})",
-                    o.id, o.line
-                ),
-            ));
-        }
-        let t = time - o.origin;
-        if let Some(prev) = o.grasp.frames.last()
-            && t < prev.t
-        {
-            return Err(SessionError::line_field(
-                path,
-                no,
-                "time",
-                format!(
-                    "time goes backwards within grasp `{}`: {time} after {}",
-                    o.id,
-                    prev.t + o.origin
-                ),
-            ));
-        }
-        let mut taxels = Vec::with_capacity(cols.taxels.len());
-        for (s, taxel_cols) in cols.taxels.iter().enumerate() {
+        let need = |name: &str| need_column(names, name);
+        Ok(FrameColumns {
+            time: find_column(names, "time"),
+            taxels: spec
+                .sensors
+                .iter()
+                .map(|s| {
+                    (1..=s.sensor.layout.taxel_count())
+                        .map(|k| need(&format!("{}_{k}", s.sensor.name)))
+                        .collect::<Result<_, _>>()
+                })
+                .collect::<Result<_, _>>()?,
+            joints: spec
+                .encoder_names()
+                .iter()
+                .map(|j| need(j))
+                .collect::<Result<_, _>>()?,
+            key: find_column(names, "key"),
+        })
+    }
+
+    /// Read line `no`'s frame values: numbers finite, taxels within their sensor's range,
+    /// `key` 1, 0 or empty.
+    pub(crate) fn read(
+        &self,
+        path: &Path,
+        no: usize,
+        names: &[Cow<'_, str>],
+        fields: &[Cow<'_, str>],
+        spec: &ImportSpec,
+    ) -> Result<Row, SessionError> {
+        let name = |c: usize| names[c].trim().to_string();
+        let number = |c: usize| parse_number(path, no, &name(c), fields[c].trim());
+        let time = self.time.map(number).transpose()?;
+        let mut taxels = Vec::with_capacity(self.taxels.len());
+        for (s, taxel_cols) in self.taxels.iter().enumerate() {
             let sensor = &spec.sensors[s].sensor;
             let mut values = Vec::with_capacity(taxel_cols.len());
             for &c in taxel_cols {
@@ -285,44 +247,222 @@ pub fn parse_long_csv(text: &str, path: &Path, spec: &ImportSpec) -> Result<Sess
             }
             taxels.push(values);
         }
-        let encoders = cols
+        let encoders = self
             .joints
             .iter()
             .map(|&c| number(c))
             .collect::<Result<Vec<_>, _>>()?;
-        if let Some(c) = cols.key {
-            match field(c) {
-                "" | "0" => {}
-                "1" => {
-                    if let Some(first) = o.key_line {
-                        return Err(SessionError::line_field(
-                            path,
-                            no,
-                            "key",
-                            format!("grasp `{}` already has its key frame on line {first}", o.id),
-                        ));
-                    }
-                    o.key_line = Some(no);
-                    o.grasp.key_frame = Some(o.grasp.frames.len());
-                }
-                other => {
-                    return Err(SessionError::line_field(
-                        path,
-                        no,
-                        "key",
-                        format!("`{}` is not 1, 0 or empty", shorten(other)),
-                    ));
-                }
+        let key = match self.key.map(|c| fields[c].trim()) {
+            None | Some("" | "0") => false,
+            Some("1") => true,
+            Some(other) => {
+                return Err(SessionError::line_field(
+                    path,
+                    no,
+                    "key",
+                    format!("`{}` is not 1, 0 or empty", shorten(other)),
+                ));
             }
-        }
-        o.grasp.frames.push(Frame {
-            t,
+        };
+        Ok(Row {
+            time,
             taxels,
             encoders,
+            key,
+        })
+    }
+}
+
+/// A grasp's frames as its rows give them: a frame's `t` is its time from the first row's,
+/// never going back, and at most one row is the key frame.
+#[derive(Default)]
+pub(crate) struct GraspRows {
+    origin: f64,
+    pub frames: Vec<Frame>,
+    pub key_frame: Option<usize>,
+    key_line: Option<usize>,
+}
+
+impl GraspRows {
+    /// Add line `no`'s frame at `time` (seconds); `whose` names the grasp in errors
+    /// (``grasp `g1` ``, `the file`).
+    pub(crate) fn push(
+        &mut self,
+        path: &Path,
+        no: usize,
+        whose: &str,
+        time: f64,
+        row: Row,
+    ) -> Result<(), SessionError> {
+        if self.frames.is_empty() {
+            self.origin = time;
+        }
+        let t = time - self.origin;
+        if let Some(prev) = self.frames.last()
+            && t < prev.t
+        {
+            return Err(SessionError::line_field(
+                path,
+                no,
+                "time",
+                format!(
+                    "time goes backwards within {whose}: {time} after {}",
+                    prev.t + self.origin
+                ),
+            ));
+        }
+        if row.key {
+            if let Some(first) = self.key_line {
+                return Err(SessionError::line_field(
+                    path,
+                    no,
+                    "key",
+                    format!("{whose} already has its key frame on line {first}"),
+                ));
+            }
+            self.key_line = Some(no);
+            self.key_frame = Some(self.frames.len());
+        }
+        self.frames.push(Frame {
+            t,
+            taxels: row.taxels,
+            encoders: row.encoders,
         });
+        Ok(())
+    }
+}
+
+/// The grasp being read: its id, object, classes and first line, and its rows so far.
+struct Open {
+    id: String,
+    line: usize,
+    object: String,
+    classes: Vec<usize>,
+    rows: GraspRows,
+}
+
+impl Open {
+    fn close(self) -> RawGrasp {
+        RawGrasp {
+            object: self.object,
+            classes: self.classes,
+            frames: self.rows.frames,
+            key_frame: self.rows.key_frame,
+            trial: None,
+        }
+    }
+}
+
+/// Import a long-format CSV as the spec describes.
+pub fn import_long_csv(path: &Path, spec: &ImportSpec) -> Result<Session, SessionError> {
+    parse_long_csv(&read_text(path)?, path, spec)
+}
+
+/// Parse long-format CSV text (`path` names it in errors).
+pub fn parse_long_csv(text: &str, path: &Path, spec: &ImportSpec) -> Result<Session, SessionError> {
+    let Table {
+        header_line: header_no,
+        names,
+        rows: lines,
+    } = table(text, path)?;
+    let sets = spec.recorded_label_sets();
+    let (grasp_col, object_col, label_cols, cols) = (|| {
+        let grasp = need_column(&names, "grasp")?;
+        need_column(&names, "time")?;
+        let object = need_column(&names, "object")?;
+        let labels = sets
+            .iter()
+            .map(|l| need_column(&names, &l.name))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok((grasp, object, labels, FrameColumns::find(&names, spec)?))
+    })()
+    .map_err(|m: String| SessionError::line(path, header_no, m))?;
+    let mut done: Vec<RawGrasp> = Vec::new();
+    let mut done_ids: Vec<String> = Vec::new();
+    let mut open: Option<Open> = None;
+    for (no, line) in lines {
+        let fields = row_fields(path, no, line, names.len())?;
+        let field = |c: usize| fields[c].trim();
+        let id = field(grasp_col);
+        if id.is_empty() {
+            return Err(SessionError::line_field(
+                path,
+                no,
+                "grasp",
+                "empty grasp id",
+            ));
+        }
+        let object = field(object_col);
+        let classes = sets
+            .iter()
+            .zip(&label_cols)
+            .map(|(set, &c)| {
+                spec.class_index(set, field(c))
+                    .map_err(|m| SessionError::line_field(path, no, &set.name, m))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let row = cols.read(path, no, &names, &fields, spec)?;
+        if open.as_ref().is_none_or(|o| o.id != id) {
+            if done_ids.iter().any(|d| d == id) {
+                return Err(SessionError::line_field(
+                    path,
+                    no,
+                    "grasp",
+                    format!(
+                        "grasp `{}` appears again after other grasps (a grasp's rows must be \
+                         consecutive)",
+                        shorten(id)
+                    ),
+                ));
+            }
+            spec.check_object(object)
+                .map_err(|m| SessionError::line_field(path, no, "object", m))?;
+            if let Some(o) = open.take() {
+                done_ids.push(o.id.clone());
+                done.push(o.close());
+            }
+            open = Some(Open {
+                id: id.to_string(),
+                line: no,
+                object: object.to_string(),
+                classes: classes.clone(),
+                rows: GraspRows::default(),
+            });
+        }
+        let Some(o) = open.as_mut() else {
+            continue;
+        };
+        if object != o.object {
+            return Err(SessionError::line_field(
+                path,
+                no,
+                "object",
+                format!(
+                    "`{}` differs from `{}` on the grasp's first line ({})",
+                    shorten(object),
+                    o.object,
+                    o.line
+                ),
+            ));
+        }
+        if let Some(k) = classes.iter().zip(&o.classes).position(|(a, b)| a != b) {
+            return Err(SessionError::line_field(
+                path,
+                no,
+                &sets[k].name,
+                format!(
+                    "the label changes within grasp `{}` (line {})",
+                    o.id, o.line
+                ),
+            ));
+        }
+        // `time` is a required column here, so every row has one.
+        let time = row.time.unwrap_or_default();
+        let whose = format!("grasp `{}`", o.id);
+        o.rows.push(path, no, &whose, time, row)?;
     }
     if let Some(o) = open {
-        done.push(o.grasp);
+        done.push(o.close());
     }
     if done.is_empty() {
         return Err(SessionError::file(

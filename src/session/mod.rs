@@ -15,6 +15,8 @@ pub mod ros2;
 pub mod simulate;
 pub mod spec;
 pub mod subset;
+pub mod trial_folder;
+pub mod trial_pattern;
 mod validate;
 
 pub use bts3::import_bts3;
@@ -27,21 +29,25 @@ pub use subset::{SubsetError, SubsetSpec, subset, subset_grasps};
 pub use validate::validate;
 
 /// Import a researcher's own recording as its import spec describes: a `.mcap` file or a
-/// ROS 2 bag folder, or a long-format `.csv`.
+/// ROS 2 bag folder (one with `metadata.yaml`), a long-format `.csv`, or any other folder
+/// as a folder of trial files.
 pub fn import_with_spec(
     path: &std::path::Path,
     spec_path: &std::path::Path,
 ) -> Result<Session, SessionError> {
     let spec = ImportSpec::load(spec_path)?;
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
-    if path.is_dir() || ext.eq_ignore_ascii_case("mcap") {
+    if path.is_dir() && !path.join("metadata.yaml").is_file() {
+        trial_folder::import_trial_folder(path, &spec)
+    } else if path.is_dir() || ext.eq_ignore_ascii_case("mcap") {
         ros2::import_bag(path, &spec)
     } else if ext.eq_ignore_ascii_case("csv") {
         long_csv::import_long_csv(path, &spec)
     } else {
         Err(SessionError::file(
             path,
-            "expected a .mcap file, a ROS 2 bag folder or a long-format .csv",
+            "expected a .mcap file, a ROS 2 bag folder, a long-format .csv or a folder of trial \
+             files",
         ))
     }
 }
@@ -66,12 +72,13 @@ pub fn file_stem(path: &std::path::Path) -> String {
 }
 
 /// Whether `path` is a recording that only an import spec can describe — a `.mcap` file,
-/// a ROS 2 bag folder, or a `.csv` that is not a BTS3 file — so that opening it needs
+/// a ROS 2 bag folder, a folder of trial files, or a `.csv` that is not a BTS3 file — so
+/// that opening it needs
 /// [`import_with_spec`] (the workbench then asks for the spec).
 pub fn needs_spec(path: &std::path::Path) -> bool {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
     if path.is_dir() {
-        return path.join("metadata.yaml").is_file();
+        return path.join("metadata.yaml").is_file() || trial_folder::holds_trial_files(path);
     }
     if ext.eq_ignore_ascii_case("mcap") {
         return true;
@@ -95,8 +102,8 @@ pub fn open(path: &std::path::Path) -> Result<Session, SessionError> {
     if needs_spec(path) {
         return Err(SessionError::file(
             path,
-            "a recording of your own (ROS 2 bag or long-format CSV): import it with an \
-             import spec (`import mcap|csv … --spec SPEC.json`, docs/import.md)",
+            "a recording of your own (ROS 2 bag, long-format CSV or folder of trial files): \
+             import it with an import spec (`import mcap|csv … --spec SPEC.json`, docs/import.md)",
         ));
     }
     if path.is_dir() {

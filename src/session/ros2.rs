@@ -531,6 +531,7 @@ fn cut_grasps(
             classes: w.classes.clone(),
             frames,
             key_frame,
+            trial: None,
         });
     }
     Ok(cut)

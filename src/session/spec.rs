@@ -27,6 +27,7 @@ use serde::Deserialize;
 
 use super::error::read_text;
 use super::native::json_error;
+use super::trial_pattern::{TRIAL, TrialPattern};
 use super::validate::MAX_GRID_CELLS;
 use super::{
     Frame, Grasp, LabelSet, Layout, Sensor, Session, SessionError, SessionMeta, ValueTransform,
@@ -55,6 +56,14 @@ struct SpecFile {
     label_sets: Vec<LabelSet>,
     #[serde(default)]
     grasps: Option<GraspsFile>,
+    #[serde(default)]
+    trials: Option<TrialsFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TrialsFile {
+    pattern: String,
 }
 
 #[derive(Deserialize)]
@@ -136,6 +145,9 @@ pub struct ImportSpec {
     /// The label sets as the spec gives them; `object` may be among them to fix its classes.
     pub label_sets: Vec<LabelSet>,
     pub cut: Option<GraspCut>,
+    /// Folders of trial files: where a file's object, classes and trial number are in its
+    /// path (default: see [`ImportSpec::trial_pattern`]).
+    pub trials: Option<TrialPattern>,
 }
 
 /// A built-in layout by name: `icub-fingertip`, `biotac-sp`, `grid RxC`.
@@ -364,6 +376,13 @@ impl ImportSpec {
                 ));
             }
         };
+        let trials = match file.trials {
+            None => None,
+            Some(t) => Some(
+                trial_pattern(&t.pattern, &file.label_sets)
+                    .map_err(|m| err("trials.pattern".into(), m))?,
+            ),
+        };
         Ok(ImportSpec {
             path: path.to_path_buf(),
             name: file.name,
@@ -373,6 +392,27 @@ impl ImportSpec {
             joints: file.joints,
             label_sets: file.label_sets,
             cut,
+            trials,
+        })
+    }
+
+    /// The pattern of a folder of trial files: the spec's `trials.pattern`, else one folder
+    /// per label (`{object}/*.csv`, `{object}/{outcome}/*.csv` with a label set `outcome`).
+    pub fn trial_pattern(&self) -> Result<TrialPattern, SessionError> {
+        if let Some(p) = &self.trials {
+            return Ok(p.clone());
+        }
+        let mut text = format!("{{{OBJECT}}}/");
+        for set in self.recorded_label_sets() {
+            text.push_str(&format!("{{{}}}/", set.name));
+        }
+        text.push_str("*.csv");
+        trial_pattern(&text, &self.label_sets).map_err(|m| {
+            SessionError::field(
+                &self.path,
+                "trials",
+                format!("no `trials.pattern`, and the default `{text}` is not one: {m}"),
+            )
         })
     }
 
@@ -422,6 +462,42 @@ impl ImportSpec {
     }
 }
 
+/// Parse a trial pattern whose captures are `object`, `trial` or a label set, and that
+/// captures the object and every other label set (a grasp's labels come from its path).
+fn trial_pattern(text: &str, label_sets: &[LabelSet]) -> Result<TrialPattern, String> {
+    let pattern = TrialPattern::parse(text)?;
+    let names: Vec<&str> = pattern.names().collect();
+    if let Some(n) = names
+        .iter()
+        .find(|n| **n != OBJECT && **n != TRIAL && !label_sets.iter().any(|l| l.name == **n))
+    {
+        return Err(format!(
+            "`{{{}}}` is neither `{{object}}`, `{{trial}}` nor a label set of the spec",
+            super::error::shorten(n)
+        ));
+    }
+    let needed = std::iter::once(OBJECT).chain(
+        label_sets
+            .iter()
+            .map(|l| l.name.as_str())
+            .filter(|n| *n != OBJECT),
+    );
+    for n in needed {
+        if !names.contains(&n) {
+            return Err(format!(
+                "`{text}` does not capture `{{{n}}}`: a trial's object and classes come from \
+                 its path"
+            ));
+        }
+    }
+    if !text.to_ascii_lowercase().ends_with(".csv") {
+        return Err(format!(
+            "`{text}` does not end in `.csv`: trial files are CSVs"
+        ));
+    }
+    Ok(pattern)
+}
+
 /// A grasp as a reader found it, before the session's label indices are known.
 pub struct RawGrasp {
     pub object: String,
@@ -430,6 +506,9 @@ pub struct RawGrasp {
     pub frames: Vec<Frame>,
     /// The key frame, where the recording gives it.
     pub key_frame: Option<usize>,
+    /// The trial number, where the recording gives it (else grasps of an object are
+    /// numbered 1, 2, … in their order).
+    pub trial: Option<u32>,
 }
 
 /// The median frame interval's rate over all grasps, when there are intervals.
@@ -499,12 +578,13 @@ pub fn assemble(
                 }
             })
             .collect();
-        let trial = match trials.iter_mut().find(|(o, _)| *o == g.object) {
-            Some((_, n)) => {
+        let trial = match (g.trial, trials.iter_mut().find(|(o, _)| *o == g.object)) {
+            (Some(given), _) => given,
+            (None, Some((_, n))) => {
                 *n += 1;
                 *n
             }
-            None => {
+            (None, None) => {
                 trials.push((g.object.clone(), 1));
                 1
             }
