@@ -199,3 +199,44 @@ fn baselines_save_each_baseline_fitted_with_the_runs_settings() {
     assert!(held["accuracy"].as_f64().unwrap() > 0.5, "{held}");
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn more_clusters_than_grasps_are_refused_by_name_before_any_work() {
+    let sample = common::sample("object-recognition.json");
+    for args in [
+        vec![
+            "baselines",
+            s(&sample),
+            "--k",
+            "500",
+            "--som-rows",
+            "1",
+            "--som-cols",
+            "500",
+        ],
+        vec!["baselines", s(&sample), "--k-sweep", "5,300"],
+        vec![
+            "fit",
+            "kmeans",
+            s(&sample),
+            "--k",
+            "300",
+            "-o",
+            "never.json",
+        ],
+    ] {
+        let out = run(&args);
+        assert!(!out.status.success(), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        let flag = if args.contains(&"--k-sweep") {
+            "--k-sweep 300"
+        } else {
+            "--k "
+        };
+        assert!(
+            err.contains(flag) && err.contains("above the session's 200 grasps"),
+            "{args:?}: {err}"
+        );
+    }
+    assert!(!Path::new("never.json").exists());
+}

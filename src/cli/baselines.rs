@@ -188,6 +188,11 @@ pub fn run(a: BaselinesArgs) -> anyhow::Result<()> {
         )
     })?;
     let truth = session.labels_of(set);
+    let grasps = session.grasps.len();
+    super::bounds::at_most_grasps("--k", &[a.k], grasps)?;
+    if !a.no_sweep {
+        super::bounds::at_most_grasps("--k-sweep", &a.k_sweep, grasps)?;
+    }
     let features = session_features(&session)?;
     let params = BaselinesParams {
         orders: a.orders,

@@ -27,6 +27,15 @@ pub fn at_most(name: &str, value: usize, max: usize) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Checks a count of clusters or units against the grasps that must fill them (each needs
+/// at least one), naming the parameter and the session's size.
+pub fn at_most_grasps(name: &str, values: &[usize], grasps: usize) -> anyhow::Result<()> {
+    if let Some(k) = values.iter().find(|&&k| k > grasps) {
+        bail!("{name} {k} is above the session's {grasps} grasps (each cluster needs one)");
+    }
+    Ok(())
+}
+
 /// Checks every value of a list parameter.
 pub fn all_at_most(name: &str, values: &[usize], max: usize) -> anyhow::Result<()> {
     values.iter().try_for_each(|&v| at_most(name, v, max))

@@ -369,6 +369,9 @@ fn fit_table_one(method: MethodId, a: FitTableOneArgs) -> anyhow::Result<()> {
     super::bounds::at_most("--k", a.k, super::bounds::MAX_K)?;
     let session =
         session::open(&a.session).with_context(|| format!("opening {}", a.session.display()))?;
+    if method != MethodId::RbfSvm {
+        super::bounds::at_most_grasps("--k", &[a.k], session.grasps.len())?;
+    }
     let opts = models::TableOneFitOptions::new(method, &a.target, a.k, a.seed);
     let (model, fit) = models::fit_table_one(&session, &opts, None)?;
     let file = models::table_one_file(model, &session, fit);
