@@ -6,8 +6,9 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use crate::catalogue::MethodId;
 use crate::experiments::frontier::Frontier;
-use crate::experiments::result::AnalysisResult;
+use crate::experiments::result::{AnalysisKind, AnalysisResult};
 use crate::fsutil;
 use crate::models::ModelFile;
 
@@ -117,7 +118,12 @@ impl Project {
             Some(found) => return Err(ProjectError::Version { path: p, found }),
             None => return Err(read("`version`: missing".into())),
         }
-        let project: Project = serde_json::from_str(text).map_err(|e| read(e.to_string()))?;
+        let mut project: Project = serde_json::from_str(text).map_err(|e| read(e.to_string()))?;
+        for r in &mut project.results {
+            if r.methods.is_empty() {
+                r.methods = older_methods(r);
+            }
+        }
         for (i, r) in project.results.iter().enumerate() {
             let details = r
                 .details
@@ -138,7 +144,24 @@ impl Project {
     }
 }
 
-/// The time the speed-against-accuracy chart puts on its x axis.
+/// The methods of a result saved before results named them, read from its kind and its
+/// `learner` parameter.
+fn older_methods(r: &AnalysisResult) -> Vec<MethodId> {
+    let learner = r.parameters.get("learner").map(String::as_str);
+    match (r.kind, learner) {
+        (AnalysisKind::Recognition, Some("DS")) => vec![MethodId::Ds],
+        (AnalysisKind::Recognition, Some("GS")) => vec![MethodId::Gs],
+        (AnalysisKind::Clustering, Some("DU")) => vec![MethodId::Du],
+        (AnalysisKind::Clustering, Some("GU")) => vec![MethodId::Gu],
+        (AnalysisKind::Stability, _) if r.held_out.is_none() => vec![MethodId::SparseSvm],
+        (AnalysisKind::Baselines, _) => [MethodId::KMeans, MethodId::Som]
+            .into_iter()
+            .chain(r.score("SVM accuracy").map(|_| MethodId::RbfSvm))
+            .collect(),
+        _ => Vec::new(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -204,6 +227,17 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.starts_with("p.json: `models[0]`"), "{e}");
+    }
+
+    #[test]
+    fn older_results_get_their_methods_from_their_learner() {
+        let mut r = result();
+        r.parameters.insert("learner".into(), "GS".into());
+        let text = serde_json::to_string(&Project::new(Vec::new(), vec![r])).unwrap();
+        let mut old: serde_json::Value = serde_json::from_str(&text).unwrap();
+        old["results"][0].as_object_mut().unwrap().remove("methods");
+        let back = Project::parse(&old.to_string(), Path::new("p.json")).unwrap();
+        assert_eq!(back.results[0].methods, [MethodId::Gs]);
     }
 
     #[test]

@@ -451,6 +451,7 @@ fn a_project_on_the_command_line_reopens_its_sessions_and_shows_its_results() {
         .name;
     let result = AnalysisResult {
         held_out: None,
+        methods: Vec::new(),
         kind: AnalysisKind::Stability,
         label: "saved model".into(),
         session,

@@ -461,22 +461,20 @@ impl WorkbenchApp {
             let sized = || r.model_size.as_ref().map(|m| m.knobs.as_str()) == Some(&spec.knobs());
             r.kind == kind
                 && r.session == name
+                && r.held_out.is_none()
+                && r.methods.contains(&spec.method())
                 && match &spec {
-                    ModelSpec::Recognition {
-                        learner, features, ..
-                    } => {
+                    ModelSpec::Recognition { features, .. } => {
                         sized()
-                            && of("learner") == Some(&format!("{learner:?}").to_uppercase())
                             && of("features")
                                 == Some(&crate::experiments::result::features_text(*features))
                     }
                     ModelSpec::Stability(_) => sized(),
-                    ModelSpec::Clustering { learner, threshold } => {
-                        of("learner") == Some(&format!("{learner:?}").to_uppercase())
-                            && r.details.iter().any(|d| d.at(*threshold).is_some())
+                    ModelSpec::Clustering { threshold, .. } => {
+                        r.details.iter().any(|d| d.at(*threshold).is_some())
                     }
                     ModelSpec::Baselines { k: Some(k) } => of("k") == Some(&k.to_string()),
-                    ModelSpec::Baselines { k: None } => r.score("SVM accuracy").is_some(),
+                    ModelSpec::Baselines { k: None } => true,
                 }
         };
         if let Some(i) = self.analyses.results.iter().rposition(same) {

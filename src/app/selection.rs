@@ -3,6 +3,7 @@
 //! the queue between frames, so every view of a frame sees the same selection.
 
 use super::View;
+use crate::catalogue::MethodId;
 use crate::experiments::clustering::UnsupervisedLearner;
 use crate::experiments::recognition::SupervisedLearner;
 use crate::experiments::stability::Config;
@@ -136,6 +137,24 @@ pub enum ModelSpec {
 }
 
 impl ModelSpec {
+    /// The catalogue's method the spec trains (the Baselines view's k trains k-means and the
+    /// SOM together: k-means stands for both).
+    pub fn method(&self) -> MethodId {
+        match self {
+            ModelSpec::Recognition { learner, .. } => match learner {
+                SupervisedLearner::Ds => MethodId::Ds,
+                SupervisedLearner::Gs => MethodId::Gs,
+            },
+            ModelSpec::Stability(_) => MethodId::SparseSvm,
+            ModelSpec::Clustering { learner, .. } => match learner {
+                UnsupervisedLearner::Du => MethodId::Du,
+                UnsupervisedLearner::Gu => MethodId::Gu,
+            },
+            ModelSpec::Baselines { k: Some(_) } => MethodId::KMeans,
+            ModelSpec::Baselines { k: None } => MethodId::RbfSvm,
+        }
+    }
+
     /// The size in the words a result's `model_size` uses.
     pub fn knobs(&self) -> String {
         match self {

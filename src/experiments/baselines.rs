@@ -2,6 +2,7 @@
 //! analysis result with its figures: NMI against effective clusters (the baselines of the
 //! second paper's Fig. 13), the scores at k clusters (Table IV) and the SVM's C × γ map.
 
+use crate::catalogue::MethodId;
 use std::collections::BTreeMap;
 
 use super::result::{AnalysisKind, AnalysisResult, distinct_sorted, now_unix};
@@ -141,6 +142,10 @@ pub fn baselines_report(session: &str, r: &BaselinesResult, train_seconds: f64) 
     ]);
     AnalysisResult {
         held_out: None,
+        methods: [MethodId::KMeans, MethodId::Som]
+            .into_iter()
+            .chain(r.svm.as_ref().map(|_| MethodId::RbfSvm))
+            .collect(),
         kind: AnalysisKind::Baselines,
         label: format!("baselines, k = {k}"),
         session: session.to_string(),

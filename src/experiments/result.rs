@@ -78,6 +78,10 @@ pub struct AnalysisResult {
     /// Such scores are never compared with cross-validated ones as if they were alike.
     #[serde(default)]
     pub held_out: Option<HeldOut>,
+    /// The catalogue's methods the result trained, so that the window finds a result by
+    /// method rather than by a parameter's text (results saved before have none).
+    #[serde(default)]
+    pub methods: Vec<crate::catalogue::MethodId>,
 }
 
 /// Where a held-out result's model trained and how the tested session was calibrated.
@@ -526,6 +530,7 @@ pub(crate) mod tests {
     pub(crate) fn result() -> AnalysisResult {
         AnalysisResult {
             held_out: None,
+            methods: vec![crate::catalogue::MethodId::Ds],
             kind: AnalysisKind::Recognition,
             label: "DS, all features".into(),
             session: "iCub".into(),

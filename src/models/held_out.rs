@@ -583,6 +583,7 @@ pub fn held_out_report(r: &HeldOutResult) -> AnalysisResult {
         grasp_codes: Vec::new(),
         model_size: None,
         held_out: Some(held_out),
+        methods: vec![r.method],
     }
 }
 

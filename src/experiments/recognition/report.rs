@@ -3,6 +3,7 @@
 //! lengthscale relevance; and the comparison of a session's models on one accuracy chart.
 
 use super::{RecognitionResult, SupervisedLearner};
+use crate::catalogue::MethodId;
 use crate::experiments::links::{GraspLinks, grasps_text};
 use crate::experiments::result::{
     AnalysisKind, AnalysisResult, MeanSd, ModelSize, common_parameters, features_text, now_unix,
@@ -174,6 +175,10 @@ pub fn recognition_report(session: &str, r: &RecognitionResult) -> AnalysisResul
     ]);
     AnalysisResult {
         held_out: None,
+        methods: vec![match p.learner {
+            SupervisedLearner::Ds => MethodId::Ds,
+            SupervisedLearner::Gs => MethodId::Gs,
+        }],
         kind: AnalysisKind::Recognition,
         label,
         session: session.to_string(),
@@ -313,6 +318,7 @@ mod tests {
         .ref_line(Orientation::Vertical, 8.5, "test only from here");
         AnalysisResult {
             held_out: None,
+            methods: Vec::new(),
             kind,
             label: label.into(),
             session: session.into(),

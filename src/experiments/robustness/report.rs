@@ -158,6 +158,8 @@ pub fn robustness_report(session: &str, r: &RobustnessResult) -> AnalysisResult 
     }
     AnalysisResult {
         held_out: None,
+        // Perturbed copies of the methods, not a trained model.
+        methods: Vec::new(),
         kind: AnalysisKind::Robustness,
         label,
         session: session.to_string(),

@@ -4,6 +4,7 @@
 //! basis usage (Figs. 8–9), the usage differential (Fig. 10), the coefficient differential
 //! (Fig. 11) and a patch's reconstruction (Fig. 2).
 
+use crate::catalogue::MethodId;
 use std::collections::BTreeMap;
 
 use super::{BasisUsage, CvScheme, GridImage as PatchImage, StabilityOptions, StabilityReport};
@@ -510,6 +511,7 @@ pub fn stability_report(r: &StabilityReport) -> AnalysisResult {
     ]);
     AnalysisResult {
         held_out: None,
+        methods: vec![MethodId::SparseSvm],
         kind: AnalysisKind::Stability,
         label,
         session: r.session.clone(),
