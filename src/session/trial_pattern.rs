@@ -168,7 +168,7 @@ mod tests {
     use super::*;
 
     fn caps(pattern: &str, path: &str) -> Option<Vec<(String, String)>> {
-        let p = TrialPattern::parse(pattern).unwrap();
+        let p = TrialPattern::parse(pattern).unwrap_or_else(|e| panic!("{pattern}: {e}"));
         p.captures(path).map(|c| {
             c.into_iter()
                 .map(|(n, v)| (n.to_string(), v.to_string()))
@@ -210,7 +210,8 @@ mod tests {
     #[test]
     fn a_long_path_against_many_captures_matches_quickly() {
         // Without remembering failures this tries about 200^5 splits.
-        let p = TrialPattern::parse("{a}a{b}a{c}a{d}a{e}b.csv").unwrap();
+        let pattern = "{a}a{b}a{c}a{d}a{e}b.csv";
+        let p = TrialPattern::parse(pattern).unwrap_or_else(|e| panic!("{pattern}: {e}"));
         let path = format!("{}.csv", "a".repeat(200));
         assert_eq!(p.captures(&path), None);
     }
