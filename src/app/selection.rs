@@ -141,15 +141,9 @@ impl ModelSpec {
     /// SOM together: k-means stands for both).
     pub fn method(&self) -> MethodId {
         match self {
-            ModelSpec::Recognition { learner, .. } => match learner {
-                SupervisedLearner::Ds => MethodId::Ds,
-                SupervisedLearner::Gs => MethodId::Gs,
-            },
+            ModelSpec::Recognition { learner, .. } => learner.method(),
             ModelSpec::Stability(_) => MethodId::SparseSvm,
-            ModelSpec::Clustering { learner, .. } => match learner {
-                UnsupervisedLearner::Du => MethodId::Du,
-                UnsupervisedLearner::Gu => MethodId::Gu,
-            },
+            ModelSpec::Clustering { learner, .. } => learner.method(),
             ModelSpec::Baselines { k: Some(_) } => MethodId::KMeans,
             ModelSpec::Baselines { k: None } => MethodId::RbfSvm,
         }

@@ -11,7 +11,6 @@ mod bench;
 pub use bench::{BenchArgs, bench};
 
 use super::progress::with_progress;
-use crate::catalogue::MethodId;
 use crate::experiments::clustering::{ClusteringParams, run_clustering};
 use crate::experiments::frontier::Frontier;
 use crate::experiments::recognition::{
@@ -134,10 +133,7 @@ fn recommended_size(
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let frontiers: Vec<Frontier> = serde_json::from_str(&text)
         .with_context(|| format!("{} is not a `frontier --json` file", path.display()))?;
-    let method = match learner {
-        SupervisedLearner::Ds => MethodId::Ds,
-        SupervisedLearner::Gs => MethodId::Gs,
-    };
+    let method = learner.method();
     let f = frontiers
         .iter()
         .find(|f| f.params.method == method && f.params.features == features)

@@ -180,10 +180,7 @@ pub fn cluster_file_of_run(
         return Ok(None);
     };
     let params = &run.params;
-    let method = match params.learner {
-        UnsupervisedLearner::Du => MethodId::Du,
-        UnsupervisedLearner::Gu => MethodId::Gu,
-    };
+    let method = params.learner.method();
     let opts = ClusterFitOptions {
         method,
         features: params.features,
@@ -194,11 +191,10 @@ pub fn cluster_file_of_run(
     };
     let (model, secs) = fit_clusters(session, &opts)?;
     let mut file = cluster_file(model, session, secs, None);
-    file.provenance.selection = vec![SelectionScore {
-        protocol: format!("{}, {} orders", choice.criterion.text(), params.reps),
-        name: "mean pairwise ARI".into(),
-        value: choice.agreement,
-    }];
+    file.provenance.selection = SelectionScore::under(
+        &format!("{}, {} orders", choice.criterion.text(), params.reps),
+        &[("mean pairwise ARI", choice.agreement)],
+    );
     Ok(Some(file))
 }
 

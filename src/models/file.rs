@@ -48,6 +48,20 @@ pub struct SelectionScore {
     pub value: f64,
 }
 
+impl SelectionScore {
+    /// Named scores all measured under one protocol.
+    pub fn under(protocol: &str, scores: &[(&str, f64)]) -> Vec<SelectionScore> {
+        scores
+            .iter()
+            .map(|&(name, value)| SelectionScore {
+                protocol: protocol.into(),
+                name: name.into(),
+                value,
+            })
+            .collect()
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Provenance {
     pub method: MethodId,

@@ -18,9 +18,7 @@ use super::inputs::SequenceInputs;
 use super::{Calibration, Model, ModelError, ModelFile, Provenance, SelectionScore, SessionRef};
 use crate::catalogue::MethodId;
 use crate::experiments::labels::session_labels;
-use crate::experiments::recognition::{
-    RecognitionResult, SupervisedLearner, prefix_len, protocol_order,
-};
+use crate::experiments::recognition::{RecognitionResult, prefix_len, protocol_order};
 use crate::experiments::result::SizeReason;
 use crate::features::FeatureSet;
 use crate::learners::{Ds, DsParams, Gs, GsParams, SequenceClassifier};
@@ -160,10 +158,7 @@ pub fn sequence_file_of_run(
     run: &RecognitionResult,
 ) -> Result<ModelFile, ModelError> {
     let params = &run.params;
-    let method = match params.learner {
-        SupervisedLearner::Ds => MethodId::Ds,
-        SupervisedLearner::Gs => MethodId::Gs,
-    };
+    let method = params.learner.method();
     let opts = SequenceFitOptions {
         method,
         features: params.features,
@@ -175,17 +170,13 @@ pub fn sequence_file_of_run(
     let (model, secs) = fit_sequences(session, &opts)?;
     let mut file = sequence_file(model, session, secs, params.size_reason, None);
     let protocol = format!("online protocol, {} orders", params.reps);
-    file.provenance.selection = [
-        ("accuracy", run.summary.all.mean),
-        ("accuracy, final 20 %", run.summary.final_20.mean),
-    ]
-    .into_iter()
-    .map(|(name, value)| SelectionScore {
-        protocol: protocol.clone(),
-        name: name.into(),
-        value,
-    })
-    .collect();
+    file.provenance.selection = SelectionScore::under(
+        &protocol,
+        &[
+            ("accuracy", run.summary.all.mean),
+            ("accuracy, final 20 %", run.summary.final_20.mean),
+        ],
+    );
     Ok(file)
 }
 

@@ -381,18 +381,14 @@ pub fn table_one_files_of_run(
             };
             if let Some(s) = scores {
                 let protocol = format!("{} random orders", run.params.orders);
-                fit.selection = [
-                    ("purity", s.mean.purity),
-                    ("ARI", s.mean.ari),
-                    ("NMI", s.mean.nmi),
-                ]
-                .into_iter()
-                .map(|(name, value)| SelectionScore {
-                    protocol: protocol.clone(),
-                    name: name.into(),
-                    value,
-                })
-                .collect();
+                fit.selection = SelectionScore::under(
+                    &protocol,
+                    &[
+                        ("purity", s.mean.purity),
+                        ("ARI", s.mean.ari),
+                        ("NMI", s.mean.nmi),
+                    ],
+                );
             }
             Ok(table_one_file(model, session, fit))
         })

@@ -56,10 +56,7 @@ fn paper_size() -> (usize, usize) {
 
 impl RecognitionForm {
     fn method(&self) -> MethodId {
-        match self.learner {
-            SupervisedLearner::Ds => MethodId::Ds,
-            SupervisedLearner::Gs => MethodId::Gs,
-        }
+        self.learner.method()
     }
 
     /// The size the form runs with and why: the user's, else the recommendation of the

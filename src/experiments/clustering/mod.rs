@@ -41,6 +41,16 @@ pub enum UnsupervisedLearner {
     Gu,
 }
 
+impl UnsupervisedLearner {
+    /// The learner as the catalogue names it.
+    pub fn method(self) -> crate::catalogue::MethodId {
+        match self {
+            UnsupervisedLearner::Du => crate::catalogue::MethodId::Du,
+            UnsupervisedLearner::Gu => crate::catalogue::MethodId::Gu,
+        }
+    }
+}
+
 impl FromStr for UnsupervisedLearner {
     type Err = ExperimentError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {

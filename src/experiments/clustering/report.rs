@@ -4,7 +4,6 @@
 //! at 10 effective clusters (Table IV).
 
 use super::{ClusteringResult, ClusteringRun, EffectivePoint, UnsupervisedLearner};
-use crate::catalogue::MethodId;
 use crate::experiments::links::{GraspLinks, grasps_text};
 use crate::experiments::result::{
     AnalysisKind, AnalysisResult, FigureDetails, MeanSd, common_parameters, features_text,
@@ -197,10 +196,7 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
     let (details, links) = clustering_details(r);
     AnalysisResult {
         held_out: None,
-        methods: vec![match r.params.learner {
-            UnsupervisedLearner::Du => MethodId::Du,
-            UnsupervisedLearner::Gu => MethodId::Gu,
-        }],
+        methods: vec![r.params.learner.method()],
         kind: AnalysisKind::Clustering,
         label,
         session: session.to_string(),

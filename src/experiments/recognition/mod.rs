@@ -39,6 +39,16 @@ pub enum SupervisedLearner {
     Gs,
 }
 
+impl SupervisedLearner {
+    /// The learner as the catalogue names it.
+    pub fn method(self) -> crate::catalogue::MethodId {
+        match self {
+            SupervisedLearner::Ds => crate::catalogue::MethodId::Ds,
+            SupervisedLearner::Gs => crate::catalogue::MethodId::Gs,
+        }
+    }
+}
+
 impl FromStr for SupervisedLearner {
     type Err = ExperimentError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {

@@ -3,7 +3,6 @@
 //! lengthscale relevance; and the comparison of a session's models on one accuracy chart.
 
 use super::{RecognitionResult, SupervisedLearner};
-use crate::catalogue::MethodId;
 use crate::experiments::links::{GraspLinks, grasps_text};
 use crate::experiments::result::{
     AnalysisKind, AnalysisResult, MeanSd, ModelSize, common_parameters, features_text, now_unix,
@@ -175,10 +174,7 @@ pub fn recognition_report(session: &str, r: &RecognitionResult) -> AnalysisResul
     ]);
     AnalysisResult {
         held_out: None,
-        methods: vec![match p.learner {
-            SupervisedLearner::Ds => MethodId::Ds,
-            SupervisedLearner::Gs => MethodId::Gs,
-        }],
+        methods: vec![p.learner.method()],
         kind: AnalysisKind::Recognition,
         label,
         session: session.to_string(),
