@@ -431,10 +431,13 @@ pub fn evaluate(a: EvaluateArgs) -> anyhow::Result<()> {
                     .iter()
                     .map(|(f, a)| format!("{:.0} %: {:.1} %", 100.0 * f, 100.0 * a))
                     .collect();
-                println!(
-                    "early classification (share observed: accuracy) {}",
-                    early.join(", ")
-                );
+                // The RBF SVM decides once per grasp: it has no early decisions.
+                if !early.is_empty() {
+                    println!(
+                        "early classification (share observed: accuracy) {}",
+                        early.join(", ")
+                    );
+                }
             }
             HeldOutScores::Clustering {
                 purity,
