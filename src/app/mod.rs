@@ -4,6 +4,7 @@
 //! run on worker threads.
 
 pub mod browser;
+mod commands;
 pub mod figure_view;
 pub mod files;
 pub mod heatmap;
@@ -11,130 +12,34 @@ pub mod import;
 pub mod loader;
 pub mod models;
 pub mod notify;
+mod persisted;
+mod picking;
 pub mod replay;
 pub mod results;
 pub mod selection;
+mod view;
 pub mod views;
+mod window;
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
-use std::sync::mpsc::{Receiver, channel};
-use std::time::Instant;
-
-use serde::{Deserialize, Serialize};
+use std::sync::mpsc::Receiver;
 
 use crate::experiments::result::AnalysisKind;
 use browser::{Browser, BrowserAction};
-use files::{FilePicker, Picked, Purpose};
+use files::{FilePicker, Purpose};
 use loader::{LoadedSession, Loader, Source};
 use replay::Replay;
 use results::Analyses;
-use selection::{Command, ModelSpec, Selection};
+use selection::{Command, Selection};
 use views::{Cx, Layout, Pane, Rooms};
 
 const STORAGE_KEY: &str = "tactile-workbench";
 const MAX_RECENT: usize = 10;
 
 pub use crate::cli::View;
-
-impl View {
-    pub const ALL: [View; 7] = [
-        View::Replay,
-        View::Stability,
-        View::Recognition,
-        View::Clustering,
-        View::Baselines,
-        View::SpeedAccuracy,
-        View::Robustness,
-    ];
-
-    pub fn title(self) -> &'static str {
-        match self {
-            View::Replay => "Replay",
-            View::Stability => "Grasp stability",
-            View::Recognition => "Recognition",
-            View::Clustering => "Clustering",
-            View::Baselines => "Baselines",
-            View::SpeedAccuracy => "Speed vs accuracy",
-            View::Robustness => "Where methods fail",
-        }
-    }
-
-    /// The analysis this view shows, if it shows one.
-    pub fn kind(self) -> Option<AnalysisKind> {
-        match self {
-            View::Stability => Some(AnalysisKind::Stability),
-            View::Recognition => Some(AnalysisKind::Recognition),
-            View::Clustering => Some(AnalysisKind::Clustering),
-            View::Baselines => Some(AnalysisKind::Baselines),
-            View::Robustness => Some(AnalysisKind::Robustness),
-            View::Replay | View::SpeedAccuracy => None,
-        }
-    }
-
-    fn of(kind: AnalysisKind) -> View {
-        match kind {
-            AnalysisKind::Baselines => View::Baselines,
-            AnalysisKind::Recognition => View::Recognition,
-            AnalysisKind::Clustering => View::Clustering,
-            AnalysisKind::Stability => View::Stability,
-            AnalysisKind::Robustness => View::Robustness,
-        }
-    }
-}
-
-/// The file in the data folder that keeps the open project between runs.
-pub const KEPT_RESULTS: &str = "results.json";
-
-/// What persists between runs.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct Persisted {
-    pub sources: Vec<Source>,
-    pub view: View,
-    pub dark: bool,
-    pub recent: Vec<PathBuf>,
-    pub browser: Browser,
-    /// The focused grasp: (session, grasp).
-    pub selected: Option<(usize, usize)>,
-    pub replay: Replay,
-    /// Each view's tiles, by view title.
-    #[serde(default)]
-    pub layouts: BTreeMap<String, Layout>,
-    #[serde(default = "yes")]
-    pub form_open: bool,
-    /// Each view's form settings.
-    #[serde(default)]
-    pub forms: views::Forms,
-    /// The folder the file picker last opened from or saved to.
-    #[serde(default)]
-    pub last_folder: Option<PathBuf>,
-    /// Run times measured on this machine, which correct the expected times.
-    #[serde(default)]
-    pub timings: crate::jobs::estimate::Timings,
-}
-
-fn yes() -> bool {
-    true
-}
-
-impl Default for Persisted {
-    fn default() -> Self {
-        Persisted {
-            sources: Vec::new(),
-            view: View::default(),
-            dark: true,
-            recent: Vec::new(),
-            browser: Browser::default(),
-            selected: None,
-            replay: Replay::default(),
-            layouts: BTreeMap::new(),
-            form_open: true,
-            forms: views::Forms::default(),
-            last_folder: None,
-            timings: Default::default(),
-        }
-    }
-}
+pub use persisted::{KEPT_RESULTS, Persisted};
+pub use window::{Measure, run};
 
 pub struct WorkbenchApp {
     pub sessions: Vec<LoadedSession>,
@@ -273,34 +178,6 @@ impl WorkbenchApp {
         !self.loader.pending.is_empty()
     }
 
-    pub fn persisted(&self) -> Persisted {
-        Persisted {
-            sources: self.sessions.iter().map(|s| s.source.clone()).collect(),
-            view: self.view,
-            dark: self.dark,
-            recent: self.recent.clone(),
-            browser: self.browser.clone(),
-            selected: self.selection.focus,
-            replay: self.replay.clone(),
-            layouts: self.layouts.clone(),
-            form_open: self.form_open,
-            forms: self.rooms.forms(),
-            last_folder: self.last_folder.clone(),
-            timings: self.analyses.timings.clone(),
-        }
-    }
-
-    /// Keep the results (the open project) in `dir` from now on, written after each finished
-    /// job, and reopen those kept there by an earlier run.
-    pub fn keep_results_in(&mut self, ctx: &egui::Context, dir: PathBuf) {
-        let path = dir.join(KEPT_RESULTS);
-        if path.is_file() {
-            self.analyses.restore_results(ctx, path.clone());
-        }
-        self.analyses.keep = Some(path);
-        self.analyses.keep_models_in(ctx, &dir);
-    }
-
     fn close(&mut self, i: usize) {
         let source = self.sessions.remove(i).source;
         self.requested.retain(|s| s != &source);
@@ -393,137 +270,6 @@ impl WorkbenchApp {
             &mut self.layouts,
             &mut self.form_open,
         )
-    }
-
-    /// Apply the commands the views pushed while drawing.
-    pub fn apply_commands(&mut self, ctx: &egui::Context) {
-        for c in std::mem::take(&mut self.commands) {
-            match c {
-                Command::SelectGrasps {
-                    session,
-                    grasps,
-                    origin,
-                    result,
-                } => {
-                    if let Some(&first) = grasps.first() {
-                        self.select(session, first);
-                    }
-                    self.selection.session = Some(session);
-                    self.selection.grasps = grasps;
-                    self.selection.origin = origin;
-                    self.selection.result = result;
-                    self.browser.active = session;
-                }
-                Command::Focus { session, grasp } => self.select(session, grasp),
-                Command::FocusBasis { result, basis } => {
-                    self.selection.basis = Some((result, basis))
-                }
-                Command::Strength {
-                    result,
-                    figure,
-                    strength,
-                } => self.selection.strength = Some((result, figure, strength)),
-                Command::ClearSelection => {
-                    self.selection.clear_set();
-                    self.browser.only_selection = false;
-                }
-                Command::OpenResult(i) => {
-                    if let Some(kind) = self.analyses.results.get(i).map(|r| r.kind) {
-                        self.analyses.shown.insert(kind, i);
-                        self.view = View::of(kind);
-                        self.focus_results(kind);
-                    }
-                }
-                Command::Open(v) => self.view = v,
-                Command::TrainModel(spec) => self.train_model(spec, ctx),
-                Command::SaveModel(i) => self.open_picker(Purpose::SaveModel(i)),
-                Command::LoadModel => self.open_picker(Purpose::LoadModel),
-                Command::SaveSelection => self.open_picker(Purpose::SaveSelection),
-            }
-        }
-    }
-
-    /// Open the active session's result of the model `spec`, or set the form of its view to
-    /// that size and train it there.
-    fn train_model(&mut self, spec: ModelSpec, ctx: &egui::Context) {
-        let Some(session) = self.sessions.get(self.browser.active) else {
-            return;
-        };
-        let name = session.session.meta.name.clone();
-        let (kind, view) = match &spec {
-            ModelSpec::Recognition { .. } => (AnalysisKind::Recognition, View::Recognition),
-            ModelSpec::Stability(_) => (AnalysisKind::Stability, View::Stability),
-            ModelSpec::Clustering { .. } => (AnalysisKind::Clustering, View::Clustering),
-            ModelSpec::Baselines { .. } => (AnalysisKind::Baselines, View::Baselines),
-        };
-        let same = |r: &crate::experiments::result::AnalysisResult| {
-            let of = |key: &str| r.parameters.get(key).map(String::as_str);
-            let sized = || r.model_size.as_ref().map(|m| m.knobs.as_str()) == Some(&spec.knobs());
-            r.kind == kind
-                && r.session == name
-                && r.held_out.is_none()
-                && r.methods.contains(&spec.method())
-                && match &spec {
-                    ModelSpec::Recognition { features, .. } => {
-                        sized()
-                            && of("features")
-                                == Some(&crate::experiments::result::features_text(*features))
-                    }
-                    ModelSpec::Stability(_) => sized(),
-                    ModelSpec::Clustering { threshold, .. } => {
-                        r.details.iter().any(|d| d.at(*threshold).is_some())
-                    }
-                    ModelSpec::Baselines { k: Some(k) } => of("k") == Some(&k.to_string()),
-                    ModelSpec::Baselines { k: None } => true,
-                }
-        };
-        if let Some(i) = self.analyses.results.iter().rposition(same) {
-            if let ModelSpec::Clustering { threshold, .. } = spec {
-                // The clustering charts' markers go to the threshold clicked.
-                for d in &self.analyses.results[i].details {
-                    if let Some(k) = d.at(threshold) {
-                        self.analyses.selected.insert((i, d.figure.clone()), k);
-                    }
-                }
-            }
-            self.commands.push(Command::OpenResult(i));
-            return;
-        }
-        match spec {
-            ModelSpec::Recognition {
-                learner,
-                features,
-                capacity,
-                tau,
-            } => {
-                let f = &mut self.rooms.recognition.form;
-                (f.learner, f.features) = (learner, features);
-                (f.capacity, f.tau, f.user_size) = (capacity, tau, true);
-            }
-            ModelSpec::Stability(c) => {
-                let f = &mut self.rooms.stability.form;
-                f.grid = false;
-                (f.num_bases, f.beta, f.gamma) = (c.num_bases, c.beta, c.gamma);
-                f.user_size = true;
-            }
-            ModelSpec::Clustering { learner, threshold } => {
-                let f = &mut self.rooms.clustering.form;
-                f.learner = learner;
-                f.thresholds = [threshold, threshold, f.thresholds[2]];
-            }
-            ModelSpec::Baselines { k } => {
-                let f = &mut self.rooms.baselines.form;
-                match k {
-                    Some(k) => f.k = k,
-                    None => f.with_svm = true,
-                }
-            }
-        }
-        self.view = view;
-        let (room, mut cx, _, _) = self.parts(ctx, view);
-        if !cx.analyses.is_running(kind) {
-            room.start(&mut cx);
-        }
     }
 
     /// Replay the focused grasp: play it, in the open view's replay tile if it has one,
@@ -683,132 +429,6 @@ impl WorkbenchApp {
         }
     }
 
-    /// Open, save or add what the user picked for `purpose`.
-    fn picked(&mut self, purpose: Purpose, paths: Vec<PathBuf>, ctx: &egui::Context) {
-        if let Some(p) = paths.first() {
-            let folder = if p.is_dir() {
-                Some(p.as_path())
-            } else {
-                p.parent()
-            };
-            self.last_folder = folder.map(std::path::Path::to_path_buf);
-        }
-        for p in paths {
-            match purpose {
-                Purpose::Sessions | Purpose::Folder => self.open_path(p, ctx),
-                Purpose::OpenProject => self.analyses.open_project(ctx, p),
-                Purpose::SaveProject => {
-                    let sessions = self.sessions.iter().map(|s| s.source.label()).collect();
-                    self.analyses.save_project(ctx, p, sessions);
-                }
-                Purpose::SaveModel(i) => self.analyses.save_model(ctx, i, p),
-                Purpose::LoadModel => self.analyses.load_model(ctx, p),
-                Purpose::SaveSelection => match self.selection.session {
-                    Some(s) if !self.selection.grasps.is_empty() => {
-                        let grasps = self.selection.grasps.clone();
-                        if let Some(ls) = self.sessions.get(s) {
-                            self.analyses.save_selection(ctx, ls, grasps, p);
-                        }
-                    }
-                    _ => self.analyses.notes.error("no grasps are selected"),
-                },
-            }
-        }
-    }
-
-    /// Open the in-app picker for `purpose` on its default location: the folder last used
-    /// (for sessions, that of the most recent file), else the working folder.
-    pub fn open_picker(&mut self, purpose: Purpose) {
-        let recent = self
-            .recent
-            .first()
-            .and_then(|p| p.parent())
-            .map(|p| p.to_path_buf());
-        let folder = match purpose {
-            Purpose::Sessions | Purpose::Folder => recent.or_else(|| self.last_folder.clone()),
-            _ => self.last_folder.clone().or(recent),
-        }
-        .filter(|d| d.is_dir())
-        .or_else(|| std::env::current_dir().ok())
-        .unwrap_or_else(|| PathBuf::from("."));
-        let start = match purpose {
-            Purpose::SaveProject => folder.join("project.json"),
-            Purpose::SaveModel(i) => match self.analyses.models.list.get(i) {
-                Some(m) => folder.join(models::file_name(&m.file)),
-                None => folder.join("model.json"),
-            },
-            Purpose::SaveSelection => {
-                let name = self
-                    .selection
-                    .session
-                    .and_then(|s| self.sessions.get(s))
-                    .map_or("session".into(), |s| {
-                        crate::experiments::result::slug(&s.session.meta.name)
-                    });
-                folder.join(format!("{name}-selection.json"))
-            }
-            _ => folder,
-        };
-        self.picker = Some(FilePicker::new(purpose, start));
-    }
-
-    /// The system file dialog for `purpose`, on a thread of its own.
-    fn open_dialog(&mut self, purpose: Purpose) {
-        let (tx, rx) = channel();
-        self.dialog = Some((purpose, rx));
-        // The portal dialog blocks its thread; keep it off the UI thread.
-        std::thread::spawn(move || {
-            let dialog = rfd::FileDialog::new();
-            let picked = match purpose {
-                Purpose::Folder => dialog.pick_folder().map(|p| vec![p]),
-                Purpose::Sessions => dialog
-                    .add_filter(
-                        "Sessions, datasets and recordings",
-                        &["json", "csv", "mcap"],
-                    )
-                    .pick_files(),
-                Purpose::OpenProject => dialog
-                    .add_filter("Projects", &["json"])
-                    .pick_file()
-                    .map(|p| vec![p]),
-                Purpose::SaveProject => dialog
-                    .add_filter("Projects", &["json"])
-                    .set_file_name("project.json")
-                    .save_file()
-                    .map(|p| vec![p]),
-                Purpose::SaveModel(_) | Purpose::SaveSelection => dialog
-                    .add_filter("JSON", &["json"])
-                    .save_file()
-                    .map(|p| vec![p]),
-                Purpose::LoadModel => dialog
-                    .add_filter("Models", &["json"])
-                    .pick_file()
-                    .map(|p| vec![p]),
-            };
-            let _ = tx.send(picked.unwrap_or_default());
-        });
-    }
-
-    /// The in-app picker, when open.
-    fn picker_ui(&mut self, ctx: &egui::Context) {
-        let Some(picker) = &mut self.picker else {
-            return;
-        };
-        let purpose = picker.purpose;
-        match picker.show(ctx, &mut self.analyses.notes) {
-            Picked::None => {}
-            Picked::Cancel => self.picker = None,
-            Picked::System => {
-                picker.system_gave_nothing = false;
-                self.open_dialog(purpose);
-            }
-            Picked::Paths(paths) => {
-                self.picker = None;
-                self.picked(purpose, paths, ctx);
-            }
-        }
-    }
-
     fn menu(&mut self, ui: &mut egui::Ui) {
         egui::MenuBar::new().ui(ui, |ui| {
             ui.menu_button("File", |ui| {
@@ -945,148 +565,4 @@ impl WorkbenchApp {
         }
         self.picker_ui(&ctx);
     }
-}
-
-/// A measurement the window makes of itself, then quits.
-#[derive(Clone, Copy, Debug)]
-pub enum Measure {
-    /// The time from the process start to the first frame and to the sessions shown.
-    Startup(Instant),
-    /// Per-frame UI time (layout and tessellation, not GPU painting) of the grasp-stability
-    /// view for `seconds` while a 108-cell grid search runs on the grasp-stability sample.
-    Frames { seconds: f64 },
-}
-
-struct EframeApp {
-    app: WorkbenchApp,
-    measure: Option<Measure>,
-    first_frame: Option<f64>,
-    /// UI times (ms) of the frames drawn while the measured grid search ran.
-    frame_ms: Vec<f64>,
-    measuring_since: Option<Instant>,
-}
-
-impl EframeApp {
-    /// `--measure-frames`: start the grid once the samples are in, time each frame.
-    fn measure_frames(&mut self, ui: &egui::Ui, seconds: f64, ms: f64) {
-        let ctx = ui.ctx().clone();
-        match self.measuring_since {
-            None if !self.app.is_loading() && !self.app.sessions.is_empty() => {
-                let stability = self
-                    .app
-                    .sessions
-                    .iter()
-                    .position(|s| s.session.label_sets.iter().any(|l| l.classes.len() == 2));
-                if let Some(i) = stability {
-                    self.app.browser.active = i;
-                    self.app.view = View::Stability;
-                    self.app.rooms.stability.form.grid = true;
-                    self.app.start(&ctx, View::Stability);
-                    self.measuring_since = Some(Instant::now());
-                }
-            }
-            Some(t0) => {
-                let running = self.app.analyses.busy();
-                if running {
-                    self.frame_ms.push(ms);
-                }
-                if !running || t0.elapsed().as_secs_f64() > seconds {
-                    let mut v = self.frame_ms.clone();
-                    v.sort_by(f64::total_cmp);
-                    let n = v.len().max(1);
-                    let mean = v.iter().sum::<f64>() / n as f64;
-                    let p95 = v.get(n * 95 / 100).copied().unwrap_or(0.0);
-                    let max = v.last().copied().unwrap_or(0.0);
-                    println!(
-                        "{} frames during the grid search: UI time mean {mean:.2} ms, p95 {p95:.2} ms, max {max:.2} ms",
-                        v.len()
-                    );
-                    self.app.analyses.jobs.iter().for_each(|j| j.job.cancel());
-                    ctx.send_viewport_cmd(egui::ViewportCommand::Close);
-                    self.measure = None;
-                    return;
-                }
-            }
-            None => {}
-        }
-        // Keep drawing, as an animation would, so frames are timed continuously.
-        ctx.request_repaint();
-    }
-}
-
-impl eframe::App for EframeApp {
-    fn logic(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
-        self.app.tick(ctx);
-    }
-
-    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
-        let t = Instant::now();
-        self.app.show(ui);
-        let frame_ms = t.elapsed().as_secs_f64() * 1e3;
-        match self.measure {
-            Some(Measure::Startup(t0)) => {
-                let ms = t0.elapsed().as_secs_f64() * 1e3;
-                let first = *self.first_frame.get_or_insert(ms);
-                if !self.app.is_loading() && !self.app.sessions.is_empty() {
-                    println!("first frame: {first:.0} ms; sessions shown: {ms:.0} ms");
-                    ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
-                    // Report once: frames may still be drawn while the window closes.
-                    self.measure = None;
-                }
-            }
-            Some(Measure::Frames { seconds }) => self.measure_frames(ui, seconds, frame_ms),
-            None => {}
-        }
-    }
-
-    fn save(&mut self, storage: &mut dyn eframe::Storage) {
-        if self.measure.is_none() && self.measuring_since.is_none() {
-            eframe::set_value(storage, STORAGE_KEY, &self.app.persisted());
-        }
-    }
-}
-
-/// Open the workbench window; with `measure`, measure the window itself, print the result
-/// and close.
-pub fn run(
-    files: Vec<PathBuf>,
-    view: Option<View>,
-    measure: Option<Measure>,
-) -> anyhow::Result<()> {
-    let options = eframe::NativeOptions {
-        viewport: egui::ViewportBuilder::default()
-            .with_title("Tactile Workbench")
-            .with_inner_size([1400.0, 900.0])
-            .with_drag_and_drop(true),
-        ..Default::default()
-    };
-    eframe::run_native(
-        "Tactile Workbench",
-        options,
-        Box::new(move |cc| {
-            // A measurement always starts from the bundled samples.
-            let persisted = cc
-                .storage
-                .filter(|_| measure.is_none())
-                .and_then(|s| eframe::get_value::<Persisted>(s, STORAGE_KEY));
-            let mut app = WorkbenchApp::new(&cc.egui_ctx, persisted, files);
-            if let Some(v) = view {
-                app.view = v;
-            }
-            // A measurement neither reads nor overwrites the results kept between runs.
-            if measure.is_none()
-                && let Some(dir) = eframe::storage_dir("Tactile Workbench")
-            {
-                app.keep_results_in(&cc.egui_ctx, dir);
-            }
-            Ok(Box::new(EframeApp {
-                app,
-                measure,
-                first_frame: None,
-                frame_ms: Vec::new(),
-                measuring_since: None,
-            }))
-        }),
-    )
-    .map_err(|e| anyhow::anyhow!("could not open the window: {e}"))
 }
