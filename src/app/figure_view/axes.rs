@@ -1,0 +1,101 @@
+//! Axes and legends of charts on screen: ticks at the figure model's scale, the legend in
+//! the emptiest corner.
+
+use super::*;
+
+/// egui_plot's default minimum grid spacing, in points: its `GridInput::base_step_size` is
+/// this many points in plot units.
+const GRID_SPACING_MIN: f64 = 8.0;
+
+/// Grid marks at the export's ticks (1, 2, 5 × 10^k; round values on a log axis), about
+/// one per `px_per_label` points and never fewer than three, so that the screen shows the
+/// same ticks as the paper at any tile size.
+pub(super) fn tick_spacer(scale: Scale, px_per_label: f64) -> impl Fn(GridInput) -> Vec<GridMark> {
+    move |input: GridInput| {
+        let (lo, hi) = input.bounds;
+        let px = (hi - lo) * GRID_SPACING_MIN / input.base_step_size.max(f64::MIN_POSITIVE);
+        let max = (px / px_per_label).floor().clamp(3.0, 10.0) as usize;
+        let coords: Vec<f64> = figures::axis_ticks(value(scale, lo), value(scale, hi), scale, max)
+            .into_iter()
+            .filter_map(|(v, _)| coord(scale, v))
+            .collect();
+        // Labels are drawn when marks are this far apart: the closest pair.
+        let step = coords
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .fold(f64::INFINITY, f64::min);
+        let step = if step.is_finite() { step } else { hi - lo };
+        coords
+            .into_iter()
+            .map(|value| GridMark {
+                value,
+                step_size: step,
+            })
+            .collect()
+    }
+}
+
+pub(super) fn tick_text(scale: Scale, mark: GridMark) -> String {
+    figures::tick_label(value(scale, mark.value), mark.step_size, scale)
+}
+
+/// An axis whose tick labels show even when a tile is small (egui_plot hides labels
+/// closer than 60 points by default).
+pub(super) fn axis_hints(x: bool, title: String, scale: Scale) -> AxisHints<'static> {
+    let hints = if x {
+        AxisHints::new_x().label_spacing(24.0..=32.0)
+    } else {
+        AxisHints::new_y().label_spacing(12.0..=16.0)
+    };
+    hints
+        .label(title)
+        .formatter(move |mark, _| tick_text(scale, mark))
+}
+
+/// The legend's place: the plot corner with the fewest points (in the data's own box).
+pub(super) fn emptiest_corner(points: &[[f64; 2]]) -> Corner {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in points {
+        for a in 0..2 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    let t = |p: &[f64; 2], a: usize| {
+        if hi[a] > lo[a] {
+            (p[a] - lo[a]) / (hi[a] - lo[a])
+        } else {
+            0.5
+        }
+    };
+    // A corner box of 40 % × 45 % of the data's extent.
+    let count = |right: bool, top: bool| {
+        points
+            .iter()
+            .filter(|p| {
+                let (x, y) = (t(p, 0), t(p, 1));
+                (if right { x >= 0.6 } else { x <= 0.4 })
+                    && (if top { y >= 0.55 } else { y <= 0.45 })
+            })
+            .count()
+    };
+    [
+        (Corner::RightTop, count(true, true)),
+        (Corner::LeftTop, count(false, true)),
+        (Corner::RightBottom, count(true, false)),
+        (Corner::LeftBottom, count(false, false)),
+    ]
+    .into_iter()
+    .min_by_key(|&(_, n)| n)
+    .map_or(Corner::RightTop, |(c, _)| c)
+}
+
+/// The legend in the emptiest corner, one entry per series in the series' colour (a
+/// series' band and error bars share its entry; the solid line or markers, drawn last,
+/// give the swatch its colour).
+pub(super) fn legend(points: &[[f64; 2]]) -> Legend {
+    Legend::default()
+        .position(emptiest_corner(points))
+        .color_conflict_handling(ColorConflictHandling::PickLast)
+        .follow_insertion_order(true)
+}

@@ -1,0 +1,253 @@
+//! Line and marker charts on screen through egui_plot, with hover values and clickable markers.
+
+use super::axes::{axis_hints, legend, tick_spacer};
+use super::*;
+
+/// The hover text of a chart point: series, point label, both values with units.
+fn point_tooltip(chart: &figures::Chart, name: &str, at: PlotPoint) -> Option<String> {
+    let (xs, ys) = (chart.x.scale, chart.y.scale);
+    let s = chart.series.iter().find(|s| s.name == name)?;
+    let k = s.x.iter().zip(&s.y).position(|(&x, &y)| {
+        coord(xs, x).is_some_and(|c| (c - at.x).abs() < 1e-9)
+            && coord(ys, y).is_some_and(|c| (c - at.y).abs() < 1e-9)
+    });
+    let label = k
+        .and_then(|k| s.point_labels.get(k))
+        .filter(|l| !l.is_empty())
+        .map_or(String::new(), |l| format!(" · {l}"));
+    let (x, y) = (value(xs, at.x), value(ys, at.y));
+    Some(format!(
+        "{name}{label}\n{}: {} {}\n{}: {} {}",
+        chart.x.title,
+        exact(x),
+        chart.x.unit,
+        chart.y.title,
+        exact(y),
+        chart.y.unit
+    ))
+}
+
+#[allow(clippy::too_many_arguments)]
+pub(super) fn show_chart(
+    ui: &mut egui::Ui,
+    id: &str,
+    chart: &figures::Chart,
+    height: f32,
+    selection: Selection,
+    legend_shown: bool,
+    interaction: &mut Interaction,
+) {
+    let (xs, ys) = (chart.x.scale, chart.y.scale);
+    let all_points: Vec<[f64; 2]> = chart
+        .series
+        .iter()
+        .flat_map(|s| {
+            s.x.iter()
+                .zip(&s.y)
+                .filter_map(|(&x, &y)| Some([coord(xs, x)?, coord(ys, y)?]))
+        })
+        .collect();
+    // Views scroll as pages: the wheel scrolls the page, it does not pan the plot.
+    let mut plot = Plot::new(id)
+        .allow_scroll(false)
+        .height(height)
+        .custom_x_axes(vec![axis_hints(true, chart.x.text(), xs)])
+        .custom_y_axes(vec![axis_hints(false, chart.y.text(), ys)])
+        .x_grid_spacer(tick_spacer(xs, 70.0))
+        .y_grid_spacer(tick_spacer(ys, 36.0))
+        .label_formatter(move |pos| match pos {
+            HoverPosition::NearDataPoint {
+                plot_name,
+                position,
+                ..
+            } => point_tooltip(chart, plot_name, *position),
+            HoverPosition::Elsewhere { .. } => None,
+        });
+    if legend_shown {
+        plot = plot.legend(legend(&all_points));
+    }
+    if let Some([lo, hi]) = chart.x.include {
+        plot = plot
+            .include_x(coord(xs, lo).unwrap_or(lo))
+            .include_x(coord(xs, hi).unwrap_or(hi));
+    }
+    if let Some([lo, hi]) = chart.y.include {
+        plot = plot
+            .include_y(coord(ys, lo).unwrap_or(lo))
+            .include_y(coord(ys, hi).unwrap_or(hi));
+    }
+    let marker = match selection {
+        Selection::Marker(x) => coord(xs, x),
+        _ => None,
+    };
+    if marker.is_some() {
+        // A drag moves the marker instead of panning the plot.
+        plot = plot.allow_drag(false);
+    }
+    let accent = ui.visuals().selection.bg_fill;
+    let shown = plot.show(ui, |p| {
+        if let Some(x) = marker {
+            p.vline(
+                VLine::new(format!("selected {}", chart.x.title), x)
+                    .color(accent)
+                    .width(2.5),
+            );
+        }
+        for (i, s) in chart.series.iter().enumerate() {
+            plot_series(p, chart, s, i);
+        }
+        for r in &chart.ref_lines {
+            match r.orientation {
+                Orientation::Vertical => {
+                    if let Some(v) = coord(xs, r.value) {
+                        p.vline(VLine::new(r.label.clone(), v).color(Color32::GRAY));
+                    }
+                }
+                Orientation::Horizontal => {
+                    if let Some(v) = coord(ys, r.value) {
+                        p.hline(HLine::new(r.label.clone(), v).color(Color32::GRAY));
+                    }
+                }
+            }
+        }
+    });
+    let r = &shown.response;
+    ui.ctx()
+        .data_mut(|d| d.insert_temp(transform_id(id), shown.transform));
+    if let Some(pos) = r.hover_pos() {
+        interaction.hovered_point = nearest_marker(chart, &shown.transform, pos, 12.0);
+    }
+    if marker.is_some()
+        && (r.dragged() || r.clicked())
+        && let Some(pos) = r.interact_pointer_pos()
+    {
+        let x = shown.transform.value_from_position(pos).x;
+        interaction.marker_x = Some(value(xs, x));
+    } else if r.clicked()
+        && let Some(pos) = r.interact_pointer_pos()
+    {
+        interaction.clicked_point = nearest_marker(chart, &shown.transform, pos, 12.0);
+    }
+}
+
+/// One series: its band or error bars, line, markers and point labels. Everything but the
+/// labels carries the series' name, so that the legend has one entry per series.
+fn plot_series(
+    p: &mut egui_plot::PlotUi<'_>,
+    chart: &figures::Chart,
+    s: &figures::Series,
+    i: usize,
+) {
+    let (xs, ys) = (chart.x.scale, chart.y.scale);
+    let color = rgb(s.color.unwrap_or_else(|| series_color(i)));
+    let pts: Vec<[f64; 2]> =
+        s.x.iter()
+            .zip(&s.y)
+            .filter_map(|(&x, &y)| Some([coord(xs, x)?, coord(ys, y)?]))
+            .collect();
+    if let Some(err) = &s.error {
+        let rows: Vec<(f64, f64, f64)> = s
+            .x
+            .iter()
+            .zip(err.lower.iter().zip(&err.upper))
+            .filter_map(|(&x, (&lo, &hi))| Some((coord(xs, x)?, coord(ys, lo)?, coord(ys, hi)?)))
+            .collect();
+        match err.display {
+            ErrorDisplay::Band => {
+                let x: Vec<f64> = rows.iter().map(|r| r.0).collect();
+                let lo: Vec<f64> = rows.iter().map(|r| r.1).collect();
+                let hi: Vec<f64> = rows.iter().map(|r| r.2).collect();
+                p.add(
+                    FilledArea::new(s.name.clone(), &x, &lo, &hi)
+                        .fill_color(color.gamma_multiply(0.25)),
+                );
+            }
+            ErrorDisplay::Bars => {
+                for (x, lo, hi) in rows {
+                    p.line(
+                        Line::new(s.name.clone(), PlotPoints::new(vec![[x, lo], [x, hi]]))
+                            .color(color)
+                            .width(1.0),
+                    );
+                }
+            }
+        }
+    }
+    if matches!(s.style, SeriesStyle::Line | SeriesStyle::LineMarkers) {
+        p.line(
+            Line::new(s.name.clone(), PlotPoints::new(pts.clone()))
+                .color(color)
+                .width(2.0),
+        );
+    }
+    // Markers on every series, so that every point has a hover value.
+    let radius = if s.style == SeriesStyle::Line {
+        1.5
+    } else {
+        3.5
+    };
+    p.points(
+        Points::new(s.name.clone(), PlotPoints::new(pts))
+            .color(color)
+            .shape(MarkerShape::Circle)
+            .filled(true)
+            .radius(radius),
+    );
+    for (k, label) in s.point_labels.iter().enumerate() {
+        if let (Some(&x), Some(&y)) = (s.x.get(k), s.y.get(k))
+            && let (Some(x), Some(y)) = (coord(xs, x), coord(ys, y))
+            && !label.is_empty()
+        {
+            // Unnamed: point labels are no legend entry.
+            p.text(Text::new("", PlotPoint::new(x, y), label.clone()).anchor(Align2::LEFT_BOTTOM));
+        }
+    }
+}
+
+fn transform_id(figure_id: &str) -> egui::Id {
+    egui::Id::unique(("chart-transform", figure_id))
+}
+
+/// Where point `k` of series `series` of `chart`, drawn with figure id `id`, was on the
+/// screen in the last frame (to point at a marker from outside the chart).
+pub fn marker_position(
+    ctx: &egui::Context,
+    id: &str,
+    chart: &figures::Chart,
+    series: usize,
+    k: usize,
+) -> Option<Pos2> {
+    let t: egui_plot::PlotTransform = ctx.data(|d| d.get_temp(transform_id(id)))?;
+    let s = chart.series.get(series)?;
+    let x = coord(chart.x.scale, *s.x.get(k)?)?;
+    let y = coord(chart.y.scale, *s.y.get(k)?)?;
+    Some(t.position_from_point(&PlotPoint::new(x, y)))
+}
+
+/// The marker point of `chart` drawn nearest to `pos`, if within `radius` points.
+fn nearest_marker(
+    chart: &figures::Chart,
+    transform: &egui_plot::PlotTransform,
+    pos: Pos2,
+    radius: f32,
+) -> Option<(usize, usize)> {
+    let (xs, ys) = (chart.x.scale, chart.y.scale);
+    let mut best: Option<(f32, (usize, usize))> = None;
+    for (i, s) in chart.series.iter().enumerate() {
+        if !matches!(s.style, SeriesStyle::Markers | SeriesStyle::LineMarkers) {
+            continue;
+        }
+        for (k, (&x, &y)) in s.x.iter().zip(&s.y).enumerate() {
+            let (Some(x), Some(y)) = (coord(xs, x), coord(ys, y)) else {
+                continue;
+            };
+            let d = transform
+                .position_from_point(&PlotPoint::new(x, y))
+                .distance(pos);
+            if d <= radius && best.is_none_or(|(b, _)| d < b) {
+                best = Some((d, (i, k)));
+            }
+        }
+    }
+    best.map(|(_, hit)| hit)
+}
