@@ -1,0 +1,143 @@
+//! Exporting figures from the window: the export settings and "Export all".
+
+use super::*;
+
+/// Export settings shared by every view.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct ExportSettings {
+    pub dir: PathBuf,
+    pub width: u32,
+    pub height: u32,
+    pub dpi: f64,
+}
+
+impl Default for ExportSettings {
+    fn default() -> Self {
+        ExportSettings {
+            dir: PathBuf::from("figures-export"),
+            width: 960,
+            height: 640,
+            dpi: 96.0,
+        }
+    }
+}
+
+impl ExportSettings {
+    fn options(&self) -> RenderOptions {
+        RenderOptions {
+            width: self.width,
+            height: self.height,
+            dpi: self.dpi,
+        }
+    }
+
+    /// The folder, size and DPI form, laid out down the panel so that opening it never
+    /// widens the panel.
+    pub fn ui(&mut self, ui: &mut egui::Ui) {
+        let caption = ui.label("Export folder");
+        let mut dir = self.dir.display().to_string();
+        if ui
+            .add(egui::TextEdit::singleline(&mut dir).desired_width(ui.available_width()))
+            .labelled_by(caption.id)
+            .changed()
+        {
+            self.dir = PathBuf::from(dir);
+        }
+        ui.horizontal_wrapped(|ui| {
+            ui.add(
+                egui::DragValue::new(&mut self.width)
+                    .range(200..=6000)
+                    .prefix("width "),
+            );
+            ui.add(
+                egui::DragValue::new(&mut self.height)
+                    .range(150..=6000)
+                    .prefix("height "),
+            );
+            ui.add(
+                egui::DragValue::new(&mut self.dpi)
+                    .range(48.0..=600.0)
+                    .prefix("DPI "),
+            );
+        });
+    }
+
+    /// Write `figure` as SVG, PNG and CSV named `name`, and say so in `notes`.
+    pub fn write(&self, figure: &figures::Figure, name: &str, notes: &mut Notifications) {
+        let opts = self.options();
+        let mut written = Vec::new();
+        let result = std::fs::create_dir_all(&self.dir)
+            .map_err(|e| format!("{}: {e}", self.dir.display()))
+            .and_then(|_| {
+                for f in [Format::Svg, Format::Png, Format::Csv] {
+                    let path = self.dir.join(format!("{name}.{}", f.extension()));
+                    figures::write_figure(figure, &path, &opts).map_err(|e| e.to_string())?;
+                    written.push(path.display().to_string());
+                }
+                Ok(())
+            });
+        match result {
+            Ok(()) => notes.info(format!("exported {}", written.join(", "))),
+            Err(e) => notes.error(format!("export failed: {e}")),
+        }
+    }
+}
+
+impl Analyses {
+    /// Export every figure of every result in the background.
+    pub fn export_all(&mut self, ctx: &egui::Context) {
+        let set = result::figure_set(&self.results);
+        let mut set_all = set;
+        let extra = result::speed_accuracy_figures(&self.results)
+            .into_iter()
+            .chain(comparison_figures(&self.results));
+        for (name, f) in extra {
+            set_all.entries.push(figures::FigureEntry {
+                name,
+                figure: f,
+                parameters: Default::default(),
+                session: "all".into(),
+                date: date_text(result::now_unix()),
+            });
+        }
+        // Each session's frontiers on one chart per time axis.
+        let mut sessions: Vec<&str> = self.frontiers.iter().map(|f| f.session.as_str()).collect();
+        sessions.dedup();
+        for session in sessions {
+            let of: Vec<Frontier> = self
+                .frontiers
+                .iter()
+                .filter(|f| f.session == session)
+                .cloned()
+                .collect();
+            for (name, f) in frontier_figures(&of) {
+                set_all.entries.push(figures::FigureEntry {
+                    name: format!("{name}-{}", result::slug(session)),
+                    figure: f,
+                    parameters: Default::default(),
+                    session: session.to_string(),
+                    date: date_text(result::now_unix()),
+                });
+            }
+        }
+        let dir = self.export.dir.clone();
+        let opts = self.export.options();
+        self.spawn(ctx, None, "Export all figures".into(), move |p| {
+            p.set(0.0, format!("writing {} figures", set_all.entries.len()));
+            let t0 = std::time::Instant::now();
+            let index = figures::export_all(
+                &set_all,
+                &dir,
+                &[Format::Svg, Format::Png, Format::Csv],
+                &opts,
+            )
+            .map_err(JobError::failed)?;
+            Ok(JobOutput::Message(format!(
+                "exported {} figures to {} in {:.2} s",
+                index.entries.len(),
+                dir.display(),
+                t0.elapsed().as_secs_f64()
+            )))
+        });
+    }
+}
