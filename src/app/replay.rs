@@ -204,7 +204,29 @@ impl Replay {
             g.object,
             g.trial.map(|t| format!(" #{t}")).unwrap_or_default()
         ));
+        self.controls(ui, g);
+        ui.separator();
+        self.heatmaps(ui, s, g);
+        let trace = trace.filter(|t| {
+            t.session == session.meta.name && t.grasp == grasp && t.learner == self.learner
+        });
+        if let Some(t) = trace {
+            class_distribution(ui, &t.trace, self.frame, 160.0);
+        }
+        if session.label_set("object").is_some() && !session.encoders.is_empty() {
+            action = self.recognition_row(ui);
+        }
+        ui.separator();
+        if let Some(t) = self.traces(ui, session, g) {
+            let times: Vec<f64> = g.frames.iter().map(|fr| fr.t).collect();
+            self.seek(t, &times);
+        }
+        action
+    }
 
+    /// Step, play, speed and the frame slider, with the frame's number and time.
+    fn controls(&mut self, ui: &mut egui::Ui, g: &Grasp) {
+        let n = g.frames.len();
         ui.horizontal_wrapped(|ui| {
             if ui
                 .button("Step back")
@@ -251,8 +273,12 @@ impl Replay {
             self.frame + 1,
             f.t
         ));
+    }
 
-        ui.separator();
+    /// One heatmap per sensor at the current frame, beside a colour bar.
+    fn heatmaps(&mut self, ui: &mut egui::Ui, s: &LoadedSession, g: &Grasp) {
+        let session = &s.session;
+        let n = g.frames.len();
         let unit = session
             .sensors
             .first()
@@ -315,35 +341,35 @@ impl Replay {
             }
             colour_bar(ui, range, map, &title, &unit, cell.y + 20.0);
         });
-        let trace = trace.filter(|t| {
-            t.session == session.meta.name && t.grasp == grasp && t.learner == self.learner
-        });
-        if let Some(t) = trace {
-            class_distribution(ui, &t.trace, self.frame, 160.0);
-        }
-        if session.label_set("object").is_some() && !session.encoders.is_empty() {
-            ui.horizontal_wrapped(|ui| {
-                ComboBox::from_label("Recognition learner")
-                    .selected_text(format!("{:?}", self.learner).to_uppercase())
-                    .show_ui(ui, |ui| {
-                        ui.selectable_value(&mut self.learner, SupervisedLearner::Ds, "DS");
-                        ui.selectable_value(&mut self.learner, SupervisedLearner::Gs, "GS");
-                    });
-                if ui
-                    .button("Show the recognition as the hand closes")
-                    .on_hover_text(
-                        "Teach the learner every other grasp, then classify this one step by step",
-                    )
-                    .clicked()
-                {
-                    action = ReplayAction::Trace(self.learner);
-                }
-            });
-        }
+    }
 
-        ui.separator();
-        let t_now = f.t;
-        let times: Vec<f64> = g.frames.iter().map(|fr| fr.t).collect();
+    /// The learner choice and the button that asks for its recognition trace.
+    fn recognition_row(&mut self, ui: &mut egui::Ui) -> ReplayAction {
+        let mut action = ReplayAction::None;
+        ui.horizontal_wrapped(|ui| {
+            ComboBox::from_label("Recognition learner")
+                .selected_text(format!("{:?}", self.learner).to_uppercase())
+                .show_ui(ui, |ui| {
+                    ui.selectable_value(&mut self.learner, SupervisedLearner::Ds, "DS");
+                    ui.selectable_value(&mut self.learner, SupervisedLearner::Gs, "GS");
+                });
+            if ui
+                .button("Show the recognition as the hand closes")
+                .on_hover_text(
+                    "Teach the learner every other grasp, then classify this one step by step",
+                )
+                .clicked()
+            {
+                action = ReplayAction::Trace(self.learner);
+            }
+        });
+        action
+    }
+
+    /// The encoder and per-finger traces with the current frame's cursor; the time a click
+    /// or drag on either points at.
+    fn traces(&mut self, ui: &mut egui::Ui, session: &Session, g: &Grasp) -> Option<f64> {
+        let t_now = g.frames[self.frame].t;
         let mut seek_to: Option<f64> = None;
         let height = ((ui.available_height() - 40.0) / 2.0).max(120.0);
         if !session.encoders.is_empty() {
@@ -394,10 +420,7 @@ impl Replay {
                 plot.vline(VLine::new("current frame", t_now));
             });
         seek_to = seek_to.or(trace_seek(&shown, "Per-finger feature trace"));
-        if let Some(t) = seek_to {
-            self.seek(t, &times);
-        }
-        action
+        seek_to
     }
 }
 
