@@ -288,7 +288,21 @@ pub fn slug(s: &str) -> String {
     out.trim_matches('-').to_string()
 }
 
-/// Every figure of `results`, named for export (`<analysis>-<label>-<figure>`).
+/// The file name (without extension) of figure `figure` of result `r`, the `i`-th result:
+/// `<number>-<label>[-<size>]-<figure>`. One name whether the figure is exported alone or
+/// with every other, and two results of one method that differ only in size say so.
+pub fn export_name(i: usize, r: &AnalysisResult, figure: &str) -> String {
+    let label = slug(&r.label);
+    let size = r
+        .model_size
+        .as_ref()
+        .map(|m| slug(&m.knobs))
+        .filter(|k| !k.is_empty() && !label.contains(k.as_str()))
+        .map_or(String::new(), |k| format!("-{k}"));
+    format!("{:02}-{label}{size}-{}", i + 1, slug(figure))
+}
+
+/// Every figure of `results`, named for export by [`export_name`].
 pub fn figure_set(results: &[AnalysisResult]) -> FigureSet {
     let mut entries: Vec<FigureEntry> = Vec::new();
     for (i, r) in results.iter().enumerate() {
@@ -296,7 +310,7 @@ pub fn figure_set(results: &[AnalysisResult]) -> FigureSet {
             let mut parameters = r.parameters.clone();
             parameters.insert("method".into(), r.label.clone());
             entries.push(FigureEntry {
-                name: format!("{:02}-{}-{}", i + 1, slug(&r.label), slug(name)),
+                name: export_name(i, r, name),
                 figure: figure.clone(),
                 parameters,
                 session: r.session.clone(),
@@ -554,6 +568,36 @@ pub(crate) mod tests {
             grasp_codes: Vec::new(),
             model_size: None,
         }
+    }
+
+    #[test]
+    fn export_names_say_the_size_and_agree_alone_and_with_every_figure() {
+        let sized = |knobs: &str| {
+            let mut r = result();
+            r.model_size = Some(ModelSize {
+                knobs: knobs.into(),
+                reason: SizeReason::PaperDefault,
+            });
+            r
+        };
+        let results = vec![sized("capacity 5, tau 1"), sized("capacity 50, tau 15")];
+        let names: Vec<String> = figure_set(&results)
+            .entries
+            .into_iter()
+            .map(|e| e.name)
+            .collect();
+        assert_eq!(
+            names,
+            [
+                "01-ds-all-features-capacity-5-tau-1-accuracy",
+                "02-ds-all-features-capacity-50-tau-15-accuracy"
+            ]
+        );
+        assert_eq!(export_name(1, &results[1], "accuracy"), names[1]);
+        // A size the label already gives is not said twice.
+        let mut k = sized("k 10");
+        k.label = "baselines, k 10".into();
+        assert_eq!(export_name(0, &k, "scores"), "01-baselines-k-10-scores");
     }
 
     #[test]

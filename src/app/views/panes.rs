@@ -15,10 +15,6 @@ use crate::experiments::result::{AnalysisKind, AnalysisResult, date_text};
 use crate::figures::{self, ColorMap, Figure, FigureKind};
 
 /// The file name a figure of result `r` exports under.
-pub fn file_name(r: &AnalysisResult, figure: &str) -> String {
-    format!("{}-{figure}", r.label.replace([' ', ',', '=', ':'], "_"))
-}
-
 pub fn pane_ui(
     ui: &mut egui::Ui,
     pane: &Pane,
@@ -135,7 +131,7 @@ fn figure_pane(
         }
     });
     if export {
-        let file = file_name(r, name);
+        let file = crate::experiments::result::export_name(i, r, name);
         cx.analyses.export.write(fig, &file, &mut cx.analyses.notes);
     }
     let r = &cx.analyses.results[i];
@@ -258,8 +254,8 @@ fn detail_pane(ui: &mut egui::Ui, cx: &mut Cx, i: usize, name: &str) {
     {
         let file = format!(
             "{}-{}",
-            file_name(r, name),
-            detail.title.replace([' ', ',', ':', '='], "_")
+            crate::experiments::result::export_name(i, r, name),
+            crate::experiments::result::slug(&detail.title)
         );
         cx.analyses
             .export
