@@ -111,6 +111,7 @@ pub(super) fn show_chart(
             }
         }
     });
+    paint_point_labels(ui, chart, &shown.transform);
     let r = &shown.response;
     ui.ctx()
         .data_mut(|d| d.insert_temp(transform_id(id), shown.transform));
@@ -193,15 +194,74 @@ fn plot_series(
             .filled(true)
             .radius(radius),
     );
-    for (k, label) in s.point_labels.iter().enumerate() {
-        if let (Some(&x), Some(&y)) = (s.x.get(k), s.y.get(k))
-            && let (Some(x), Some(y)) = (coord(xs, x), coord(ys, y))
-            && !label.is_empty()
-        {
-            // Unnamed: point labels are no legend entry.
-            p.text(Text::new("", PlotPoint::new(x, y), label.clone()).anchor(Align2::LEFT_BOTTOM));
+}
+
+/// Point labels, painted over the drawn plot where they fit (see [`place_labels`]).
+fn paint_point_labels(ui: &egui::Ui, chart: &figures::Chart, t: &egui_plot::PlotTransform) {
+    let (xs, ys) = (chart.x.scale, chart.y.scale);
+    let frame = *t.frame();
+    let painter = ui.painter_at(frame);
+    let font = FontId::proportional(11.0);
+    let color = ui.visuals().text_color();
+    let on_screen =
+        |x: f64, y: f64| Some(t.position_from_point(&PlotPoint::new(coord(xs, x)?, coord(ys, y)?)));
+    let points: Vec<Pos2> = chart
+        .series
+        .iter()
+        .flat_map(|s| s.x.iter().zip(&s.y).filter_map(|(&x, &y)| on_screen(x, y)))
+        .collect();
+    let mut labels = Vec::new();
+    for s in &chart.series {
+        for (k, text) in s.point_labels.iter().enumerate() {
+            if let (Some(&x), Some(&y)) = (s.x.get(k), s.y.get(k))
+                && let Some(at) = on_screen(x, y)
+                && !text.is_empty()
+            {
+                let galley = painter.layout_no_wrap(text.clone(), font.clone(), color);
+                labels.push((at, galley));
+            }
         }
     }
+    let wanted: Vec<(Pos2, Vec2)> = labels.iter().map(|(at, g)| (*at, g.size())).collect();
+    for ((_, galley), place) in labels
+        .into_iter()
+        .zip(place_labels(frame, &wanted, &points))
+    {
+        if let Some(r) = place {
+            painter.galley(r.min, galley, color);
+        }
+    }
+}
+
+/// Where each label (its point and size) goes: beside its point, above right, above left,
+/// below right or below left, the first of these inside `frame` that overlaps no label
+/// placed before it and covers no point of `points`; None (dropped) when none does, as
+/// the export drops it. The point's tooltip still names it.
+fn place_labels(frame: Rect, labels: &[(Pos2, Vec2)], points: &[Pos2]) -> Vec<Option<Rect>> {
+    const GAP: f32 = 4.0;
+    let mut placed: Vec<Rect> = Vec::new();
+    labels
+        .iter()
+        .map(|&(at, size)| {
+            let candidates = [
+                at + Vec2::new(GAP, -GAP - size.y),
+                at + Vec2::new(-GAP - size.x, -GAP - size.y),
+                at + Vec2::new(GAP, GAP),
+                at + Vec2::new(-GAP - size.x, GAP),
+            ];
+            let fits = |r: &Rect| {
+                frame.contains_rect(*r)
+                    && !placed.iter().any(|q| q.intersects(*r))
+                    && !points.iter().any(|p| r.expand(2.0).contains(*p))
+            };
+            let r = candidates
+                .into_iter()
+                .map(|min| Rect::from_min_size(min, size))
+                .find(fits)?;
+            placed.push(r);
+            Some(r)
+        })
+        .collect()
 }
 
 fn transform_id(figure_id: &str) -> egui::Id {
@@ -250,4 +310,37 @@ fn nearest_marker(
         }
     }
     best.map(|(_, hit)| hit)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn crowded_labels_never_overlap_cover_points_or_leave_the_plot() {
+        let frame = Rect::from_min_size(Pos2::ZERO, Vec2::new(300.0, 200.0));
+        let size = Vec2::new(90.0, 12.0);
+        // Twelve labelled points within a few pixels of each other, and one at a corner.
+        let mut points: Vec<Pos2> = (0..12)
+            .map(|i| Pos2::new(150.0 + i as f32, 100.0 + (i % 3) as f32))
+            .collect();
+        points.push(Pos2::new(298.0, 2.0));
+        let labels: Vec<(Pos2, Vec2)> = points.iter().map(|&p| (p, size)).collect();
+        let placed = place_labels(frame, &labels, &points);
+        let shown: Vec<Rect> = placed.iter().flatten().copied().collect();
+        // Four sides of the crowd, the corner point's label inside the plot.
+        assert_eq!(shown.len(), 5, "{placed:?}");
+        for (i, a) in shown.iter().enumerate() {
+            assert!(frame.contains_rect(*a));
+            assert!(
+                !points.iter().any(|p| a.contains(*p)),
+                "{a:?} covers a point"
+            );
+            for b in &shown[i + 1..] {
+                assert!(!a.intersects(*b), "{a:?} overlaps {b:?}");
+            }
+        }
+        let corner = placed[12].expect("the lone point's label has room");
+        assert!(corner.max.x <= 298.0 && corner.min.y >= 2.0);
+    }
 }

@@ -11,8 +11,7 @@ mod grid;
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Stroke, Vec2};
 use egui_plot::{
     AxisHints, Bar, BarChart, ColorConflictHandling, Corner, FilledArea, GridInput, GridMark,
-    HLine, HoverPosition, Legend, Line, MarkerShape, Plot, PlotPoint, PlotPoints, Points, Text,
-    VLine,
+    HLine, HoverPosition, Legend, Line, MarkerShape, Plot, PlotPoint, PlotPoints, Points, VLine,
 };
 
 use super::heatmap::rgb;
