@@ -16,10 +16,12 @@ pub mod normal;
 pub mod sngd;
 pub mod sogp;
 mod wide;
+pub mod window;
 
-pub use kernel::{KernelParams, LagMajor, RecursiveArd, SequenceWindows, Stamp, Window};
+pub use kernel::{KernelParams, LagMajor, RecursiveArd};
 pub use sngd::{Sngd, SngdParams};
 pub use sogp::{Likelihood, Sogp, SogpParams};
+pub use window::{SequenceWindows, Stamp, Window};
 
 /// Errors of the GP engine: bad parameters name the parameter.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

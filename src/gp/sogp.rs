@@ -34,9 +34,10 @@ use serde::{Deserialize, Serialize};
 
 use super::GpError;
 use super::inputs::{Inputs, Shift};
-use super::kernel::{KernelParams, LagMajor, RecursiveArd, SequenceWindows, Stamp, Window, dot};
+use super::kernel::{KernelParams, LagMajor, RecursiveArd, dot};
 use super::normal::{log_norm_cdf, pdf_over_cdf};
 use super::sngd::SngdParams;
+use super::window::{SequenceWindows, Stamp, Window};
 use adapt::Adaptation;
 
 /// Smallest latent variance a prediction may report (the C++ clamp).

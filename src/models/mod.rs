@@ -19,6 +19,7 @@ pub mod calibration;
 pub mod clustering;
 pub mod file;
 pub mod held_out;
+pub mod held_out_report;
 pub mod inputs;
 pub mod recognition;
 pub mod stability;
@@ -34,9 +35,8 @@ pub use clustering::{
 pub use file::{
     FORMAT, Model, ModelFile, Provenance, SelectionScore, SessionRef, VERSION, load, save,
 };
-pub use held_out::{
-    GraspPrediction, HeldOutResult, HeldOutScores, evaluate, held_out_report, predict,
-};
+pub use held_out::{GraspPrediction, HeldOutResult, HeldOutScores, evaluate, predict};
+pub use held_out_report::held_out_report;
 pub use recognition::{
     SequenceFitOptions, SequenceModel, continue_sequences, fit_sequences, sequence_file,
     sequence_file_of_run,

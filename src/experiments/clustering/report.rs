@@ -26,147 +26,29 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
         UnsupervisedLearner::Du => "DU",
         UnsupervisedLearner::Gu => "GU",
     };
-    let mut label = format!("{learner}, {}", features_text(p.features));
     let min_grasps = match p.learner {
         UnsupervisedLearner::Du => p.du_min_grasps,
         UnsupervisedLearner::Gu => p.gu_min_grasps,
     };
-    if p.learner == UnsupervisedLearner::Gu || min_grasps > 1 {
-        label += &match min_grasps {
-            1 => ", every cluster kept".to_string(),
-            n => format!(", clusters kept from {n} grasps"),
-        };
-    }
+    let label = clustering_label(r, learner, min_grasps);
     let th: Vec<f64> = r.sweep.iter().map(|s| s.threshold).collect();
     let reps = p.reps;
-    let mut score_series = vec![
-        with_band(
-            "purity",
-            th.clone(),
-            &r.sweep.iter().map(|s| &s.purity).collect::<Vec<_>>(),
-        ),
-        with_band(
-            "ARI",
-            th.clone(),
-            &r.sweep.iter().map(|s| &s.ari).collect::<Vec<_>>(),
-        ),
-        with_band(
-            "NMI",
-            th.clone(),
-            &r.sweep.iter().map(|s| &s.nmi).collect::<Vec<_>>(),
-        ),
-    ];
-    if let Some(c) = &r.threshold_choice {
-        let agreement: Vec<MeanSd> = c
-            .curve
-            .iter()
-            .map(|a| MeanSd {
-                mean: a.agreement,
-                sd: a.sd,
-            })
-            .collect();
-        score_series.push(with_band(
-            "agreement across orders (no labels)",
-            c.curve.iter().map(|a| a.threshold).collect(),
-            &agreement.iter().collect::<Vec<_>>(),
-        ));
-    }
     let mut figures = vec![
         (
             "scores-vs-threshold".to_string(),
-            chosen_threshold(
-                Figure::chart(
-                    "Purity, ARI and NMI against the novelty threshold",
-                    Axis::new("novelty threshold", ""),
-                    Axis::new("score", "").including(0.0, 1.0),
-                    score_series,
-                )
-                .subtitle(format!("{label}; mean ± sd over {reps} seeded orders")),
-                r,
-            ),
+            scores_vs_threshold(r, &th, &label),
         ),
         (
             "clusters-vs-threshold".to_string(),
-            chosen_threshold(
-                Figure::chart(
-                    "Clusters against the novelty threshold",
-                    Axis::new("novelty threshold", ""),
-                    Axis::new("number of clusters", ""),
-                    vec![
-                        with_band(
-                            "clusters created",
-                            th.clone(),
-                            &r.sweep.iter().map(|s| &s.clusters).collect::<Vec<_>>(),
-                        ),
-                        with_band(
-                            "effective clusters",
-                            th.clone(),
-                            &r.sweep.iter().map(|s| &s.effective).collect::<Vec<_>>(),
-                        ),
-                    ],
-                )
-                .subtitle(format!(
-                    "{label}; effective = clusters used when every sample is re-assigned"
-                )),
-                r,
-            ),
+            clusters_vs_threshold(r, &th, &label),
+        ),
+        (
+            "nmi-vs-effective".to_string(),
+            nmi_vs_effective(r, learner, &label),
         ),
     ];
-    let mut nmi = vec![effective_series(learner, &r.by_effective)];
-    if !r.kmeans.is_empty() {
-        nmi.push(effective_series("sequential k-means", &r.kmeans));
-    }
-    if !r.som.is_empty() {
-        nmi.push(effective_series("SOM", &r.som));
-    }
-    figures.push((
-        "nmi-vs-effective".to_string(),
-        Figure::chart(
-            "NMI against effective clusters",
-            Axis::new("effective clusters", ""),
-            Axis::new("normalised mutual information", ""),
-            nmi,
-        )
-        .subtitle(format!(
-            "{label} against k-means and SOM on the Table I features"
-        )),
-    ));
-    let mut scores = Vec::new();
-    let mut groups = Vec::new();
-    for (name, point) in [
-        (learner, &r.at_10),
-        ("sequential k-means", &r.kmeans_at_10),
-        ("SOM", &r.som_at_10),
-    ] {
-        if let Some(pt) = point {
-            groups.push(
-                BarGroup::new(name, vec![pt.purity.mean, pt.ari.mean, pt.nmi.mean]).errors(vec![
-                    pt.purity.sd,
-                    pt.ari.sd,
-                    pt.nmi.sd,
-                ]),
-            );
-            scores.push((format!("{name} purity at 10"), pt.purity.mean));
-            scores.push((format!("{name} ARI at 10"), pt.ari.mean));
-            scores.push((format!("{name} NMI at 10"), pt.nmi.mean));
-        }
-    }
-    if !groups.is_empty() {
-        figures.push((
-            "scores-at-10".to_string(),
-            Figure::bars(
-                "Scores at 10 effective clusters",
-                AxisTitle {
-                    title: "score".into(),
-                    unit: String::new(),
-                },
-                Axis::new("value", "").including(0.0, 1.0),
-                vec!["purity".into(), "ARI".into(), "NMI".into()],
-                groups,
-            )
-            .subtitle("runs whose re-assignment used 10 clusters; mean ± sd"),
-        ));
-    }
+    let (at_10, mut scores) = scores_at_10(r, learner);
+    figures.extend(at_10.map(|f| ("scores-at-10".to_string(), f)));
     let headline = r
         .at_10
         .as_ref()
@@ -212,6 +94,155 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
         grasp_codes: Vec::new(),
         model_size: None,
     }
+}
+
+/// The learner and features, and how many grasps keep a cluster when that is not every
+/// cluster of DU.
+fn clustering_label(r: &ClusteringResult, learner: &str, min_grasps: usize) -> String {
+    let mut label = format!("{learner}, {}", features_text(r.params.features));
+    if r.params.learner == UnsupervisedLearner::Gu || min_grasps > 1 {
+        label += &match min_grasps {
+            1 => ", every cluster kept".to_string(),
+            n => format!(", clusters kept from {n} grasps"),
+        };
+    }
+    label
+}
+
+/// Purity, ARI and NMI against the threshold (Fig. 11), with the label-free agreement
+/// curve when a threshold was chosen without labels.
+fn scores_vs_threshold(r: &ClusteringResult, th: &[f64], label: &str) -> Figure {
+    let mut score_series = vec![
+        with_band(
+            "purity",
+            th.to_vec(),
+            &r.sweep.iter().map(|s| &s.purity).collect::<Vec<_>>(),
+        ),
+        with_band(
+            "ARI",
+            th.to_vec(),
+            &r.sweep.iter().map(|s| &s.ari).collect::<Vec<_>>(),
+        ),
+        with_band(
+            "NMI",
+            th.to_vec(),
+            &r.sweep.iter().map(|s| &s.nmi).collect::<Vec<_>>(),
+        ),
+    ];
+    if let Some(c) = &r.threshold_choice {
+        let agreement: Vec<MeanSd> = c
+            .curve
+            .iter()
+            .map(|a| MeanSd {
+                mean: a.agreement,
+                sd: a.sd,
+            })
+            .collect();
+        score_series.push(with_band(
+            "agreement across orders (no labels)",
+            c.curve.iter().map(|a| a.threshold).collect(),
+            &agreement.iter().collect::<Vec<_>>(),
+        ));
+    }
+    chosen_threshold(
+        Figure::chart(
+            "Purity, ARI and NMI against the novelty threshold",
+            Axis::new("novelty threshold", ""),
+            Axis::new("score", "").including(0.0, 1.0),
+            score_series,
+        )
+        .subtitle(format!(
+            "{label}; mean ± sd over {} seeded orders",
+            r.params.reps
+        )),
+        r,
+    )
+}
+
+/// Clusters created and effective clusters against the threshold (Fig. 12).
+fn clusters_vs_threshold(r: &ClusteringResult, th: &[f64], label: &str) -> Figure {
+    chosen_threshold(
+        Figure::chart(
+            "Clusters against the novelty threshold",
+            Axis::new("novelty threshold", ""),
+            Axis::new("number of clusters", ""),
+            vec![
+                with_band(
+                    "clusters created",
+                    th.to_vec(),
+                    &r.sweep.iter().map(|s| &s.clusters).collect::<Vec<_>>(),
+                ),
+                with_band(
+                    "effective clusters",
+                    th.to_vec(),
+                    &r.sweep.iter().map(|s| &s.effective).collect::<Vec<_>>(),
+                ),
+            ],
+        )
+        .subtitle(format!(
+            "{label}; effective = clusters used when every sample is re-assigned"
+        )),
+        r,
+    )
+}
+
+/// NMI against effective clusters, beside sequential k-means and the SOM (Fig. 13).
+fn nmi_vs_effective(r: &ClusteringResult, learner: &str, label: &str) -> Figure {
+    let mut nmi = vec![effective_series(learner, &r.by_effective)];
+    if !r.kmeans.is_empty() {
+        nmi.push(effective_series("sequential k-means", &r.kmeans));
+    }
+    if !r.som.is_empty() {
+        nmi.push(effective_series("SOM", &r.som));
+    }
+    Figure::chart(
+        "NMI against effective clusters",
+        Axis::new("effective clusters", ""),
+        Axis::new("normalised mutual information", ""),
+        nmi,
+    )
+    .subtitle(format!(
+        "{label} against k-means and SOM on the Table I features"
+    ))
+}
+
+/// The scores at 10 effective clusters of the learner, k-means and the SOM (Table IV): their
+/// bars (None when no run used 10 clusters) and their named values.
+fn scores_at_10(r: &ClusteringResult, learner: &str) -> (Option<Figure>, Vec<(String, f64)>) {
+    let mut scores = Vec::new();
+    let mut groups = Vec::new();
+    for (name, point) in [
+        (learner, &r.at_10),
+        ("sequential k-means", &r.kmeans_at_10),
+        ("SOM", &r.som_at_10),
+    ] {
+        if let Some(pt) = point {
+            groups.push(
+                BarGroup::new(name, vec![pt.purity.mean, pt.ari.mean, pt.nmi.mean]).errors(vec![
+                    pt.purity.sd,
+                    pt.ari.sd,
+                    pt.nmi.sd,
+                ]),
+            );
+            scores.push((format!("{name} purity at 10"), pt.purity.mean));
+            scores.push((format!("{name} ARI at 10"), pt.ari.mean));
+            scores.push((format!("{name} NMI at 10"), pt.nmi.mean));
+        }
+    }
+    let figure = (!groups.is_empty()).then(|| {
+        Figure::bars(
+            "Scores at 10 effective clusters",
+            AxisTitle {
+                title: "score".into(),
+                unit: String::new(),
+            },
+            Axis::new("value", "").including(0.0, 1.0),
+            vec!["purity".into(), "ARI".into(), "NMI".into()],
+            groups,
+        )
+        .subtitle("runs whose re-assignment used 10 clusters; mean ± sd")
+    });
+    (figure, scores)
 }
 
 /// `f` with the threshold chosen without labels marked, if one was chosen.

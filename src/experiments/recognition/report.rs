@@ -25,142 +25,22 @@ pub fn recognition_report(session: &str, r: &RecognitionResult) -> AnalysisResul
     let label = format!("{learner}, {}{noise}", features_text(p.features));
     let s = &r.summary;
     let reps = r.repetitions.len();
-    let mut figures = Vec::new();
-
-    let x: Vec<f64> = (1..=s.trial_sets.len()).map(|i| i as f64).collect();
-    let stats: Vec<&MeanSd> = s.trial_sets.iter().collect();
-    let test_from = (1.0 - p.test_fraction) * s.trial_sets.len() as f64 + 0.5;
-    figures.push((
-        "accuracy-by-trials".to_string(),
-        Figure::chart(
-            "Accuracy as trials progress",
-            Axis::new(
-                format!("set of trials (order cut into {} parts)", p.trial_sets),
-                "",
-            ),
-            Axis::new("accuracy", "").including(0.0, 1.0),
-            vec![with_band(learner, x, &stats)],
-        )
-        .ref_line(Orientation::Vertical, test_from, "test only from here")
-        .subtitle(format!("{label}; mean ± sd over {reps} seeded orders")),
-    ));
-
-    let n = r.classes.len();
-    let mut confusion = vec![vec![0.0; n]; n];
-    for (t, row) in s.confusion.iter().enumerate() {
-        let total: usize = row.iter().sum();
-        for (c, &k) in row.iter().enumerate() {
-            if t < n && c < n {
-                confusion[t][c] = if total > 0 {
-                    k as f64 / total as f64
-                } else {
-                    f64::NAN
-                };
-            }
-        }
-    }
-    let mut heat = Heatmap {
-        x: AxisTitle {
-            title: "predicted class".into(),
-            unit: String::new(),
-        },
-        y: AxisTitle {
-            title: "true class".into(),
-            unit: String::new(),
-        },
-        columns: r.classes.clone(),
-        rows: r.classes.clone(),
-        values: confusion,
-        colors: ColorScale::viridis("share of the true class", ""),
-        annotate: true,
-        marked: Vec::new(),
-    };
-    heat.colors.limits = Some([0.0, 1.0]);
-    figures.push((
-        "confusion".to_string(),
-        Figure::new("Confusion matrix", FigureKind::Heatmap(heat))
-            .subtitle(format!("{label}; every predicted grasp, {reps} orders")),
-    ));
-
+    let mut figures = vec![
+        (
+            "accuracy-by-trials".to_string(),
+            accuracy_by_trials(r, learner, &label),
+        ),
+        ("confusion".to_string(), confusion_matrix(r, &label)),
+    ];
     if !s.early.is_empty() {
-        let x: Vec<f64> = p
-            .early_fractions
-            .iter()
-            .take(s.early.len())
-            .copied()
-            .collect();
-        let stats: Vec<&MeanSd> = s.early.iter().collect();
         figures.push((
             "early-classification".to_string(),
-            Figure::chart(
-                "Early classification",
-                Axis::new("share of the sequence seen", ""),
-                Axis::new("accuracy on the final 20%", "").including(0.0, 1.0),
-                vec![with_band(learner, x, &stats)],
-            )
-            .subtitle(label.clone()),
+            early_classification(r, learner, &label),
         ));
     }
-
     if !s.lengthscales.is_empty() && !r.feature_names.is_empty() {
-        // Relevance = 1 / lengthscale: a short lengthscale means the class model's output
-        // changes quickly with that feature.
-        let values: Vec<Vec<f64>> = s
-            .lengthscales
-            .iter()
-            .map(|row| {
-                row.iter()
-                    .map(|&l| if l > 0.0 { (1.0 / l).log10() } else { f64::NAN })
-                    .collect()
-            })
-            .collect();
-        let heat = Heatmap {
-            x: AxisTitle {
-                title: "feature".into(),
-                unit: String::new(),
-            },
-            y: AxisTitle {
-                title: "class model".into(),
-                unit: String::new(),
-            },
-            columns: r.feature_names.clone(),
-            rows: r.classes.iter().take(values.len()).cloned().collect(),
-            values,
-            colors: ColorScale::viridis("relevance log10(1 / lengthscale)", ""),
-            annotate: false,
-            marked: Vec::new(),
-        };
-        figures.push((
-            "lengthscales".to_string(),
-            Figure::new(
-                "Feature relevance from the learned lengthscales",
-                FigureKind::Heatmap(heat),
-            )
-            .subtitle(format!("{label}; mean over {reps} orders")),
-        ));
+        figures.push(("lengthscales".to_string(), lengthscale_relevance(r, &label)));
     }
-
-    // Confusion cell [true, predicted] → its grasps over every repetition, the grasps
-    // predicted so most often first.
-    let class = |c: usize| r.classes.get(c).map_or("?", String::as_str);
-    let confusion_links = GraspLinks::from_observations(
-        "confusion",
-        None,
-        r.repetitions
-            .iter()
-            .flat_map(|rep| &rep.predictions)
-            .filter(|x| x.truth < n && x.predicted < n)
-            .map(|x| ([x.truth, x.predicted], x.grasp)),
-        |[t, p], grasps, predictions| {
-            format!(
-                "true {}, predicted {}: {predictions} prediction{} of {}",
-                class(t),
-                class(p),
-                if predictions == 1 { "" } else { "s" },
-                grasps_text(grasps)
-            )
-        },
-    );
 
     let mean_train: f64 =
         r.repetitions.iter().map(|x| x.train_seconds).sum::<f64>() / reps.max(1) as f64;
@@ -193,7 +73,7 @@ pub fn recognition_report(session: &str, r: &RecognitionResult) -> AnalysisResul
         created: now_unix(),
         figures,
         details: Vec::new(),
-        links: vec![confusion_links],
+        links: vec![confusion_links(r)],
         grasp_codes: Vec::new(),
         model_size: Some(ModelSize {
             knobs: {
@@ -206,6 +86,149 @@ pub fn recognition_report(session: &str, r: &RecognitionResult) -> AnalysisResul
             reason: p.size_reason,
         }),
     }
+}
+
+/// Accuracy per set of trials, mean ± sd over the orders (Fig. 6).
+fn accuracy_by_trials(r: &RecognitionResult, learner: &str, label: &str) -> Figure {
+    let (p, s) = (&r.params, &r.summary);
+    let x: Vec<f64> = (1..=s.trial_sets.len()).map(|i| i as f64).collect();
+    let stats: Vec<&MeanSd> = s.trial_sets.iter().collect();
+    let test_from = (1.0 - p.test_fraction) * s.trial_sets.len() as f64 + 0.5;
+    Figure::chart(
+        "Accuracy as trials progress",
+        Axis::new(
+            format!("set of trials (order cut into {} parts)", p.trial_sets),
+            "",
+        ),
+        Axis::new("accuracy", "").including(0.0, 1.0),
+        vec![with_band(learner, x, &stats)],
+    )
+    .ref_line(Orientation::Vertical, test_from, "test only from here")
+    .subtitle(format!(
+        "{label}; mean ± sd over {} seeded orders",
+        r.repetitions.len()
+    ))
+}
+
+/// The share of each true class predicted as each class, over every order (Fig. 7).
+fn confusion_matrix(r: &RecognitionResult, label: &str) -> Figure {
+    let n = r.classes.len();
+    let mut confusion = vec![vec![0.0; n]; n];
+    for (t, row) in r.summary.confusion.iter().enumerate() {
+        let total: usize = row.iter().sum();
+        for (c, &k) in row.iter().enumerate() {
+            if t < n && c < n {
+                confusion[t][c] = if total > 0 {
+                    k as f64 / total as f64
+                } else {
+                    f64::NAN
+                };
+            }
+        }
+    }
+    let mut heat = Heatmap {
+        x: AxisTitle {
+            title: "predicted class".into(),
+            unit: String::new(),
+        },
+        y: AxisTitle {
+            title: "true class".into(),
+            unit: String::new(),
+        },
+        columns: r.classes.clone(),
+        rows: r.classes.clone(),
+        values: confusion,
+        colors: ColorScale::viridis("share of the true class", ""),
+        annotate: true,
+        marked: Vec::new(),
+    };
+    heat.colors.limits = Some([0.0, 1.0]);
+    Figure::new("Confusion matrix", FigureKind::Heatmap(heat)).subtitle(format!(
+        "{label}; every predicted grasp, {} orders",
+        r.repetitions.len()
+    ))
+}
+
+/// Accuracy on the final 20% against the share of each sequence seen (Fig. 9).
+fn early_classification(r: &RecognitionResult, learner: &str, label: &str) -> Figure {
+    let s = &r.summary;
+    let x: Vec<f64> = r
+        .params
+        .early_fractions
+        .iter()
+        .take(s.early.len())
+        .copied()
+        .collect();
+    let stats: Vec<&MeanSd> = s.early.iter().collect();
+    Figure::chart(
+        "Early classification",
+        Axis::new("share of the sequence seen", ""),
+        Axis::new("accuracy on the final 20%", "").including(0.0, 1.0),
+        vec![with_band(learner, x, &stats)],
+    )
+    .subtitle(label.to_string())
+}
+
+/// Each class model's relevance of each feature, from its mean learned lengthscales.
+fn lengthscale_relevance(r: &RecognitionResult, label: &str) -> Figure {
+    // Relevance = 1 / lengthscale: a short lengthscale means the class model's output
+    // changes quickly with that feature.
+    let values: Vec<Vec<f64>> = r
+        .summary
+        .lengthscales
+        .iter()
+        .map(|row| {
+            row.iter()
+                .map(|&l| if l > 0.0 { (1.0 / l).log10() } else { f64::NAN })
+                .collect()
+        })
+        .collect();
+    let heat = Heatmap {
+        x: AxisTitle {
+            title: "feature".into(),
+            unit: String::new(),
+        },
+        y: AxisTitle {
+            title: "class model".into(),
+            unit: String::new(),
+        },
+        columns: r.feature_names.clone(),
+        rows: r.classes.iter().take(values.len()).cloned().collect(),
+        values,
+        colors: ColorScale::viridis("relevance log10(1 / lengthscale)", ""),
+        annotate: false,
+        marked: Vec::new(),
+    };
+    Figure::new(
+        "Feature relevance from the learned lengthscales",
+        FigureKind::Heatmap(heat),
+    )
+    .subtitle(format!("{label}; mean over {} orders", r.repetitions.len()))
+}
+
+/// Confusion cell [true, predicted] → its grasps over every repetition, the grasps
+/// predicted so most often first.
+fn confusion_links(r: &RecognitionResult) -> GraspLinks {
+    let n = r.classes.len();
+    let class = |c: usize| r.classes.get(c).map_or("?", String::as_str);
+    GraspLinks::from_observations(
+        "confusion",
+        None,
+        r.repetitions
+            .iter()
+            .flat_map(|rep| &rep.predictions)
+            .filter(|x| x.truth < n && x.predicted < n)
+            .map(|x| ([x.truth, x.predicted], x.grasp)),
+        |[t, p], grasps, predictions| {
+            format!(
+                "true {}, predicted {}: {predictions} prediction{} of {}",
+                class(t),
+                class(p),
+                if predictions == 1 { "" } else { "s" },
+                grasps_text(grasps)
+            )
+        },
+    )
 }
 
 /// Fig. 6 across models: the accuracy-as-trials-progress curve of every recognition result

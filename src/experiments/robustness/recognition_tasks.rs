@@ -36,50 +36,13 @@ pub(super) fn recognition_task(
 ) -> Result<Vec<f64>, ExperimentError> {
     let rc = &params.recognition;
     let scope = pert.map(|(p, _)| p.scope());
-    let sequences = params
-        .methods
-        .iter()
-        .any(|m| m.input() != catalogue::Input::TableOne);
-    let feats = match perturbed {
-        Some(ps) if sequences => {
-            let f = feature_sequences(
-                ps,
-                &SequenceParams {
-                    features: rc.features,
-                    taxel_noise_variance: 0.0,
-                    seed: params.seed,
-                },
-            )?;
-            Some(if scope == Some(Scope::All) {
-                f
-            } else {
-                renormalise(&f, &prep.clean)
-            })
-        }
-        _ => None,
-    };
+    let feats = perturbed_sequences(params, prep, scope, perturbed)?;
     let train_seqs = match (&feats, scope) {
         (Some(f), Some(Scope::All)) => f,
         _ => &prep.clean,
     };
     let test_seqs = feats.as_ref().unwrap_or(&prep.clean);
-    // Table I features: (training rows, test rows), z-scored as the clean session unless
-    // the perturbation is there all along.
-    let table = match (&prep.table, perturbed) {
-        (Some((clean, norm)), Some(ps)) => {
-            let raw = session_features(ps)?;
-            if scope == Some(Scope::All) {
-                let own = Normaliser::fit(Normalisation::ZScore, raw.view())
-                    .and_then(|n| n.transform(raw.view()))?;
-                Some((own.clone(), own))
-            } else {
-                let t = norm.transform(raw.view())?;
-                Some((clean.clone(), t))
-            }
-        }
-        (Some((clean, _)), None) => Some((clean.clone(), clean.clone())),
-        _ => None,
-    };
+    let table = table_features(prep, scope, perturbed)?;
     // The same order as `run_recognition`'s repetition `rep` (without noise).
     let mut rng = Rng::stream(params.seed, rep as u64);
     let (teach, order) = protocol_order(&prep.labels, prep.n_classes, &mut rng);
@@ -126,52 +89,13 @@ pub(super) fn recognition_task(
                 )?
             }
             MethodId::Du | MethodId::Gu => {
-                let threshold = if method == MethodId::Du {
-                    rc.du_threshold
-                } else {
-                    rc.gu_threshold
-                };
-                let cp = ClusteringParams {
-                    learner: if method == MethodId::Du {
-                        UnsupervisedLearner::Du
-                    } else {
-                        UnsupervisedLearner::Gu
-                    },
-                    features: rc.features,
-                    thresholds: vec![threshold],
-                    reps: 1,
-                    seed: params.seed,
-                    label_set: rc.label_set.clone(),
-                    ds: rc.ds.clone(),
-                    gs: rc.gs.clone(),
-                    gu_aggregate: rc.gu_aggregate,
-                    gu_min_grasps: rc.gu_min_grasps,
-                    baseline_max_k: 0,
-                    // The rest as the clustering experiment's defaults.
-                    ..ClusteringParams::default()
-                };
-                one_run(&cp, &sub_seqs, &sub_labels, test_seqs.dim(), threshold, rep)?.nmi
+                unsupervised_nmi(method, params, &sub_seqs, &sub_labels, test_seqs.dim(), rep)?
             }
             MethodId::KMeans | MethodId::Som => {
                 let Some((_, test)) = &table else {
                     return Err(ExperimentError::Data("no Table I features".into()));
                 };
-                let data = gather(test.view(), &subset);
-                let pred = if method == MethodId::KMeans {
-                    SequentialKMeansParams {
-                        k,
-                        passes: 1,
-                        seed: cluster_seed,
-                    }
-                    .fit(data.view())
-                    .and_then(|m| m.assign(data.view()))
-                } else {
-                    som_setup(k, cluster_seed)
-                        .fit(data.view())
-                        .and_then(|m| m.assign(data.view()))
-                }
-                .map_err(cluster_err)?;
-                scores(&sub_labels, &pred).nmi
+                baseline_nmi(method, k, cluster_seed, test, &subset, &sub_labels)?
             }
             MethodId::RbfSvm => {
                 let Some((train_x, test_x)) = &table else {
@@ -189,6 +113,131 @@ pub(super) fn recognition_task(
         out.push(score);
     }
     Ok(out)
+}
+
+/// The perturbed session's feature sequences when a sequence method needs them: normalised
+/// on themselves when the perturbation is there all along, else in the clean session's
+/// normalisation. None without a perturbed session or a sequence method.
+fn perturbed_sequences(
+    params: &RobustnessParams,
+    prep: &RecognitionPrep,
+    scope: Option<Scope>,
+    perturbed: Option<&Session>,
+) -> Result<Option<FeatureSequences>, ExperimentError> {
+    let sequences = params
+        .methods
+        .iter()
+        .any(|m| m.input() != catalogue::Input::TableOne);
+    Ok(match perturbed {
+        Some(ps) if sequences => {
+            let f = feature_sequences(
+                ps,
+                &SequenceParams {
+                    features: params.recognition.features,
+                    taxel_noise_variance: 0.0,
+                    seed: params.seed,
+                },
+            )?;
+            Some(if scope == Some(Scope::All) {
+                f
+            } else {
+                renormalise(&f, &prep.clean)
+            })
+        }
+        _ => None,
+    })
+}
+
+/// Table I features of the training and of the test grasps (every grasp in each).
+type TrainTest = (Array2<f64>, Array2<f64>);
+
+/// Table I features: (training rows, test rows), z-scored as the clean session unless
+/// the perturbation is there all along.
+fn table_features(
+    prep: &RecognitionPrep,
+    scope: Option<Scope>,
+    perturbed: Option<&Session>,
+) -> Result<Option<TrainTest>, ExperimentError> {
+    Ok(match (&prep.table, perturbed) {
+        (Some((clean, norm)), Some(ps)) => {
+            let raw = session_features(ps)?;
+            if scope == Some(Scope::All) {
+                let own = Normaliser::fit(Normalisation::ZScore, raw.view())
+                    .and_then(|n| n.transform(raw.view()))?;
+                Some((own.clone(), own))
+            } else {
+                let t = norm.transform(raw.view())?;
+                Some((clean.clone(), t))
+            }
+        }
+        (Some((clean, _)), None) => Some((clean.clone(), clean.clone())),
+        _ => None,
+    })
+}
+
+/// DU's or GU's NMI on the kept grasps, one run at the setup's threshold in repetition
+/// `rep`'s order.
+fn unsupervised_nmi(
+    method: MethodId,
+    params: &RobustnessParams,
+    sub_seqs: &[Array2<f64>],
+    sub_labels: &[usize],
+    dim: usize,
+    rep: usize,
+) -> Result<f64, ExperimentError> {
+    let rc = &params.recognition;
+    let threshold = if method == MethodId::Du {
+        rc.du_threshold
+    } else {
+        rc.gu_threshold
+    };
+    let cp = ClusteringParams {
+        learner: if method == MethodId::Du {
+            UnsupervisedLearner::Du
+        } else {
+            UnsupervisedLearner::Gu
+        },
+        features: rc.features,
+        thresholds: vec![threshold],
+        reps: 1,
+        seed: params.seed,
+        label_set: rc.label_set.clone(),
+        ds: rc.ds.clone(),
+        gs: rc.gs.clone(),
+        gu_aggregate: rc.gu_aggregate,
+        gu_min_grasps: rc.gu_min_grasps,
+        baseline_max_k: 0,
+        // The rest as the clustering experiment's defaults.
+        ..ClusteringParams::default()
+    };
+    Ok(one_run(&cp, sub_seqs, sub_labels, dim, threshold, rep)?.nmi)
+}
+
+/// Sequential k-means' or the SOM's NMI on the Table I test rows of the kept grasps.
+fn baseline_nmi(
+    method: MethodId,
+    k: usize,
+    cluster_seed: u64,
+    test: &Array2<f64>,
+    subset: &[usize],
+    sub_labels: &[usize],
+) -> Result<f64, ExperimentError> {
+    let data = gather(test.view(), subset);
+    let pred = if method == MethodId::KMeans {
+        SequentialKMeansParams {
+            k,
+            passes: 1,
+            seed: cluster_seed,
+        }
+        .fit(data.view())
+        .and_then(|m| m.assign(data.view()))
+    } else {
+        som_setup(k, cluster_seed)
+            .fit(data.view())
+            .and_then(|m| m.assign(data.view()))
+    }
+    .map_err(cluster_err)?;
+    Ok(scores(sub_labels, &pred).nmi)
 }
 
 /// DS or GS through the supervised protocol: teach one grasp per class, then predict and

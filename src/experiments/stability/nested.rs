@@ -105,13 +105,60 @@ pub fn nested_cv_on(
         )));
     }
     let start = Instant::now();
-    let splits: Vec<(Vec<usize>, Vec<usize>, Folds)> = (0..outer.count)
+    let splits: Vec<OuterSplit> = (0..outer.count)
         .map(|f| {
             let train = outer.train_indices(f);
             let inner = inner_folds(data, &train, protocol, settings.cv_seed)?;
             Ok((train, outer.test_indices(f), inner))
         })
         .collect::<Result<_, StabilityError>>()?;
+    let cells = nested_cells(data, spec, settings, protocol, &splits, progress)?;
+    let raw = cross_validate(data.images().view(), &data.labels, outer, &settings.svm)?;
+    let mut pooled = Confusion::default();
+    let mut folds = Vec::with_capacity(splits.len());
+    for (f, split) in splits.iter().enumerate() {
+        let fold = outer_fold(data, spec, &cells, &raw, f, split);
+        pooled.add(&fold.confusion);
+        folds.push(fold);
+    }
+    let per_fold: Vec<f64> = folds
+        .iter()
+        .filter_map(|f| f.weighted_success_rate)
+        .collect();
+    let (fold_wsr_mean, fold_wsr_se) = crate::svm::mean_se(&per_fold);
+    Ok(NestedResult {
+        protocol,
+        description: format!(
+            "nested: outer {}, grid and one-SE rule on inner {} of each outer training fold",
+            protocol.describe(),
+            protocol.describe()
+        ),
+        folds,
+        weighted_success_rate: pooled.weighted_success_rate().unwrap_or(f64::NAN),
+        failure_recall: pooled.failure_recall().unwrap_or(f64::NAN),
+        fold_wsr_mean,
+        fold_wsr_se,
+        raw_weighted_success_rate: raw.weighted_success_rate,
+        raw_failure_recall: raw.failure_recall,
+        secs: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// One outer fold: its training grasps, its test grasps and the inner folds over the
+/// training grasps.
+type OuterSplit = (Vec<usize>, Vec<usize>, Folds);
+
+/// Every grid cell on every outer fold, as `cells[cell][outer fold]` (cells in the grid's
+/// order: num_bases, then beta, then gamma), one dictionary per (num_bases, beta) in
+/// parallel.
+fn nested_cells(
+    data: &StabilityData,
+    spec: &GridSpec,
+    settings: &PipelineSettings,
+    protocol: CvScheme,
+    splits: &[OuterSplit],
+    progress: &Progress,
+) -> Result<Vec<Vec<NestedCell>>, StabilityError> {
     let tasks: Vec<(usize, f64)> = spec
         .num_bases
         .iter()
@@ -144,22 +191,7 @@ pub fn nested_cv_on(
                     beta,
                     gamma,
                 };
-                let mut per_fold = Vec::with_capacity(splits.len());
-                for (train, test, inner) in &splits {
-                    let xt = crate::svm::gather(features.view(), train);
-                    let yt: Vec<bool> = train.iter().map(|&g| data.labels[g]).collect();
-                    let cv = cross_validate(xt.view(), &yt, inner, &settings.svm)?;
-                    let model = settings.svm.fit(xt.view(), &yt)?;
-                    per_fold.push(NestedCell {
-                        config,
-                        inner: cv,
-                        test_predictions: test
-                            .iter()
-                            .map(|&g| model.predict(features.row(g)))
-                            .collect(),
-                    });
-                }
-                per_gamma.push(per_fold);
+                per_gamma.push(cell_on_splits(data, &features, config, settings, splits)?);
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 progress.set(
                     n as f64 / total as f64,
@@ -169,78 +201,90 @@ pub fn nested_cv_on(
             Ok(per_gamma)
         })
         .collect::<Result<_, StabilityError>>()?;
-    let cells: Vec<Vec<NestedCell>> = cells.into_iter().flatten().collect();
-    let raw = cross_validate(data.images().view(), &data.labels, outer, &settings.svm)?;
-    let mut pooled = Confusion::default();
-    let mut folds = Vec::with_capacity(splits.len());
-    for (f, (train, test, _)) in splits.iter().enumerate() {
-        let inner: Vec<CellResult> = cells
-            .iter()
-            .map(|c| {
-                let cv = &c[f].inner;
-                CellResult {
-                    config: c[f].config,
-                    weighted_success_rate: cv.weighted_success_rate,
-                    failure_recall: cv.failure_recall,
-                    fold_wsr_mean: cv.fold_wsr_mean,
-                    fold_wsr_se: cv.fold_wsr_se,
-                    sparsity: 0.0,
-                    active_bases_per_patch: 0.0,
-                    dictionary_objective: 0.0,
-                    dictionary_iterations: 0,
-                    dictionary_secs: 0.0,
-                    coding_secs: 0.0,
-                    cv_secs: 0.0,
-                }
-            })
-            .collect();
-        let (_, best, chosen) = choose(&inner, &spec.num_bases);
-        let cell = cells
-            .iter()
-            .map(|c| &c[f])
-            .find(|c| c.config == chosen.config)
-            .expect("the choice is a cell");
-        let truth: Vec<bool> = test.iter().map(|&g| data.labels[g]).collect();
-        let confusion = Confusion::from_predictions(&truth, &cell.test_predictions);
-        pooled.add(&confusion);
-        let raw_fold = raw
-            .folds
-            .iter()
-            .find(|r| r.fold == f)
-            .expect("one score per outer fold");
-        folds.push(NestedFold {
-            fold: f,
-            train: train.len(),
-            test: test.len(),
-            chosen: chosen.config,
-            chosen_inner_wsr: chosen.weighted_success_rate,
-            best: best.config,
-            best_inner_wsr: best.weighted_success_rate,
-            weighted_success_rate: confusion.weighted_success_rate(),
-            confusion,
-            raw_confusion: raw_fold.confusion,
-            raw_weighted_success_rate: raw_fold.weighted_success_rate,
+    Ok(cells.into_iter().flatten().collect())
+}
+
+/// One cell on every outer fold: its inner cross validation on the outer training grasps,
+/// and the SVM trained on them predicting the outer test grasps.
+fn cell_on_splits(
+    data: &StabilityData,
+    features: &Array2<f64>,
+    config: Config,
+    settings: &PipelineSettings,
+    splits: &[OuterSplit],
+) -> Result<Vec<NestedCell>, StabilityError> {
+    let mut per_fold = Vec::with_capacity(splits.len());
+    for (train, test, inner) in splits {
+        let xt = crate::svm::gather(features.view(), train);
+        let yt: Vec<bool> = train.iter().map(|&g| data.labels[g]).collect();
+        let cv = cross_validate(xt.view(), &yt, inner, &settings.svm)?;
+        let model = settings.svm.fit(xt.view(), &yt)?;
+        per_fold.push(NestedCell {
+            config,
+            inner: cv,
+            test_predictions: test
+                .iter()
+                .map(|&g| model.predict(features.row(g)))
+                .collect(),
         });
     }
-    let per_fold: Vec<f64> = folds
+    Ok(per_fold)
+}
+
+/// Outer fold `f`: the one-standard-error rule's choice from the inner scores, scored on
+/// the outer test grasps beside the raw SVM's score on the same fold.
+fn outer_fold(
+    data: &StabilityData,
+    spec: &GridSpec,
+    cells: &[Vec<NestedCell>],
+    raw: &CvResult,
+    f: usize,
+    (train, test, _): &OuterSplit,
+) -> NestedFold {
+    let inner: Vec<CellResult> = cells
         .iter()
-        .filter_map(|f| f.weighted_success_rate)
+        .map(|c| {
+            let cv = &c[f].inner;
+            CellResult {
+                config: c[f].config,
+                weighted_success_rate: cv.weighted_success_rate,
+                failure_recall: cv.failure_recall,
+                fold_wsr_mean: cv.fold_wsr_mean,
+                fold_wsr_se: cv.fold_wsr_se,
+                sparsity: 0.0,
+                active_bases_per_patch: 0.0,
+                dictionary_objective: 0.0,
+                dictionary_iterations: 0,
+                dictionary_secs: 0.0,
+                coding_secs: 0.0,
+                cv_secs: 0.0,
+            }
+        })
         .collect();
-    let (fold_wsr_mean, fold_wsr_se) = crate::svm::mean_se(&per_fold);
-    Ok(NestedResult {
-        protocol,
-        description: format!(
-            "nested: outer {}, grid and one-SE rule on inner {} of each outer training fold",
-            protocol.describe(),
-            protocol.describe()
-        ),
-        folds,
-        weighted_success_rate: pooled.weighted_success_rate().unwrap_or(f64::NAN),
-        failure_recall: pooled.failure_recall().unwrap_or(f64::NAN),
-        fold_wsr_mean,
-        fold_wsr_se,
-        raw_weighted_success_rate: raw.weighted_success_rate,
-        raw_failure_recall: raw.failure_recall,
-        secs: start.elapsed().as_secs_f64(),
-    })
+    let (_, best, chosen) = choose(&inner, &spec.num_bases);
+    let cell = cells
+        .iter()
+        .map(|c| &c[f])
+        .find(|c| c.config == chosen.config)
+        .expect("the choice is a cell");
+    let truth: Vec<bool> = test.iter().map(|&g| data.labels[g]).collect();
+    let confusion = Confusion::from_predictions(&truth, &cell.test_predictions);
+    let raw_fold = raw
+        .folds
+        .iter()
+        .find(|r| r.fold == f)
+        .expect("one score per outer fold");
+    NestedFold {
+        fold: f,
+        train: train.len(),
+        test: test.len(),
+        chosen: chosen.config,
+        chosen_inner_wsr: chosen.weighted_success_rate,
+        best: best.config,
+        best_inner_wsr: best.weighted_success_rate,
+        weighted_success_rate: confusion.weighted_success_rate(),
+        confusion,
+        raw_confusion: raw_fold.confusion,
+        raw_weighted_success_rate: raw_fold.weighted_success_rate,
+    }
 }
