@@ -10,6 +10,12 @@ pub mod som;
 
 use ndarray::{ArrayView1, ArrayView2};
 
+/// The baselines as their series and scores name them (a learner's result is compared
+/// with them, and shows their numbers apart from its own).
+pub const KMEANS_NAME: &str = "sequential k-means";
+pub const SOM_NAME: &str = "SOM";
+pub const BASELINE_NAMES: [&str; 2] = [KMEANS_NAME, SOM_NAME];
+
 pub use kmeans::{SequentialKMeans, SequentialKMeansParams};
 pub use scores::{
     ClusterScores, adjusted_rand_index, mutual_info, normalized_mutual_info, purity, scores,

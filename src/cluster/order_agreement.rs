@@ -16,6 +16,9 @@
 //!
 //! Only the clusterings enter: no labels, no scores against labels.
 
+/// The score that names the threshold chosen without labels in a clustering result.
+pub const CHOSEN_THRESHOLD: &str = "threshold chosen without labels";
+
 use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};

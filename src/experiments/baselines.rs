@@ -3,6 +3,7 @@
 //! second paper's Fig. 13), the scores at k clusters (Table IV) and the SVM's C × γ map.
 
 use crate::catalogue::MethodId;
+use crate::cluster::{KMEANS_NAME, SOM_NAME};
 use std::collections::BTreeMap;
 
 use super::result::{AnalysisKind, AnalysisResult, distinct_sorted, now_unix};
@@ -43,10 +44,7 @@ pub fn baselines_report(session: &str, r: &BaselinesResult, train_seconds: f64) 
                 "NMI against effective clusters",
                 Axis::new("effective clusters", ""),
                 Axis::new("normalised mutual information", ""),
-                vec![
-                    nmi_series("sequential k-means", &km),
-                    nmi_series("SOM", &som),
-                ],
+                vec![nmi_series(KMEANS_NAME, &km), nmi_series(SOM_NAME, &som)],
             )
             .subtitle(format!(
                 "Table I features, {} orders each; band: ± 1 sd",
@@ -71,7 +69,7 @@ pub fn baselines_report(session: &str, r: &BaselinesResult, train_seconds: f64) 
             },
             Axis::new("value", "").including(0.0, 1.0),
             vec!["purity".into(), "ARI".into(), "NMI".into()],
-            vec![bars(&r.kmeans, "sequential k-means"), bars(&r.som, "SOM")],
+            vec![bars(&r.kmeans, KMEANS_NAME), bars(&r.som, SOM_NAME)],
         )
         .subtitle(format!("mean ± sd over {} seeded orders", r.params.orders)),
     ));

@@ -181,7 +181,8 @@ fn figure_pane(
         // A chart always carries its marker, first at the threshold chosen without labels
         // when the result has one; a slider moves it too.
         let chosen = || {
-            let t = cx.analyses.results[i].score("threshold chosen without labels")?;
+            let t =
+                cx.analyses.results[i].score(crate::cluster::order_agreement::CHOSEN_THRESHOLD)?;
             details.nearest(t)
         };
         let mut k = sel
@@ -616,10 +617,6 @@ pub fn selection_line(ui: &mut egui::Ui, cx: &mut Cx) {
     });
 }
 
-/// What a learner's result is compared against: the card of a learner's result (DU, GU)
-/// does not show these methods' numbers as its own.
-const COMPARED_WITH: [&str; 2] = ["sequential k-means", "SOM"];
-
 /// At most six numbers that sum a result up: its headline first, then its first scores
 /// (a learner's own, not those of the methods it is compared with), then the training time.
 pub fn headline(r: &AnalysisResult) -> Vec<(String, f64)> {
@@ -627,8 +624,18 @@ pub fn headline(r: &AnalysisResult) -> Vec<(String, f64)> {
     if let Some((n, v)) = &r.headline {
         out.push((n.clone(), *v));
     }
-    let learner = r.parameters.contains_key("learner");
-    let own = |n: &str| !learner || !COMPARED_WITH.iter().any(|m| n.starts_with(m));
+    // The card of a learner's clustering result (DU, GU) does not show the numbers of the
+    // baselines it is compared with as its own.
+    let learner = r
+        .methods
+        .iter()
+        .any(|m| m.task() == crate::catalogue::Task::Clustering && m.uses_features());
+    let own = |n: &str| {
+        !learner
+            || !crate::cluster::BASELINE_NAMES
+                .iter()
+                .any(|m| n.starts_with(m))
+    };
     for (n, v) in &r.scores {
         if out.len() >= 5 {
             break;
@@ -642,4 +649,30 @@ pub fn headline(r: &AnalysisResult) -> Vec<(String, f64)> {
         out.push(("training time (s)".into(), r.train_seconds));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::catalogue::MethodId;
+
+    #[test]
+    fn a_learners_card_shows_its_own_numbers_not_its_baselines() {
+        let mut du = crate::experiments::result::tests::result();
+        du.methods = vec![MethodId::Du];
+        du.headline = None;
+        du.scores = vec![
+            ("sequential k-means purity at 10".into(), 0.7),
+            ("SOM purity at 10".into(), 0.8),
+            ("DU purity at 10".into(), 0.9),
+        ];
+        let names = |r: &AnalysisResult| -> Vec<String> {
+            headline(r).into_iter().map(|(n, _)| n).collect()
+        };
+        assert_eq!(names(&du), ["DU purity at 10", "training time (s)"]);
+        // The baselines' own result shows them.
+        let mut baselines = du.clone();
+        baselines.methods = vec![MethodId::KMeans, MethodId::Som];
+        assert_eq!(names(&baselines).len(), 4);
+    }
 }

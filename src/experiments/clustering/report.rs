@@ -4,6 +4,8 @@
 //! at 10 effective clusters (Table IV).
 
 use super::{ClusteringResult, ClusteringRun, EffectivePoint, UnsupervisedLearner};
+use crate::cluster::order_agreement::CHOSEN_THRESHOLD;
+use crate::cluster::{KMEANS_NAME, SOM_NAME};
 use crate::experiments::links::{GraspLinks, grasps_text};
 use crate::experiments::result::{
     AnalysisKind, AnalysisResult, FigureDetails, MeanSd, common_parameters, features_text,
@@ -57,7 +59,7 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
     let mean_step_us = r.runs.iter().map(|x| x.learn_step_us).sum::<f64>() / runs;
     scores.push(("learning step (µs)".into(), mean_step_us));
     if let (Some(c), Some(at)) = (&r.threshold_choice, r.at_choice()) {
-        scores.push(("threshold chosen without labels".into(), c.threshold));
+        scores.push((CHOSEN_THRESHOLD.into(), c.threshold));
         scores.push((
             "effective clusters at the label-free threshold".into(),
             at.effective.mean,
@@ -190,10 +192,10 @@ fn clusters_vs_threshold(r: &ClusteringResult, th: &[f64], label: &str) -> Figur
 fn nmi_vs_effective(r: &ClusteringResult, learner: &str, label: &str) -> Figure {
     let mut nmi = vec![effective_series(learner, &r.by_effective)];
     if !r.kmeans.is_empty() {
-        nmi.push(effective_series("sequential k-means", &r.kmeans));
+        nmi.push(effective_series(KMEANS_NAME, &r.kmeans));
     }
     if !r.som.is_empty() {
-        nmi.push(effective_series("SOM", &r.som));
+        nmi.push(effective_series(SOM_NAME, &r.som));
     }
     Figure::chart(
         "NMI against effective clusters",
@@ -213,8 +215,8 @@ fn scores_at_10(r: &ClusteringResult, learner: &str) -> (Option<Figure>, Vec<(St
     let mut groups = Vec::new();
     for (name, point) in [
         (learner, &r.at_10),
-        ("sequential k-means", &r.kmeans_at_10),
-        ("SOM", &r.som_at_10),
+        (KMEANS_NAME, &r.kmeans_at_10),
+        (SOM_NAME, &r.som_at_10),
     ] {
         if let Some(pt) = point {
             groups.push(

@@ -88,7 +88,7 @@ impl FrontierParams {
     pub fn label(&self) -> String {
         match self.method {
             m if m.uses_features() => format!("{}, {} features", m.title(), self.features.name()),
-            MethodId::KMeans => "sequential k-means".into(),
+            MethodId::KMeans => crate::cluster::KMEANS_NAME.into(),
             m => m.title().to_string(),
         }
     }
