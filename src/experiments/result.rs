@@ -409,7 +409,8 @@ pub fn speed_accuracy(results: &[AnalysisResult], axis: TimeAxis) -> Option<Spee
                     front.iter().map(|&i| x[i]).collect(),
                     front.iter().map(|&i| y[i]).collect(),
                 )
-                .color(color),
+                .color(color)
+                .part_of(name.clone()),
             );
             sources.push(Vec::new());
         }

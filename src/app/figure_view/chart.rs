@@ -6,7 +6,13 @@ use super::*;
 /// The hover text of a chart point: series, point label, both values with units.
 fn point_tooltip(chart: &figures::Chart, name: &str, at: PlotPoint) -> Option<String> {
     let (xs, ys) = (chart.x.scale, chart.y.scale);
-    let s = chart.series.iter().find(|s| s.name == name)?;
+    // The series drawn under this legend name that has this point (a front's points are
+    // its owner's too, and the owner has their labels).
+    let s = chart
+        .series
+        .iter()
+        .filter(|s| s.legend_name() == name)
+        .min_by_key(|s| s.part_of.is_some())?;
     let k = s.x.iter().zip(&s.y).position(|(&x, &y)| {
         coord(xs, x).is_some_and(|c| (c - at.x).abs() < 1e-9)
             && coord(ys, y).is_some_and(|c| (c - at.y).abs() < 1e-9)
@@ -141,6 +147,7 @@ fn plot_series(
 ) {
     let (xs, ys) = (chart.x.scale, chart.y.scale);
     let color = rgb(s.color.unwrap_or_else(|| series_color(i)));
+    let name = s.legend_name().to_string();
     let pts: Vec<[f64; 2]> =
         s.x.iter()
             .zip(&s.y)
@@ -159,14 +166,14 @@ fn plot_series(
                 let lo: Vec<f64> = rows.iter().map(|r| r.1).collect();
                 let hi: Vec<f64> = rows.iter().map(|r| r.2).collect();
                 p.add(
-                    FilledArea::new(s.name.clone(), &x, &lo, &hi)
+                    FilledArea::new(name.clone(), &x, &lo, &hi)
                         .fill_color(color.gamma_multiply(0.25)),
                 );
             }
             ErrorDisplay::Bars => {
                 for (x, lo, hi) in rows {
                     p.line(
-                        Line::new(s.name.clone(), PlotPoints::new(vec![[x, lo], [x, hi]]))
+                        Line::new(name.clone(), PlotPoints::new(vec![[x, lo], [x, hi]]))
                             .color(color)
                             .width(1.0),
                     );
@@ -176,7 +183,7 @@ fn plot_series(
     }
     if matches!(s.style, SeriesStyle::Line | SeriesStyle::LineMarkers) {
         p.line(
-            Line::new(s.name.clone(), PlotPoints::new(pts.clone()))
+            Line::new(name.clone(), PlotPoints::new(pts.clone()))
                 .color(color)
                 .width(2.0),
         );
@@ -188,7 +195,7 @@ fn plot_series(
         3.5
     };
     p.points(
-        Points::new(s.name.clone(), PlotPoints::new(pts))
+        Points::new(name.clone(), PlotPoints::new(pts))
             .color(color)
             .shape(MarkerShape::Circle)
             .filled(true)

@@ -145,7 +145,8 @@ fn frontier_chart(frontiers: &[Frontier], axis: CostAxis) -> Figure {
                 front.iter().map(|&k| x_of(k)).collect(),
                 front.iter().map(|&k| y_of(k)).collect(),
             )
-            .color(color),
+            .color(color)
+            .part_of(name.clone()),
         );
         let rec = f.recommended;
         marked[0].0.push(x_of(rec));

@@ -44,6 +44,10 @@ pub struct Series {
     /// Colour; by default the next colour of a colour-blind-safe palette.
     #[serde(default)]
     pub color: Option<Rgb>,
+    /// The series this one is drawn for (a Pareto front through some of its points): no
+    /// legend entry of its own, its line joins that series' entry.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub part_of: Option<String>,
 }
 
 impl Series {
@@ -56,6 +60,7 @@ impl Series {
             error: None,
             point_labels: Vec::new(),
             color: None,
+            part_of: None,
         }
     }
 
@@ -92,6 +97,17 @@ impl Series {
     pub fn color(mut self, color: Rgb) -> Self {
         self.color = Some(color);
         self
+    }
+
+    /// Drawn for the series named `owner`: see [`Series::part_of`].
+    pub fn part_of(mut self, owner: impl Into<String>) -> Self {
+        self.part_of = Some(owner.into());
+        self
+    }
+
+    /// The legend entry this series is drawn under.
+    pub fn legend_name(&self) -> &str {
+        self.part_of.as_deref().unwrap_or(&self.name)
     }
 }
 
@@ -169,6 +185,17 @@ impl Chart {
             {
                 return Err(format!(
                     "series {:?}: error bounds need one value per point",
+                    s.name
+                ));
+            }
+            if let Some(owner) = &s.part_of
+                && !c
+                    .series
+                    .iter()
+                    .any(|o| &o.name == owner && o.part_of.is_none())
+            {
+                return Err(format!(
+                    "series {:?} is drawn for a series {owner:?} the chart does not have",
                     s.name
                 ));
             }

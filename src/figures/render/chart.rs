@@ -20,9 +20,10 @@ pub(super) fn draw_chart<DB: DrawingBackend>(
 ) -> Result<(), FigureError> {
     let [(xlo, xhi), (ylo, yhi)] = chart_limits(chart)?;
     let entries = legend_entries(chart);
-    let colors: Vec<Rgb> = entries.iter().map(|e| e.color).collect();
-    let show_legend =
-        chart.series.len() > 1 || entries.iter().any(|e| e.name != chart.series[0].name);
+    let colors: Vec<Rgb> = (chart.series.iter().enumerate())
+        .map(|(i, s)| s.color.unwrap_or(series_color(i)))
+        .collect();
+    let show_legend = entries.len() > 1 || entries.iter().any(|e| e.name != chart.series[0].name);
     let tick_label_h = c.px(TICK_EM * 1.2);
     let layout = |body: Rect| {
         frame(
@@ -100,19 +101,27 @@ fn chart_limits(chart: &Chart) -> Result<[(f64, f64); 2], FigureError> {
 }
 
 /// One entry per series, its swatch in the series' colour: the line, the marker and the
-/// band (a series' range is part of its entry, not an entry of its own).
+/// band (a series' range is part of its entry, not an entry of its own; so is a line drawn
+/// for it, such as its Pareto front).
 fn legend_entries(chart: &Chart) -> Vec<LegendEntry> {
     let ok = |x: f64, y: f64| chart.x.scale.can_draw(x) && chart.y.scale.can_draw(y);
+    let drawn_for = |s: &Series| {
+        chart
+            .series
+            .iter()
+            .any(|o| o.part_of.as_ref() == Some(&s.name) && o.style != SeriesStyle::Markers)
+    };
     chart
         .series
         .iter()
         .enumerate()
+        .filter(|(_, s)| s.part_of.is_none())
         .map(|(i, s)| {
             let missing = (0..s.x.len()).filter(|&k| !ok(s.x[k], s.y[k])).count();
             LegendEntry {
                 name: missing_note(&s.name, missing),
                 color: s.color.unwrap_or(series_color(i)),
-                line: s.style != SeriesStyle::Markers,
+                line: s.style != SeriesStyle::Markers || drawn_for(s),
                 marker: (s.style != SeriesStyle::Line).then(|| Marker::nth(i)),
                 band: s
                     .error
@@ -372,4 +381,29 @@ fn draw_point_labels<DB: DrawingBackend>(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_front_joins_its_series_legend_entry() {
+        let points = Series::new("accuracy", vec![1.0, 2.0, 3.0], vec![0.5, 0.9, 0.7])
+            .style(SeriesStyle::Markers);
+        let front = Series::new("accuracy: Pareto front", vec![1.0, 2.0], vec![0.5, 0.9])
+            .part_of("accuracy");
+        let other = Series::new("NMI", vec![1.0], vec![0.4]).style(SeriesStyle::Markers);
+        let chart = Chart {
+            x: crate::figures::Axis::new("training time", "s"),
+            y: crate::figures::Axis::new("score", ""),
+            series: vec![front, points, other],
+            ref_lines: Vec::new(),
+        };
+        let entries = legend_entries(&chart);
+        let names: Vec<&str> = entries.iter().map(|e| e.name.as_str()).collect();
+        assert_eq!(names, ["accuracy", "NMI"]);
+        assert!(entries[0].line && entries[0].marker.is_some());
+        assert!(!entries[1].line);
+    }
 }
