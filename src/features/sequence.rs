@@ -24,13 +24,13 @@
 use std::fmt;
 use std::str::FromStr;
 
-use ndarray::Array2;
+use ndarray::{Array2, ArrayViewMut1};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::FingerStats;
 use super::codes::FrameCodes;
 use crate::rng::Rng;
-use crate::session::Session;
+use crate::session::{Frame, Grasp, Session};
 
 /// One family of per-step inputs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -339,36 +339,83 @@ pub fn feature_sequences_in(
     let used = params.features.resolve(session);
     let families = used.families();
     let set = used.name();
-    let n_enc = session.encoders.len();
-    let has = |f: Family| families.contains(&f);
-    let tactile = families.iter().any(|f| f.uses_taxels());
-    // Raw, change and codes read every taxel, so every frame must have the layout's count.
-    let per_taxel = has(Family::Raw) || has(Family::Change) || has(Family::Codes);
-    if has(Family::Encoders) && n_enc == 0 {
-        return Err(SequenceError::Session {
-            set,
-            reason: "it has no joint encoders".into(),
-        });
-    }
-    if tactile && session.sensors.is_empty() {
-        return Err(SequenceError::Session {
-            set,
-            reason: "it has no tactile sensors".into(),
-        });
-    }
-    if has(Family::Change) && session.grasps.iter().all(|g| g.frames.len() <= 1) {
-        return Err(SequenceError::Session {
-            set,
-            reason: "every grasp has one frame, so every change since the first is 0".into(),
-        });
-    }
+    check_session(session, &families, &set)?;
     let taxel_counts: Vec<usize> = session
         .sensors
         .iter()
         .map(|s| s.layout.taxel_count())
         .collect();
+    let mut names = column_names(session, &families, &taxel_counts);
+    let codes = if families.contains(&Family::Codes) {
+        let book = codes_book(session, params, codes, &taxel_counts, &set)?;
+        for (s, width) in session.sensors.iter().zip(book.widths()) {
+            names.extend((0..width).map(|k| format!("{}/codes/{k}", s.name)));
+        }
+        Some(book)
+    } else {
+        None
+    };
+    let codes_from = names.len() - codes.as_ref().map_or(0, |c| c.widths().iter().sum());
+    let has = |f: Family| families.contains(&f);
+    let columns = Columns {
+        session,
+        tactile: families.iter().any(|f| f.uses_taxels()),
+        // Raw, change and codes read every taxel, so every frame must have the layout's count.
+        per_taxel: has(Family::Raw) || has(Family::Change) || has(Family::Codes),
+        families,
+        set,
+        taxel_counts,
+        sd: params.taxel_noise_variance.sqrt(),
+        seed: params.seed,
+        codes,
+        codes_from,
+        dim: names.len(),
+    };
+    let mut sequences = session
+        .grasps
+        .iter()
+        .enumerate()
+        .map(|(g, grasp)| columns.grasp(g, grasp))
+        .collect::<Result<Vec<_>, _>>()?;
+    let (min, max) = min_max(range, &sequences, columns.dim)?;
+    normalise(&mut sequences, &min, &max);
+    Ok(FeatureSequences {
+        names,
+        families: used,
+        sequences,
+        min,
+        max,
+        codes: columns.codes,
+    })
+}
+
+/// The session has what the families read: encoders, tactile sensors, and for `change`
+/// a grasp of more than one frame.
+fn check_session(session: &Session, families: &[Family], set: &str) -> Result<(), SequenceError> {
+    let has = |f: Family| families.contains(&f);
+    let lacks = |reason: &str| {
+        Err(SequenceError::Session {
+            set: set.to_string(),
+            reason: reason.into(),
+        })
+    };
+    if has(Family::Encoders) && session.encoders.is_empty() {
+        return lacks("it has no joint encoders");
+    }
+    if families.iter().any(|f| f.uses_taxels()) && session.sensors.is_empty() {
+        return lacks("it has no tactile sensors");
+    }
+    if has(Family::Change) && session.grasps.iter().all(|g| g.frames.len() <= 1) {
+        return lacks("every grasp has one frame, so every change since the first is 0");
+    }
+    Ok(())
+}
+
+/// The names of the columns of every family but `codes` (whose widths its dictionaries
+/// give), in column order.
+fn column_names(session: &Session, families: &[Family], taxel_counts: &[usize]) -> Vec<String> {
     let mut names = Vec::new();
-    for &f in &families {
+    for &f in families {
         match f {
             Family::Encoders => {
                 names.extend(session.encoders.iter().map(|e| format!("encoder/{e}")));
@@ -381,150 +428,220 @@ pub fn feature_sequences_in(
                 }
             }
             Family::Raw | Family::Change => {
-                for (s, &n) in session.sensors.iter().zip(&taxel_counts) {
+                for (s, &n) in session.sensors.iter().zip(taxel_counts) {
                     names.extend((0..n).map(|i| format!("{}/{}/{i}", s.name, f.name())));
                 }
             }
             Family::Codes => {}
         }
     }
-    // The codes' dictionaries: the model's, else learned on every frame of the session.
-    let codes = if has(Family::Codes) {
-        let book = match codes {
-            Some(book) => {
-                if book.widths().len() != taxel_counts.len()
-                    || book
-                        .sensors
-                        .iter()
-                        .zip(&taxel_counts)
-                        .any(|(c, &n)| c.mean.len() != n)
-                {
-                    return Err(SequenceError::Session {
-                        set,
-                        reason: "its sensors' taxels are not those of the codes' dictionaries"
-                            .into(),
-                    });
-                }
-                book.clone()
+    names
+}
+
+/// The codes' dictionaries: the model's (`given`, checked to fit the session's sensors),
+/// else learned on every frame of the session.
+fn codes_book(
+    session: &Session,
+    params: &SequenceParams,
+    given: Option<&FrameCodes>,
+    taxel_counts: &[usize],
+    set: &str,
+) -> Result<FrameCodes, SequenceError> {
+    match given {
+        Some(book) => {
+            if book.widths().len() != taxel_counts.len()
+                || book
+                    .sensors
+                    .iter()
+                    .zip(taxel_counts)
+                    .any(|(c, &n)| c.mean.len() != n)
+            {
+                return Err(SequenceError::Session {
+                    set: set.to_string(),
+                    reason: "its sensors' taxels are not those of the codes' dictionaries".into(),
+                });
             }
-            None => {
-                learn_codes(session, params, &taxel_counts).map_err(|e| SequenceError::Session {
-                    set: set.clone(),
-                    reason: format!("learning the codes' dictionaries: {e}"),
-                })?
-            }
-        };
-        for (s, width) in session.sensors.iter().zip(book.widths()) {
-            names.extend((0..width).map(|k| format!("{}/codes/{k}", s.name)));
+            Ok(book.clone())
         }
-        Some(book)
-    } else {
-        None
-    };
-    let codes_from = names.len() - codes.as_ref().map_or(0, |c| c.widths().iter().sum());
-    let dim = names.len();
-    let sd = params.taxel_noise_variance.sqrt();
-    let mut sequences = Vec::with_capacity(session.grasps.len());
-    for (g, grasp) in session.grasps.iter().enumerate() {
-        let mut rng = Rng::stream(params.seed, g as u64);
-        let mut m = Array2::zeros((grasp.frames.len(), dim));
+        None => learn_codes(session, params, taxel_counts).map_err(|e| SequenceError::Session {
+            set: set.to_string(),
+            reason: format!("learning the codes' dictionaries: {e}"),
+        }),
+    }
+}
+
+/// What the rows of every grasp hold on a session: the families in column order and what
+/// reading them needs.
+struct Columns<'s> {
+    session: &'s Session,
+    families: Vec<Family>,
+    /// The feature set's name, for errors.
+    set: String,
+    taxel_counts: Vec<usize>,
+    /// Whether a family reads the taxels.
+    tactile: bool,
+    /// Whether a family reads each taxel (raw, change, codes).
+    per_taxel: bool,
+    /// Standard deviation of the noise on each raw reading, and its seed.
+    sd: f64,
+    seed: u64,
+    codes: Option<FrameCodes>,
+    /// The first column of the codes.
+    codes_from: usize,
+    dim: usize,
+}
+
+impl Columns<'_> {
+    /// Grasp `g`'s T × D rows, not yet normalised (noise from stream `g` of the seed).
+    fn grasp(&self, g: usize, grasp: &Grasp) -> Result<Array2<f64>, SequenceError> {
+        let mut rng = Rng::stream(self.seed, g as u64);
+        let mut m = Array2::zeros((grasp.frames.len(), self.dim));
         // Pressures of the grasp's first frame (with its noise), for `change`.
         let mut first: Vec<Vec<f64>> = Vec::new();
         // Every frame's pressures per sensor, for `codes` (coded once per grasp).
-        let mut by_sensor: Vec<Vec<f64>> = vec![Vec::new(); session.sensors.len()];
+        let mut by_sensor: Vec<Vec<f64>> = vec![Vec::new(); self.session.sensors.len()];
         for (t, frame) in grasp.frames.iter().enumerate() {
-            let bad_frame = |reason: String| SequenceError::Session {
-                set: set.clone(),
-                reason: format!("grasp {g} frame {t} {reason}"),
-            };
-            if has(Family::Encoders) && frame.encoders.len() != n_enc {
-                return Err(bad_frame(format!(
-                    "has {} encoders, the session names {n_enc}",
-                    frame.encoders.len()
-                )));
-            }
-            let mut pressures: Vec<Vec<f64>> = Vec::new();
-            if tactile {
-                if frame.taxels.len() != session.sensors.len() {
-                    return Err(bad_frame(
-                        "does not have one taxel vector per sensor".into(),
-                    ));
-                }
-                for (s, raw) in frame.taxels.iter().enumerate() {
-                    if per_taxel && raw.len() != taxel_counts[s] {
-                        return Err(bad_frame(format!(
-                            "has {} taxels on sensor {}, its layout {}",
-                            raw.len(),
-                            session.sensors[s].name,
-                            taxel_counts[s]
-                        )));
-                    }
-                    pressures.push(
-                        raw.iter()
-                            .enumerate()
-                            .map(|(i, &v)| {
-                                let noisy = if sd > 0.0 { v + sd * rng.normal() } else { v };
-                                session.pressure(s, i, noisy)
-                            })
-                            .collect(),
-                    );
-                }
-            }
+            let pressures = self.pressures(g, t, frame, &mut rng)?;
             if t == 0 {
                 first = pressures.clone();
             }
-            if codes.is_some() {
+            if self.codes.is_some() {
                 for (all, p) in by_sensor.iter_mut().zip(&pressures) {
                     all.extend_from_slice(p);
                 }
             }
-            let mut row = m.row_mut(t);
-            let mut c = 0;
-            let mut put = |v: f64| {
-                row[c] = v;
-                c += 1;
-            };
-            for &f in &families {
-                match f {
-                    Family::Encoders => frame.encoders.iter().for_each(|&e| put(e)),
-                    Family::Moments => {
-                        for p in &pressures {
-                            FingerStats::of(p).to_array().into_iter().for_each(&mut put);
-                        }
-                    }
-                    Family::Raw => pressures.iter().flatten().for_each(|&p| put(p)),
-                    Family::Change => pressures
-                        .iter()
-                        .flatten()
-                        .zip(first.iter().flatten())
-                        .for_each(|(&p, &p0)| put(p - p0)),
-                    Family::Codes => {}
-                }
-            }
+            self.fill_row(m.row_mut(t), frame, &pressures, &first);
         }
-        if let Some(book) = &codes {
-            let mut col = codes_from;
-            for (s, all) in by_sensor.into_iter().enumerate() {
-                let frames = Array2::from_shape_vec((grasp.frames.len(), taxel_counts[s]), all)
-                    .map_err(|e| SequenceError::Session {
-                        set: set.clone(),
-                        reason: format!("grasp {g}: {e}"),
-                    })?;
-                let coded = book
-                    .encode(s, frames.view())
-                    .map_err(|e| SequenceError::Session {
-                        set: set.clone(),
-                        reason: format!("grasp {g}: {e}"),
-                    })?;
-                m.slice_mut(ndarray::s![.., col..col + coded.ncols()])
-                    .assign(&coded);
-                col += coded.ncols();
-            }
+        if let Some(book) = &self.codes {
+            self.put_codes(book, g, by_sensor, &mut m)?;
         }
-        sequences.push(m);
+        Ok(m)
     }
-    let (min, max) = match range {
-        SequenceRange::Session => range_of(&sequences, dim),
+
+    /// Frame `t` of grasp `g` checked against the session, and its pressures per sensor
+    /// (none without a tactile family), each raw reading with its noise.
+    fn pressures(
+        &self,
+        g: usize,
+        t: usize,
+        frame: &Frame,
+        rng: &mut Rng,
+    ) -> Result<Vec<Vec<f64>>, SequenceError> {
+        let session = self.session;
+        let bad_frame = |reason: String| SequenceError::Session {
+            set: self.set.clone(),
+            reason: format!("grasp {g} frame {t} {reason}"),
+        };
+        let n_enc = session.encoders.len();
+        if self.families.contains(&Family::Encoders) && frame.encoders.len() != n_enc {
+            return Err(bad_frame(format!(
+                "has {} encoders, the session names {n_enc}",
+                frame.encoders.len()
+            )));
+        }
+        let mut pressures: Vec<Vec<f64>> = Vec::new();
+        if !self.tactile {
+            return Ok(pressures);
+        }
+        if frame.taxels.len() != session.sensors.len() {
+            return Err(bad_frame(
+                "does not have one taxel vector per sensor".into(),
+            ));
+        }
+        for (s, raw) in frame.taxels.iter().enumerate() {
+            if self.per_taxel && raw.len() != self.taxel_counts[s] {
+                return Err(bad_frame(format!(
+                    "has {} taxels on sensor {}, its layout {}",
+                    raw.len(),
+                    session.sensors[s].name,
+                    self.taxel_counts[s]
+                )));
+            }
+            pressures.push(
+                raw.iter()
+                    .enumerate()
+                    .map(|(i, &v)| {
+                        let noisy = if self.sd > 0.0 {
+                            v + self.sd * rng.normal()
+                        } else {
+                            v
+                        };
+                        session.pressure(s, i, noisy)
+                    })
+                    .collect(),
+            );
+        }
+        Ok(pressures)
+    }
+
+    /// A frame's row of every family but `codes`, in column order; `first` holds the
+    /// pressures of the grasp's first frame.
+    fn fill_row(
+        &self,
+        mut row: ArrayViewMut1<f64>,
+        frame: &Frame,
+        pressures: &[Vec<f64>],
+        first: &[Vec<f64>],
+    ) {
+        let mut c = 0;
+        let mut put = |v: f64| {
+            row[c] = v;
+            c += 1;
+        };
+        for &f in &self.families {
+            match f {
+                Family::Encoders => frame.encoders.iter().for_each(|&e| put(e)),
+                Family::Moments => {
+                    for p in pressures {
+                        FingerStats::of(p).to_array().into_iter().for_each(&mut put);
+                    }
+                }
+                Family::Raw => pressures.iter().flatten().for_each(|&p| put(p)),
+                Family::Change => pressures
+                    .iter()
+                    .flatten()
+                    .zip(first.iter().flatten())
+                    .for_each(|(&p, &p0)| put(p - p0)),
+                Family::Codes => {}
+            }
+        }
+    }
+
+    /// Grasp `g`'s frames coded sensor by sensor on `book`, into the codes' columns of `m`.
+    fn put_codes(
+        &self,
+        book: &FrameCodes,
+        g: usize,
+        by_sensor: Vec<Vec<f64>>,
+        m: &mut Array2<f64>,
+    ) -> Result<(), SequenceError> {
+        let failed = |e: String| SequenceError::Session {
+            set: self.set.clone(),
+            reason: format!("grasp {g}: {e}"),
+        };
+        let mut col = self.codes_from;
+        for (s, all) in by_sensor.into_iter().enumerate() {
+            let frames = Array2::from_shape_vec((m.nrows(), self.taxel_counts[s]), all)
+                .map_err(|e| failed(e.to_string()))?;
+            let coded = book
+                .encode(s, frames.view())
+                .map_err(|e| failed(e.to_string()))?;
+            m.slice_mut(ndarray::s![.., col..col + coded.ncols()])
+                .assign(&coded);
+            col += coded.ncols();
+        }
+        Ok(())
+    }
+}
+
+/// Each feature's minimum and maximum as `range` says, over `dim` features.
+fn min_max(
+    range: SequenceRange,
+    sequences: &[Array2<f64>],
+    dim: usize,
+) -> Result<(Vec<f64>, Vec<f64>), SequenceError> {
+    match range {
+        SequenceRange::Session => Ok(range_of(sequences, dim)),
         SequenceRange::Grasps(r) => {
             let Some(part) = sequences.get(r.clone()).filter(|p| !p.is_empty()) else {
                 return Err(SequenceError::Parameter {
@@ -537,7 +654,7 @@ pub fn feature_sequences_in(
                     ),
                 });
             };
-            range_of(part, dim)
+            Ok(range_of(part, dim))
         }
         SequenceRange::Given { min, max } => {
             if min.len() != dim || max.len() != dim {
@@ -550,10 +667,14 @@ pub fn feature_sequences_in(
                     ),
                 });
             }
-            (min.to_vec(), max.to_vec())
+            Ok((min.to_vec(), max.to_vec()))
         }
-    };
-    for m in &mut sequences {
+    }
+}
+
+/// Every value mapped to [0, 1] on its feature's range.
+fn normalise(sequences: &mut [Array2<f64>], min: &[f64], max: &[f64]) {
+    for m in sequences {
         for mut row in m.rows_mut() {
             for (j, v) in row.iter_mut().enumerate() {
                 let range = max[j] - min[j];
@@ -566,14 +687,6 @@ pub fn feature_sequences_in(
             }
         }
     }
-    Ok(FeatureSequences {
-        names,
-        families: used,
-        sequences,
-        min,
-        max,
-        codes,
-    })
 }
 
 /// One dictionary per sensor, learned on every frame's pressures (with the session's noise).
