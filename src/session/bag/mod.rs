@@ -104,12 +104,8 @@ pub fn read(path: &Path, spec: &ImportSpec, events: Option<&str>) -> Result<Bag,
             Role::Joints => bag.joints.as_ref().map_or(0, |j| j.stamps.len()),
             Role::Events => bag.events.len(),
         };
+        let what = role.what();
         if messages == 0 && seen.iter().any(|(t, _)| t == topic) {
-            let what = match role {
-                Role::Tactile(_) => "tactile topic",
-                Role::Joints => "joint topic",
-                Role::Events => "events topic",
-            };
             return Err(SessionError::topic(
                 path,
                 topic,
@@ -119,11 +115,6 @@ pub fn read(path: &Path, spec: &ImportSpec, events: Option<&str>) -> Result<Bag,
         }
         if !seen.iter().any(|(t, _)| t == topic) {
             let listed: Vec<String> = seen.iter().map(|(t, ty)| format!("{t} ({ty})")).collect();
-            let what = match role {
-                Role::Tactile(_) => "tactile topic",
-                Role::Joints => "joint topic",
-                Role::Events => "events topic",
-            };
             return Err(SessionError::topic(
                 path,
                 topic,

@@ -17,6 +17,17 @@ pub(super) enum Role {
     Events,
 }
 
+impl Role {
+    /// The spec's topic of this role, in words.
+    pub(super) fn what(self) -> &'static str {
+        match self {
+            Role::Tactile(_) => "tactile topic",
+            Role::Joints => "joint topic",
+            Role::Events => "events topic",
+        }
+    }
+}
+
 /// The topics the spec reads, with the role of each.
 pub(super) fn roles(
     spec: &ImportSpec,
