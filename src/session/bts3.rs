@@ -65,31 +65,8 @@ pub fn parse_bts3(text: &str, path: &Path) -> Result<Session, SessionError> {
         _ => return Err(SessionError::file(path, "the file is empty")),
     };
     let expected = expected_header();
-    let names: Vec<&str> = header.split(',').map(str::trim).collect();
-    if names.len() != expected.len() {
-        return Err(SessionError::line(
-            path,
-            1,
-            format!(
-                "header has {} columns, expected {} (object, slipped, 3 × 24 electrodes)",
-                names.len(),
-                expected.len()
-            ),
-        ));
-    }
-    // Names are matched regardless of case (`Object`, `FF_biotac_1`): CSV headers are
-    // case-free, and spreadsheet tools capitalise them.
-    for (i, (got, want)) in names.iter().zip(&expected).enumerate() {
-        if !got.eq_ignore_ascii_case(want) {
-            return Err(SessionError::line(
-                path,
-                1,
-                format!("column {} is `{}`, expected `{want}`", i + 1, shorten(got)),
-            ));
-        }
-    }
+    check_header(header, &expected, path)?;
 
-    let n_cols = expected.len();
     let mut grasps = Vec::new();
     let mut trial_counts: Vec<(String, u32)> = Vec::new();
     for (i, line) in lines {
@@ -97,54 +74,11 @@ pub fn parse_bts3(text: &str, path: &Path) -> Result<Session, SessionError> {
         if line.trim().is_empty() {
             continue;
         }
-        let fields: Vec<&str> = line.split(',').collect();
-        if fields.len() != n_cols {
-            return Err(SessionError::line(
-                path,
-                line_no,
-                format!("{} values, expected {n_cols}", fields.len()),
-            ));
-        }
-        let object = fields[0].trim();
-        if object.is_empty() {
-            return Err(SessionError::line_field(
-                path,
-                line_no,
-                "object",
-                "empty object name",
-            ));
-        }
-        let failed = match fields[1].trim() {
-            "0" => false,
-            "1" => true,
-            other => {
-                return Err(SessionError::line_field(
-                    path,
-                    line_no,
-                    "slipped",
-                    format!("`{}` is not 0 or 1", shorten(other)),
-                ));
-            }
-        };
-        let mut taxels = Vec::with_capacity(FINGERS.len());
-        for f in 0..FINGERS.len() {
-            let mut values = Vec::with_capacity(ELECTRODES);
-            for e in 0..ELECTRODES {
-                let col = 2 + f * ELECTRODES + e;
-                let v = parse_number(path, line_no, &expected[col], fields[col])?;
-                let [lo, hi] = READING_RANGE;
-                if !(lo..=hi).contains(&v) {
-                    return Err(SessionError::line_field(
-                        path,
-                        line_no,
-                        &expected[col],
-                        format!("reading {v} is outside the BioTac SP electrode range {lo}–{hi}"),
-                    ));
-                }
-                values.push(v);
-            }
-            taxels.push(values);
-        }
+        let Row {
+            object,
+            failed,
+            taxels,
+        } = parse_row(line, line_no, &expected, path)?;
         let trial = match trial_counts.iter_mut().find(|(o, _)| o == object) {
             Some((_, n)) => {
                 *n += 1;
@@ -174,7 +108,131 @@ pub fn parse_bts3(text: &str, path: &Path) -> Result<Session, SessionError> {
         ));
     }
 
-    let sensors = (0..FINGERS.len())
+    let session = Session {
+        meta: SessionMeta {
+            name: format!("BioTac SP grasp stability ({})", file_stem(path)),
+            source: format!("BTS3 BioTac SP grasps, imported from {}", file_name(path)),
+            licence: String::new(),
+            citation: String::new(),
+            frame_rate_hz: None,
+            notes:
+                "One static reading per grasp. Pressure = per-electrode session maximum − reading."
+                    .into(),
+        },
+        sensors: sensors(&grasps),
+        encoders: Vec::new(),
+        label_sets: vec![LabelSet {
+            name: "outcome".into(),
+            classes: vec!["success".into(), "failure".into()],
+        }],
+        grasps,
+    };
+    validate(&session, path)?;
+    Ok(session)
+}
+
+/// The header's columns are the expected ones, in order.
+fn check_header(header: &str, expected: &[String], path: &Path) -> Result<(), SessionError> {
+    let names: Vec<&str> = header.split(',').map(str::trim).collect();
+    if names.len() != expected.len() {
+        return Err(SessionError::line(
+            path,
+            1,
+            format!(
+                "header has {} columns, expected {} (object, slipped, 3 × 24 electrodes)",
+                names.len(),
+                expected.len()
+            ),
+        ));
+    }
+    // Names are matched regardless of case (`Object`, `FF_biotac_1`): CSV headers are
+    // case-free, and spreadsheet tools capitalise them.
+    for (i, (got, want)) in names.iter().zip(expected).enumerate() {
+        if !got.eq_ignore_ascii_case(want) {
+            return Err(SessionError::line(
+                path,
+                1,
+                format!("column {} is `{}`, expected `{want}`", i + 1, shorten(got)),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// One grasp's row: its object, whether it slipped, and each finger's readings.
+struct Row<'a> {
+    object: &'a str,
+    failed: bool,
+    taxels: Vec<Vec<f64>>,
+}
+
+/// A grasp's row (line `line_no`), every field checked.
+fn parse_row<'a>(
+    line: &'a str,
+    line_no: usize,
+    expected: &[String],
+    path: &Path,
+) -> Result<Row<'a>, SessionError> {
+    let n_cols = expected.len();
+    let fields: Vec<&str> = line.split(',').collect();
+    if fields.len() != n_cols {
+        return Err(SessionError::line(
+            path,
+            line_no,
+            format!("{} values, expected {n_cols}", fields.len()),
+        ));
+    }
+    let object = fields[0].trim();
+    if object.is_empty() {
+        return Err(SessionError::line_field(
+            path,
+            line_no,
+            "object",
+            "empty object name",
+        ));
+    }
+    let failed = match fields[1].trim() {
+        "0" => false,
+        "1" => true,
+        other => {
+            return Err(SessionError::line_field(
+                path,
+                line_no,
+                "slipped",
+                format!("`{}` is not 0 or 1", shorten(other)),
+            ));
+        }
+    };
+    let mut taxels = Vec::with_capacity(FINGERS.len());
+    for f in 0..FINGERS.len() {
+        let mut values = Vec::with_capacity(ELECTRODES);
+        for e in 0..ELECTRODES {
+            let col = 2 + f * ELECTRODES + e;
+            let v = parse_number(path, line_no, &expected[col], fields[col])?;
+            let [lo, hi] = READING_RANGE;
+            if !(lo..=hi).contains(&v) {
+                return Err(SessionError::line_field(
+                    path,
+                    line_no,
+                    &expected[col],
+                    format!("reading {v} is outside the BioTac SP electrode range {lo}–{hi}"),
+                ));
+            }
+            values.push(v);
+        }
+        taxels.push(values);
+    }
+    Ok(Row {
+        object,
+        failed,
+        taxels,
+    })
+}
+
+/// The three fingers' sensors, each electrode's baseline its largest reading over the
+/// grasps.
+fn sensors(grasps: &[Grasp]) -> Vec<Sensor> {
+    (0..FINGERS.len())
         .map(|f| {
             let baseline = (0..ELECTRODES)
                 .map(|e| {
@@ -192,26 +250,5 @@ pub fn parse_bts3(text: &str, path: &Path) -> Result<Session, SessionError> {
                 range: Some(READING_RANGE),
             }
         })
-        .collect();
-    let session = Session {
-        meta: SessionMeta {
-            name: format!("BioTac SP grasp stability ({})", file_stem(path)),
-            source: format!("BTS3 BioTac SP grasps, imported from {}", file_name(path)),
-            licence: String::new(),
-            citation: String::new(),
-            frame_rate_hz: None,
-            notes:
-                "One static reading per grasp. Pressure = per-electrode session maximum − reading."
-                    .into(),
-        },
-        sensors,
-        encoders: Vec::new(),
-        label_sets: vec![LabelSet {
-            name: "outcome".into(),
-            classes: vec!["success".into(), "failure".into()],
-        }],
-        grasps,
-    };
-    validate(&session, path)?;
-    Ok(session)
+        .collect()
 }

@@ -192,6 +192,183 @@ fn duplicate<'a>(names: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
     None
 }
 
+/// The spec's name, frame rate and sync tolerance checked; the tolerance in ns.
+fn check_scalars(file: &SpecFile, path: &Path) -> Result<Option<u64>, SessionError> {
+    let err = |field: &str, msg: String| SessionError::field(path, field, msg);
+    if let Some(name) = &file.name
+        && name.trim().is_empty()
+    {
+        return Err(err("name", "an empty name".into()));
+    }
+    if let Some(hz) = file.frame_rate_hz
+        && !(hz.is_finite() && hz > 0.0)
+    {
+        return Err(err(
+            "frame_rate_hz",
+            format!("{hz} is not a positive frame rate"),
+        ));
+    }
+    match file.sync_tolerance_s {
+        None => Ok(None),
+        Some(s) if s.is_finite() && (0.0..=MAX_SYNC_TOLERANCE_S).contains(&s) => {
+            Ok(Some((s * 1e9).round() as u64))
+        }
+        Some(s) => Err(err(
+            "sync_tolerance_s",
+            format!("{s} is not a tolerance in seconds from 0 to {MAX_SYNC_TOLERANCE_S}"),
+        )),
+    }
+}
+
+/// Sensor `s` of the spec, every field checked (errors name `sensors[s].FIELD`).
+fn sensor_spec(s: usize, f: SensorFile, path: &Path) -> Result<SensorSpec, SessionError> {
+    let err = |field: String, msg: String| SessionError::field(path, field, msg);
+    let at = |rest: &str| format!("sensors[{s}]{rest}");
+    if f.name.trim().is_empty() {
+        return Err(err(at(".name"), "an empty sensor name".into()));
+    }
+    let layout = layout_of(&f.layout).map_err(|m| err(at(".layout"), m))?;
+    if let Some((rows, cols)) = layout.grid_shape()
+        && (rows == 0 || cols == 0 || rows.checked_mul(cols).is_none_or(|a| a > MAX_GRID_CELLS))
+    {
+        return Err(err(
+            at(".layout"),
+            format!("a {rows} × {cols} grid is empty or too large"),
+        ));
+    }
+    let n = layout.taxel_count();
+    if n == 0 {
+        return Err(err(at(".layout"), "the layout has no taxels".into()));
+    }
+    if let Some([a, b]) = f.slice
+        && b.checked_sub(a) != Some(n)
+    {
+        return Err(err(
+            at(".slice"),
+            format!(
+                "[{a}, {b}] holds {} values but the layout has {n} taxels",
+                b.saturating_sub(a)
+            ),
+        ));
+    }
+    if let Some(t) = &f.topic
+        && t.trim().is_empty()
+    {
+        return Err(err(at(".topic"), "an empty topic".into()));
+    }
+    if let Some([lo, hi]) = f.range
+        && !(lo.is_finite() && hi.is_finite() && lo <= hi)
+    {
+        return Err(err(
+            at(".range"),
+            format!("[{lo}, {hi}] is not a range of finite values, low to high"),
+        ));
+    }
+    let transform = f.transform.unwrap_or(ValueTransform::Identity);
+    match &transform {
+        ValueTransform::BaselineMinus { baseline }
+            if baseline.len() != n || baseline.iter().any(|b| !b.is_finite()) =>
+        {
+            return Err(err(
+                at(".transform.baseline"),
+                format!(
+                    "{} baselines for {n} taxels (each must be finite)",
+                    baseline.len()
+                ),
+            ));
+        }
+        ValueTransform::Reversed { offset } if !offset.is_finite() => {
+            return Err(err(
+                at(".transform.offset"),
+                "the offset must be finite".into(),
+            ));
+        }
+        _ => {}
+    }
+    Ok(SensorSpec {
+        sensor: Sensor {
+            name: f.name,
+            layout,
+            unit: f.unit,
+            transform,
+            range: f.range,
+        },
+        topic: f.topic,
+        slice: f.slice,
+    })
+}
+
+/// The joints: at least one, each named once, and a topic that is not empty.
+fn check_joints(j: &JointsSpec, path: &Path) -> Result<(), SessionError> {
+    let err = |field: &str, msg: String| SessionError::field(path, field, msg);
+    if j.names.is_empty() {
+        return Err(err("joints.names", "no joints named".into()));
+    }
+    if let Some(d) = duplicate(j.names.iter().map(String::as_str)) {
+        return Err(err("joints.names", format!("`{d}` is named twice")));
+    }
+    if let Some(t) = &j.topic
+        && t.trim().is_empty()
+    {
+        return Err(err("joints.topic", "an empty topic".into()));
+    }
+    Ok(())
+}
+
+/// The label sets: each named, with classes listed once, and no two of one name.
+fn check_label_sets(sets: &[LabelSet], path: &Path) -> Result<(), SessionError> {
+    let err = |field: String, msg: String| SessionError::field(path, field, msg);
+    for (l, set) in sets.iter().enumerate() {
+        if set.name.trim().is_empty() {
+            return Err(err(
+                format!("label_sets[{l}].name"),
+                "an empty label set name".into(),
+            ));
+        }
+        if set.classes.is_empty() {
+            return Err(err(
+                format!("label_sets[{l}].classes"),
+                format!("label set `{}` has no classes", set.name),
+            ));
+        }
+        if let Some(d) = duplicate(set.classes.iter().map(String::as_str)) {
+            return Err(err(
+                format!("label_sets[{l}].classes"),
+                format!("class `{d}` is listed twice"),
+            ));
+        }
+    }
+    if let Some(d) = duplicate(sets.iter().map(|s| s.name.as_str())) {
+        return Err(err(
+            "label_sets".into(),
+            format!("two label sets are named `{d}`"),
+        ));
+    }
+    Ok(())
+}
+
+/// How the spec cuts a bag into grasps: a windows CSV (beside the spec) or an events topic.
+fn grasp_cut(grasps: GraspsFile, path: &Path) -> Result<GraspCut, SessionError> {
+    match grasps {
+        GraspsFile {
+            windows: Some(w),
+            events: None,
+        } => {
+            let base = path.parent().unwrap_or(Path::new(""));
+            Ok(GraspCut::Windows(base.join(w)))
+        }
+        GraspsFile {
+            windows: None,
+            events: Some(topic),
+        } => Ok(GraspCut::Events(topic)),
+        _ => Err(SessionError::field(
+            path,
+            "grasps",
+            "give exactly one of `windows` (a CSV file) or `events` (a topic)",
+        )),
+    }
+}
+
 impl ImportSpec {
     /// Read a spec file.
     pub fn load(path: &Path) -> Result<ImportSpec, SessionError> {
@@ -205,112 +382,16 @@ impl ImportSpec {
         }
         let file: SpecFile = serde_json::from_str(text).map_err(|e| json_error(path, &e))?;
         let err = |field: String, msg: String| SessionError::field(path, field, msg);
-        if let Some(name) = &file.name
-            && name.trim().is_empty()
-        {
-            return Err(err("name".into(), "an empty name".into()));
-        }
-        if let Some(hz) = file.frame_rate_hz
-            && !(hz.is_finite() && hz > 0.0)
-        {
-            return Err(err(
-                "frame_rate_hz".into(),
-                format!("{hz} is not a positive frame rate"),
-            ));
-        }
-        let sync_tolerance_ns = match file.sync_tolerance_s {
-            None => None,
-            Some(s) if s.is_finite() && (0.0..=MAX_SYNC_TOLERANCE_S).contains(&s) => {
-                Some((s * 1e9).round() as u64)
-            }
-            Some(s) => {
-                return Err(err(
-                    "sync_tolerance_s".into(),
-                    format!("{s} is not a tolerance in seconds from 0 to {MAX_SYNC_TOLERANCE_S}"),
-                ));
-            }
-        };
+        let sync_tolerance_ns = check_scalars(&file, path)?;
         if file.sensors.is_empty() {
             return Err(err("sensors".into(), "the spec has no sensors".into()));
         }
-        let mut sensors = Vec::with_capacity(file.sensors.len());
-        for (s, f) in file.sensors.into_iter().enumerate() {
-            let at = |rest: &str| format!("sensors[{s}]{rest}");
-            if f.name.trim().is_empty() {
-                return Err(err(at(".name"), "an empty sensor name".into()));
-            }
-            let layout = layout_of(&f.layout).map_err(|m| err(at(".layout"), m))?;
-            if let Some((rows, cols)) = layout.grid_shape()
-                && (rows == 0
-                    || cols == 0
-                    || rows.checked_mul(cols).is_none_or(|a| a > MAX_GRID_CELLS))
-            {
-                return Err(err(
-                    at(".layout"),
-                    format!("a {rows} × {cols} grid is empty or too large"),
-                ));
-            }
-            let n = layout.taxel_count();
-            if n == 0 {
-                return Err(err(at(".layout"), "the layout has no taxels".into()));
-            }
-            if let Some([a, b]) = f.slice
-                && b.checked_sub(a) != Some(n)
-            {
-                return Err(err(
-                    at(".slice"),
-                    format!(
-                        "[{a}, {b}] holds {} values but the layout has {n} taxels",
-                        b.saturating_sub(a)
-                    ),
-                ));
-            }
-            if let Some(t) = &f.topic
-                && t.trim().is_empty()
-            {
-                return Err(err(at(".topic"), "an empty topic".into()));
-            }
-            if let Some([lo, hi]) = f.range
-                && !(lo.is_finite() && hi.is_finite() && lo <= hi)
-            {
-                return Err(err(
-                    at(".range"),
-                    format!("[{lo}, {hi}] is not a range of finite values, low to high"),
-                ));
-            }
-            let transform = f.transform.unwrap_or(ValueTransform::Identity);
-            match &transform {
-                ValueTransform::BaselineMinus { baseline }
-                    if baseline.len() != n || baseline.iter().any(|b| !b.is_finite()) =>
-                {
-                    return Err(err(
-                        at(".transform.baseline"),
-                        format!(
-                            "{} baselines for {n} taxels (each must be finite)",
-                            baseline.len()
-                        ),
-                    ));
-                }
-                ValueTransform::Reversed { offset } if !offset.is_finite() => {
-                    return Err(err(
-                        at(".transform.offset"),
-                        "the offset must be finite".into(),
-                    ));
-                }
-                _ => {}
-            }
-            sensors.push(SensorSpec {
-                sensor: Sensor {
-                    name: f.name,
-                    layout,
-                    unit: f.unit,
-                    transform,
-                    range: f.range,
-                },
-                topic: f.topic,
-                slice: f.slice,
-            });
-        }
+        let sensors = file
+            .sensors
+            .into_iter()
+            .enumerate()
+            .map(|(s, f)| sensor_spec(s, f, path))
+            .collect::<Result<Vec<_>, _>>()?;
         if let Some(d) = duplicate(sensors.iter().map(|s| s.sensor.name.as_str())) {
             return Err(err(
                 "sensors".into(),
@@ -318,63 +399,12 @@ impl ImportSpec {
             ));
         }
         if let Some(j) = &file.joints {
-            if j.names.is_empty() {
-                return Err(err("joints.names".into(), "no joints named".into()));
-            }
-            if let Some(d) = duplicate(j.names.iter().map(String::as_str)) {
-                return Err(err("joints.names".into(), format!("`{d}` is named twice")));
-            }
-            if let Some(t) = &j.topic
-                && t.trim().is_empty()
-            {
-                return Err(err("joints.topic".into(), "an empty topic".into()));
-            }
+            check_joints(j, path)?;
         }
-        for (l, set) in file.label_sets.iter().enumerate() {
-            if set.name.trim().is_empty() {
-                return Err(err(
-                    format!("label_sets[{l}].name"),
-                    "an empty label set name".into(),
-                ));
-            }
-            if set.classes.is_empty() {
-                return Err(err(
-                    format!("label_sets[{l}].classes"),
-                    format!("label set `{}` has no classes", set.name),
-                ));
-            }
-            if let Some(d) = duplicate(set.classes.iter().map(String::as_str)) {
-                return Err(err(
-                    format!("label_sets[{l}].classes"),
-                    format!("class `{d}` is listed twice"),
-                ));
-            }
-        }
-        if let Some(d) = duplicate(file.label_sets.iter().map(|s| s.name.as_str())) {
-            return Err(err(
-                "label_sets".into(),
-                format!("two label sets are named `{d}`"),
-            ));
-        }
+        check_label_sets(&file.label_sets, path)?;
         let cut = match file.grasps {
             None => None,
-            Some(GraspsFile {
-                windows: Some(w),
-                events: None,
-            }) => {
-                let base = path.parent().unwrap_or(Path::new(""));
-                Some(GraspCut::Windows(base.join(w)))
-            }
-            Some(GraspsFile {
-                windows: None,
-                events: Some(topic),
-            }) => Some(GraspCut::Events(topic)),
-            Some(_) => {
-                return Err(err(
-                    "grasps".into(),
-                    "give exactly one of `windows` (a CSV file) or `events` (a topic)".into(),
-                ));
-            }
+            Some(grasps) => Some(grasp_cut(grasps, path)?),
         };
         let trials = match file.trials {
             None => None,

@@ -6,8 +6,12 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 
 use super::{open_session, write_json};
-use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
+use crate::experiments::recognition::{
+    RecognitionParams, SessionBenchParams, SessionStepBench, StepBench, StepBenchParams,
+    SupervisedLearner, bench_session_steps, bench_steps, run_recognition,
+};
 use crate::jobs::Progress;
+use crate::session::Session;
 
 /// The session timed when none is given: the iCub dataset beside the checkout, if present.
 const DEFAULT_BENCH_SESSION: &str = "../shared/datasets/icub-grasp";
@@ -54,8 +58,8 @@ pub struct BenchArgs {
 
 #[derive(serde::Serialize)]
 struct BenchReport {
-    steps: Vec<crate::experiments::recognition::StepBench>,
-    session_steps: Vec<crate::experiments::recognition::SessionStepBench>,
+    steps: Vec<StepBench>,
+    session_steps: Vec<SessionStepBench>,
     protocol: Vec<ProtocolTiming>,
     anchor: Option<crate::experiments::recognition::AnchorBench>,
     threads: usize,
@@ -82,8 +86,6 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
         all_at_most("--budgets", &args.budgets, MAX_CAPACITY)?;
         all_at_most("--taus", &args.taus, MAX_TAU)?;
     }
-    use crate::experiments::recognition::{StepBenchParams, bench_steps};
-    let mut steps = Vec::new();
     println!("per observation, one thread (34 inputs, 10 classes, adaptation on unless noted):");
     let learners = args
         .learners
@@ -94,6 +96,56 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
         sequences: args.sequences,
         ..StepBenchParams::default()
     };
+    let steps = synthetic_steps(&args, &learners, &base)?;
+    let path = args.session.clone().or_else(|| {
+        let p = PathBuf::from(DEFAULT_BENCH_SESSION);
+        p.exists().then_some(p)
+    });
+    let session = path.as_deref().map(open_session).transpose()?;
+    let shown = path.as_deref().map(|p| p.display().to_string());
+    let anchor = match &session {
+        Some(session) if !args.no_anchor => {
+            let a = crate::experiments::recognition::anchor_steps(
+                session,
+                base.capacity,
+                base.tau,
+                args.session_reps,
+            )?;
+            print_anchor(&a);
+            Some(a)
+        }
+        _ => None,
+    };
+    let session_steps = match session.as_ref().filter(|_| !args.no_session_steps) {
+        Some(session) => {
+            session_steps(session, &shown.unwrap_or_default(), &args, &learners, &base)?
+        }
+        None => Vec::new(),
+    };
+    let protocol = match session.as_ref().filter(|_| args.protocol) {
+        Some(session) => protocol_timings(session, &args, &learners)?,
+        None => Vec::new(),
+    };
+    write_json(
+        &BenchReport {
+            steps,
+            session_steps,
+            protocol,
+            anchor,
+            threads: rayon::current_num_threads(),
+        },
+        args.json.as_deref(),
+    )
+}
+
+/// Each learner's steps on synthetic sequences: over the budgets, the lags other than
+/// `base`'s, and without adaptation (none with `--no-steps`); printed as they come.
+fn synthetic_steps(
+    args: &BenchArgs,
+    learners: &[SupervisedLearner],
+    base: &StepBenchParams,
+) -> anyhow::Result<Vec<StepBench>> {
+    let mut steps = Vec::new();
     let mut configs = Vec::new();
     if !args.no_steps {
         for &capacity in &args.budgets {
@@ -114,7 +166,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
         });
     }
     for p in configs {
-        for &learner in &learners {
+        for &learner in learners {
             let b = bench_steps(learner, &p)?;
             let cpu = |v: Option<f64>| v.map_or("?".to_string(), |v| format!("{v:.0}"));
             println!(
@@ -133,104 +185,90 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
             steps.push(b);
         }
     }
-    let path = args.session.clone().or_else(|| {
-        let p = PathBuf::from(DEFAULT_BENCH_SESSION);
-        p.exists().then_some(p)
-    });
-    let session = path.as_deref().map(open_session).transpose()?;
-    let shown = path.as_deref().map(|p| p.display().to_string());
-    let anchor = match &session {
-        Some(session) if !args.no_anchor => {
-            let a = crate::experiments::recognition::anchor_steps(
-                session,
-                base.capacity,
-                base.tau,
-                args.session_reps,
-            )?;
-            print_anchor(&a);
-            Some(a)
-        }
-        _ => None,
-    };
+    Ok(steps)
+}
+
+/// Each learner's steps on the session (`shown` names it), with and without adaptation,
+/// once every expert is full; printed as they come.
+fn session_steps(
+    session: &Session,
+    shown: &str,
+    args: &BenchArgs,
+    learners: &[SupervisedLearner],
+    base: &StepBenchParams,
+) -> anyhow::Result<Vec<SessionStepBench>> {
     let mut session_steps = Vec::new();
-    if let Some(session) = session.as_ref().filter(|_| !args.no_session_steps) {
-        use crate::experiments::recognition::{SessionBenchParams, bench_session_steps};
-        println!(
-            "per step on {} once every expert is full (all features, capacity {}, tau {}, {} orders, one thread), µs median [p10, p90]:",
-            shown.unwrap_or_default(),
-            base.capacity,
-            base.tau,
-            args.session_reps
-        );
-        for adaptation in [true, false] {
-            for &learner in &learners {
-                let b = bench_session_steps(
-                    session,
-                    &SessionBenchParams {
-                        learner,
-                        capacity: base.capacity,
-                        tau: base.tau,
-                        adaptation,
-                        reps: args.session_reps,
-                        seed: 0,
-                    },
-                )?;
-                println!(
-                    "  {:?} adapt {:<5}: predict {:>6.1} [{:.1}, {:.1}], train {:>6.1} [{:.1}, {:.1}]  ({} steps; {} of {} experts adapting at the end)",
+    println!(
+        "per step on {} once every expert is full (all features, capacity {}, tau {}, {} orders, one thread), µs median [p10, p90]:",
+        shown, base.capacity, base.tau, args.session_reps
+    );
+    for adaptation in [true, false] {
+        for &learner in learners {
+            let b = bench_session_steps(
+                session,
+                &SessionBenchParams {
                     learner,
+                    capacity: base.capacity,
+                    tau: base.tau,
                     adaptation,
-                    b.predict.median,
-                    b.predict.p10,
-                    b.predict.p90,
-                    b.train.median,
-                    b.train.p10,
-                    b.train.p90,
-                    b.train.steps,
-                    b.adapting,
-                    b.experts
-                );
-                session_steps.push(b);
-            }
-        }
-    }
-    let mut protocol = Vec::new();
-    if let Some(session) = session.as_ref().filter(|_| args.protocol) {
-        for &learner in &learners {
-            let p = RecognitionParams {
-                learner,
-                reps: args.reps,
-                ..RecognitionParams::default()
-            };
-            let r = run_recognition(session, &p, &Progress::new())?;
+                    reps: args.session_reps,
+                    seed: 0,
+                },
+            )?;
             println!(
-                "  Table II protocol {:?}/all, {} reps: {:.1} s wall, {:.1} s CPU ({} threads)",
+                "  {:?} adapt {:<5}: predict {:>6.1} [{:.1}, {:.1}], train {:>6.1} [{:.1}, {:.1}]  ({} steps; {} of {} experts adapting at the end)",
                 learner,
-                args.reps,
-                r.wall_seconds,
-                r.cpu_seconds.unwrap_or(f64::NAN),
-                rayon::current_num_threads()
+                adaptation,
+                b.predict.median,
+                b.predict.p10,
+                b.predict.p90,
+                b.train.median,
+                b.train.p10,
+                b.train.p90,
+                b.train.steps,
+                b.adapting,
+                b.experts
             );
-            protocol.push(ProtocolTiming {
-                learner: format!("{learner:?}"),
-                features: "all".into(),
-                reps: args.reps,
-                wall_seconds: r.wall_seconds,
-                cpu_seconds: r.cpu_seconds,
-                all: r.summary.all.mean,
-                final_20: r.summary.final_20.mean,
-            });
+            session_steps.push(b);
         }
     }
-    write_json(
-        &BenchReport {
-            steps,
-            session_steps,
-            protocol,
-            anchor,
-            threads: rayon::current_num_threads(),
-        },
-        args.json.as_deref(),
-    )
+    Ok(session_steps)
+}
+
+/// The whole Table II protocol on the session for each learner, timed; printed as they
+/// come.
+fn protocol_timings(
+    session: &Session,
+    args: &BenchArgs,
+    learners: &[SupervisedLearner],
+) -> anyhow::Result<Vec<ProtocolTiming>> {
+    let mut protocol = Vec::new();
+    for &learner in learners {
+        let p = RecognitionParams {
+            learner,
+            reps: args.reps,
+            ..RecognitionParams::default()
+        };
+        let r = run_recognition(session, &p, &Progress::new())?;
+        println!(
+            "  Table II protocol {:?}/all, {} reps: {:.1} s wall, {:.1} s CPU ({} threads)",
+            learner,
+            args.reps,
+            r.wall_seconds,
+            r.cpu_seconds.unwrap_or(f64::NAN),
+            rayon::current_num_threads()
+        );
+        protocol.push(ProtocolTiming {
+            learner: format!("{learner:?}"),
+            features: "all".into(),
+            reps: args.reps,
+            wall_seconds: r.wall_seconds,
+            cpu_seconds: r.cpu_seconds,
+            all: r.summary.all.mean,
+            final_20: r.summary.final_20.mean,
+        });
+    }
+    Ok(protocol)
 }
 
 fn print_anchor(a: &crate::experiments::recognition::AnchorBench) {
