@@ -82,7 +82,7 @@ pub fn merge(dir: &Path, progress: &Progress) -> Result<Merged, SweepError> {
     };
     for s in 0..plan.shard_count() {
         let f = read_shard(dir, s, &plan, &plan_hash)
-            .map_err(SweepError::Incomplete)?
+            .map_err(|e| SweepError::Incomplete(e.to_string()))?
             .ok_or_else(|| {
                 SweepError::Incomplete(format!("shard {s} vanished during the merge"))
             })?;

@@ -10,7 +10,7 @@ use serde_json::Value;
 use super::plan::{read_plan, read_session};
 use super::{
     Plan, SHARD_TAG, SHARDS_DIR, SWEEP_VERSION, ShardFailure, ShardFile, SweepError, failure_path,
-    host, io_err, shard_path, to_value, with_experiment, write_json,
+    format_err, host, io_err, shard_path, to_value, with_experiment, write_json,
 };
 use crate::experiments::experiment::Experiment as Sweepable;
 use crate::experiments::parallel::compute_items;
@@ -35,35 +35,32 @@ pub(super) fn read_shard(
     shard: usize,
     plan: &Plan,
     plan_hash: &str,
-) -> Result<Option<ShardFile>, String> {
+) -> Result<Option<ShardFile>, SweepError> {
     let path = shard_path(dir, shard);
     let bytes = match fs::read(&path) {
         Ok(b) => b,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => return Err(format!("{}: {e}", path.display())),
+        Err(e) => return Err(io_err(&path, e)),
     };
     let f: ShardFile = serde_json::from_slice(&bytes)
-        .map_err(|e| format!("{}: not a shard result ({e})", path.display()))?;
+        .map_err(|e| format_err(&path, format!("not a shard result ({e})")))?;
     if f.format != SHARD_TAG || f.version != SWEEP_VERSION {
-        return Err(format!(
-            "{}: not a shard result of this version",
-            path.display()
-        ));
+        return Err(format_err(&path, "not a shard result of this version"));
     }
     if f.plan_hash != plan_hash || f.session_hash != plan.session.hash {
-        return Err(format!(
+        return Err(SweepError::Mismatch(format!(
             "{}: computed for another plan or session (hash mismatch)",
             path.display()
-        ));
+        )));
     }
     if f.shard != shard || f.items != plan.shards[shard] || f.outputs.len() != f.items.len() {
-        return Err(format!(
+        return Err(SweepError::Mismatch(format!(
             "{}: its items are not shard {shard}'s",
             path.display()
-        ));
+        )));
     }
     with_experiment!(&plan.experiment, e => outputs_fit(e, &f))
-        .map_err(|m| format!("{}: {m}", path.display()))?;
+        .map_err(|m| format_err(&path, m))?;
     Ok(Some(f))
 }
 

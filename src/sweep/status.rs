@@ -54,7 +54,9 @@ pub fn status(dir: &Path) -> Result<Status, SweepError> {
                 seconds: f.seconds,
                 host: f.host,
             },
-            Err(reason) => ShardState::Failed { reason },
+            Err(e) => ShardState::Failed {
+                reason: e.to_string(),
+            },
             Ok(None) => {
                 let failure = fs::read(failure_path(dir, i))
                     .ok()
