@@ -68,7 +68,7 @@ pub struct WorkbenchApp {
     last_folder: Option<PathBuf>,
     /// Recordings (ROS 2 bags, long-format CSVs) waiting for their import spec.
     pub import: import::ImportDialog,
-    pub cluster: views::cluster::ClusterForm,
+    pub slurm: views::slurm::SlurmForm,
     /// The selection to restore once the persisted sessions have loaded.
     restore: Option<(usize, usize)>,
     /// After a project opens: once its sessions have loaded, show the open view's results,
@@ -100,7 +100,7 @@ impl WorkbenchApp {
             picker: None,
             last_folder: p.last_folder.clone(),
             import: import::ImportDialog::default(),
-            cluster: views::cluster::ClusterForm::default(),
+            slurm: views::slurm::SlurmForm::default(),
             restore: None,
             focus_pending: None,
         };
@@ -262,7 +262,7 @@ impl WorkbenchApp {
             selection: &self.selection,
             commands: &mut self.commands,
             replay: &mut self.replay,
-            cluster: &mut self.cluster,
+            slurm: &mut self.slurm,
         };
         (
             self.rooms.get(view),
@@ -533,7 +533,7 @@ impl WorkbenchApp {
                 .show(ui, |ui| {
                     egui::ScrollArea::vertical().show(ui, |ui| {
                         room.form_ui(ui, &mut cx);
-                        views::cluster::ui(ui, room, &mut cx);
+                        views::slurm::ui(ui, room, &mut cx);
                         ui.separator();
                         ui.collapsing("Export settings", |ui| cx.analyses.export.ui(ui));
                     });

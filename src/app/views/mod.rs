@@ -3,7 +3,6 @@
 //! reset. Rooms read the shared selection and push commands; they never change another view.
 
 pub mod baselines;
-pub mod cluster;
 pub mod clustering;
 pub mod models;
 pub mod pane;
@@ -11,6 +10,7 @@ pub mod panes;
 pub mod recognition;
 pub mod replay;
 pub mod robustness;
+pub mod slurm;
 pub mod speed;
 pub mod stability;
 pub mod tiles;
@@ -35,7 +35,7 @@ pub struct Cx<'a> {
     pub commands: &'a mut Vec<Command>,
     pub replay: &'a mut Replay,
     /// The settings of "Run on a cluster…", shared by the views.
-    pub cluster: &'a mut cluster::ClusterForm,
+    pub slurm: &'a mut slurm::SlurmForm,
 }
 
 impl Cx<'_> {

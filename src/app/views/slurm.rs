@@ -13,7 +13,7 @@ use crate::sweep::{self, PlanRequest, SBATCH_FILE};
 
 /// The plan's settings, shared by the views (a cluster is the same whichever view plans).
 #[derive(Clone, Debug)]
-pub struct ClusterForm {
+pub struct SlurmForm {
     pub shards: usize,
     /// The plan folder; empty: `sweeps/<experiment>-<session>` under the current folder.
     pub folder: String,
@@ -22,9 +22,9 @@ pub struct ClusterForm {
     pub partition: String,
 }
 
-impl Default for ClusterForm {
+impl Default for SlurmForm {
     fn default() -> Self {
-        ClusterForm {
+        SlurmForm {
             shards: 4,
             folder: String::new(),
             program: "tactile-workbench".into(),
@@ -33,7 +33,7 @@ impl Default for ClusterForm {
     }
 }
 
-impl ClusterForm {
+impl SlurmForm {
     fn folder_for(&self, experiment: &str, session: &str) -> PathBuf {
         if self.folder.trim().is_empty() {
             Path::new("sweeps").join(format!("{experiment}-{}", slug(session)))
@@ -60,7 +60,7 @@ pub fn ui(ui: &mut egui::Ui, room: &dyn Room, cx: &mut Cx) {
                 "Writes this run as a sweep plan for a Slurm job array instead of running \
                  it here (docs/cluster.md).",
             );
-            let f = &mut *cx.cluster;
+            let f = &mut *cx.slurm;
             ui.add(
                 egui::DragValue::new(&mut f.shards)
                     .range(1..=1000)
