@@ -467,7 +467,7 @@ impl WorkbenchApp {
                 });
             });
             ui.menu_button("View", |ui| {
-                for v in View::ALL {
+                for &v in View::all() {
                     ui.selectable_value(&mut self.view, v, v.title());
                 }
                 ui.separator();
@@ -485,7 +485,7 @@ impl WorkbenchApp {
                 }
             });
             ui.separator();
-            for v in View::ALL {
+            for &v in View::all() {
                 ui.selectable_value(&mut self.view, v, v.title());
             }
             if self.is_loading() {

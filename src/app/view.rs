@@ -4,15 +4,11 @@ use super::View;
 use crate::experiments::result::AnalysisKind;
 
 impl View {
-    pub const ALL: [View; 7] = [
-        View::Replay,
-        View::Stability,
-        View::Recognition,
-        View::Clustering,
-        View::Baselines,
-        View::SpeedAccuracy,
-        View::Robustness,
-    ];
+    /// Every view, in the order of their declaration: derived with the command line's
+    /// `--view` values, so a new view cannot be missing from the menus.
+    pub fn all() -> &'static [View] {
+        <View as clap::ValueEnum>::value_variants()
+    }
 
     pub fn title(self) -> &'static str {
         match self {
