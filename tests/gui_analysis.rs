@@ -9,6 +9,7 @@ use std::time::Duration;
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
+use tactile_workbench::app::views::number;
 use tactile_workbench::app::{View, WorkbenchApp};
 use tactile_workbench::catalogue::MethodId;
 use tactile_workbench::figures::FigureKind;
@@ -559,4 +560,36 @@ fn robustness_view_sweeps_a_perturbation_and_charts_it() {
     h.get_by_label(&format!("{clean:.4}"));
     h.get_by_label("Robustness to noise");
     h.get_by_label("Robustness to truncation");
+    // A click on a point of the noise chart chooses its strength and lists every method's
+    // score there.
+    let i = h.state().analyses.results.len() - 1;
+    let r = h.state().analyses.results[i].clone();
+    let (name, fig) = r
+        .figures
+        .iter()
+        .find(|(_, f)| f.title == "Robustness to noise")
+        .expect("the noise chart");
+    let FigureKind::Chart(chart) = &fig.kind else {
+        panic!("a chart");
+    };
+    let k = chart.series[0].x.len() - 1;
+    let (x, y) = (chart.series[0].x[k], chart.series[0].y[k]);
+    let heading = format!("At {} {}:", chart.x.title, number(x));
+    assert!(h.query_by_label(&heading).is_none());
+    let pos = tactile_workbench::app::figure_view::marker_position(
+        &h.ctx,
+        &format!("{i}-{name}"),
+        chart,
+        0,
+        k,
+    )
+    .expect("the noise chart was drawn");
+    h.drag_at(pos);
+    h.step();
+    h.drop_at(pos);
+    h.run_ok();
+    let strength = h.state().selection.strength.clone();
+    assert_eq!(strength, Some((i, name.clone(), x)));
+    h.get_by_label(&heading);
+    h.get_by_label(&format!("{} {}", chart.series[0].name, number(y)));
 }

@@ -82,11 +82,14 @@ pub(super) fn show_chart(
             .include_y(coord(ys, lo).unwrap_or(lo))
             .include_y(coord(ys, hi).unwrap_or(hi));
     }
+    // A chart that carries a marker takes clicks as moving it, also before it has a
+    // position (NaN: nothing chosen yet).
+    let marker_mode = matches!(selection, Selection::Marker(_));
     let marker = match selection {
         Selection::Marker(x) => coord(xs, x),
         _ => None,
     };
-    if marker.is_some() {
+    if marker_mode {
         // A drag moves the marker instead of panning the plot.
         plot = plot.allow_drag(false);
     }
@@ -124,7 +127,7 @@ pub(super) fn show_chart(
     if let Some(pos) = r.hover_pos() {
         interaction.hovered_point = nearest_marker(chart, &shown.transform, pos, 12.0);
     }
-    if marker.is_some()
+    if marker_mode
         && (r.dragged() || r.clicked())
         && let Some(pos) = r.interact_pointer_pos()
     {
