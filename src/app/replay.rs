@@ -3,7 +3,11 @@
 //! cursor at the current frame.
 
 use egui::{Color32, ComboBox, Vec2};
-use egui_plot::{Bar, BarChart, Legend, Line, Plot, PlotPoints, VLine};
+use egui_plot::{Bar, BarChart, Line, Plot, PlotPoints, VLine};
+
+use super::figure_view::tick_spacer;
+use super::heatmap::rgb;
+use crate::figures::{Scale, series_color};
 
 use super::heatmap::{colour_bar, sensor_heatmap};
 use super::loader::LoadedSession;
@@ -371,25 +375,22 @@ impl Replay {
     fn traces(&mut self, ui: &mut egui::Ui, session: &Session, g: &Grasp) -> Option<f64> {
         let t_now = g.frames[self.frame].t;
         let mut seek_to: Option<f64> = None;
-        let height = ((ui.available_height() - 40.0) / 2.0).max(120.0);
+        let height = ((ui.available_height() - 60.0) / 2.0).max(120.0);
         if !session.encoders.is_empty() {
             ui.label("Joint encoders");
-            let shown = Plot::new("encoder_trace")
-                .allow_scroll(false)
-                .allow_drag(false)
-                .height(height)
-                .legend(Legend::default())
-                .x_axis_label("time (s)")
-                .y_axis_label("angle (degrees)")
-                .show(ui, |plot| {
-                    for (j, name) in session.encoders.iter().enumerate() {
-                        let pts: PlotPoints =
-                            g.frames.iter().map(|fr| [fr.t, fr.encoders[j]]).collect();
-                        plot.line(Line::new(name.clone(), pts));
-                    }
-                    plot.vline(VLine::new("current frame", t_now));
-                });
-            seek_to = seek_to.or(trace_seek(&shown, "Joint encoders trace"));
+            let lines = (session.encoders.iter().enumerate())
+                .map(|(j, name)| {
+                    let pts = g.frames.iter().map(|fr| [fr.t, fr.encoders[j]]).collect();
+                    (name.clone(), pts)
+                })
+                .collect();
+            let trace = Trace {
+                id: "encoder_trace",
+                label: "Joint encoders trace",
+                y_title: "angle (degrees)".into(),
+                lines,
+            };
+            seek_to = seek_to.or(trace.show(ui, t_now, height));
         }
         ComboBox::from_label("Per-finger feature")
             .selected_text(FingerStats::NAMES[self.stat])
@@ -398,29 +399,62 @@ impl Replay {
                     ui.selectable_value(&mut self.stat, i, *name);
                 }
             });
-        let shown = Plot::new("finger_trace")
+        let lines = (session.sensors.iter().enumerate())
+            .map(|(k, sensor)| {
+                let pts = (g.frames.iter())
+                    .map(|fr| {
+                        let stats = FingerStats::of(&session.frame_pressures(fr, k));
+                        [fr.t, stats.to_array()[self.stat]]
+                    })
+                    .collect();
+                (sensor.name.clone(), pts)
+            })
+            .collect();
+        let trace = Trace {
+            id: "finger_trace",
+            label: "Per-finger feature trace",
+            y_title: format!("{} of pressure", FingerStats::NAMES[self.stat]),
+            lines,
+        };
+        seek_to.or(trace.show(ui, t_now, height))
+    }
+}
+
+/// A trace of a grasp over time: one line per joint or finger, its legend a row of names
+/// above the plot (in the lines' colours) so that it never covers the lines or the cursor.
+struct Trace {
+    id: &'static str,
+    /// The plot's name for assistive technology.
+    label: &'static str,
+    y_title: String,
+    lines: Vec<(String, Vec<[f64; 2]>)>,
+}
+
+impl Trace {
+    /// Draw it with the current frame's cursor at `t_now`; the time a click or drag points at.
+    fn show(self, ui: &mut egui::Ui, t_now: f64, height: f32) -> Option<f64> {
+        let color = |j: usize| rgb(series_color(j));
+        ui.horizontal_wrapped(|ui| {
+            for (j, (name, _)) in self.lines.iter().enumerate() {
+                ui.colored_label(color(j), format!("— {name}"));
+            }
+        });
+        let cursor = ui.visuals().selection.bg_fill;
+        let shown = Plot::new(self.id)
             .allow_scroll(false)
             .allow_drag(false)
             .height(height)
-            .legend(Legend::default())
             .x_axis_label("time (s)")
-            .y_axis_label(format!("{} of pressure", FingerStats::NAMES[self.stat]))
+            .y_axis_label(self.y_title)
+            .x_grid_spacer(tick_spacer(Scale::Linear, 70.0))
+            .y_grid_spacer(tick_spacer(Scale::Linear, 36.0))
             .show(ui, |plot| {
-                for (k, sensor) in session.sensors.iter().enumerate() {
-                    let pts: PlotPoints = g
-                        .frames
-                        .iter()
-                        .map(|fr| {
-                            let stats = FingerStats::of(&session.frame_pressures(fr, k));
-                            [fr.t, stats.to_array()[self.stat]]
-                        })
-                        .collect();
-                    plot.line(Line::new(sensor.name.clone(), pts));
+                for (j, (name, pts)) in self.lines.into_iter().enumerate() {
+                    plot.line(Line::new(name, PlotPoints::new(pts)).color(color(j)));
                 }
-                plot.vline(VLine::new("current frame", t_now));
+                plot.vline(VLine::new("current frame", t_now).color(cursor).width(2.0));
             });
-        seek_to = seek_to.or(trace_seek(&shown, "Per-finger feature trace"));
-        seek_to
+        trace_seek(&shown, self.label)
     }
 }
 

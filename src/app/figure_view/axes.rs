@@ -10,7 +10,7 @@ const GRID_SPACING_MIN: f64 = 8.0;
 /// Grid marks at the export's ticks (1, 2, 5 × 10^k; round values on a log axis), about
 /// one per `px_per_label` points and never fewer than three, so that the screen shows the
 /// same ticks as the paper at any tile size.
-pub(super) fn tick_spacer(scale: Scale, px_per_label: f64) -> impl Fn(GridInput) -> Vec<GridMark> {
+pub(crate) fn tick_spacer(scale: Scale, px_per_label: f64) -> impl Fn(GridInput) -> Vec<GridMark> {
     move |input: GridInput| {
         let (lo, hi) = input.bounds;
         let px = (hi - lo) * GRID_SPACING_MIN / input.base_step_size.max(f64::MIN_POSITIVE);

@@ -19,6 +19,7 @@ use crate::figures::{
     self, ColorMap, ColorScale, ErrorDisplay, Figure, FigureKind, Orientation, Scale, SeriesStyle,
     series_color,
 };
+pub(crate) use axes::tick_spacer;
 use bars::show_bars;
 pub use chart::marker_position;
 use chart::show_chart;
