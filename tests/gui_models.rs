@@ -230,8 +230,10 @@ fn the_models_list_survives_a_restart_and_saves_and_loads_through_the_picker() {
         .collect();
     assert_eq!(files.len(), 1, "kept in the data folder: {files:?}");
 
-    // Save model… writes the model file where the user chooses.
-    h.get_by_label("Save model…").click();
+    // The result's card saves the model it trained (as the Models list's row does) where
+    // the user chooses.
+    h.get_by_label("Save model…");
+    h.get_by_label("Save sparse coding + SVM model…").click();
     h.run_ok();
     let saved = folder.join("stability-model.json");
     pick(&mut h, &saved, "Save");

@@ -17,6 +17,9 @@ pub struct KeptModel {
     pub kept: Option<PathBuf>,
     /// The copy is written (or being written).
     pub written: bool,
+    /// The result that trained it, by its creation time and label (None for a model read
+    /// from a file): that result's card offers to save it.
+    pub result: Option<(u64, String)>,
 }
 
 /// What "Evaluate on session…" is set to: a model of the list, an open session and the
@@ -67,8 +70,23 @@ impl Models {
             file,
             kept,
             written: false,
+            result: None,
         });
         true
+    }
+
+    /// Add `file`, trained by the result created at `created` and labelled `label`.
+    pub fn add_trained(&mut self, file: ModelFile, created: u64, label: &str) {
+        let key = Some((created, label.to_string()));
+        match self.list.iter().position(|m| m.file == file) {
+            Some(i) => self.list[i].result = key,
+            None => {
+                self.add(file);
+                if let Some(m) = self.list.last_mut() {
+                    m.result = key;
+                }
+            }
+        }
     }
 
     /// A model read back from the kept folder.
@@ -78,6 +96,7 @@ impl Models {
                 file,
                 kept: Some(path),
                 written: true,
+                result: None,
             });
         }
     }

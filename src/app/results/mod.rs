@@ -156,10 +156,10 @@ impl Analyses {
             match outcome {
                 Some(Outcome::Done(JobOutput::Result(r))) => self.add_result(*r),
                 Some(Outcome::Done(JobOutput::Trained { result, models })) => {
-                    self.add_result(*result);
                     for m in models {
-                        self.models.add(m);
+                        self.models.add_trained(m, result.created, &result.label);
                     }
+                    self.add_result(*result);
                 }
                 Some(Outcome::Done(JobOutput::HeldOut(r))) => {
                     let score = r

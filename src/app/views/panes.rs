@@ -572,6 +572,22 @@ pub fn card(ui: &mut egui::Ui, cx: &mut Cx, i: usize, reset: &mut bool) {
             ui.label(RichText::new(number(v)).strong());
         }
         ui.separator();
+        let r = &cx.analyses.results[i];
+        let trained = cx.analyses.models.list.iter().enumerate().filter(|(_, m)| {
+            m.result
+                .as_ref()
+                .is_some_and(|(c, l)| *c == r.created && *l == r.label)
+        });
+        for (k, m) in trained {
+            let text = format!("Save {} model…", m.file.provenance.method.title());
+            if ui
+                .button(text)
+                .on_hover_text("The model this result trained, as a model file")
+                .clicked()
+            {
+                cx.commands.push(Command::SaveModel(k));
+            }
+        }
         if ui
             .button("Reset layout")
             .on_hover_text("Back to the default tiles for this result")
