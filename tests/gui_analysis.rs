@@ -86,6 +86,21 @@ fn baselines_run_in_the_background_and_show_their_figures() {
     // File > Export all figures writes every figure and an index, and says how long it took.
     let dir = common::temp_dir("gui-export-all");
     h.state_mut().analyses.export.dir = dir.clone();
+    // The size presets: a page width, then back to the column (the default).
+    h.get_by_label("Export settings").click();
+    h.run_ok();
+    h.get_by_label("Page width (7 in, 300 DPI)").click();
+    h.run_ok();
+    assert_eq!(h.state().analyses.export.width, 2100);
+    h.get_by_label("Column (3.5 in, 300 DPI)").click();
+    h.run_ok();
+    assert_eq!(
+        (
+            h.state().analyses.export.width,
+            h.state().analyses.export.dpi
+        ),
+        (1050, 300.0)
+    );
     h.get_by_label("File").click();
     h.run_ok();
     h.get_by_label("Export all figures").click();
@@ -106,6 +121,25 @@ fn baselines_run_in_the_background_and_show_their_figures() {
     let index = std::fs::read_to_string(dir.join("index.md")).unwrap();
     assert!(index.contains("NMI against effective clusters"), "{index}");
     assert!(index.contains("Speed against accuracy"), "{index}");
+    // Every figure as vector PDF too, and the PNGs at the column preset's width.
+    let files: Vec<std::path::PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    let with = |ext: &str| {
+        files
+            .iter()
+            .filter(|p| p.extension().is_some_and(|e| e == ext))
+            .count()
+    };
+    assert!(with("png") > 0 && with("pdf") == with("png"), "{files:?}");
+    let png = files
+        .iter()
+        .find(|p| p.extension().is_some_and(|e| e == "png"))
+        .unwrap();
+    let bytes = std::fs::read(png).unwrap();
+    let width = u32::from_be_bytes([bytes[16], bytes[17], bytes[18], bytes[19]]);
+    assert_eq!(width, 1050, "{}", png.display());
     let _ = std::fs::remove_dir_all(dir);
 }
 

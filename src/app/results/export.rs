@@ -11,13 +11,28 @@ pub struct ExportSettings {
     pub dpi: f64,
 }
 
+/// The formats every export writes: vector (SVG, PDF), raster (PNG) and the numbers (CSV).
+const FORMATS: [Format; 4] = [Format::Svg, Format::Pdf, Format::Png, Format::Csv];
+
+/// The size presets offered, by name: a journal column, a full page width (both 300 DPI,
+/// 8–9 pt text) and the screen.
+fn presets() -> [(&'static str, RenderOptions); 3] {
+    [
+        ("Column (3.5 in, 300 DPI)", RenderOptions::column()),
+        ("Page width (7 in, 300 DPI)", RenderOptions::page()),
+        ("Screen (960 × 640, 96 DPI)", RenderOptions::default()),
+    ]
+}
+
 impl Default for ExportSettings {
+    /// A journal column: what a figure exported from the workbench is most often for.
     fn default() -> Self {
+        let o = RenderOptions::column();
         ExportSettings {
             dir: PathBuf::from("figures-export"),
-            width: 960,
-            height: 640,
-            dpi: 96.0,
+            width: o.width,
+            height: o.height,
+            dpi: o.dpi,
         }
     }
 }
@@ -43,6 +58,12 @@ impl ExportSettings {
         {
             self.dir = PathBuf::from(dir);
         }
+        for (name, o) in presets() {
+            let on = self.options() == o;
+            if ui.selectable_label(on, name).clicked() {
+                (self.width, self.height, self.dpi) = (o.width, o.height, o.dpi);
+            }
+        }
         ui.horizontal_wrapped(|ui| {
             ui.add(
                 egui::DragValue::new(&mut self.width)
@@ -62,14 +83,14 @@ impl ExportSettings {
         });
     }
 
-    /// Write `figure` as SVG, PNG and CSV named `name`, and say so in `notes`.
+    /// Write `figure` as SVG, PDF, PNG and CSV named `name`, and say so in `notes`.
     pub fn write(&self, figure: &figures::Figure, name: &str, notes: &mut Notifications) {
         let opts = self.options();
         let mut written = Vec::new();
         let result = std::fs::create_dir_all(&self.dir)
             .map_err(|e| format!("{}: {e}", self.dir.display()))
             .and_then(|_| {
-                for f in [Format::Svg, Format::Png, Format::Csv] {
+                for f in FORMATS {
                     let path = self.dir.join(format!("{name}.{}", f.extension()));
                     figures::write_figure(figure, &path, &opts).map_err(|e| e.to_string())?;
                     written.push(path.display().to_string());
@@ -125,13 +146,8 @@ impl Analyses {
         self.spawn(ctx, None, "Export all figures".into(), move |p| {
             p.set(0.0, format!("writing {} figures", set_all.entries.len()));
             let t0 = std::time::Instant::now();
-            let index = figures::export_all(
-                &set_all,
-                &dir,
-                &[Format::Svg, Format::Png, Format::Csv],
-                &opts,
-            )
-            .map_err(JobError::failed)?;
+            let index =
+                figures::export_all(&set_all, &dir, &FORMATS, &opts).map_err(JobError::failed)?;
             Ok(JobOutput::Message(format!(
                 "exported {} figures to {} in {:.2} s",
                 index.entries.len(),

@@ -109,7 +109,7 @@ fn figure_pane(
     ui.horizontal(|ui| {
         export = ui
             .small_button("Export")
-            .on_hover_text("SVG, PNG and CSV into the export folder")
+            .on_hover_text("SVG, PDF, PNG and CSV into the export folder")
             .clicked();
         if let (Some(tile), Some(requests)) = (tile, requests.as_deref_mut())
             && ui
@@ -250,7 +250,7 @@ fn detail_pane(ui: &mut egui::Ui, cx: &mut Cx, i: usize, name: &str) {
     };
     if ui
         .small_button("Export")
-        .on_hover_text("SVG, PNG and CSV into the export folder")
+        .on_hover_text("SVG, PDF, PNG and CSV into the export folder")
         .clicked()
     {
         let file = format!(

@@ -280,7 +280,7 @@ impl Room for RecognitionRoom {
             Some(fig) => {
                 if ui
                     .small_button("Export")
-                    .on_hover_text("SVG, PNG and CSV into the export folder")
+                    .on_hover_text("SVG, PDF, PNG and CSV into the export folder")
                     .clicked()
                 {
                     cx.analyses

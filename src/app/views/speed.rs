@@ -348,7 +348,7 @@ impl SpeedRoom {
         };
         if ui
             .small_button("Export")
-            .on_hover_text("SVG, PNG and CSV into the export folder")
+            .on_hover_text("SVG, PDF, PNG and CSV into the export folder")
             .clicked()
         {
             cx.analyses
@@ -429,7 +429,7 @@ impl SpeedRoom {
         }
         if ui
             .small_button("Export")
-            .on_hover_text("SVG, PNG and CSV into the export folder")
+            .on_hover_text("SVG, PDF, PNG and CSV into the export folder")
             .clicked()
         {
             let export = format!("{file}-{}", result::slug(&name));
