@@ -203,6 +203,9 @@ impl ColumnLabels {
     }
 }
 
+/// The width a colour bar takes: the bar, its ticks and its title.
+const COLOUR_BAR_W: f32 = 170.0;
+
 pub(super) fn show_image_grid(
     ui: &mut egui::Ui,
     g: &figures::ImageGrid,
@@ -215,8 +218,24 @@ pub(super) fn show_image_grid(
         .flat_map(|i| i.values.iter().flatten().copied())
         .collect();
     let limits = g.colors.resolve(values.iter().copied());
-    let per_row = if g.columns > 0 { g.columns } else { 10 };
-    ui.horizontal(|ui| {
+    // As many images a row as the tile holds beside the colour bar (the bar goes below
+    // when fewer than three would), so that no image is cut off at a narrow tile.
+    let image_w = g
+        .images
+        .iter()
+        .map(|img| {
+            let rows = img.values.len();
+            let cols = img.values.first().map_or(0, Vec::len);
+            (56.0 / rows.max(cols).max(1) as f32).max(3.0) * cols as f32
+        })
+        .fold(40.0_f32, f32::max)
+        + ui.spacing().item_spacing.x;
+    let fit = |w: f32| ((w / image_w).floor() as usize).max(1);
+    let avail = ui.available_width();
+    let beside = fit(avail - COLOUR_BAR_W - ui.spacing().item_spacing.x);
+    let fitted = if beside >= 3 { beside } else { fit(avail) };
+    let per_row = (if g.columns > 0 { g.columns } else { 10 }).min(fitted);
+    ui.horizontal_wrapped(|ui| {
         ui.vertical(|ui| {
             for (row, chunk) in g.images.chunks(per_row).enumerate() {
                 ui.horizontal(|ui| {
@@ -309,7 +328,7 @@ fn image_cell(
 }
 
 fn colour_bar(ui: &mut egui::Ui, scale: &ColorScale, limits: (f64, f64), height: f32) {
-    let (rect, _) = ui.allocate_exact_size(Vec2::new(170.0, height), Sense::hover());
+    let (rect, _) = ui.allocate_exact_size(Vec2::new(COLOUR_BAR_W, height), Sense::hover());
     let painter = ui.painter_at(rect);
     let bar = Rect::from_min_size(
         rect.min + Vec2::new(4.0, 20.0),
