@@ -40,3 +40,27 @@ fn opening_export_settings_keeps_the_form_panel_width_and_toasts_stay_inside() {
         "the toast at {toast:?} leaves the window"
     );
 }
+
+/// A chart whose legend would cover more than a third of its plot gets the legend above
+/// the plot, as a row of names; with room, the legend stays in the plot's emptiest corner.
+#[test]
+fn a_crowded_legend_goes_above_the_plot() {
+    use tactile_workbench::app::figure_view::{self, Selection};
+    use tactile_workbench::figures::{Axis, Figure, Series};
+    let series = (1..=10)
+        .map(|i| Series::new(format!("series {i}"), vec![0.0, 1.0], vec![0.0, i as f64]))
+        .collect();
+    let fig = Figure::chart("ten lines", Axis::new("x", ""), Axis::new("y", ""), series);
+    let row_shown = |height: f32| {
+        let fig = fig.clone();
+        let mut h = egui_kittest::Harness::builder()
+            .with_size(egui::Vec2::new(600.0, height + 120.0))
+            .build_ui(move |ui| {
+                figure_view::show(ui, "ten", &fig, height, Selection::None);
+            });
+        h.run();
+        h.query_by_label("— series 10").is_some()
+    };
+    assert!(row_shown(200.0), "ten entries cover a 200 px plot");
+    assert!(!row_shown(700.0), "a 700 px plot has room for them");
+}

@@ -53,6 +53,19 @@ pub(super) fn show_chart(
                 .filter_map(|(&x, &y)| Some([coord(xs, x)?, coord(ys, y)?]))
         })
         .collect();
+    // A legend taller than a third of the plot would cover the data: it goes above the
+    // plot instead, as a row of names in the series' colours.
+    let entries = legend_entries(chart);
+    let mut height = height;
+    let in_plot = legend_shown && (entries.len() as f32) * 18.0 <= height / 3.0;
+    if legend_shown && !in_plot {
+        let row = ui.horizontal_wrapped(|ui| {
+            for (name, color) in &entries {
+                ui.colored_label(*color, format!("— {name}"));
+            }
+        });
+        height = (height - row.response.rect.height()).max(80.0);
+    }
     // Views scroll as pages: the wheel scrolls the page, it does not pan the plot.
     let mut plot = Plot::new(id)
         .allow_scroll(false)
@@ -69,7 +82,7 @@ pub(super) fn show_chart(
             } => point_tooltip(chart, plot_name, *position),
             HoverPosition::Elsewhere { .. } => None,
         });
-    if legend_shown {
+    if in_plot {
         plot = plot.legend(legend(&all_points));
     }
     if let Some([lo, hi]) = chart.x.include {
@@ -138,6 +151,21 @@ pub(super) fn show_chart(
     {
         interaction.clicked_point = nearest_marker(chart, &shown.transform, pos, 12.0);
     }
+}
+
+/// The chart's legend entries as the plot's legend shows them: one per series (a front
+/// joins its owner's) and one per reference line.
+fn legend_entries(chart: &figures::Chart) -> Vec<(String, Color32)> {
+    let series = (chart.series.iter().enumerate())
+        .filter(|(_, s)| s.part_of.is_none())
+        .map(|(i, s)| {
+            (
+                s.name.clone(),
+                rgb(s.color.unwrap_or_else(|| series_color(i))),
+            )
+        });
+    let refs = (chart.ref_lines.iter()).map(|r| (r.label.clone(), Color32::GRAY));
+    series.chain(refs).filter(|(n, _)| !n.is_empty()).collect()
 }
 
 /// One series: its band or error bars, line, markers and point labels. Everything but the
