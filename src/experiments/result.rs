@@ -364,6 +364,56 @@ pub struct SpeedChart {
 /// (a model tested on a session it did not train on) are series of their own, never
 /// joined to a front.
 pub fn speed_accuracy(results: &[AnalysisResult], axis: TimeAxis) -> Option<SpeedChart> {
+    speed_chart(results, axis, None)
+}
+
+/// One score of one session: what one speed chart compares (accuracy and a weighted
+/// success rate, or two sessions' accuracies, are not one axis).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ScoreKind {
+    pub session: String,
+    pub score: String,
+}
+
+impl ScoreKind {
+    pub fn text(&self) -> String {
+        format!("{} · {}", self.score, self.session)
+    }
+}
+
+/// The score kinds `results` can chart on `axis`, in order of first appearance.
+pub fn score_kinds(results: &[AnalysisResult], axis: TimeAxis) -> Vec<ScoreKind> {
+    let mut kinds: Vec<ScoreKind> = Vec::new();
+    for r in results {
+        if let Some((_, _, score)) = charted(r, axis)
+            && !kinds
+                .iter()
+                .any(|k| k.session == r.session && k.score == score)
+        {
+            kinds.push(ScoreKind {
+                session: r.session.clone(),
+                score: score.to_string(),
+            });
+        }
+    }
+    kinds
+}
+
+/// Speed against accuracy of one score kind: its trained models' front and its held-out
+/// results, the score on the y axis and the session in the title.
+pub fn speed_accuracy_of(
+    results: &[AnalysisResult],
+    axis: TimeAxis,
+    kind: &ScoreKind,
+) -> Option<SpeedChart> {
+    speed_chart(results, axis, Some(kind))
+}
+
+fn speed_chart(
+    results: &[AnalysisResult],
+    axis: TimeAxis,
+    kind: Option<&ScoreKind>,
+) -> Option<SpeedChart> {
     use crate::figures::{Axis, Series, pareto_front, series_color};
     /// Points that may share a front: (session, score name, held out).
     type Group<'a> = (&'a str, &'a str, bool);
@@ -373,6 +423,9 @@ pub fn speed_accuracy(results: &[AnalysisResult], axis: TimeAxis) -> Option<Spee
         let Some((_, _, name)) = charted(r, axis) else {
             continue;
         };
+        if kind.is_some_and(|k| k.session != r.session || k.score != name) {
+            continue;
+        }
         let key = (r.session.as_str(), name, r.held_out.is_some());
         match groups.iter_mut().find(|(k, _)| *k == key) {
             Some((_, members)) => members.push(i),
@@ -451,21 +504,32 @@ pub fn speed_accuracy(results: &[AnalysisResult], axis: TimeAxis) -> Option<Spee
              scores apart",
         ),
     };
+    let (title, y) = match kind {
+        Some(k) => (format!("{title} · {}", k.session), Axis::new(&k.score, "")),
+        None => (title.to_string(), Axis::new("score", "")),
+    };
     Some(SpeedChart {
-        figure: Figure::chart(title, x.log(), Axis::new("score", ""), series).subtitle(subtitle),
+        figure: Figure::chart(title, x.log(), y, series).subtitle(subtitle),
         sources,
     })
 }
 
-/// The speed-against-accuracy charts that have points, with their figure names.
+/// The speed-against-accuracy charts that have points, one per time axis and score kind,
+/// with their figure names.
 pub fn speed_accuracy_figures(results: &[AnalysisResult]) -> Vec<(String, Figure)> {
-    [
+    let mut out = Vec::new();
+    for (axis, name) in [
         (TimeAxis::Training, "speed-against-accuracy"),
         (TimeAxis::Prediction, "prediction-speed-against-accuracy"),
-    ]
-    .into_iter()
-    .filter_map(|(axis, name)| Some((name.to_string(), speed_accuracy(results, axis)?.figure)))
-    .collect()
+    ] {
+        for k in score_kinds(results, axis) {
+            if let Some(c) = speed_accuracy_of(results, axis, &k) {
+                let file = format!("{name}-{}-{}", slug(&k.session), slug(&k.score));
+                out.push((file, c.figure));
+            }
+        }
+    }
+    out
 }
 
 /// Mean and (population) standard deviation over repetitions.
@@ -716,5 +780,33 @@ pub(crate) mod tests {
             c.series[3].point_labels,
             ["DS, all features, num_bases 29 (trained on BTS3 train)"; 2]
         );
+        // One chart per score and session: its own points and front, the score on its axis.
+        let kinds = score_kinds(&results, TimeAxis::Training);
+        let texts: Vec<String> = kinds.iter().map(ScoreKind::text).collect();
+        assert_eq!(
+            texts,
+            [
+                "accuracy (all) · iCub",
+                "weighted success rate · BTS3 train",
+                "weighted success rate · BTS3 test"
+            ]
+        );
+        let icub = speed_accuracy_of(&results, TimeAxis::Training, &kinds[0]).unwrap();
+        assert_eq!(icub.sources, [vec![], vec![0, 2, 5]]);
+        let crate::figures::FigureKind::Chart(c) = &icub.figure.kind else {
+            panic!("a chart");
+        };
+        assert_eq!(c.y.title, "accuracy (all)");
+        assert_eq!(icub.figure.title, "Speed against accuracy · iCub");
+        // Held out alone: no front.
+        let test = speed_accuracy_of(&results, TimeAxis::Training, &kinds[2]).unwrap();
+        assert_eq!(test.sources, [vec![3, 4]]);
+        // Exported: one figure per kind on the training axis (none on prediction here).
+        let exported = speed_accuracy_figures(&results);
+        assert_eq!(
+            exported.len(),
+            3 + score_kinds(&results, TimeAxis::Prediction).len()
+        );
+        assert_eq!(exported[0].0, "speed-against-accuracy-icub-accuracy-all");
     }
 }

@@ -172,6 +172,9 @@ pub struct SpeedRoom {
     /// The time on the charts' x axis.
     pub time_axis: TimeAxis,
     pub frontier: FrontierForm,
+    /// The score and session the chart of every trained model shows (None: the active
+    /// session's first).
+    pub kind: Option<result::ScoreKind>,
 }
 
 impl Room for SpeedRoom {
@@ -331,15 +334,43 @@ fn spec_of(f: &Frontier, k: usize) -> Option<ModelSpec> {
 }
 
 impl SpeedRoom {
-    fn chart(&self, ui: &mut egui::Ui, cx: &mut Cx) {
+    fn chart(&mut self, ui: &mut egui::Ui, cx: &mut Cx) {
         let axis = self.time_axis;
         let results = &cx.analyses.results;
-        let Some(chart) = result::speed_accuracy(results, axis) else {
+        let kinds = result::score_kinds(results, axis);
+        let active = cx.session().map(|s| s.session.meta.name.clone());
+        let shown = (self.kind.clone())
+            .filter(|k| kinds.contains(k))
+            .or_else(|| {
+                kinds
+                    .iter()
+                    .find(|k| Some(&k.session) == active.as_ref())
+                    .cloned()
+            })
+            .or_else(|| kinds.first().cloned());
+        let Some(mut kind) = shown else {
             if axis == TimeAxis::Prediction && !results.is_empty() {
                 ui.label("None of the results times its predictions (the OIESGP learners do).");
             } else {
                 ui.label("Train a model in any analysis view: every result appears here.");
             }
+            return;
+        };
+        // One score of one session a chart: accuracies and success rates are not one axis.
+        ui.horizontal(|ui| {
+            let caption = ui.label("Score");
+            egui::ComboBox::from_id_salt("speed-kind")
+                .selected_text(kind.text())
+                .show_ui(ui, |ui| {
+                    for k in &kinds {
+                        ui.selectable_value(&mut kind, k.clone(), k.text());
+                    }
+                })
+                .response
+                .labelled_by(caption.id);
+        });
+        self.kind = Some(kind.clone());
+        let Some(chart) = result::speed_accuracy_of(results, axis, &kind) else {
             return;
         };
         let file = match axis {
@@ -351,9 +382,14 @@ impl SpeedRoom {
             .on_hover_text("SVG, PDF, PNG and CSV into the export folder")
             .clicked()
         {
+            let file = format!(
+                "{file}-{}-{}",
+                result::slug(&kind.session),
+                result::slug(&kind.score)
+            );
             cx.analyses
                 .export
-                .write(&chart.figure, file, &mut cx.analyses.notes);
+                .write(&chart.figure, &file, &mut cx.analyses.notes);
         }
         let height = (ui.available_height() - 40.0).max(160.0);
         let act = figure_view::show(
