@@ -436,7 +436,8 @@ impl Trace {
         let color = |j: usize| rgb(series_color(j));
         ui.horizontal_wrapped(|ui| {
             for (j, (name, _)) in self.lines.iter().enumerate() {
-                ui.colored_label(color(j), format!("— {name}"));
+                let text = egui::RichText::new(format!("— {name}")).color(color(j));
+                ui.add(egui::Label::new(text).truncate());
             }
         });
         let cursor = ui.visuals().selection.bg_fill;

@@ -61,7 +61,9 @@ pub(super) fn show_chart(
     if legend_shown && !in_plot {
         let row = ui.horizontal_wrapped(|ui| {
             for (name, color) in &entries {
-                ui.colored_label(*color, format!("— {name}"));
+                // Whole entries move to the next line; an entry is not broken across two.
+                let text = egui::RichText::new(format!("— {name}")).color(*color);
+                ui.add(egui::Label::new(text).truncate());
             }
         });
         height = (height - row.response.rect.height()).max(80.0);
