@@ -359,7 +359,11 @@ impl SpeedRoom {
         // One score of one session a chart: accuracies and success rates are not one axis.
         ui.horizontal(|ui| {
             let caption = ui.label("Score");
+            // Cut to the tile's width, so that a long name never widens the chart.
+            let width = (ui.available_width() - 30.0).max(80.0);
             egui::ComboBox::from_id_salt("speed-kind")
+                .width(width)
+                .truncate()
                 .selected_text(kind.text())
                 .show_ui(ui, |ui| {
                     for k in &kinds {
