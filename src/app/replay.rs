@@ -5,7 +5,7 @@
 use egui::{Color32, ComboBox, Vec2};
 use egui_plot::{Bar, BarChart, Line, Plot, PlotPoints, VLine};
 
-use super::figure_view::tick_spacer;
+use super::figure_view::{legend_row, tick_spacer};
 use super::heatmap::rgb;
 use crate::figures::{Scale, series_color};
 
@@ -434,12 +434,10 @@ impl Trace {
     /// Draw it with the current frame's cursor at `t_now`; the time a click or drag points at.
     fn show(self, ui: &mut egui::Ui, t_now: f64, height: f32) -> Option<f64> {
         let color = |j: usize| rgb(series_color(j));
-        ui.horizontal_wrapped(|ui| {
-            for (j, (name, _)) in self.lines.iter().enumerate() {
-                let text = egui::RichText::new(format!("— {name}")).color(color(j));
-                ui.add(egui::Label::new(text).truncate());
-            }
-        });
+        let entries: Vec<(String, egui::Color32)> = (self.lines.iter().enumerate())
+            .map(|(j, (name, _))| (name.clone(), color(j)))
+            .collect();
+        legend_row(ui, &entries);
         let cursor = ui.visuals().selection.bg_fill;
         let shown = Plot::new(self.id)
             .allow_scroll(false)

@@ -59,14 +59,8 @@ pub(super) fn show_chart(
     let mut height = height;
     let in_plot = legend_shown && (entries.len() as f32) * 18.0 <= height / 3.0;
     if legend_shown && !in_plot {
-        let row = ui.horizontal_wrapped(|ui| {
-            for (name, color) in &entries {
-                // Whole entries move to the next line; an entry is not broken across two.
-                let text = egui::RichText::new(format!("— {name}")).color(*color);
-                ui.add(egui::Label::new(text).truncate());
-            }
-        });
-        height = (height - row.response.rect.height()).max(80.0);
+        let row = legend_row(ui, &entries);
+        height = (height - row.height()).max(80.0);
     }
     // Views scroll as pages: the wheel scrolls the page, it does not pan the plot.
     let mut plot = Plot::new(id)
@@ -168,6 +162,19 @@ fn legend_entries(chart: &figures::Chart) -> Vec<(String, Color32)> {
         });
     let refs = (chart.ref_lines.iter()).map(|r| (r.label.clone(), Color32::GRAY));
     series.chain(refs).filter(|(n, _)| !n.is_empty()).collect()
+}
+
+/// A legend as a row of names in their colours, above a plot; returns the row's rectangle.
+pub(crate) fn legend_row(ui: &mut egui::Ui, entries: &[(String, Color32)]) -> Rect {
+    ui.horizontal_wrapped(|ui| {
+        for (name, color) in entries {
+            // Whole entries move to the next line; an entry is not broken across two.
+            let text = egui::RichText::new(format!("— {name}")).color(*color);
+            ui.add(egui::Label::new(text).truncate());
+        }
+    })
+    .response
+    .rect
 }
 
 /// One series: its band or error bars, line, markers and point labels. Everything but the

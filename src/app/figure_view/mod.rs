@@ -21,6 +21,7 @@ use crate::figures::{
 };
 pub(crate) use axes::tick_spacer;
 use bars::show_bars;
+pub(crate) use chart::legend_row;
 pub use chart::marker_position;
 use chart::show_chart;
 use grid::{show_heatmap, show_image_grid};

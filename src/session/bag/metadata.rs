@@ -136,30 +136,22 @@ mod tests {
     use super::*;
 
     #[test]
-    fn metadata_lists_files_indented_or_not_and_in_flow_style() {
+    fn metadata_lists_files_indented_or_not_and_in_flow_style() -> Result<(), SessionError> {
         let p = Path::new("metadata.yaml");
         let rosbag2 = "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: mcap\n  \
                        relative_file_paths:\n    - b_0.mcap\n    - \"b_1.mcap\"\n  duration:\n";
         let names = |v: Vec<(usize, String)>| v.into_iter().map(|(_, n)| n).collect::<Vec<_>>();
-        assert_eq!(
-            names(metadata_files(rosbag2, p).unwrap()),
-            ["b_0.mcap", "b_1.mcap"]
-        );
+        assert_eq!(names(metadata_files(rosbag2, p)?), ["b_0.mcap", "b_1.mcap"]);
         let compact = "x:\n  relative_file_paths:\n  - a.mcap\n  - 'c.mcap'\n  ros_distro: r\n";
-        assert_eq!(
-            names(metadata_files(compact, p).unwrap()),
-            ["a.mcap", "c.mcap"]
-        );
+        assert_eq!(names(metadata_files(compact, p)?), ["a.mcap", "c.mcap"]);
         let flow = "relative_file_paths: [a.mcap, b.mcap]\n";
-        assert_eq!(
-            names(metadata_files(flow, p).unwrap()),
-            ["a.mcap", "b.mcap"]
-        );
+        assert_eq!(names(metadata_files(flow, p)?), ["a.mcap", "b.mcap"]);
         let sqlite = "storage_identifier: sqlite3\nrelative_file_paths:\n- a.db3\n";
         let e = metadata_files(sqlite, p).unwrap_err().to_string();
         assert!(
             e.contains("metadata.yaml:1:") && e.contains("sqlite3"),
             "{e}"
         );
+        Ok(())
     }
 }
