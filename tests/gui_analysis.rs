@@ -360,6 +360,42 @@ fn choosing_gu_offers_its_thresholds_and_cluster_confirmation() {
 }
 
 #[test]
+fn the_stability_form_puts_the_values_beside_the_codes() {
+    let mut h = harness();
+    h.get_by_label("Simulated grasp stability").click();
+    h.run_ok();
+    h.get_by_label("Grasp stability").click();
+    h.run_ok();
+    h.get_by_label("num_bases").set_value_accesskit(8.0);
+    h.run_ok();
+    h.get_by_label("SVM reads the values beside the codes")
+        .click();
+    h.run_ok();
+    run_job(&mut h);
+    assert_result_count(&h, 1);
+    let r = &h.state().analyses.results[0];
+    assert!(r.label.ends_with(", codes+raw"), "{}", r.label);
+    assert_eq!(r.parameters["inputs"], "codes+raw");
+    // The run's model reads the values too: its SVM has a weight per code and per taxel.
+    let model = h
+        .state()
+        .analyses
+        .models
+        .list
+        .last()
+        .expect("the run's model");
+    let tactile_workbench::models::Model::Stability(c) = &model.file.model else {
+        panic!("a stability model");
+    };
+    let taxels: usize = c.sensors.iter().map(|s| s.taxels).sum();
+    let codes = c.codes.as_ref().expect("a sparse model");
+    assert_eq!(
+        c.svm.weights.len(),
+        c.sensors.len() * codes.dictionary.num_bases() + taxels
+    );
+}
+
+#[test]
 fn stability_view_shows_the_first_papers_figures() {
     let mut h = harness();
     h.get_by_label("Simulated grasp stability").click();

@@ -460,7 +460,7 @@ fn the_trained_model_scales_new_grasps_like_the_session() {
     .unwrap()
     .dictionary;
     let settings = PipelineSettings::default();
-    let model = StabilityModel::train(&d, cfg, dict.clone(), &settings.svm).unwrap();
+    let model = StabilityModel::train(&d, cfg, dict.clone(), &settings).unwrap();
     let codes = dict.encode(d.x.view(), 0.5).unwrap();
     let features = stability::concatenated_codes(codes, 2);
     let mut correct = 0;

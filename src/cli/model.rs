@@ -11,7 +11,7 @@ use super::progress::with_progress;
 use super::stability::{StabilityArgs, data_options, in_pool, options_from};
 use crate::catalogue::MethodId;
 use crate::experiments::result::figure_set;
-use crate::experiments::stability::StabilityData;
+use crate::experiments::stability::{PipelineInputs, StabilityData};
 use crate::figures::{Format, RenderOptions, export_all};
 use crate::models::{self, Calibration, HeldOutScores, ModelFile};
 use crate::session::{self, Session, SubsetSpec};
@@ -621,10 +621,20 @@ pub fn bench_held_out(a: BenchHeldOutArgs) -> anyhow::Result<()> {
         "| method | trained on | 10-fold | leave objects out | fit s | tested on | calibration | WSR | failure recall | evaluate s |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|");
-    for method in [MethodId::RawSvm, MethodId::SparseSvm] {
+    let pipelines = [
+        (MethodId::RawSvm, PipelineInputs::Codes),
+        (MethodId::SparseSvm, PipelineInputs::Codes),
+        (MethodId::SparseSvm, PipelineInputs::CodesAndRaw),
+    ];
+    for (method, inputs) in pipelines {
+        opts.settings.inputs = inputs;
         let fit = in_pool(a.threads, || {
             models::fit_stability(method, &train, &data, &opts, &crate::jobs::Progress::new())
         })??;
+        let label = match (method, inputs) {
+            (MethodId::SparseSvm, PipelineInputs::CodesAndRaw) => ", codes+raw",
+            _ => "",
+        };
         let file = fit.into_file(&train, &data);
         let p = &file.provenance;
         let score = |i: usize| p.selection.get(i).map_or(f64::NAN, |s| s.value);
@@ -641,7 +651,7 @@ pub fn bench_held_out(a: BenchHeldOutArgs) -> anyhow::Result<()> {
                     bail!("{} is not a grasp-stability model", method.key());
                 };
                 println!(
-                    "| {} | {} | {:.3} | {:.3} | {:.2} | {} | {c} | {:.3} | {:.3} | {:.3} |",
+                    "| {}{label} | {} | {:.3} | {:.3} | {:.2} | {} | {c} | {:.3} | {:.3} | {:.3} |",
                     p.summary().split(", trained on").next().unwrap_or_default(),
                     session::file_name(&a.train),
                     score(0),

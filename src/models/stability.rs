@@ -13,7 +13,7 @@ use super::{Calibration, Model, ModelError, ModelFile, Provenance, SelectionScor
 use crate::catalogue::MethodId;
 use crate::experiments::result::SizeReason;
 use crate::experiments::stability::{
-    self, StabilityData, StabilityModel, StabilityOptions, StabilityReport, concatenated_codes,
+    self, PipelineInputs, StabilityData, StabilityModel, StabilityOptions, StabilityReport,
 };
 use crate::features::{KeyFramePatches, PatchScaling, Standardizer};
 use crate::jobs::Progress;
@@ -34,6 +34,9 @@ pub struct SparseCodes {
     pub dictionary: Dictionary,
     /// λ when coding (scikit-learn's convention, see `experiments::stability`).
     pub gamma: f64,
+    /// What the SVM reads (files without the field read codes).
+    #[serde(default)]
+    pub inputs: PipelineInputs,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -101,9 +104,13 @@ impl StabilityFit {
         let shape = format!("{} sensors × {} taxels", data.sensor_count(), data.dim());
         let features = match &c.codes {
             Some(codes) => format!(
-                "key-frame patches ({shape}) coded on {} bases (gamma {}), concatenated",
+                "key-frame patches ({shape}) coded on {} bases (gamma {}), concatenated{}",
                 codes.dictionary.num_bases(),
-                codes.gamma
+                codes.gamma,
+                match codes.inputs {
+                    PipelineInputs::Codes => "",
+                    PipelineInputs::CodesAndRaw => ", followed by the scaled key-frame values",
+                }
             ),
             None => format!("key-frame values ({shape})"),
         };
@@ -154,6 +161,7 @@ fn parameters(opts: &StabilityOptions, config: Option<stability::Config>) -> Vec
     ];
     if let Some(c) = config {
         out.extend([
+            ("inputs".to_string(), s.inputs.to_string()),
             ("beta".to_string(), c.beta.to_string()),
             ("gamma".to_string(), c.gamma.to_string()),
             (
@@ -193,6 +201,7 @@ impl StabilityClassifier {
         let codes = SparseCodes {
             dictionary: model.dictionary.clone(),
             gamma: model.config.gamma,
+            inputs: model.inputs,
         };
         Self::new(data, session, Some(codes), model.svm.clone())
     }
@@ -208,7 +217,13 @@ impl StabilityClassifier {
     pub fn feature_count(&self) -> usize {
         let values: usize = self.sensors.iter().map(|s| s.taxels).sum();
         match &self.codes {
-            Some(c) => self.sensors.len() * c.dictionary.num_bases(),
+            Some(c) => {
+                let codes = self.sensors.len() * c.dictionary.num_bases();
+                match c.inputs {
+                    PipelineInputs::Codes => codes,
+                    PipelineInputs::CodesAndRaw => codes + values,
+                }
+            }
             None => values,
         }
     }
@@ -289,7 +304,7 @@ impl StabilityClassifier {
             .dictionary
             .encode(x.view(), codes.gamma)
             .map_err(stability::StabilityError::from)?;
-        Ok(concatenated_codes(coded, sensors))
+        Ok(codes.inputs.features(coded, x.view(), sensors))
     }
 
     /// The decision value of every grasp (positive: failure).
@@ -464,7 +479,7 @@ pub fn fit_stability(
                 dictionary,
                 progress,
             )?;
-            let model = StabilityModel::train(data, config, dictionary, &s.svm)?;
+            let model = StabilityModel::train(data, config, dictionary, s)?;
             Ok(StabilityFit {
                 classifier: StabilityClassifier::from_sparse(&model, data, session),
                 selection: scores(&evaluation.kfold, &evaluation.objects),

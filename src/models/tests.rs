@@ -66,6 +66,40 @@ fn a_saved_model_predicts_bit_for_bit_as_the_model_in_memory() {
     }
 }
 
+#[test]
+fn codes_and_raw_give_the_svm_what_the_codes_drop() {
+    use crate::experiments::stability::PipelineInputs;
+    let (session, data) = sample();
+    // A coding penalty past every |dᵀx| codes every patch as zero: the codes carry nothing.
+    let mut opts = small();
+    opts.single.gamma = 1e9;
+    let fit = |opts: &StabilityOptions| {
+        fit_stability(MethodId::SparseSvm, &session, &data, opts, &Progress::new())
+            .unwrap()
+            .into_file(&session, &data)
+    };
+    let codes = fit(&opts);
+    opts.settings.inputs = PipelineInputs::CodesAndRaw;
+    let both = fit(&opts);
+    let score = |f: &ModelFile| wsr(&evaluate(f, &session, Calibration::None).unwrap());
+    // Chance is 0.5: all-zero codes put every grasp on one side; the values beside them
+    // separate the sample's outcomes as the raw SVM does.
+    assert!(score(&codes) <= 0.5 + 1e-12, "codes {}", score(&codes));
+    assert!(score(&both) > 0.7, "codes+raw {}", score(&both));
+    // The inputs travel with the file, and a file without them reads codes.
+    let loaded = ModelFile::from_json(&both.to_json(), "m.json").unwrap();
+    assert_eq!(loaded, both);
+    let mut old: serde_json::Value = serde_json::from_str(&codes.to_json()).unwrap();
+    let removed = old["model"]["codes"]
+        .as_object_mut()
+        .and_then(|c| c.remove("inputs"));
+    assert_eq!(removed, Some(serde_json::json!("codes")));
+    assert_eq!(
+        ModelFile::from_json(&old.to_string(), "old.json").unwrap(),
+        codes
+    );
+}
+
 /// The session with every taxel's pressure raised by `shift`.
 fn shifted(session: &Session, shift: f64) -> Session {
     let mut s = session.clone();

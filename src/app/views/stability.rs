@@ -12,7 +12,7 @@ use crate::catalogue::{MethodId, Task};
 use crate::experiments::result::{AnalysisKind, SizeReason};
 use crate::experiments::stability::report::stability_report;
 use crate::experiments::stability::{
-    Config, DataOptions, GridSpec, StabilityData, StabilityError, StabilityOptions,
+    Config, DataOptions, GridSpec, PipelineInputs, StabilityData, StabilityError, StabilityOptions,
 };
 use crate::features::FeatureSet;
 use crate::jobs::JobError;
@@ -31,6 +31,9 @@ pub struct StabilityForm {
     /// The single configuration's size is the user's; otherwise it is automatic (the
     /// session's sparse-coding frontier recommendation, else the paper's).
     pub user_size: bool,
+    /// What the SVM reads (forms saved before the choice existed read codes).
+    #[serde(default)]
+    pub inputs: PipelineInputs,
 }
 
 impl Default for StabilityForm {
@@ -42,6 +45,7 @@ impl Default for StabilityForm {
             grid: false,
             bases: [5, 60, 5],
             user_size: false,
+            inputs: PipelineInputs::Codes,
         }
     }
 }
@@ -85,12 +89,14 @@ impl StabilityForm {
     /// The options the form runs with on `session`.
     pub fn options(&self, analyses: &Analyses, session: &str) -> StabilityOptions {
         let (single, reason) = self.size(analyses, session);
-        StabilityOptions {
+        let mut opts = StabilityOptions {
             single,
             grid: self.grid_spec(),
             size_reason: Some(reason).filter(|_| !self.grid),
             ..Default::default()
-        }
+        };
+        opts.settings.inputs = self.inputs;
+        opts
     }
 
     fn grid_spec(&self) -> Option<GridSpec> {
@@ -240,6 +246,21 @@ impl Room for StabilityRoom {
             {
                 f.user_size = false;
             }
+        }
+        let mut values = f.inputs == PipelineInputs::CodesAndRaw;
+        if ui
+            .checkbox(&mut values, "SVM reads the values beside the codes")
+            .on_hover_text(
+                "codes+raw: each grasp's codes followed by its scaled key-frame values. \
+                 On the BioTac sets it scores higher within the training sessions and on new \
+                 objects recorded later (docs/held-out.md); the paper reads codes only.",
+            )
+            .changed()
+        {
+            f.inputs = match values {
+                true => PipelineInputs::CodesAndRaw,
+                false => PipelineInputs::Codes,
+            };
         }
         ui.small("Pressures are z-scored per taxel over the session; β and γ use the 0.5·|x − Da|² + λ·|a|₁ convention.");
         if run_button(

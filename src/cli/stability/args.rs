@@ -6,7 +6,8 @@ use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 
 use crate::experiments::stability::{
-    Config, CvScheme, DataOptions, GridSpec, PipelineSettings, StabilityData, StabilityOptions,
+    Config, CvScheme, DataOptions, GridSpec, PipelineInputs, PipelineSettings, StabilityData,
+    StabilityOptions,
 };
 use crate::features::PatchScaling;
 use crate::sparse::{CodePenalty, DictInit, DictionaryParams};
@@ -31,6 +32,15 @@ pub enum LossArg {
 pub enum PenaltyArg {
     L1,
     EpsL1,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum InputsArg {
+    /// The patches' sparse codes side by side (the first paper).
+    Codes,
+    /// The codes followed by the scaled key-frame values (docs/held-out.md).
+    #[value(name = "codes+raw")]
+    CodesRaw,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -89,6 +99,9 @@ pub struct StabilityArgs {
     pub svm_c: f64,
     #[arg(long, value_enum, default_value = "squared-hinge")]
     pub loss: LossArg,
+    /// What the SVM reads of a grasp.
+    #[arg(long, value_enum, default_value = "codes")]
+    pub inputs: InputsArg,
     /// Penalty while learning: L1 (exact feature-sign codes) or the paper's epsilon-L1.
     #[arg(long, value_enum, default_value = "l1")]
     pub learn_penalty: PenaltyArg,
@@ -184,6 +197,10 @@ fn settings_from(a: &StabilityArgs) -> PipelineSettings {
             },
             seed: a.seed,
             ..Default::default()
+        },
+        inputs: match a.inputs {
+            InputsArg::Codes => PipelineInputs::Codes,
+            InputsArg::CodesRaw => PipelineInputs::CodesAndRaw,
         },
         cv_seed: a.seed,
     }

@@ -150,7 +150,7 @@ pub fn grid_task(
     for &gamma in gamma {
         progress.checkpoint()?;
         let (codes, cvr, coding_secs, cv_secs) =
-            score_codes(data, &fit.dictionary, gamma, folds, &settings.svm)?;
+            score_codes(data, &fit.dictionary, gamma, folds, settings)?;
         let (sparsity, active) = sparsity_of(codes.view());
         let cell = CellResult {
             config: Config {

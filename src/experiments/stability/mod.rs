@@ -268,6 +268,59 @@ impl StabilityData {
     }
 }
 
+/// What the SVM reads of a grasp.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum PipelineInputs {
+    /// The patches' sparse codes side by side (the first paper).
+    #[default]
+    #[serde(rename = "codes")]
+    Codes,
+    /// The codes followed by the scaled key-frame values they were coded from. The L1
+    /// code of a patch keeps a few bases and shrinks them, so a small offset of a taxel can
+    /// change which bases it keeps; the values beside it give the SVM the offset's linear
+    /// part. Chosen on the training files (10-fold and leave-objects-out, both BioTac
+    /// sessions), see docs/held-out.md.
+    #[serde(rename = "codes+raw")]
+    CodesAndRaw,
+}
+
+impl PipelineInputs {
+    pub fn name(self) -> &'static str {
+        match self {
+            PipelineInputs::Codes => "codes",
+            PipelineInputs::CodesAndRaw => "codes+raw",
+        }
+    }
+
+    /// The SVM's features of every grasp from its patches' codes (G·S × K) and the scaled
+    /// patches they were coded from (G·S × n).
+    pub fn features(
+        self,
+        codes: Array2<f64>,
+        patches: ArrayView2<f64>,
+        sensors: usize,
+    ) -> Array2<f64> {
+        let codes = concatenated_codes(codes, sensors);
+        match self {
+            PipelineInputs::Codes => codes,
+            PipelineInputs::CodesAndRaw => {
+                let values = patches
+                    .as_standard_layout()
+                    .into_owned()
+                    .into_shape_with_order((codes.nrows(), sensors * patches.ncols()))
+                    .expect("patches hold whole grasps");
+                ndarray::concatenate![ndarray::Axis(1), codes, values]
+            }
+        }
+    }
+}
+
+impl std::fmt::Display for PipelineInputs {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// A grasp's feature vector: its patches' codes side by side (G·S × K → G × S·K).
 pub fn concatenated_codes(codes: Array2<f64>, sensors: usize) -> Array2<f64> {
     let (rows, k) = codes.dim();
@@ -317,6 +370,9 @@ pub struct PipelineSettings {
     /// Dictionary learning (its `num_bases` and `beta` are set per configuration).
     pub dictionary: DictionaryParams,
     pub svm: LinearSvmParams,
+    /// What the SVM reads (older results, without the field, read codes).
+    #[serde(default)]
+    pub inputs: PipelineInputs,
     /// Seed of the fold assignment.
     pub cv_seed: u64,
 }
@@ -329,6 +385,7 @@ impl Default for PipelineSettings {
                 loss: crate::svm::Loss::SquaredHinge,
                 ..Default::default()
             },
+            inputs: PipelineInputs::Codes,
             cv_seed: 0,
         }
     }
@@ -388,14 +445,16 @@ fn score_codes(
     dict: &Dictionary,
     gamma: f64,
     folds: &Folds,
-    svm: &LinearSvmParams,
+    settings: &PipelineSettings,
 ) -> Result<(Array2<f64>, CvResult, f64, f64), StabilityError> {
     let t0 = Instant::now();
     let codes = dict.encode(data.x.view(), gamma)?;
     let coding_secs = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let features = concatenated_codes(codes.clone(), data.sensor_count());
-    let cv = cross_validate(features.view(), &data.labels, folds, svm)?;
+    let features = settings
+        .inputs
+        .features(codes.clone(), data.x.view(), data.sensor_count());
+    let cv = cross_validate(features.view(), &data.labels, folds, &settings.svm)?;
     Ok((codes, cv, coding_secs, t1.elapsed().as_secs_f64()))
 }
 
@@ -577,7 +636,7 @@ pub fn finish(
     };
     let analyses = analyse(data, pars_cfg, &pd)?;
     let codes = grasp_codes(data, &pd, pars_cfg.gamma, &parsimonious.kfold)?;
-    let model = StabilityModel::train(data, pars_cfg, pd, &s.svm)?;
+    let model = StabilityModel::train(data, pars_cfg, pd, s)?;
     Ok(StabilityReport {
         session: data.session_name.clone(),
         grasps: data.grasp_count(),

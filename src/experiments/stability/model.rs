@@ -24,6 +24,9 @@ pub struct StabilityModel {
     pub sensors: usize,
     pub dim: usize,
     pub dictionary: Dictionary,
+    /// What the SVM reads (older results, without the field, read codes).
+    #[serde(default)]
+    pub inputs: PipelineInputs,
     pub svm: LinearSvm,
 }
 
@@ -33,17 +36,20 @@ impl StabilityModel {
         data: &StabilityData,
         config: Config,
         dictionary: Dictionary,
-        svm: &LinearSvmParams,
+        settings: &PipelineSettings,
     ) -> Result<Self, StabilityError> {
         let codes = dictionary.encode(data.x.view(), config.gamma)?;
-        let features = concatenated_codes(codes, data.sensor_count());
-        let svm = svm.fit(features.view(), &data.labels)?;
+        let features = settings
+            .inputs
+            .features(codes, data.x.view(), data.sensor_count());
+        let svm = settings.svm.fit(features.view(), &data.labels)?;
         Ok(StabilityModel {
             config,
             scaler: data.patches.scaler.clone(),
             sensors: data.sensor_count(),
             dim: data.dim(),
             dictionary,
+            inputs: settings.inputs,
             svm,
         })
     }
@@ -69,7 +75,7 @@ impl StabilityModel {
         let patches = ArrayView2::from_shape((self.sensors, self.dim), &img)
             .map_err(|e| StabilityError::Data(e.to_string()))?;
         let codes = self.dictionary.encode(patches, self.config.gamma)?;
-        let features = concatenated_codes(codes, self.sensors);
+        let features = self.inputs.features(codes, patches, self.sensors);
         Ok(self.svm.predict(features.row(0)))
     }
 }
@@ -110,9 +116,11 @@ pub fn evaluate_config(
     let dictionary_secs = t0.elapsed().as_secs_f64();
     progress.checkpoint()?;
     let kf = kfold.folds(data, settings.cv_seed)?;
-    let (codes, kcv, _, _) = score_codes(data, &dict, config.gamma, &kf, &settings.svm)?;
+    let (codes, kcv, _, _) = score_codes(data, &dict, config.gamma, &kf, settings)?;
     let of = objects.folds(data, settings.cv_seed)?;
-    let features = concatenated_codes(codes.clone(), data.sensor_count());
+    let features = settings
+        .inputs
+        .features(codes.clone(), data.x.view(), data.sensor_count());
     let ocv = cross_validate(features.view(), &data.labels, &of, &settings.svm)?;
     let (sparsity, active) = sparsity_of(codes.view());
     Ok((

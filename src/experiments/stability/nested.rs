@@ -185,7 +185,9 @@ fn nested_cells(
             for &gamma in &spec.gamma {
                 progress.checkpoint()?;
                 let codes = fit.dictionary.encode(data.x.view(), gamma)?;
-                let features = concatenated_codes(codes, data.sensor_count());
+                let features = settings
+                    .inputs
+                    .features(codes, data.x.view(), data.sensor_count());
                 let config = Config {
                     num_bases: k,
                     beta,

@@ -8,7 +8,8 @@ use crate::catalogue::MethodId;
 use std::collections::BTreeMap;
 
 use super::{
-    BasisUsage, CvScheme, GridImage as PatchImage, GridResult, StabilityOptions, StabilityReport,
+    BasisUsage, CvScheme, GridImage as PatchImage, GridResult, PipelineInputs, StabilityOptions,
+    StabilityReport,
 };
 use crate::experiments::links::{GraspLinks, basis_links, grasps_text};
 use crate::experiments::result::{
@@ -192,8 +193,12 @@ fn nested_scores(r: &StabilityReport) -> Vec<(String, f64)> {
 pub fn stability_report(r: &StabilityReport) -> AnalysisResult {
     let p = &r.parsimonious;
     let cfg = p.config;
+    let inputs = match r.options.settings.inputs {
+        PipelineInputs::Codes => "",
+        PipelineInputs::CodesAndRaw => ", codes+raw",
+    };
     let label = format!(
-        "sparse coding + SVM, K = {}, β = {}, γ = {}",
+        "sparse coding + SVM, K = {}, β = {}, γ = {}{inputs}",
         cfg.num_bases, cfg.beta, cfg.gamma
     );
     let figures = figures(r);
@@ -577,6 +582,7 @@ fn parameters(r: &StabilityReport) -> BTreeMap<String, String> {
         ("scaling".to_string(), r.scaling.clone()),
         ("objective convention".to_string(), r.convention.clone()),
         ("model selection".to_string(), r.selection_cv.clone()),
+        ("inputs".to_string(), r.options.settings.inputs.to_string()),
     ])
 }
 
