@@ -631,10 +631,7 @@ pub fn bench_held_out(a: BenchHeldOutArgs) -> anyhow::Result<()> {
         let fit = in_pool(a.threads, || {
             models::fit_stability(method, &train, &data, &opts, &crate::jobs::Progress::new())
         })??;
-        let label = match (method, inputs) {
-            (MethodId::SparseSvm, PipelineInputs::CodesAndRaw) => ", codes+raw",
-            _ => "",
-        };
+
         let file = fit.into_file(&train, &data);
         let p = &file.provenance;
         let score = |i: usize| p.selection.get(i).map_or(f64::NAN, |s| s.value);
@@ -651,7 +648,7 @@ pub fn bench_held_out(a: BenchHeldOutArgs) -> anyhow::Result<()> {
                     bail!("{} is not a grasp-stability model", method.key());
                 };
                 println!(
-                    "| {}{label} | {} | {:.3} | {:.3} | {:.2} | {} | {c} | {:.3} | {:.3} | {:.3} |",
+                    "| {} | {} | {:.3} | {:.3} | {:.2} | {} | {c} | {:.3} | {:.3} | {:.3} |",
                     p.summary().split(", trained on").next().unwrap_or_default(),
                     session::file_name(&a.train),
                     score(0),

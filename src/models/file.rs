@@ -86,12 +86,19 @@ impl Provenance {
         humantime::format_rfc3339_seconds(SystemTime::now()).to_string()
     }
 
-    /// "sparse coding + SVM (num_bases 29), trained on NAME (n grasps)".
+    /// "sparse coding + SVM (num_bases 29), trained on NAME (n grasps)"; a pipeline on
+    /// other inputs than the paper's says which ("num_bases 29, codes+raw").
     pub fn summary(&self) -> String {
+        let inputs = self
+            .parameters
+            .iter()
+            .find(|(k, v)| k == "inputs" && v != "codes")
+            .map(|(_, v)| v.clone());
         let size = self
             .size
             .iter()
             .map(|(k, v)| format!("{k} {v}"))
+            .chain(inputs)
             .collect::<Vec<_>>()
             .join(", ");
         let size = if size.is_empty() {

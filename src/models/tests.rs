@@ -86,6 +86,13 @@ fn codes_and_raw_give_the_svm_what_the_codes_drop() {
     // separate the sample's outcomes as the raw SVM does.
     assert!(score(&codes) <= 0.5 + 1e-12, "codes {}", score(&codes));
     assert!(score(&both) > 0.7, "codes+raw {}", score(&both));
+    // The summary (the Models list, held-out cards) tells the two apart.
+    assert!(
+        both.provenance
+            .summary()
+            .contains("(num_bases 8, codes+raw)")
+    );
+    assert!(codes.provenance.summary().contains("(num_bases 8)"));
     // The inputs travel with the file, and a file without them reads codes.
     let loaded = ModelFile::from_json(&both.to_json(), "m.json").unwrap();
     assert_eq!(loaded, both);
