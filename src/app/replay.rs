@@ -5,8 +5,7 @@
 use egui::{Color32, ComboBox, Vec2};
 use egui_plot::{Bar, BarChart, Line, Plot, PlotPoints, VLine};
 
-use super::figure_view::{legend_row, tick_spacer};
-use super::heatmap::rgb;
+use super::figure_view::{legend_row, series_rgb, tick_spacer};
 use crate::figures::{Scale, series_color};
 
 use super::heatmap::{colour_bar, sensor_heatmap};
@@ -433,7 +432,8 @@ struct Trace {
 impl Trace {
     /// Draw it with the current frame's cursor at `t_now`; the time a click or drag points at.
     fn show(self, ui: &mut egui::Ui, t_now: f64, height: f32) -> Option<f64> {
-        let color = |j: usize| rgb(series_color(j));
+        let ctx = ui.ctx().clone();
+        let color = |j: usize| series_rgb(&ctx, series_color(j));
         let entries: Vec<(String, egui::Color32)> = (self.lines.iter().enumerate())
             .map(|(j, (name, _))| (name.clone(), color(j)))
             .collect();

@@ -55,7 +55,7 @@ pub(super) fn show_chart(
         .collect();
     // A legend taller than a third of the plot would cover the data: it goes above the
     // plot instead, as a row of names in the series' colours.
-    let entries = legend_entries(chart);
+    let entries = legend_entries(ui.ctx(), chart);
     let mut height = height;
     let in_plot = legend_shown && (entries.len() as f32) * 18.0 <= height / 3.0;
     if legend_shown && !in_plot {
@@ -151,13 +151,13 @@ pub(super) fn show_chart(
 
 /// The chart's legend entries as the plot's legend shows them: one per series (a front
 /// joins its owner's) and one per reference line.
-fn legend_entries(chart: &figures::Chart) -> Vec<(String, Color32)> {
+fn legend_entries(ctx: &egui::Context, chart: &figures::Chart) -> Vec<(String, Color32)> {
     let series = (chart.series.iter().enumerate())
         .filter(|(_, s)| s.part_of.is_none())
         .map(|(i, s)| {
             (
                 s.name.clone(),
-                rgb(s.color.unwrap_or_else(|| series_color(i))),
+                series_rgb(ctx, s.color.unwrap_or_else(|| series_color(i))),
             )
         });
     let refs = (chart.ref_lines.iter()).map(|r| (r.label.clone(), Color32::GRAY));
@@ -186,7 +186,7 @@ fn plot_series(
     i: usize,
 ) {
     let (xs, ys) = (chart.x.scale, chart.y.scale);
-    let color = rgb(s.color.unwrap_or_else(|| series_color(i)));
+    let color = series_rgb(p.ctx(), s.color.unwrap_or_else(|| series_color(i)));
     let name = s.legend_name().to_string();
     let pts: Vec<[f64; 2]> =
         s.x.iter()

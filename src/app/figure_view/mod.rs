@@ -16,8 +16,8 @@ use egui_plot::{
 
 use super::heatmap::rgb;
 use crate::figures::{
-    self, ColorMap, ColorScale, ErrorDisplay, Figure, FigureKind, Orientation, Scale, SeriesStyle,
-    series_color,
+    self, ColorMap, ColorScale, ErrorDisplay, Figure, FigureKind, Orientation, Rgb, Scale,
+    SeriesStyle, series_color,
 };
 pub(crate) use axes::tick_spacer;
 use bars::show_bars;
@@ -25,6 +25,18 @@ pub(crate) use chart::legend_row;
 pub use chart::marker_position;
 use chart::show_chart;
 use grid::{show_heatmap, show_image_grid};
+
+/// A series' colour on screen: the export's, except that the palette's black (drawn on
+/// white paper) becomes the theme's text colour on a dark background, where black lines
+/// would vanish.
+pub(crate) fn series_rgb(ctx: &egui::Context, c: Rgb) -> Color32 {
+    let dark = ctx.global_style().visuals.dark_mode;
+    let near_black = u16::from(c.0) + u16::from(c.1) + u16::from(c.2) < 0x60;
+    match dark && near_black {
+        true => ctx.global_style().visuals.strong_text_color(),
+        false => rgb(c),
+    }
+}
 
 /// Map a value to plot coordinates (log10 on log axes); None where it cannot be drawn.
 fn coord(scale: Scale, v: f64) -> Option<f64> {
@@ -160,5 +172,26 @@ fn abbreviated(name: &str, max: usize) -> String {
         name.to_string()
     } else {
         name.chars().take(max.saturating_sub(1)).collect::<String>() + "…"
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_palettes_black_reads_on_a_dark_background() {
+        let ctx = egui::Context::default();
+        let black = series_color(6);
+        assert_eq!(black, Rgb(0, 0, 0), "the palette's seventh colour");
+        ctx.set_visuals(egui::Visuals::dark());
+        let on_dark = series_rgb(&ctx, black);
+        // The theme's text colour: far from the dark panel behind the plot.
+        assert_eq!(on_dark, egui::Visuals::dark().strong_text_color());
+        assert!(on_dark.r() > 0x80, "{on_dark:?}");
+        // Every other colour, and black on a light background, is the export's.
+        assert_eq!(series_rgb(&ctx, series_color(0)), rgb(series_color(0)));
+        ctx.set_visuals(egui::Visuals::light());
+        assert_eq!(series_rgb(&ctx, black), Color32::BLACK);
     }
 }
