@@ -6,7 +6,7 @@ use egui::{Color32, ComboBox, Vec2};
 use egui_plot::{Bar, BarChart, Line, Plot, PlotPoints, VLine};
 
 use super::figure_view::{legend_row, series_rgb, tick_spacer};
-use crate::figures::{Scale, series_color};
+use crate::figures::Scale;
 
 use super::heatmap::{colour_bar, sensor_heatmap};
 use super::loader::LoadedSession;
@@ -433,7 +433,7 @@ impl Trace {
     /// Draw it with the current frame's cursor at `t_now`; the time a click or drag points at.
     fn show(self, ui: &mut egui::Ui, t_now: f64, height: f32) -> Option<f64> {
         let ctx = ui.ctx().clone();
-        let color = |j: usize| series_rgb(&ctx, series_color(j));
+        let color = |j: usize| series_rgb(&ctx, None, j);
         let entries: Vec<(String, egui::Color32)> = (self.lines.iter().enumerate())
             .map(|(j, (name, _))| (name.clone(), color(j)))
             .collect();

@@ -72,7 +72,7 @@ pub(super) fn show_bars(
     }
     plot.show(ui, |p| {
         for (g, group) in bars.groups.iter().enumerate() {
-            let color = series_rgb(p.ctx(), group.color.unwrap_or_else(|| series_color(g)));
+            let color = series_rgb(p.ctx(), group.color, g);
             let offset = (g as f64 - (n_groups - 1.0) / 2.0) * width;
             let items: Vec<Bar> = group
                 .values

@@ -1,6 +1,6 @@
 //! Line and marker charts on screen through egui_plot, with hover values and clickable markers.
 
-use super::axes::{axis_hints, legend, tick_spacer};
+use super::axes::{axis_hints, emptiest_corner, legend, tick_spacer};
 use super::*;
 
 /// The hover text of a chart point: series, point label, both values with units.
@@ -129,7 +129,8 @@ pub(super) fn show_chart(
             }
         }
     });
-    paint_point_labels(ui, chart, &shown.transform);
+    let legend_box = in_plot.then(|| (emptiest_corner(&all_points), entries.as_slice()));
+    paint_point_labels(ui, chart, &shown.transform, legend_box);
     let r = &shown.response;
     ui.ctx()
         .data_mut(|d| d.insert_temp(transform_id(id), shown.transform));
@@ -154,12 +155,7 @@ pub(super) fn show_chart(
 fn legend_entries(ctx: &egui::Context, chart: &figures::Chart) -> Vec<(String, Color32)> {
     let series = (chart.series.iter().enumerate())
         .filter(|(_, s)| s.part_of.is_none())
-        .map(|(i, s)| {
-            (
-                s.name.clone(),
-                series_rgb(ctx, s.color.unwrap_or_else(|| series_color(i))),
-            )
-        });
+        .map(|(i, s)| (s.name.clone(), series_rgb(ctx, s.color, i)));
     let refs = (chart.ref_lines.iter()).map(|r| (r.label.clone(), Color32::GRAY));
     series.chain(refs).filter(|(n, _)| !n.is_empty()).collect()
 }
@@ -186,7 +182,7 @@ fn plot_series(
     i: usize,
 ) {
     let (xs, ys) = (chart.x.scale, chart.y.scale);
-    let color = series_rgb(p.ctx(), s.color.unwrap_or_else(|| series_color(i)));
+    let color = series_rgb(p.ctx(), s.color, i);
     let name = s.legend_name().to_string();
     let pts: Vec<[f64; 2]> =
         s.x.iter()
@@ -243,11 +239,18 @@ fn plot_series(
     );
 }
 
-/// Point labels, painted over the drawn plot where they fit (see [`place_labels`]).
-fn paint_point_labels(ui: &egui::Ui, chart: &figures::Chart, t: &egui_plot::PlotTransform) {
+/// Point labels, painted over the drawn plot where they fit (see [`place_labels`]) and
+/// clear of the in-plot legend, when there is one in `legend`'s corner.
+fn paint_point_labels(
+    ui: &egui::Ui,
+    chart: &figures::Chart,
+    t: &egui_plot::PlotTransform,
+    legend: Option<(Corner, &[(String, Color32)])>,
+) {
     let (xs, ys) = (chart.x.scale, chart.y.scale);
     let frame = *t.frame();
     let painter = ui.painter_at(frame);
+    let legend = legend.map(|(corner, entries)| legend_rect(ui, frame, corner, entries));
     let font = FontId::proportional(11.0);
     let color = ui.visuals().text_color();
     let on_screen =
@@ -270,9 +273,10 @@ fn paint_point_labels(ui: &egui::Ui, chart: &figures::Chart, t: &egui_plot::Plot
         }
     }
     let wanted: Vec<(Pos2, Vec2)> = labels.iter().map(|(at, g)| (*at, g.size())).collect();
-    for ((_, galley), place) in labels
-        .into_iter()
-        .zip(place_labels(frame, &wanted, &points))
+    for ((_, galley), place) in
+        labels
+            .into_iter()
+            .zip(place_labels(frame, &wanted, &points, legend.as_slice()))
     {
         if let Some(r) = place {
             painter.galley(r.min, galley, color);
@@ -280,11 +284,45 @@ fn paint_point_labels(ui: &egui::Ui, chart: &figures::Chart, t: &egui_plot::Plot
     }
 }
 
+/// Where egui_plot draws its legend of `entries` in `corner` of `frame`: 4 points in from
+/// the corner, a frame with margins of 8 × 4, and one row of the body font per entry with
+/// a swatch a row high (and a fifth of it apart) before each name.
+fn legend_rect(ui: &egui::Ui, frame: Rect, corner: Corner, entries: &[(String, Color32)]) -> Rect {
+    let font = egui::TextStyle::Body.resolve(ui.style());
+    let galleys: Vec<_> = (entries.iter())
+        .map(|(name, _)| {
+            ui.painter()
+                .layout_no_wrap(name.clone(), font.clone(), Color32::WHITE)
+        })
+        .collect();
+    let row = galleys.first().map_or(0.0, |g| g.size().y);
+    let width = galleys.iter().map(|g| g.size().x).fold(0.0f32, f32::max);
+    let gaps = galleys.len().saturating_sub(1) as f32 * ui.spacing().item_spacing.y;
+    let size = Vec2::new(
+        width + 1.2 * row + 16.0,
+        galleys.len() as f32 * row + gaps + 8.0,
+    );
+    let inner = frame.shrink(4.0);
+    let min = match corner {
+        Corner::LeftTop => inner.left_top(),
+        Corner::RightTop => Pos2::new(inner.right() - size.x, inner.top()),
+        Corner::LeftBottom => Pos2::new(inner.left(), inner.bottom() - size.y),
+        Corner::RightBottom => inner.right_bottom() - size,
+    };
+    Rect::from_min_size(min, size)
+}
+
 /// Where each label (its point and size) goes: beside its point, above right, above left,
 /// below right or below left, the first of these inside `frame` that overlaps no label
-/// placed before it and covers no point of `points`; None (dropped) when none does, as
-/// the export drops it. The point's tooltip still names it.
-fn place_labels(frame: Rect, labels: &[(Pos2, Vec2)], points: &[Pos2]) -> Vec<Option<Rect>> {
+/// placed before it, no rectangle of `avoid` (the legend) and covers no point of `points`;
+/// None (dropped) when none does, as the export drops it. The point's tooltip still names
+/// it.
+fn place_labels(
+    frame: Rect,
+    labels: &[(Pos2, Vec2)],
+    points: &[Pos2],
+    avoid: &[Rect],
+) -> Vec<Option<Rect>> {
     const GAP: f32 = 4.0;
     let mut placed: Vec<Rect> = Vec::new();
     labels
@@ -298,7 +336,7 @@ fn place_labels(frame: Rect, labels: &[(Pos2, Vec2)], points: &[Pos2]) -> Vec<Op
             ];
             let fits = |r: &Rect| {
                 frame.contains_rect(*r)
-                    && !placed.iter().any(|q| q.intersects(*r))
+                    && !placed.iter().chain(avoid).any(|q| q.intersects(*r))
                     && !points.iter().any(|p| r.expand(2.0).contains(*p))
             };
             let r = candidates
@@ -373,7 +411,7 @@ mod tests {
             .collect();
         points.push(Pos2::new(298.0, 2.0));
         let labels: Vec<(Pos2, Vec2)> = points.iter().map(|&p| (p, size)).collect();
-        let placed = place_labels(frame, &labels, &points);
+        let placed = place_labels(frame, &labels, &points, &[]);
         let shown: Vec<Rect> = placed.iter().flatten().copied().collect();
         // Four sides of the crowd, the corner point's label inside the plot.
         assert_eq!(shown.len(), 5, "{placed:?}");
@@ -389,5 +427,21 @@ mod tests {
         }
         let corner = placed[12].expect("the lone point's label has room");
         assert!(corner.max.x <= 298.0 && corner.min.y >= 2.0);
+    }
+
+    #[test]
+    fn labels_keep_clear_of_the_legend() {
+        let frame = Rect::from_min_size(Pos2::ZERO, Vec2::new(300.0, 200.0));
+        let size = Vec2::new(60.0, 12.0);
+        let legend = Rect::from_min_max(Pos2::new(200.0, 4.0), Pos2::new(296.0, 60.0));
+        // A point just left of the legend: its first choice (above right) runs into it.
+        let point = Pos2::new(180.0, 40.0);
+        let placed = place_labels(frame, &[(point, size)], &[point], &[legend]);
+        let r = placed[0].expect("room to the left");
+        assert!(!r.intersects(legend), "{r:?}");
+        assert!(r.max.x <= point.x, "placed to the left: {r:?}");
+        // Without the legend the first choice stands.
+        let free = place_labels(frame, &[(point, size)], &[point], &[])[0].unwrap();
+        assert!(free.min.x > point.x && free.intersects(legend));
     }
 }

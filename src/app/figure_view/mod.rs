@@ -26,14 +26,15 @@ pub use chart::marker_position;
 use chart::show_chart;
 use grid::{show_heatmap, show_image_grid};
 
-/// A series' colour on screen: the export's, except that the palette's black (drawn on
-/// white paper) becomes the theme's text colour on a dark background, where black lines
-/// would vanish.
-pub(crate) fn series_rgb(ctx: &egui::Context, c: Rgb) -> Color32 {
-    let dark = ctx.global_style().visuals.dark_mode;
+/// The colour of series `i` on screen: its own colour, else the palette's, as the export
+/// draws them, except that black (drawn on white paper) would vanish on a dark background
+/// and takes the theme's text colour there.
+pub(crate) fn series_rgb(ctx: &egui::Context, color: Option<Rgb>, i: usize) -> Color32 {
+    let c = color.unwrap_or_else(|| series_color(i));
+    let visuals = &ctx.global_style().visuals;
     let near_black = u16::from(c.0) + u16::from(c.1) + u16::from(c.2) < 0x60;
-    match dark && near_black {
-        true => ctx.global_style().visuals.strong_text_color(),
+    match visuals.dark_mode && near_black {
+        true => visuals.strong_text_color(),
         false => rgb(c),
     }
 }
@@ -182,16 +183,20 @@ mod tests {
     #[test]
     fn the_palettes_black_reads_on_a_dark_background() {
         let ctx = egui::Context::default();
-        let black = series_color(6);
-        assert_eq!(black, Rgb(0, 0, 0), "the palette's seventh colour");
+        let black = Rgb(0, 0, 0);
+        assert_eq!(series_color(6), black, "the palette's seventh colour");
         ctx.set_visuals(egui::Visuals::dark());
-        let on_dark = series_rgb(&ctx, black);
-        // The theme's text colour: far from the dark panel behind the plot.
-        assert_eq!(on_dark, egui::Visuals::dark().strong_text_color());
-        assert!(on_dark.r() > 0x80, "{on_dark:?}");
+        let panel = egui::Visuals::dark().extreme_bg_color;
+        let light = |c: Color32| u16::from(c.r()) + u16::from(c.g()) + u16::from(c.b());
+        // The palette's black series and a series given black are both bright against the
+        // dark panel behind the plot.
+        for c in [series_rgb(&ctx, None, 6), series_rgb(&ctx, Some(black), 0)] {
+            assert!(light(c) > light(panel) + 300, "{c:?}");
+        }
         // Every other colour, and black on a light background, is the export's.
-        assert_eq!(series_rgb(&ctx, series_color(0)), rgb(series_color(0)));
+        assert_eq!(series_rgb(&ctx, None, 0), rgb(series_color(0)));
         ctx.set_visuals(egui::Visuals::light());
-        assert_eq!(series_rgb(&ctx, black), Color32::BLACK);
+        assert_eq!(series_rgb(&ctx, None, 6), Color32::BLACK);
+        assert_eq!(series_rgb(&ctx, Some(black), 0), Color32::BLACK);
     }
 }
