@@ -224,16 +224,23 @@ fn plot_series(
                 .width(2.0),
         );
     }
-    // Markers on every series, so that every point has a hover value.
-    let radius = if s.style == SeriesStyle::Line {
-        1.5
+    // Markers on every series, so that every point has a hover value; a marked series takes
+    // the export's shape for its index, so that series of one colour stay apart.
+    let (radius, shape) = if s.style == SeriesStyle::Line {
+        (1.5, MarkerShape::Circle)
     } else {
-        3.5
+        let shapes = [
+            MarkerShape::Circle,
+            MarkerShape::Square,
+            MarkerShape::Up,
+            MarkerShape::Diamond,
+        ];
+        (3.5, shapes[i % shapes.len()])
     };
     p.points(
         Points::new(name.clone(), PlotPoints::new(pts))
             .color(color)
-            .shape(MarkerShape::Circle)
+            .shape(shape)
             .filled(true)
             .radius(radius),
     );
