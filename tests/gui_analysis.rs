@@ -359,8 +359,8 @@ fn choosing_gu_offers_its_thresholds_and_cluster_confirmation() {
     );
 }
 
-#[test]
-fn the_stability_form_puts_the_values_beside_the_codes() {
+/// The grasp-stability sample in the Grasp stability view, its form set to 8 bases.
+fn stability_form_at_8_bases() -> Harness<'static, WorkbenchApp> {
     let mut h = harness();
     h.get_by_label("Simulated grasp stability").click();
     h.run_ok();
@@ -368,6 +368,12 @@ fn the_stability_form_puts_the_values_beside_the_codes() {
     h.run_ok();
     h.get_by_label("num_bases").set_value_accesskit(8.0);
     h.run_ok();
+    h
+}
+
+#[test]
+fn the_stability_form_puts_the_values_beside_the_codes() {
+    let mut h = stability_form_at_8_bases();
     h.get_by_label("SVM reads the values beside the codes")
         .click();
     h.run_ok();
@@ -397,13 +403,7 @@ fn the_stability_form_puts_the_values_beside_the_codes() {
 
 #[test]
 fn stability_view_shows_the_first_papers_figures() {
-    let mut h = harness();
-    h.get_by_label("Simulated grasp stability").click();
-    h.run_ok();
-    h.get_by_label("Grasp stability").click();
-    h.run_ok();
-    h.get_by_label("num_bases").set_value_accesskit(8.0);
-    h.run_ok();
+    let mut h = stability_form_at_8_bases();
     assert_eq!(h.state().rooms.stability.form.num_bases, 8);
     run_job(&mut h);
     assert_result_count(&h, 1);
