@@ -631,7 +631,6 @@ pub fn bench_held_out(a: BenchHeldOutArgs) -> anyhow::Result<()> {
         let fit = in_pool(a.threads, || {
             models::fit_stability(method, &train, &data, &opts, &crate::jobs::Progress::new())
         })??;
-
         let file = fit.into_file(&train, &data);
         let p = &file.provenance;
         let score = |i: usize| p.selection.get(i).map_or(f64::NAN, |s| s.value);

@@ -1,6 +1,6 @@
 //! The human-readable summary of a `stability` run.
 
-use crate::experiments::stability::StabilityReport;
+use crate::experiments::stability::{PipelineInputs, StabilityReport};
 
 fn pct(v: f64) -> String {
     format!("{:.2} %", 100.0 * v)
@@ -19,6 +19,9 @@ pub fn report(r: &StabilityReport) -> String {
     ));
     line(format!("scaling: {}", r.scaling));
     line(format!("objective: {}", r.convention));
+    if r.options.settings.inputs == PipelineInputs::CodesAndRaw {
+        line("the SVM reads each grasp's codes followed by its scaled key-frame values".into());
+    }
     if let Some(g) = &r.grid {
         line(format!(
             "grid: {} cells ({} num_bases × {} beta × {} gamma), selection by {}, {:.1} s on {} threads",
