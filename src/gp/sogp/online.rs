@@ -242,6 +242,7 @@ impl Sogp {
     /// Remove BV `i` with the (Q + C) removal of Csató & Opper; the last BV moves into
     /// its slot.
     pub fn delete(&mut self, i: usize) {
+        self.own_inputs();
         if i >= self.n {
             return;
         }
