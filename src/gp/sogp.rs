@@ -35,7 +35,7 @@ use serde::{Deserialize, Serialize};
 
 use super::GpError;
 use super::inputs::{Inputs, Shift};
-use super::kernel::{KernelParams, LagMajor, RecursiveArd, dot};
+use super::kernel::{KernelParams, LagMajor, RecursiveArd, dot_rows};
 use super::normal::{log_norm_cdf, pdf_over_cdf};
 use super::sngd::SngdParams;
 use super::window::{SequenceWindows, Stamp, Window};
@@ -414,9 +414,7 @@ impl Sogp {
     #[inline(always)]
     fn refresh_posterior_portable(&mut self) {
         let (n, s) = (self.n, self.stride);
-        for i in 0..n {
-            self.ck[i] = dot(&self.c[i * s..i * s + n], &self.k[..n]);
-        }
+        dot_rows(&self.c, s, n, &self.k, &mut self.ck[..n]);
         let no = self.n_out;
         self.mean.fill(0.0);
         for i in 0..n {
