@@ -416,11 +416,21 @@ impl Sogp {
         let (n, s) = (self.n, self.stride);
         dot_rows(&self.c, s, n, &self.k, &mut self.ck[..n]);
         let no = self.n_out;
-        self.mean.fill(0.0);
-        for i in 0..n {
-            let ki = self.k[i];
-            for (m, a) in self.mean.iter_mut().zip(&self.alpha[i * no..(i + 1) * no]) {
-                *m += ki * a;
+        if no == 1 {
+            // The same additions in the same order, summed in a register rather than
+            // through memory (one chain of n dependent additions).
+            let mut m = 0.0;
+            for (k, a) in self.k[..n].iter().zip(&self.alpha[..n]) {
+                m += k * a;
+            }
+            self.mean[0] = m;
+        } else {
+            self.mean.fill(0.0);
+            for i in 0..n {
+                let ki = self.k[i];
+                for (m, a) in self.mean.iter_mut().zip(&self.alpha[i * no..(i + 1) * no]) {
+                    *m += ki * a;
+                }
             }
         }
         self.observed = Some(self.version);
