@@ -61,7 +61,7 @@ pub struct Ds {
     /// distinct inputs are then held once, and each new input's distances computed once
     /// per step for all of them (rebuilt on load).
     #[serde(skip_serializing)]
-    shared: Option<SharedInputs>,
+    shared: Option<Box<SharedInputs>>,
 }
 
 /// A [`Ds`] as it is saved: the fields of [`Ds`].
@@ -119,7 +119,7 @@ impl Ds {
             .gp
             .adaptation
             .is_none()
-            .then(|| SharedInputs::new(probe.kernel()));
+            .then(|| Box::new(SharedInputs::new(probe.kernel())));
         Ok(Ds {
             params: params.clone(),
             dim,
@@ -139,7 +139,7 @@ impl Ds {
     fn observe(&mut self, o: &[f64]) {
         self.window.push(o);
         for (m, q) in self.models.iter_mut().zip(self.q.iter_mut()) {
-            observe(m, self.shared.as_mut(), &self.window);
+            observe(m, self.shared.as_deref_mut(), &self.window);
             *q = m.probability();
         }
     }
@@ -156,7 +156,7 @@ impl Ds {
     /// table they share (None when they do not share one).
     pub fn distinct_inputs(&self) -> (usize, Option<usize>) {
         let sum = self.models.iter().map(Sogp::distinct_inputs).sum();
-        (sum, self.shared.as_ref().map(SharedInputs::distinct))
+        (sum, self.shared.as_ref().map(|s| s.distinct()))
     }
 
     /// The un-normalised q_c of the last step taken one at a time (a training step or
@@ -228,7 +228,7 @@ impl Ds {
             self.window.push(o);
             for (j, (m, q)) in self.models.iter_mut().zip(self.q.iter_mut()).enumerate() {
                 if touched[j] || j >= q_pred.ncols() || t >= q_pred.nrows() {
-                    observe(m, self.shared.as_mut(), &self.window);
+                    observe(m, self.shared.as_deref_mut(), &self.window);
                     *q = m.probability();
                 } else {
                     *q = q_pred[[t, j]];
@@ -240,7 +240,11 @@ impl Ds {
             self.update(class, 1.0);
             if let Some(w) = wrong {
                 if !touched[w] {
-                    observe(&mut self.models[w], self.shared.as_mut(), &self.window);
+                    observe(
+                        &mut self.models[w],
+                        self.shared.as_deref_mut(),
+                        &self.window,
+                    );
                     touched[w] = true;
                 }
                 self.update(w, -1.0);
