@@ -420,8 +420,12 @@ impl Inputs {
             let at = (t.head + lag) % self.tau * t.slots;
             let row = &t.rows[at..at + t.slots];
             let kt = &mut lag_k[lag * s..lag * s + m];
+            // Every index is a slot of the table, below the row's length: `get` instead of
+            // indexing lets the loop compile to vector gathers (a bounds check that may
+            // panic keeps it scalar).
             for (d, &j) in kt.iter_mut().zip(&self.index[lag * s..lag * s + m]) {
-                *d = row[j as usize];
+                debug_assert!((j as usize) < row.len());
+                *d = row.get(j as usize).copied().unwrap_or(f64::NAN);
             }
             for (k, r) in out[..m].iter_mut().zip(kt.iter_mut()) {
                 *k = exp_nonpos(-0.5 * *r + (*k - 1.0) * inv_rho);
