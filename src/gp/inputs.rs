@@ -435,6 +435,38 @@ impl Inputs {
     }
 }
 
+impl Inputs {
+    /// Unit K_tau as [`Inputs::unit_many`] gives it (bit for bit), without K_t per lag.
+    pub(crate) fn unit_k(&self, inv_rho: f64, n: usize, out: &mut [f64]) {
+        dispatch_wide!(["avx512f", "avx2"] Inputs::unit_k_portable, (
+            this: &Inputs = self,
+            inv_rho: f64 = inv_rho,
+            n: usize = n,
+            out: &mut [f64] = out,
+        ))
+    }
+
+    #[inline(always)]
+    fn unit_k_portable(&self, inv_rho: f64, n: usize, out: &mut [f64]) {
+        let (s, m) = (self.lanes, n.div_ceil(LANES) * LANES);
+        let t = &self.table;
+        let p = t.lead;
+        match p {
+            0 => out[..m].fill(1.0),
+            p => out[..m].copy_from_slice(&self.prefix[(p - 1) * s..(p - 1) * s + m]),
+        }
+        for lag in p..self.tau {
+            let at = (t.head + lag) % self.tau * t.slots;
+            let row = &t.rows[at..at + t.slots];
+            for (k, &j) in out[..m].iter_mut().zip(&self.index[lag * s..lag * s + m]) {
+                debug_assert!((j as usize) < row.len());
+                let r = row.get(j as usize).copied().unwrap_or(f64::NAN);
+                *k = exp_nonpos(-0.5 * r + (*k - 1.0) * inv_rho);
+            }
+        }
+    }
+}
+
 impl SharedInputs {
     /// A table for models with `kernel`'s hyperparameters.
     pub(crate) fn new(kernel: &RecursiveArd) -> SharedInputs {

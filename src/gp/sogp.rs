@@ -387,11 +387,20 @@ impl Sogp {
 
     /// The kernel vector (from the inputs' distance rows), C·k and the mean.
     fn evaluate(&mut self) {
+        self.evaluate_keeping(true);
+    }
+
+    /// [`Sogp::evaluate`], keeping K_t per lag (for the gradient) only if `lags`.
+    fn evaluate_keeping(&mut self, lags: bool) {
         let sf2 = self.kernel.sigma_f2();
         let n = self.n;
         let inv_rho = 1.0 / self.kernel.params().sigma_rho;
-        self.inputs
-            .unit_many(inv_rho, n, &mut self.lag_k, &mut self.k);
+        if lags {
+            self.inputs
+                .unit_many(inv_rho, n, &mut self.lag_k, &mut self.k);
+        } else {
+            self.inputs.unit_k(inv_rho, n, &mut self.k);
+        }
         for k in &mut self.k[..n] {
             *k *= sf2;
         }

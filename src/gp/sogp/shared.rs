@@ -93,7 +93,8 @@ impl Sogp {
             shared.observe(window, Some(stamp));
             let shift = self.shift_to(stamp);
             self.take_window(shift, window, stamp);
-            self.lend(shared, |m| m.evaluate());
+            // Without adaptation no gradient reads K_t per lag.
+            self.lend(shared, |m| m.evaluate_keeping(false));
         } else {
             self.observe_stamped(window, stamp);
         }
