@@ -10,6 +10,10 @@
 //! its distance up: a fraction of the tau·n distances of a direct evaluation. The
 //! distances are those [`super::kernel::sq_dist`] gives for the pair, so the kernel values
 //! are bit-identical to [`super::RecursiveArd::unit_many`].
+//!
+//! The models of a learner that observe one input stream with the same hyperparameters to
+//! the bit (no adaptation) can hold their distinct inputs in one [`SharedInputs`]: each
+//! new input's distances are then computed once per step for all of them.
 
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
@@ -62,10 +66,10 @@ pub(crate) struct Inputs {
     /// K_t of BV i after t = l + 1 padding lags (all-zero inputs, as at the start of a
     /// sequence): `prefix[l * lanes + i]`. It depends on the BV alone.
     prefix: Vec<f64>,
-    pub(crate) table: Table,
+    pub(super) table: Table,
     /// The BVs' inputs are in a [`SharedInputs`]; `table` is an empty stand-in, swapped
     /// with the shared table for the calls that read it.
-    pub(crate) shared: bool,
+    pub(super) shared: bool,
 }
 
 /// One [`Table`] for the models of a learner that observe one input stream with
@@ -76,12 +80,13 @@ pub(crate) struct Inputs {
 #[derive(Clone, Debug)]
 pub(crate) struct SharedInputs {
     kernel: RecursiveArd,
-    pub(crate) table: Table,
+    pub(super) table: Table,
     /// The stamp of the window the rows are for.
-    pub(crate) stamp: Option<Stamp>,
+    pub(super) stamp: Option<Stamp>,
     /// Input slots the models joined so far may hold at once.
     room: usize,
 }
+
 /// How an observed window stands to the one observed before it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Shift {
