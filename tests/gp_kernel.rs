@@ -183,3 +183,28 @@ fn many_bvs_at_once_equal_one_at_a_time() {
         }
     }
 }
+
+/// `dot_rows` sums each row as `dot` does, to the bit, for every row count and length
+/// (whole blocks of four rows and the rows after them, whole chunks of four values and the
+/// tail), over a strided matrix; values of mixed magnitudes make any other order of
+/// summation show in the last bits.
+#[test]
+fn dot_rows_sums_each_row_as_dot_does() {
+    use tactile_workbench::gp::kernel::{dot, dot_rows};
+    let mut rng = Rng::new(7);
+    for rows in 0..11 {
+        for n in 0..23 {
+            let stride = n + 3;
+            let m: Vec<f64> = (0..rows * stride)
+                .map(|_| rng.normal() * 10f64.powi(rng.below(9) as i32 - 4))
+                .collect();
+            let x: Vec<f64> = (0..n).map(|_| rng.normal()).collect();
+            let mut out = vec![0.0; rows];
+            dot_rows(&m, stride, n, &x, &mut out);
+            for (i, o) in out.iter().enumerate() {
+                let d = dot(&m[i * stride..i * stride + n], &x);
+                assert_eq!(o.to_bits(), d.to_bits(), "rows {rows}, n {n}, row {i}");
+            }
+        }
+    }
+}

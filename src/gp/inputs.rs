@@ -10,22 +10,25 @@
 //! its distance up: a fraction of the tau·n distances of a direct evaluation. The
 //! distances are those [`super::kernel::sq_dist`] gives for the pair, so the kernel values
 //! are bit-identical to [`super::RecursiveArd::unit_many`].
+//!
+//! The models of a learner that observe one input stream with the same hyperparameters to
+//! the bit (no adaptation) can hold their distinct inputs in one [`SharedInputs`]: each
+//! new input's distances are then computed once per step for all of them.
 
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
 use super::kernel::{LANES, LagMajor, RecursiveArd, exp_nonpos};
 use super::wide::dispatch_wide;
+use super::window::Stamp;
 
-/// The distinct inputs of the BV windows, the input at every (lag, BV), and the distance
-/// rows of the observed window.
+/// The distinct inputs of BV windows and the distances of the observed window's lags to
+/// them: one model's own, or held once for the models of a learner ([`SharedInputs`]).
 #[derive(Clone, Debug)]
-pub(crate) struct Inputs {
+pub(crate) struct Table {
     dim: usize,
     tau: usize,
-    /// BV slots per lag in `index` (the models' lane stride).
-    lanes: usize,
-    /// Input slots: BV slots × tau, the most a model can hold at once.
+    /// Input slots: the most inputs held at once.
     slots: usize,
     /// Scaled inputs (one lag each), blocked for the many-input distance.
     data: LagMajor,
@@ -38,22 +41,50 @@ pub(crate) struct Inputs {
     used: usize,
     /// Hash of a raw input → its slot.
     lookup: HashMap<u64, u32, BuildHasherDefault<Prehashed>>,
-    /// Input slot of BV i at lag l: `index[l * lanes + i]`.
-    index: Vec<u32>,
-    /// K_t of BV i after t = l + 1 padding lags (all-zero inputs, as at the start of a
-    /// sequence): `prefix[l * lanes + i]`. It depends on the BV alone.
-    prefix: Vec<f64>,
     /// Leading padding lags of the observed window.
     lead: usize,
     /// Distances of the observed window's lags to every slot: tau rows of `slots`, lag l
     /// in row (head + l) mod tau.
     rows: Vec<f64>,
     head: usize,
-    /// The rows belong to the window last given to [`Inputs::observe`] and the stored
+    /// The observed window's lags, scaled, in the rows' order (lag l at (head + l) mod tau).
+    seen: Vec<f64>,
+    /// The rows belong to the window last given to [`Table::observe`] and the stored
     /// inputs.
     current: bool,
-    /// Scratch: one scaled lag.
-    scaled: Vec<f64>,
+}
+
+/// The inputs of one model's BVs: where each (BV, lag) input is in a [`Table`], and the
+/// table itself (the model's own, or a stand-in while a learner's shared one serves it).
+#[derive(Clone, Debug)]
+pub(crate) struct Inputs {
+    tau: usize,
+    /// BV slots per lag in `index` (the models' lane stride).
+    lanes: usize,
+    /// Input slot of BV i at lag l: `index[l * lanes + i]`.
+    index: Vec<u32>,
+    /// K_t of BV i after t = l + 1 padding lags (all-zero inputs, as at the start of a
+    /// sequence): `prefix[l * lanes + i]`. It depends on the BV alone.
+    prefix: Vec<f64>,
+    pub(super) table: Table,
+    /// The BVs' inputs are in a [`SharedInputs`]; `table` is an empty stand-in, swapped
+    /// with the shared table for the calls that read it.
+    pub(super) shared: bool,
+}
+
+/// One [`Table`] for the models of a learner that observe one input stream with
+/// bit-identical kernel hyperparameters and no adaptation (so that they stay identical):
+/// the squared distances of an input to another are then the same number for every model,
+/// so each new input's distances are computed once per step instead of once per model.
+/// Each model keeps its own (BV, lag) → slot index and padding prefixes.
+#[derive(Clone, Debug)]
+pub(crate) struct SharedInputs {
+    kernel: RecursiveArd,
+    pub(super) table: Table,
+    /// The stamp of the window the rows are for.
+    pub(super) stamp: Option<Stamp>,
+    /// Input slots the models joined so far may hold at once.
+    room: usize,
 }
 
 /// How an observed window stands to the one observed before it.
@@ -109,16 +140,14 @@ fn same_bits(a: &[f64], b: &[f64]) -> bool {
     a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
 }
 
-impl Inputs {
-    /// Room for `bv_slots` BVs of `tau` lags of `dim` inputs; `lanes` is the BV stride of
-    /// the kernel buffers (a multiple of [`LANES`], at least `bv_slots`).
-    pub(crate) fn new(dim: usize, tau: usize, bv_slots: usize, lanes: usize) -> Inputs {
-        let data = LagMajor::new(dim, 1, bv_slots * tau);
+impl Table {
+    /// Room for `slots` inputs of `dim` values, over `tau` lags.
+    pub(crate) fn new(dim: usize, tau: usize, slots: usize) -> Table {
+        let data = LagMajor::new(dim, 1, slots);
         let slots = data.stride();
-        Inputs {
+        Table {
             dim,
             tau,
-            lanes,
             slots,
             data,
             raw: vec![0.0; slots * dim],
@@ -126,18 +155,16 @@ impl Inputs {
             free: Vec::new(),
             used: 0,
             lookup: HashMap::default(),
-            index: vec![0; tau * lanes],
-            prefix: vec![0.0; tau * lanes],
             lead: 0,
             rows: vec![0.0; tau * slots],
             head: 0,
+            seen: vec![0.0; tau * dim],
             current: false,
-            scaled: vec![0.0; dim],
         }
     }
 
-    /// Forget every input and the distance rows (the BVs are about to be stored again).
-    pub(crate) fn clear(&mut self) {
+    /// Forget every input and the distance rows.
+    fn clear(&mut self) {
         self.refs.fill(0);
         self.free.clear();
         self.used = 0;
@@ -145,7 +172,14 @@ impl Inputs {
         self.current = false;
     }
 
-    /// The slot of one raw input (scaled `scaled`), stored if new; one more reference.
+    /// Inputs held by at least one BV.
+    pub(crate) fn distinct(&self) -> usize {
+        self.used - self.free.len()
+    }
+
+    /// The slot of one raw input (scaled `scaled`), stored if new, with its distances to
+    /// the observed lags while the rows are current; one more reference.
+    #[inline(always)]
     fn acquire(&mut self, raw: &[f64], scaled: &[f64]) -> usize {
         let h = hash_bits(raw);
         if let Some(&j) = self.lookup.get(&h) {
@@ -167,69 +201,53 @@ impl Inputs {
         self.refs[j] = 1;
         // On a hash collision the earlier input keeps the entry; this one is only unshared.
         self.lookup.entry(h).or_insert(j as u32);
+        if self.current {
+            let d = self.dim;
+            for r in 0..self.tau {
+                let x = &self.seen[r * d..(r + 1) * d];
+                self.rows[r * self.slots + j] = super::kernel::sq_dist(x, scaled);
+            }
+        }
         j
     }
 
-    /// Store BV `i` (raw and scaled window, oldest lag first) of a kernel with recursion
-    /// divisor 1/`inv_rho`. While the rows are current, the window must be the observed
-    /// one (a model stores the window it observed); a new input's distances to the
-    /// observed lags are then added to the rows.
-    pub(crate) fn add_bv(&mut self, i: usize, raw: &[f64], scaled: &[f64], inv_rho: f64) {
-        // Wide vectors for the new input's distances and the prefixes' exponentials (the
-        // same operations in the same order, so the same bits).
-        dispatch_wide!(["avx512f", "avx2"] Inputs::add_bv_portable, (
-            this: &mut Inputs = self,
-            i: usize = i,
-            raw: &[f64] = raw,
-            scaled: &[f64] = scaled,
-            inv_rho: f64 = inv_rho,
-        ))
-    }
-
-    #[inline(always)]
-    fn add_bv_portable(&mut self, i: usize, raw: &[f64], scaled: &[f64], inv_rho: f64) {
-        let d = self.dim;
-        let mut k = 1.0;
-        for lag in 0..self.tau {
-            let (r, s) = (
-                &raw[lag * d..(lag + 1) * d],
-                &scaled[lag * d..(lag + 1) * d],
-            );
-            let j = self.acquire(r, s);
-            self.index[lag * self.lanes + i] = j as u32;
-            // As the recursion runs at a padding lag: the distance is the input's norm.
-            k = exp_nonpos(-0.5 * self.data.norm(0, j) + (k - 1.0) * inv_rho);
-            self.prefix[lag * self.lanes + i] = k;
-            if self.current && self.refs[j] == 1 {
-                for l in 0..self.tau {
-                    let row = (self.head + l) % self.tau * self.slots;
-                    self.rows[row + j] = super::kernel::sq_dist(&scaled[l * d..(l + 1) * d], s);
-                }
+    /// One reference fewer to slot `j`; freed when no BV holds it any more.
+    fn release(&mut self, j: usize) {
+        self.refs[j] -= 1;
+        if self.refs[j] == 0 {
+            let h = hash_bits(&self.raw[j * self.dim..(j + 1) * self.dim]);
+            if self.lookup.get(&h) == Some(&(j as u32)) {
+                self.lookup.remove(&h);
             }
+            self.free.push(j as u32);
         }
     }
 
-    /// Drop BV `i`'s references; inputs no BV holds any more are freed.
-    pub(crate) fn release_bv(&mut self, i: usize) {
-        for lag in 0..self.tau {
-            let j = self.index[lag * self.lanes + i] as usize;
-            self.refs[j] -= 1;
-            if self.refs[j] == 0 {
-                let h = hash_bits(&self.raw[j * self.dim..(j + 1) * self.dim]);
-                if self.lookup.get(&h) == Some(&(j as u32)) {
-                    self.lookup.remove(&h);
-                }
-                self.free.push(j as u32);
-            }
+    /// Room for `slots` inputs: the inputs, their slots and the rows are kept (the
+    /// stored scaled inputs are scaled again from the raw ones by `kernel`, the
+    /// kernel that scaled them: the same bits).
+    fn grow(&mut self, kernel: &RecursiveArd, slots: usize) {
+        if slots <= self.slots {
+            return;
         }
-    }
-
-    /// Move BV `from`'s inputs and prefixes into slot `to` (whose BV was released).
-    pub(crate) fn move_bv(&mut self, from: usize, to: usize) {
-        for lag in 0..self.tau {
-            self.index[lag * self.lanes + to] = self.index[lag * self.lanes + from];
-            self.prefix[lag * self.lanes + to] = self.prefix[lag * self.lanes + from];
+        let (d, old) = (self.dim, self.slots);
+        self.data = LagMajor::new(d, 1, slots);
+        self.slots = self.data.stride();
+        let mut scaled = vec![0.0; d];
+        for j in 0..self.used {
+            kernel.scale_into(&self.raw[j * d..(j + 1) * d], &mut scaled);
+            self.data.set(j, &scaled);
         }
+        self.raw.resize(self.slots * d, 0.0);
+        self.refs.resize(self.slots, 0);
+        let mut rows = vec![0.0; self.tau * self.slots];
+        for (to, from) in rows
+            .chunks_exact_mut(self.slots)
+            .zip(self.rows.chunks_exact(old))
+        {
+            to[..self.used].copy_from_slice(&from[..self.used]);
+        }
+        self.rows = rows;
     }
 
     /// Make the rows those of `window` (raw, oldest lag first), which stands to the window
@@ -265,8 +283,8 @@ impl Inputs {
 
     /// Row of lag `lag`: the distances of the raw input `x` to every used slot.
     fn fill_row(&mut self, kernel: &RecursiveArd, lag: usize, x: &[f64]) {
-        dispatch_wide!(["avx512f", "avx2"] Inputs::fill_row_portable, (
-            this: &mut Inputs = self,
+        dispatch_wide!(["avx512f", "avx2"] Table::fill_row_portable, (
+            this: &mut Table = self,
             kernel: &RecursiveArd = kernel,
             lag: usize = lag,
             x: &[f64] = x,
@@ -275,11 +293,104 @@ impl Inputs {
 
     #[inline(always)]
     fn fill_row_portable(&mut self, kernel: &RecursiveArd, lag: usize, x: &[f64]) {
-        kernel.scale_into(x, &mut self.scaled);
+        let r = (self.head + lag) % self.tau;
+        let seen = &mut self.seen[r * self.dim..(r + 1) * self.dim];
+        kernel.scale_into(x, seen);
         let m = self.used.div_ceil(LANES) * LANES;
-        let at = (self.head + lag) % self.tau * self.slots;
+        let at = r * self.slots;
         self.data
-            .lag_sq_dist(0, &self.scaled, m, &mut self.rows[at..at + m]);
+            .lag_sq_dist(0, seen, m, &mut self.rows[at..at + m]);
+    }
+}
+
+impl Inputs {
+    /// Room for `bv_slots` BVs of `tau` lags of `dim` inputs; `lanes` is the BV stride of
+    /// the kernel buffers (a multiple of [`LANES`], at least `bv_slots`).
+    pub(crate) fn new(dim: usize, tau: usize, bv_slots: usize, lanes: usize) -> Inputs {
+        Inputs {
+            tau,
+            lanes,
+            index: vec![0; tau * lanes],
+            prefix: vec![0.0; tau * lanes],
+            table: Table::new(dim, tau, bv_slots * tau),
+            shared: false,
+        }
+    }
+
+    /// Forget every input and the distance rows (the BVs are about to be stored again).
+    pub(crate) fn clear(&mut self) {
+        debug_assert!(
+            !self.shared,
+            "a shared table is cleared only by its learner"
+        );
+        self.table.clear();
+    }
+
+    /// Store BV `i` (raw and scaled window, oldest lag first) of a kernel with recursion
+    /// divisor 1/`inv_rho`. While the rows are current, a new input's distances to the
+    /// observed lags are added to them.
+    pub(crate) fn add_bv(&mut self, i: usize, raw: &[f64], scaled: &[f64], inv_rho: f64) {
+        // Wide vectors for the new input's distances and the prefixes' exponentials (the
+        // same operations in the same order, so the same bits).
+        dispatch_wide!(["avx512f", "avx2"] Inputs::add_bv_portable, (
+            this: &mut Inputs = self,
+            i: usize = i,
+            raw: &[f64] = raw,
+            scaled: &[f64] = scaled,
+            inv_rho: f64 = inv_rho,
+        ))
+    }
+
+    #[inline(always)]
+    fn add_bv_portable(&mut self, i: usize, raw: &[f64], scaled: &[f64], inv_rho: f64) {
+        let d = self.table.dim;
+        let mut k = 1.0;
+        for lag in 0..self.tau {
+            let (r, s) = (
+                &raw[lag * d..(lag + 1) * d],
+                &scaled[lag * d..(lag + 1) * d],
+            );
+            let j = self.table.acquire(r, s);
+            self.index[lag * self.lanes + i] = j as u32;
+            // As the recursion runs at a padding lag: the distance is the input's norm.
+            k = exp_nonpos(-0.5 * self.table.data.norm(0, j) + (k - 1.0) * inv_rho);
+            self.prefix[lag * self.lanes + i] = k;
+        }
+    }
+
+    /// Drop BV `i`'s references; inputs no BV holds any more are freed.
+    pub(crate) fn release_bv(&mut self, i: usize) {
+        for lag in 0..self.tau {
+            self.table
+                .release(self.index[lag * self.lanes + i] as usize);
+        }
+    }
+
+    /// Move BV `from`'s inputs and prefixes into slot `to` (whose BV was released).
+    pub(crate) fn move_bv(&mut self, from: usize, to: usize) {
+        for lag in 0..self.tau {
+            self.index[lag * self.lanes + to] = self.index[lag * self.lanes + from];
+            self.prefix[lag * self.lanes + to] = self.prefix[lag * self.lanes + from];
+        }
+    }
+
+    /// The table's rows made those of `window` (see [`Table::observe`]).
+    pub(crate) fn observe(&mut self, kernel: &RecursiveArd, shift: Shift, window: &[f64]) {
+        self.table.observe(kernel, shift, window);
+    }
+
+    /// Distinct inputs held by BVs 0..n (with those of other models, in a shared table).
+    pub(crate) fn distinct_of(&self, n: usize) -> usize {
+        let mut slots: Vec<u32> = (0..self.tau)
+            .flat_map(|l| {
+                self.index[l * self.lanes..l * self.lanes + n]
+                    .iter()
+                    .copied()
+            })
+            .collect();
+        slots.sort_unstable();
+        slots.dedup();
+        slots.len()
     }
 
     /// Unit K_tau between the observed window and BVs 0..n, as
@@ -299,8 +410,9 @@ impl Inputs {
     #[inline(always)]
     fn unit_many_portable(&self, inv_rho: f64, n: usize, lag_k: &mut [f64], out: &mut [f64]) {
         let (s, m) = (self.lanes, n.div_ceil(LANES) * LANES);
+        let t = &self.table;
         // The leading padding lags: K_t from the BVs' prefixes.
-        let p = self.lead;
+        let p = t.lead;
         for lag in 0..p {
             let row = &self.prefix[lag * s..lag * s + m];
             lag_k[lag * s..lag * s + m].copy_from_slice(row);
@@ -310,16 +422,105 @@ impl Inputs {
             p => out[..m].copy_from_slice(&self.prefix[(p - 1) * s..(p - 1) * s + m]),
         }
         for lag in p..self.tau {
-            let at = (self.head + lag) % self.tau * self.slots;
-            let row = &self.rows[at..at + self.slots];
+            let at = (t.head + lag) % self.tau * t.slots;
+            let row = &t.rows[at..at + t.slots];
             let kt = &mut lag_k[lag * s..lag * s + m];
+            // Every index is a slot of the table, below the row's length: `get` instead of
+            // indexing lets the loop compile to vector gathers (a bounds check that may
+            // panic keeps it scalar).
             for (d, &j) in kt.iter_mut().zip(&self.index[lag * s..lag * s + m]) {
-                *d = row[j as usize];
+                debug_assert!((j as usize) < row.len());
+                *d = row.get(j as usize).copied().unwrap_or(f64::NAN);
             }
             for (k, r) in out[..m].iter_mut().zip(kt.iter_mut()) {
                 *k = exp_nonpos(-0.5 * *r + (*k - 1.0) * inv_rho);
                 *r = *k;
             }
         }
+    }
+}
+
+impl Inputs {
+    /// Unit K_tau as [`Inputs::unit_many`] gives it (bit for bit), without K_t per lag.
+    pub(crate) fn unit_k(&self, inv_rho: f64, n: usize, out: &mut [f64]) {
+        dispatch_wide!(["avx512f", "avx2"] Inputs::unit_k_portable, (
+            this: &Inputs = self,
+            inv_rho: f64 = inv_rho,
+            n: usize = n,
+            out: &mut [f64] = out,
+        ))
+    }
+
+    #[inline(always)]
+    fn unit_k_portable(&self, inv_rho: f64, n: usize, out: &mut [f64]) {
+        let (s, m) = (self.lanes, n.div_ceil(LANES) * LANES);
+        let t = &self.table;
+        let p = t.lead;
+        match p {
+            0 => out[..m].fill(1.0),
+            p => out[..m].copy_from_slice(&self.prefix[(p - 1) * s..(p - 1) * s + m]),
+        }
+        for lag in p..self.tau {
+            let at = (t.head + lag) % self.tau * t.slots;
+            let row = &t.rows[at..at + t.slots];
+            for (k, &j) in out[..m].iter_mut().zip(&self.index[lag * s..lag * s + m]) {
+                debug_assert!((j as usize) < row.len());
+                let r = row.get(j as usize).copied().unwrap_or(f64::NAN);
+                *k = exp_nonpos(-0.5 * r + (*k - 1.0) * inv_rho);
+            }
+        }
+    }
+}
+
+impl SharedInputs {
+    /// A table for models with `kernel`'s hyperparameters.
+    pub(crate) fn new(kernel: &RecursiveArd) -> SharedInputs {
+        SharedInputs {
+            kernel: kernel.clone(),
+            table: Table::new(kernel.dim(), kernel.tau(), 0),
+            stamp: None,
+            room: 0,
+        }
+    }
+
+    /// True if a model with `kernel` reads the same distances from this table as from its
+    /// own: the same dimensions, every hyperparameter equal to the bit, and (`adapts`
+    /// false) no adaptation that could change them.
+    pub(crate) fn fits(&self, kernel: &RecursiveArd, adapts: bool) -> bool {
+        let (a, b) = (self.kernel.params(), kernel.params());
+        let same = |x: f64, y: f64| x.to_bits() == y.to_bits();
+        !adapts
+            && self.kernel.dim() == kernel.dim()
+            && self.kernel.tau() == kernel.tau()
+            && a.lengthscales.len() == b.lengthscales.len()
+            && a.lengthscales
+                .iter()
+                .zip(&b.lengthscales)
+                .all(|(x, y)| same(*x, *y))
+            && same(a.sigma_rho, b.sigma_rho)
+            && same(a.sigma_f, b.sigma_f)
+            && same(a.sigma_n, b.sigma_n)
+    }
+
+    /// Room for `slots` more inputs held at once (a model joining).
+    pub(crate) fn reserve(&mut self, slots: usize) {
+        self.room += slots;
+        self.table.grow(&self.kernel, self.room);
+    }
+
+    /// The rows made those of `window` stamped `stamp` (None: unknown, every row again).
+    pub(crate) fn observe(&mut self, window: &[f64], stamp: Option<Stamp>) {
+        let shift = match (self.stamp, stamp) {
+            (Some(a), Some(b)) if a == b => Shift::Same,
+            (Some(a), Some(b)) if b.follows(a) => Shift::ByOne,
+            _ => Shift::Other,
+        };
+        self.table.observe(&self.kernel, shift, window);
+        self.stamp = stamp;
+    }
+
+    /// Distinct inputs held by the models' BVs.
+    pub(crate) fn distinct(&self) -> usize {
+        self.table.distinct()
     }
 }

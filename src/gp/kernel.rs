@@ -185,6 +185,48 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
+/// `out[i] = dot(&m[i * stride..i * stride + n], x)` for the rows i of `out`, four rows
+/// at a time. Each row is summed in [`dot`]'s order (the same bits); the four rows' sums
+/// are independent chains of additions, which the processor overlaps (one row's chain
+/// alone waits on the latency of each addition).
+#[inline(always)]
+pub fn dot_rows(m: &[f64], stride: usize, n: usize, x: &[f64], out: &mut [f64]) {
+    let x = &x[..n];
+    let full = n / 4 * 4;
+    let mut blocks = out.chunks_exact_mut(4);
+    let mut i = 0;
+    for o in &mut blocks {
+        let row = |q: usize| &m[(i + q) * stride..(i + q) * stride + n];
+        let (r0, r1, r2, r3) = (row(0), row(1), row(2), row(3));
+        let mut acc = [[0.0f64; 4]; 4];
+        let chunks = r0[..full]
+            .chunks_exact(4)
+            .zip(r1[..full].chunks_exact(4))
+            .zip(r2[..full].chunks_exact(4))
+            .zip(r3[..full].chunks_exact(4))
+            .zip(x[..full].chunks_exact(4));
+        for ((((a0, a1), a2), a3), y) in chunks {
+            for l in 0..4 {
+                acc[0][l] += a0[l] * y[l];
+                acc[1][l] += a1[l] * y[l];
+                acc[2][l] += a2[l] * y[l];
+                acc[3][l] += a3[l] * y[l];
+            }
+        }
+        for (q, (o, a)) in o.iter_mut().zip(&acc).enumerate() {
+            let mut tail = 0.0;
+            for (v, y) in row(q)[full..].iter().zip(&x[full..]) {
+                tail += v * y;
+            }
+            *o = (a[0] + a[1]) + (a[2] + a[3]) + tail;
+        }
+        i += 4;
+    }
+    for (q, o) in blocks.into_remainder().iter_mut().enumerate() {
+        *o = dot(&m[(i + q) * stride..(i + q) * stride + n], x);
+    }
+}
+
 /// BVs processed together by the many-BV kernels (one AVX-512 register, two AVX2 ones).
 pub const LANES: usize = 8;
 

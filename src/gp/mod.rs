@@ -18,6 +18,7 @@ pub mod sogp;
 mod wide;
 pub mod window;
 
+pub(crate) use inputs::SharedInputs;
 pub use kernel::{KernelParams, LagMajor, RecursiveArd};
 pub use sngd::{Sngd, SngdParams};
 pub use sogp::{Likelihood, Sogp, SogpParams};

@@ -24,6 +24,7 @@
 mod adapt;
 mod gram;
 mod online;
+mod shared;
 mod state;
 #[cfg(test)]
 mod tests;
@@ -34,7 +35,7 @@ use serde::{Deserialize, Serialize};
 
 use super::GpError;
 use super::inputs::{Inputs, Shift};
-use super::kernel::{KernelParams, LagMajor, RecursiveArd, dot};
+use super::kernel::{KernelParams, LagMajor, RecursiveArd, dot_rows};
 use super::normal::{log_norm_cdf, pdf_over_cdf};
 use super::sngd::SngdParams;
 use super::window::{SequenceWindows, Stamp, Window};
@@ -308,6 +309,7 @@ impl Sogp {
     /// Evaluate the kernel vector, C·k and the mean at `window` (tau·dim values, oldest
     /// lag first); the following [`Sogp::update`] reuses them.
     pub fn observe(&mut self, window: &[f64]) {
+        self.own_inputs();
         let shift = Shift::between(&self.x_raw, window, self.kernel.dim());
         self.inputs.observe(&self.kernel, shift, window);
         // Copied even when equal as numbers: a BV keeps the window's bits.
@@ -320,15 +322,25 @@ impl Sogp {
     /// [`Sogp::observe`] at a window of a sequence: its stamp tells whether it is the
     /// window observed last, or that one shifted by one input, without comparing them.
     pub fn observe_window(&mut self, window: &Window) {
-        let stamp = window.stamp();
+        self.observe_stamped(window.as_slice(), window.stamp());
+    }
+
+    /// [`Sogp::observe_window`] of a window given as its values and stamp.
+    fn observe_stamped(&mut self, window: &[f64], stamp: Stamp) {
+        self.own_inputs();
         let shift = self.shift_to(stamp);
-        self.inputs.observe(&self.kernel, shift, window.as_slice());
+        self.inputs.observe(&self.kernel, shift, window);
+        self.take_window(shift, window, stamp);
+        self.evaluate();
+    }
+
+    /// Keep the observed window (raw) and its stamp unless it is the one kept.
+    fn take_window(&mut self, shift: Shift, window: &[f64], stamp: Stamp) {
         if shift != Shift::Same {
-            self.x_raw.copy_from_slice(window.as_slice());
+            self.x_raw.copy_from_slice(window);
             self.x_stamp = Some(stamp);
             self.x_scaled_current = false;
         }
-        self.evaluate();
     }
 
     /// How the window stamped `stamp` stands to the one observed last.
@@ -350,6 +362,7 @@ impl Sogp {
         from: usize,
         mut each: impl FnMut(usize, &Sogp),
     ) {
+        self.own_inputs();
         for (t, n) in (from..=windows.len()).enumerate() {
             let (window, stamp) = windows.after(n);
             let shift = self.shift_to(stamp);
@@ -374,11 +387,20 @@ impl Sogp {
 
     /// The kernel vector (from the inputs' distance rows), C·k and the mean.
     fn evaluate(&mut self) {
+        self.evaluate_keeping(true);
+    }
+
+    /// [`Sogp::evaluate`], keeping K_t per lag (for the gradient) only if `lags`.
+    fn evaluate_keeping(&mut self, lags: bool) {
         let sf2 = self.kernel.sigma_f2();
         let n = self.n;
         let inv_rho = 1.0 / self.kernel.params().sigma_rho;
-        self.inputs
-            .unit_many(inv_rho, n, &mut self.lag_k, &mut self.k);
+        if lags {
+            self.inputs
+                .unit_many(inv_rho, n, &mut self.lag_k, &mut self.k);
+        } else {
+            self.inputs.unit_k(inv_rho, n, &mut self.k);
+        }
         for k in &mut self.k[..n] {
             *k *= sf2;
         }
@@ -401,15 +423,23 @@ impl Sogp {
     #[inline(always)]
     fn refresh_posterior_portable(&mut self) {
         let (n, s) = (self.n, self.stride);
-        for i in 0..n {
-            self.ck[i] = dot(&self.c[i * s..i * s + n], &self.k[..n]);
-        }
+        dot_rows(&self.c, s, n, &self.k, &mut self.ck[..n]);
         let no = self.n_out;
-        self.mean.fill(0.0);
-        for i in 0..n {
-            let ki = self.k[i];
-            for (m, a) in self.mean.iter_mut().zip(&self.alpha[i * no..(i + 1) * no]) {
-                *m += ki * a;
+        if no == 1 {
+            // The same additions in the same order, summed in a register rather than
+            // through memory (one chain of n dependent additions).
+            let mut m = 0.0;
+            for (k, a) in self.k[..n].iter().zip(&self.alpha[..n]) {
+                m += k * a;
+            }
+            self.mean[0] = m;
+        } else {
+            self.mean.fill(0.0);
+            for i in 0..n {
+                let ki = self.k[i];
+                for (m, a) in self.mean.iter_mut().zip(&self.alpha[i * no..(i + 1) * no]) {
+                    *m += ki * a;
+                }
             }
         }
         self.observed = Some(self.version);
@@ -449,6 +479,12 @@ impl Sogp {
 
     /// Train on target `y` at the last observed window (observing again if the model changed).
     pub fn update(&mut self, y: &[f64]) {
+        self.own_inputs();
+        self.learn(y);
+    }
+
+    /// [`Sogp::update`] with the distinct inputs where they are (its own or shared).
+    fn learn(&mut self, y: &[f64]) {
         if self.observed != Some(self.version) {
             self.refresh();
         }

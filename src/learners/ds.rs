@@ -13,7 +13,7 @@ use ndarray::{Array2, ArrayView2};
 use serde::{Deserialize, Serialize};
 
 use super::{LearnerError, SequenceClassifier};
-use crate::gp::{Likelihood, SequenceWindows, Sogp, SogpParams, Window};
+use crate::gp::{Likelihood, SequenceWindows, SharedInputs, Sogp, SogpParams, Window};
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DsParams {
@@ -57,6 +57,11 @@ pub struct Ds {
     window: Window,
     #[serde(serialize_with = "crate::gp::floats::serialize")]
     q: Vec<f64>,
+    /// Without adaptation every expert has the same hyperparameters, to the bit: their
+    /// distinct inputs are then held once, and each new input's distances computed once
+    /// per step for all of them (rebuilt on load).
+    #[serde(skip_serializing)]
+    shared: Option<Box<SharedInputs>>,
 }
 
 /// A [`Ds`] as it is saved: the fields of [`Ds`].
@@ -94,6 +99,11 @@ impl TryFrom<DsState> for Ds {
             ));
         }
         ds.models = s.models;
+        if let Some(shared) = ds.shared.as_mut() {
+            for m in &mut ds.models {
+                m.join(shared);
+            }
+        }
         ds.window = s.window;
         ds.q = s.q;
         Ok(ds)
@@ -104,13 +114,19 @@ impl Ds {
     pub fn new(dim: usize, params: &DsParams) -> Result<Ds, LearnerError> {
         params.validate()?;
         // Builds one expert to check the dimension before any class exists.
-        Sogp::new(dim, 1, &params.gp)?;
+        let probe = Sogp::new(dim, 1, &params.gp)?;
+        let shared = params
+            .gp
+            .adaptation
+            .is_none()
+            .then(|| Box::new(SharedInputs::new(probe.kernel())));
         Ok(Ds {
             params: params.clone(),
             dim,
             models: Vec::new(),
             window: Window::new(dim, params.gp.tau),
             q: Vec::new(),
+            shared,
         })
     }
 
@@ -123,9 +139,24 @@ impl Ds {
     fn observe(&mut self, o: &[f64]) {
         self.window.push(o);
         for (m, q) in self.models.iter_mut().zip(self.q.iter_mut()) {
-            m.observe_window(&self.window);
+            observe(m, self.shared.as_deref_mut(), &self.window);
             *q = m.probability();
         }
+    }
+
+    /// Expert `c` trained on target `y` at the window it observed last.
+    fn update(&mut self, c: usize, y: f64) {
+        match self.shared.as_mut() {
+            Some(s) => self.models[c].update_in(s, &[y]),
+            None => self.models[c].update(&[y]),
+        }
+    }
+
+    /// Distinct inputs held by the experts' BVs: summed over the experts, and in the
+    /// table they share (None when they do not share one).
+    pub fn distinct_inputs(&self) -> (usize, Option<usize>) {
+        let sum = self.models.iter().map(Sogp::distinct_inputs).sum();
+        (sum, self.shared.as_ref().map(|s| s.distinct()))
     }
 
     /// The un-normalised q_c of the last step taken one at a time (a training step or
@@ -145,8 +176,22 @@ impl Ds {
         let t_len = windows.len();
         let mut qs = Array2::zeros((t_len, c));
         let mut ps = Array2::zeros((t_len, c));
-        for (j, m) in self.models.iter_mut().enumerate() {
-            m.observe_sequence(&windows, 1, |t, m| qs[[t, j]] = m.probability());
+        match self.shared.as_mut() {
+            // Step by step: each step's new distances once for all the experts.
+            Some(shared) => {
+                for (t, mut q) in qs.rows_mut().into_iter().enumerate() {
+                    let (window, stamp) = windows.after(t + 1);
+                    for (m, q) in self.models.iter_mut().zip(q.iter_mut()) {
+                        m.observe_in(shared, window, stamp);
+                        *q = m.probability();
+                    }
+                }
+            }
+            None => {
+                for (j, m) in self.models.iter_mut().enumerate() {
+                    m.observe_sequence(&windows, 1, |t, m| qs[[t, j]] = m.probability());
+                }
+            }
         }
         for (q, mut p) in qs.rows().into_iter().zip(ps.rows_mut()) {
             let sum: f64 = q.iter().sum();
@@ -183,7 +228,7 @@ impl Ds {
             self.window.push(o);
             for (j, (m, q)) in self.models.iter_mut().zip(self.q.iter_mut()).enumerate() {
                 if touched[j] || j >= q_pred.ncols() || t >= q_pred.nrows() {
-                    m.observe_window(&self.window);
+                    observe(m, self.shared.as_deref_mut(), &self.window);
                     *q = m.probability();
                 } else {
                     *q = q_pred[[t, j]];
@@ -192,15 +237,27 @@ impl Ds {
             let wrong = (0..self.models.len())
                 .filter(|&c| c != class)
                 .max_by(|&a, &b| self.q[a].total_cmp(&self.q[b]));
-            self.models[class].update(&[1.0]);
+            self.update(class, 1.0);
             if let Some(w) = wrong {
                 if !touched[w] {
-                    self.models[w].observe_window(&self.window);
+                    observe(
+                        &mut self.models[w],
+                        self.shared.as_deref_mut(),
+                        &self.window,
+                    );
                     touched[w] = true;
                 }
-                self.models[w].update(&[-1.0]);
+                self.update(w, -1.0);
             }
         }
+    }
+}
+
+/// Expert `m` observes `window`, from the shared distances when there are.
+fn observe(m: &mut Sogp, shared: Option<&mut SharedInputs>, window: &Window) {
+    match shared {
+        Some(s) => m.observe_in(s, window.as_slice(), window.stamp()),
+        None => m.observe_window(window),
     }
 }
 
@@ -214,7 +271,11 @@ impl SequenceClassifier for Ds {
     }
 
     fn add_class(&mut self) -> Result<usize, LearnerError> {
-        self.models.push(Sogp::new(self.dim, 1, &self.params.gp)?);
+        let mut m = Sogp::new(self.dim, 1, &self.params.gp)?;
+        if let Some(shared) = self.shared.as_mut() {
+            m.join(shared);
+        }
+        self.models.push(m);
         self.q.push(0.5);
         Ok(self.models.len() - 1)
     }
@@ -260,9 +321,9 @@ impl SequenceClassifier for Ds {
             .filter(|&c| c != class)
             .max_by(|&a, &b| self.q[a].total_cmp(&self.q[b]));
         // Both updates reuse the kernel vectors of this step's observation.
-        self.models[class].update(&[1.0]);
+        self.update(class, 1.0);
         if let Some(w) = wrong {
-            self.models[w].update(&[-1.0]);
+            self.update(w, -1.0);
         }
     }
 
@@ -353,6 +414,104 @@ mod tests {
             let (ja, jb) = (serde_json::to_string(&a), serde_json::to_string(&b));
             assert_eq!(ja.unwrap(), jb.unwrap());
         }
+    }
+
+    /// Without adaptation the experts share one table of distinct inputs; a learner whose
+    /// experts each keep their own (today's path) must give the same numbers to the bit,
+    /// through every way of predicting and training, deletions at the budget, classes
+    /// added midway, saving and loading, and an expert taken out of the learner. Inputs
+    /// lie on a coarse grid, so that BVs of different experts and sequences share them.
+    #[test]
+    fn experts_sharing_one_input_table_equal_experts_with_their_own_bit_for_bit() {
+        let params = small(false);
+        let mut a = Ds::new(3, &params).unwrap();
+        let mut b = Ds::new(3, &params).unwrap();
+        b.shared = None;
+        let coarse = |g: &Array2<f64>| g.mapv(|v| (v * 8.0).round() / 8.0);
+        let classes_at = |i: usize| if i < 12 { 3 } else { 4 };
+        for (i, (c, g)) in grasps(5, 60, 4, 3).iter().enumerate() {
+            while a.n_classes() < classes_at(i) {
+                assert_eq!(a.add_class().unwrap(), b.add_class().unwrap());
+            }
+            let (c, g) = (c % a.n_classes(), coarse(g));
+            let (qa, pa) = a.predict_q_and_p(g.view());
+            let (qb, pb) = b.predict_q_and_p(g.view());
+            assert_eq!(bits(&qa), bits(&qb), "grasp {i}");
+            assert_eq!(bits(&pa), bits(&pb), "grasp {i}");
+            match i % 4 {
+                0 => {
+                    a.train_sequence(g.view(), c);
+                    b.train_sequence(g.view(), c);
+                }
+                1 => {
+                    a.train_sequence_predicted(g.view(), c, qa.view());
+                    b.train_sequence_predicted(g.view(), c, qb.view());
+                }
+                _ => {
+                    let (mut da, mut db) = ([0.0; 4], [0.0; 4]);
+                    let n = a.n_classes();
+                    a.start_sequence();
+                    b.start_sequence();
+                    for o in g.rows() {
+                        let o = o.as_slice().unwrap();
+                        a.predict_step(o, &mut da[..n]);
+                        b.predict_step(o, &mut db[..n]);
+                        assert_eq!(bits(&da), bits(&db), "grasp {i}");
+                    }
+                    a.start_sequence();
+                    b.start_sequence();
+                    for o in g.rows() {
+                        a.train_step(o.as_slice().unwrap(), c);
+                        b.train_step(o.as_slice().unwrap(), c);
+                        assert_eq!(bits(a.q()), bits(b.q()), "grasp {i}");
+                    }
+                }
+            }
+            if i == 30 {
+                a = round_trip(&a);
+            }
+        }
+        let (ja, jb) = (serde_json::to_string(&a), serde_json::to_string(&b));
+        assert_eq!(ja.unwrap(), jb.unwrap());
+        assert!(
+            a.models()
+                .iter()
+                .all(|m| m.n_basis() == 10 && m.shares_inputs())
+        );
+        assert!(!b.models().iter().any(Sogp::shares_inputs));
+        // The experts do share inputs (the table holds fewer than their sum).
+        let (sum, held) = a.distinct_inputs();
+        assert!(held.is_some_and(|h| h < sum), "{sum} {held:?}");
+        assert_eq!(b.distinct_inputs(), (sum, None));
+        // An expert taken out of the learner goes on with a table of its own.
+        let (mut ma, mut mb) = (a.models()[1].clone(), b.models()[1].clone());
+        let mut w = Window::new(3, params.gp.tau);
+        for o in coarse(&grasps(6, 1, 1, 3)[0].1).rows() {
+            w.push(o.as_slice().unwrap());
+            ma.observe_window(&w);
+            mb.observe_window(&w);
+            assert_eq!(ma.probability().to_bits(), mb.probability().to_bits());
+            ma.update(&[1.0]);
+            mb.update(&[1.0]);
+        }
+        assert!(!ma.shares_inputs());
+    }
+
+    /// Only models whose hyperparameters are equal to the bit and cannot adapt join a
+    /// shared table; a DS learner that adapts keeps none.
+    #[test]
+    fn only_experts_with_the_same_hyperparameters_to_the_bit_share_inputs() {
+        let p = small(false).gp;
+        let first = Sogp::new(3, 1, &p).unwrap();
+        let mut shared = SharedInputs::new(first.kernel());
+        assert!(Sogp::new(3, 1, &p).unwrap().join(&mut shared));
+        let mut other = Sogp::new(3, 1, &p).unwrap();
+        let mut kp = other.kernel_params().clone();
+        kp.lengthscales[2] = f64::from_bits(kp.lengthscales[2].to_bits() + 1);
+        other.set_kernel_params(kp);
+        assert!(!other.join(&mut shared));
+        assert!(!Sogp::new(3, 1, &small(true).gp).unwrap().join(&mut shared));
+        assert!(Ds::new(3, &small(true)).unwrap().shared.is_none());
     }
 
     /// A damaged state is an error naming what is wrong, and nothing panics.

@@ -293,6 +293,11 @@ pub struct AnchorBench {
     pub orders: usize,
     pub ours: AnchorFigures<StepTimes>,
     pub libotl: AnchorFigures,
+    /// Distinct inputs the experts' BVs hold at the end of each DS-trained order, summed
+    /// over the experts, and held once in the table they share: the sum over the held is
+    /// the factor by which sharing cuts the new distances per step.
+    pub inputs_summed: Vec<usize>,
+    pub inputs_held: Vec<usize>,
 }
 
 /// DS's experts, trained step by step over the protocol's orders of `session` as DS trains
@@ -305,7 +310,7 @@ pub fn anchor_steps(
 ) -> Result<AnchorBench, ExperimentError> {
     use crate::experiments::{labels::session_labels, recognition::protocol_order};
     use crate::features::{FeatureSet, SequenceParams, feature_sequences};
-    use crate::gp::{Sogp, SogpParams, Window};
+    use crate::gp::{SharedInputs, Sogp, SogpParams, Window};
     use crate::learners::DsParams;
     use crate::rng::Rng;
 
@@ -328,6 +333,7 @@ pub fn anchor_steps(
     let us = |t0: Instant| 1e6 * t0.elapsed().as_secs_f64();
     let (mut update, mut predict, mut ds_train, mut all_updated) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut inputs_summed, mut inputs_held) = (Vec::new(), Vec::new());
     for all in [false, true] {
         for rep in 0..orders {
             let mut experts = vec![
@@ -335,6 +341,11 @@ pub fn anchor_steps(
                     .map_err(|e| ExperimentError::param("gp", e.to_string()))?;
                 classes.len()
             ];
+            // Without adaptation the experts share their distinct inputs, as DS's do.
+            let mut shared = SharedInputs::new(experts[0].kernel());
+            for m in &mut experts {
+                m.join(&mut shared);
+            }
             let mut q = vec![0.0; classes.len()];
             let mut window = Window::new(dim, tau);
             let mut rng = Rng::stream(0, rep as u64);
@@ -348,7 +359,7 @@ pub fn anchor_steps(
                     let t0 = Instant::now();
                     window.push(o);
                     for (m, q) in experts.iter_mut().zip(q.iter_mut()) {
-                        m.observe_window(&window);
+                        m.observe_in(&mut shared, window.as_slice(), window.stamp());
                         *q = m.probability();
                     }
                     let sum: f64 = q.iter().sum();
@@ -364,13 +375,13 @@ pub fn anchor_steps(
                     let t0 = Instant::now();
                     window.push(o);
                     for (m, q) in experts.iter_mut().zip(q.iter_mut()) {
-                        m.observe_window(&window);
+                        m.observe_in(&mut shared, window.as_slice(), window.stamp());
                         *q = m.probability();
                     }
                     let class = labels[g];
                     if all {
                         for (c, m) in experts.iter_mut().enumerate() {
-                            m.update(&[if c == class { 1.0 } else { -1.0 }]);
+                            m.update_in(&mut shared, &[if c == class { 1.0 } else { -1.0 }]);
                         }
                         if timed {
                             all_updated.push(us(t0));
@@ -383,7 +394,7 @@ pub fn anchor_steps(
                     for (c, y) in [(Some(class), 1.0), (wrong, -1.0)] {
                         let Some(c) = c else { continue };
                         let t1 = Instant::now();
-                        experts[c].update(&[y]);
+                        experts[c].update_in(&mut shared, &[y]);
                         if timed {
                             update.push(us(t1));
                         }
@@ -392,6 +403,10 @@ pub fn anchor_steps(
                         ds_train.push(us(t0));
                     }
                 }
+            }
+            if !all {
+                inputs_summed.push(experts.iter().map(Sogp::distinct_inputs).sum());
+                inputs_held.push(shared.distinct());
             }
         }
     }
@@ -406,5 +421,7 @@ pub fn anchor_steps(
             all_updated: StepTimes::of(all_updated),
         },
         libotl: LIBOTL_US,
+        inputs_summed,
+        inputs_held,
     })
 }

@@ -116,6 +116,7 @@ impl Sogp {
         let Ok(kernel) = RecursiveArd::new(self.kernel.dim(), self.kernel.tau(), params) else {
             return;
         };
+        self.own_inputs();
         self.kernel = kernel;
         // The re-run below stores the BVs it keeps again.
         self.inputs.clear();

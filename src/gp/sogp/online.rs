@@ -4,7 +4,7 @@
 
 use ndarray::Array2;
 
-use super::super::kernel::{LANES, dot};
+use super::super::kernel::{LANES, dot, dot_rows};
 use super::super::wide::dispatch_wide;
 use super::gram::tri;
 use super::{DRIFT_TOL, Sogp};
@@ -94,10 +94,8 @@ impl Sogp {
     #[inline(always)]
     pub(super) fn posterior_update_portable(&mut self, r: f64) -> bool {
         let (n, s, no) = (self.n, self.stride, self.n_out);
+        dot_rows(&self.q, s, n, &self.k, &mut self.ehat[..n]);
         let k = &self.k[..n];
-        for (e, qrow) in self.ehat[..n].iter_mut().zip(self.q.chunks_exact(s)) {
-            *e = dot(&qrow[..n], k);
-        }
         let sf2 = self.kernel.sigma_f2();
         let kqk: f64 = k.iter().zip(&self.ehat[..n]).map(|(k, e)| k * e).sum();
         let gamma = (sf2 - kqk).max(0.0);
@@ -242,6 +240,7 @@ impl Sogp {
     /// Remove BV `i` with the (Q + C) removal of Csató & Opper; the last BV moves into
     /// its slot.
     pub fn delete(&mut self, i: usize) {
+        self.own_inputs();
         if i >= self.n {
             return;
         }

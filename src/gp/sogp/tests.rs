@@ -558,3 +558,74 @@ fn at_the_budget_an_update_equals_storing_then_deleting_the_least_informative() 
         }
     }
 }
+
+/// Models that share one table of distinct inputs give what models with their own give,
+/// bit for bit, however the learner interleaves them: each observing windows of its own
+/// sequence (the shared rows move between sequences), updated twice without observing
+/// again (the second update evaluates at a window the shared rows have left), joining
+/// while the others are midway, and deleting BVs at the budget. Inputs lie on a coarse
+/// grid, so that the models' BVs share them.
+#[test]
+fn models_sharing_one_input_table_equal_models_with_their_own() {
+    use crate::gp::{SharedInputs, Window};
+    let (dim, tau) = (2, 3);
+    let p = SogpParams {
+        capacity: 7,
+        tau,
+        adaptation: None,
+        ..SogpParams::default()
+    };
+    let mut own: Vec<Sogp> = (0..3).map(|_| Sogp::new(dim, 1, &p).unwrap()).collect();
+    let mut shared_models = own.clone();
+    let mut shared = SharedInputs::new(own[0].kernel());
+    let mut windows: Vec<Window> = (0..3).map(|_| Window::new(dim, tau)).collect();
+    let mut joined = 0;
+    let mut checked = 0;
+    for t in 0..600 {
+        // Model 2 joins after 100 steps, with BVs and an observation of its own.
+        let wanted = if t < 100 { 2 } else { 3 };
+        while joined < wanted {
+            assert!(shared_models[joined].join(&mut shared));
+            joined += 1;
+        }
+        // Three steps of a model's sequence at a time; model 0 is midway at the join.
+        let j = (t / 3) % 3;
+        if t % 13 == 0 {
+            windows[j].reset();
+        }
+        let x: Vec<f64> = (0..dim)
+            .map(|k| ((0.61 * t as f64 + 1.7 * k as f64).sin() * 2.0).round() / 2.0)
+            .collect();
+        windows[j].push(&x);
+        own[j].observe_window(&windows[j]);
+        shared_models[j].observe_in(&mut shared, windows[j].as_slice(), windows[j].stamp());
+        let y = [if (0.29 * t as f64).cos() > 0.0 {
+            1.0
+        } else {
+            -1.0
+        }];
+        // Every fourth step another model is updated again, without observing.
+        let again = (t % 4 == 0).then_some((j + 1) % 3);
+        for i in std::iter::once(j).chain(again) {
+            let (a, b) = (&mut own[i], &mut shared_models[i]);
+            assert_eq!(bits(a.mean()), bits(b.mean()), "step {t}");
+            assert_eq!(a.latent_variance().to_bits(), b.latent_variance().to_bits());
+            a.update(&y);
+            b.update_in(&mut shared, &y);
+            checked += 1;
+        }
+    }
+    assert!(
+        shared_models
+            .iter()
+            .all(|m| m.shares_inputs() && m.n_basis() == 7)
+    );
+    let held = shared.distinct();
+    let summed: usize = shared_models.iter().map(Sogp::distinct_inputs).sum();
+    assert!(held < summed, "{held} {summed}");
+    for (a, b) in own.iter().zip(&shared_models) {
+        assert_eq!(bits(&a.c), bits(&b.c));
+        assert_eq!(bits(&a.alpha), bits(&b.alpha));
+    }
+    assert!(checked > 700, "{checked}");
+}
