@@ -261,6 +261,11 @@ impl StabilityData {
         self.patches.dim
     }
 
+    /// The SVM's features of every grasp from its patches' codes under `inputs`.
+    pub fn features(&self, codes: Array2<f64>, inputs: PipelineInputs) -> Array2<f64> {
+        inputs.features(codes, self.x.view(), self.sensor_count())
+    }
+
     /// The scaled key-frame images (grasps × sensors·taxels): the raw-electrode baseline's
     /// features.
     pub fn images(&self) -> Array2<f64> {
@@ -451,9 +456,7 @@ fn score_codes(
     let codes = dict.encode(data.x.view(), gamma)?;
     let coding_secs = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let features = settings
-        .inputs
-        .features(codes.clone(), data.x.view(), data.sensor_count());
+    let features = data.features(codes.clone(), settings.inputs);
     let cv = cross_validate(features.view(), &data.labels, folds, &settings.svm)?;
     Ok((codes, cv, coding_secs, t1.elapsed().as_secs_f64()))
 }

@@ -39,9 +39,7 @@ impl StabilityModel {
         settings: &PipelineSettings,
     ) -> Result<Self, StabilityError> {
         let codes = dictionary.encode(data.x.view(), config.gamma)?;
-        let features = settings
-            .inputs
-            .features(codes, data.x.view(), data.sensor_count());
+        let features = data.features(codes, settings.inputs);
         let svm = settings.svm.fit(features.view(), &data.labels)?;
         Ok(StabilityModel {
             config,
@@ -118,9 +116,7 @@ pub fn evaluate_config(
     let kf = kfold.folds(data, settings.cv_seed)?;
     let (codes, kcv, _, _) = score_codes(data, &dict, config.gamma, &kf, settings)?;
     let of = objects.folds(data, settings.cv_seed)?;
-    let features = settings
-        .inputs
-        .features(codes.clone(), data.x.view(), data.sensor_count());
+    let features = data.features(codes.clone(), settings.inputs);
     let ocv = cross_validate(features.view(), &data.labels, &of, &settings.svm)?;
     let (sparsity, active) = sparsity_of(codes.view());
     Ok((

@@ -185,9 +185,7 @@ fn nested_cells(
             for &gamma in &spec.gamma {
                 progress.checkpoint()?;
                 let codes = fit.dictionary.encode(data.x.view(), gamma)?;
-                let features = settings
-                    .inputs
-                    .features(codes, data.x.view(), data.sensor_count());
+                let features = data.features(codes, settings.inputs);
                 let config = Config {
                     num_bases: k,
                     beta,

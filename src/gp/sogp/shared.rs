@@ -37,20 +37,11 @@ impl Sogp {
         if !self.fits(shared) {
             return false;
         }
-        let (dim, tau, w) = (self.kernel.dim(), self.kernel.tau(), self.wlen);
+        let (dim, tau) = (self.kernel.dim(), self.kernel.tau());
         shared.reserve(self.stride * tau);
         self.inputs.table = Table::new(dim, tau, 0);
         self.inputs.shared = true;
-        let inv_rho = 1.0 / self.kernel.params().sigma_rho;
-        self.lend(shared, |m| {
-            for i in 0..m.n {
-                let (raw, scaled) = (
-                    &m.bv_raw[i * w..(i + 1) * w],
-                    &m.bv_scaled[i * w..(i + 1) * w],
-                );
-                m.inputs.add_bv(i, raw, scaled, inv_rho);
-            }
-        });
+        self.lend(shared, Sogp::add_every_bv);
         // The shared rows may be of another window than the one this model observed.
         self.x_stamp = None;
         true
@@ -61,9 +52,18 @@ impl Sogp {
         if !self.inputs.shared {
             return;
         }
-        let (dim, tau, w) = (self.kernel.dim(), self.kernel.tau(), self.wlen);
+        let (dim, tau) = (self.kernel.dim(), self.kernel.tau());
         self.inputs.table = Table::new(dim, tau, self.stride * tau);
         self.inputs.shared = false;
+        self.add_every_bv();
+        // The new table has no rows yet: the next observation computes them all.
+        self.x_stamp = None;
+        self.observed = None;
+    }
+
+    /// Put every BV's inputs in the table the model holds now (its own, or a lent one).
+    fn add_every_bv(&mut self) {
+        let w = self.wlen;
         let inv_rho = 1.0 / self.kernel.params().sigma_rho;
         for i in 0..self.n {
             let (raw, scaled) = (
@@ -72,9 +72,6 @@ impl Sogp {
             );
             self.inputs.add_bv(i, raw, scaled, inv_rho);
         }
-        // The new table has no rows yet: the next observation computes them all.
-        self.x_stamp = None;
-        self.observed = None;
     }
 
     /// Run `f` with the shared table in place of the model's stand-in.
