@@ -13,6 +13,7 @@ pub(crate) mod floats;
 mod inputs;
 pub mod kernel;
 pub mod normal;
+mod quotient;
 pub mod sngd;
 pub mod sogp;
 mod wide;

@@ -629,3 +629,64 @@ fn models_sharing_one_input_table_equal_models_with_their_own() {
     }
     assert!(checked > 700, "{checked}");
 }
+
+/// The removal's quotients by reciprocal and FMAs ([`crate::gp::quotient`]) give the
+/// division's C, Q and α to the last bit, for every BV of models at the budget, with and
+/// without adaptation; and the reciprocal path is the one taken nearly always.
+#[test]
+fn the_removal_by_reciprocals_equals_the_removal_by_division() {
+    use crate::gp::Window;
+    use crate::gp::quotient::in_range;
+    let (dim, tau, cap) = (3, 4, 8);
+    let (mut removals, mut by_reciprocal) = (0, 0);
+    for adaptation in [false, true] {
+        let params = SogpParams {
+            capacity: cap,
+            tau,
+            adaptation: adaptation.then_some(SngdParams {
+                window: 4,
+                start_after: 20,
+                stop_count: 1000,
+                ..SngdParams::default()
+            }),
+            ..SogpParams::default()
+        };
+        let mut gp = Sogp::new(dim, 1, &params).unwrap();
+        let mut window = Window::new(dim, tau);
+        for t in 0..200 {
+            if t % 9 == 0 {
+                window.reset();
+            }
+            let (x, y) = stream(t, dim, 1, true);
+            window.push(&x);
+            gp.observe_window(&window);
+            gp.update(&y);
+            let (n, s) = (gp.n, gp.stride);
+            for i in 0..n {
+                let qs = gp.q[i * s + i].max(1e-300);
+                let den = (gp.q[i * s + i] + gp.c[i * s + i]).max(1e-300);
+                let fast = in_range(qs)
+                    && in_range(den)
+                    && (0..n).all(|j| {
+                        let q = gp.q[j * s + i];
+                        in_range(q) && in_range(q + gp.c[j * s + i])
+                    });
+                let (mut a, mut b) = (gp.clone(), gp.clone());
+                a.remove_portable(i, true);
+                b.remove_portable(i, false);
+                assert_eq!(bits(&a.alpha[..n]), bits(&b.alpha[..n]), "step {t}, BV {i}");
+                for r in (0..n).filter(|&r| r != i) {
+                    let row = |m: &[f64]| bits(&m[r * s..r * s + n]);
+                    assert_eq!(row(&a.c), row(&b.c), "step {t}, BV {i}, row {r}");
+                    assert_eq!(row(&a.q), row(&b.q), "step {t}, BV {i}, row {r}");
+                }
+                removals += 1;
+                by_reciprocal += fast as usize;
+            }
+        }
+    }
+    assert!(
+        by_reciprocal * 10 > removals * 9,
+        "{by_reciprocal} of {removals} by reciprocal"
+    );
+}
