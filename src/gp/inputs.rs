@@ -44,7 +44,7 @@ pub(crate) struct Table {
     /// Leading padding lags of the observed window.
     lead: usize,
     /// Distances of the observed window's lags to every slot: tau rows of `slots`, lag l
-    /// in row (head + l) mod tau.
+    /// in row (head + l) mod tau; the rows of the leading padding lags are stale.
     rows: Vec<f64>,
     head: usize,
     /// The observed window's lags, scaled, in the rows' order (lag l at (head + l) mod tau).
@@ -252,7 +252,7 @@ impl Table {
 
     /// Make the rows those of `window` (raw, oldest lag first), which stands to the window
     /// they were computed for as `shift` says: nothing for the same window, one new row for
-    /// that window shifted by one input, else every row.
+    /// that window shifted by one input, else every row past the leading padding lags.
     pub(crate) fn observe(&mut self, kernel: &RecursiveArd, shift: Shift, window: &[f64]) {
         let (d, tau) = (self.dim, self.tau);
         if self.current {
@@ -271,13 +271,15 @@ impl Table {
                 Shift::Other => {}
             }
         }
-        for lag in 0..tau {
-            self.fill_row(kernel, lag, &window[lag * d..(lag + 1) * d]);
-        }
         self.lead = window
             .chunks_exact(d)
             .take_while(|l| l.iter().all(|v| *v == 0.0))
             .count();
+        // The leading padding lags take the BVs' prefixes: their rows are never read (and
+        // stay padding until they leave the window), so only the later ones are filled.
+        for lag in self.lead..tau {
+            self.fill_row(kernel, lag, &window[lag * d..(lag + 1) * d]);
+        }
         self.current = true;
     }
 
