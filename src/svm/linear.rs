@@ -515,8 +515,8 @@ fn primal_newton(
         }
         steps += 1;
         if !built || 2 * changes > viol {
-            // Rebuild: I + 2 X_Vᵀ diag(C) X_V by a matrix product (into H whole; its upper
-            // triangle is then overwritten by the mirror below).
+            // Rebuild: I + 2 X_Vᵀ diag(C) X_V by a matrix product (into H whole; only its
+            // lower triangle is kept up to date and read).
             xv.resize(viol * d, 0.0);
             let mut r = 0;
             for i in 0..n {
@@ -558,12 +558,7 @@ fn primal_newton(
                 }
             }
         }
-        // Mirror the lower triangle for the factorisation.
-        for a in 0..d {
-            for b in 0..a {
-                h[b * d + a] = h[a * d + b];
-            }
-        }
+        // (The factorisation reads the lower triangle only.)
         if dense::cholesky(d, h, l).is_err() {
             break;
         }
