@@ -385,4 +385,17 @@ fn a_reused_workspace_fits_as_a_fresh_one() {
         p.fit_rows(x.view(), &[0, 200], &[true, false], None, &mut ws)
             .is_err()
     );
+    // A non-finite value is named by its place among the rows fitted.
+    let mut bad = x.clone();
+    bad[[7, 2]] = f64::NAN;
+    let err = p
+        .fit_rows(
+            bad.view(),
+            &[3, 0, 7, 9],
+            &[true, false, true, false],
+            None,
+            &mut ws,
+        )
+        .unwrap_err();
+    assert!(err.to_string().contains("sample 2 feature 2"), "{err}");
 }

@@ -80,8 +80,17 @@ impl Standardizer {
     /// Scale one row into `out`.
     #[inline]
     pub fn transform_into(&self, row: ArrayView1<f64>, out: &mut [f64]) {
-        for (j, (o, v)) in out.iter_mut().zip(row.iter()).enumerate() {
-            *o = (v - self.mean[j]) / self.sd[j];
+        let scale = |o: &mut f64, (v, (m, s)): (&f64, (&f64, &f64))| *o = (v - m) / s;
+        let ms = self.mean.iter().zip(&self.sd);
+        match row.as_slice() {
+            Some(r) => out
+                .iter_mut()
+                .zip(r.iter().zip(ms))
+                .for_each(|(o, p)| scale(o, p)),
+            None => out
+                .iter_mut()
+                .zip(row.iter().zip(ms))
+                .for_each(|(o, p)| scale(o, p)),
         }
     }
 

@@ -219,7 +219,16 @@ impl LinearSvmParams {
             ));
         }
         for (r, &i) in rows.iter().enumerate() {
-            if let Some(j) = x.row(i).iter().position(|v| !v.is_finite()) {
+            let row = x.row(i);
+            // (A branch-free test on a contiguous row; the position only on failure.)
+            let finite = match row.as_slice() {
+                Some(v) => v.iter().fold(true, |ok, v| ok & v.is_finite()),
+                None => row.iter().all(|v| v.is_finite()),
+            };
+            if let Some(j) = (!finite)
+                .then(|| row.iter().position(|v| !v.is_finite()))
+                .flatten()
+            {
                 return Err(SvmError::Data(format!(
                     "sample {r} feature {j} is not finite"
                 )));
