@@ -5,7 +5,8 @@
 use ndarray::Array2;
 use tactile_workbench::rng::Rng;
 use tactile_workbench::svm::{
-    Confusion, LinearSvmParams, cross_validate, group_k_fold, mean_se, stratified_k_fold,
+    Confusion, LinearSvmParams, Loss, cross_validate, gather, group_k_fold, mean_se,
+    stratified_k_fold,
 };
 
 #[test]
@@ -220,4 +221,53 @@ fn cross_validation_rejects_mismatched_lengths() {
     assert!(cross_validate(x.view(), &y[..5], &folds, &p).is_err());
     let short = stratified_k_fold(&y[..4], 2, 0).unwrap();
     assert!(cross_validate(x.view(), &y, &short, &p).is_err());
+}
+
+/// Cross validation reuses one set of solver buffers per thread across folds and calls;
+/// its decision values must be those of each fold's SVM fitted afresh on the gathered
+/// training rows (from the all-data model, as cross validation starts), to the bit, even
+/// after a cross validation of another size on the same thread.
+#[test]
+fn cross_validation_equals_fresh_fits_of_every_fold() {
+    let data = |n: usize, d: usize, seed: u64| {
+        let mut rng = Rng::new(seed);
+        let y: Vec<bool> = (0..n).map(|i| i % 3 == 0).collect();
+        let x = Array2::from_shape_fn((n, d), |(i, j)| {
+            rng.normal() * (1.0 + j as f64) + if y[i] && j < 2 { 1.0 } else { 0.0 }
+        });
+        (x, y)
+    };
+    let p = LinearSvmParams {
+        loss: Loss::SquaredHinge,
+        ..Default::default()
+    };
+    let (other_x, other_y) = data(300, 11, 4);
+    let (x, y) = data(150, 6, 3);
+    let folds = stratified_k_fold(&y, 10, 1).unwrap();
+    let other_folds = stratified_k_fold(&other_y, 10, 1).unwrap();
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let (r, r_again) = one.install(|| {
+        let r = cross_validate(x.view(), &y, &folds, &p).unwrap();
+        cross_validate(other_x.view(), &other_y, &other_folds, &p).unwrap();
+        (r, cross_validate(x.view(), &y, &folds, &p).unwrap())
+    });
+    assert_eq!(r, r_again);
+    let warm = p.fit(x.view(), &y).unwrap();
+    for f in 0..folds.count {
+        let train = folds.train_indices(f);
+        let yt: Vec<bool> = train.iter().map(|&i| y[i]).collect();
+        let model = p
+            .fit_from(gather(x.view(), &train).view(), &yt, Some(&warm))
+            .unwrap();
+        for i in folds.test_indices(f) {
+            assert_eq!(
+                r.decisions[i],
+                model.decision(x.row(i)),
+                "fold {f} sample {i}"
+            );
+        }
+    }
 }

@@ -5,7 +5,9 @@
 
 use ndarray::{Array1, Array2};
 use tactile_workbench::rng::Rng;
-use tactile_workbench::svm::{ClassWeight, LinearSvmParams, Loss, Solver, SvmError};
+use tactile_workbench::svm::{
+    ClassWeight, LinearSvmParams, Loss, Solver, SvmError, SvmWorkspace, gather,
+};
 
 /// Two Gaussian clouds in `d` dimensions, `gap` apart along the first axis, with
 /// correlated, differently scaled features.
@@ -335,4 +337,65 @@ fn bad_input_is_an_error() {
             "{bad:?}"
         );
     }
+}
+
+/// A workspace carries only capacity from one fit to the next: fitting rows of one problem
+/// through a workspace that has served a larger and a smaller problem (and the warm start
+/// of cross validation) gives, to the bit, the model of a fresh fit of the gathered rows.
+#[test]
+fn a_reused_workspace_fits_as_a_fresh_one() {
+    let p = LinearSvmParams {
+        loss: Loss::SquaredHinge,
+        ..Default::default()
+    };
+    let (big_x, big_y) = clouds(300, 12, 0.8, 5);
+    let (small_x, small_y) = clouds(90, 3, 0.6, 6);
+    let (x, y) = clouds(200, 7, 0.7, 7);
+    let rows: Vec<usize> = (0..200).filter(|i| i % 5 != 2).rev().collect();
+    let yr: Vec<bool> = rows.iter().map(|&i| y[i]).collect();
+    let warm = p.fit(x.view(), &y).unwrap();
+    let fresh = p
+        .fit_from(gather(x.view(), &rows).view(), &yr, Some(&warm))
+        .unwrap();
+    assert!(fresh.converged && fresh.epochs > 0);
+    let mut ws = SvmWorkspace::default();
+    let all = |n: usize| (0..n).collect::<Vec<_>>();
+    for (bx, by) in [(&big_x, &big_y), (&small_x, &small_y), (&big_x, &big_y)] {
+        p.fit_rows(bx.view(), &all(bx.nrows()), by, None, &mut ws)
+            .unwrap();
+        let reused = p
+            .fit_rows(x.view(), &rows, &yr, Some(&warm), &mut ws)
+            .unwrap();
+        assert_eq!(reused, fresh);
+    }
+    // Without standardisation and from zero, too.
+    let raw = LinearSvmParams {
+        standardize: false,
+        ..p.clone()
+    };
+    let fresh = raw.fit(gather(x.view(), &rows).view(), &yr).unwrap();
+    raw.fit_rows(big_x.view(), &all(300), &big_y, None, &mut ws)
+        .unwrap();
+    assert_eq!(
+        raw.fit_rows(x.view(), &rows, &yr, None, &mut ws).unwrap(),
+        fresh
+    );
+    // A row outside the data is an error, not a panic.
+    assert!(
+        p.fit_rows(x.view(), &[0, 200], &[true, false], None, &mut ws)
+            .is_err()
+    );
+    // A non-finite value is named by its place among the rows fitted.
+    let mut bad = x.clone();
+    bad[[7, 2]] = f64::NAN;
+    let err = p
+        .fit_rows(
+            bad.view(),
+            &[3, 0, 7, 9],
+            &[true, false, true, false],
+            None,
+            &mut ws,
+        )
+        .unwrap_err();
+    assert!(err.to_string().contains("sample 2 feature 2"), "{err}");
 }

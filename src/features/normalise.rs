@@ -22,20 +22,40 @@ pub struct Standardizer {
 impl Standardizer {
     /// Fit on every row of `x`.
     pub fn fit(x: ArrayView2<f64>) -> Self {
-        let (n, d) = x.dim();
+        let all: Vec<usize> = (0..x.nrows()).collect();
+        Self::fit_rows(x, &all)
+    }
+
+    /// Fit on the rows `rows` of `x` (in that order), as [`Standardizer::fit`] on those
+    /// rows gathered: a cross-validation fold needs no copy of its training rows.
+    pub fn fit_rows(x: ArrayView2<f64>, rows: &[usize]) -> Self {
+        let (n, d) = (rows.len(), x.ncols());
         let mut mean = vec![0.0; d];
         let mut m2 = vec![0.0; d];
-        for row in x.rows() {
-            for (j, v) in row.iter().enumerate() {
-                mean[j] += v;
+        for &i in rows {
+            let row = x.row(i);
+            match row.as_slice() {
+                Some(r) => mean.iter_mut().zip(r).for_each(|(m, v)| *m += v),
+                None => mean.iter_mut().zip(row.iter()).for_each(|(m, v)| *m += v),
             }
         }
         let nf = n.max(1) as f64;
         mean.iter_mut().for_each(|m| *m /= nf);
-        for row in x.rows() {
-            for (j, v) in row.iter().enumerate() {
-                let e = v - mean[j];
-                m2[j] += e * e;
+        for &i in rows {
+            let row = x.row(i);
+            match row.as_slice() {
+                Some(r) => {
+                    for ((s, m), v) in m2.iter_mut().zip(&mean).zip(r) {
+                        let e = v - m;
+                        *s += e * e;
+                    }
+                }
+                None => {
+                    for ((s, m), v) in m2.iter_mut().zip(&mean).zip(row.iter()) {
+                        let e = v - m;
+                        *s += e * e;
+                    }
+                }
             }
         }
         let sd = m2
@@ -60,8 +80,17 @@ impl Standardizer {
     /// Scale one row into `out`.
     #[inline]
     pub fn transform_into(&self, row: ArrayView1<f64>, out: &mut [f64]) {
-        for (j, (o, v)) in out.iter_mut().zip(row.iter()).enumerate() {
-            *o = (v - self.mean[j]) / self.sd[j];
+        let scale = |o: &mut f64, (v, (m, s)): (&f64, (&f64, &f64))| *o = (v - m) / s;
+        let ms = self.mean.iter().zip(&self.sd);
+        match row.as_slice() {
+            Some(r) => out
+                .iter_mut()
+                .zip(r.iter().zip(ms))
+                .for_each(|(o, p)| scale(o, p)),
+            None => out
+                .iter_mut()
+                .zip(row.iter().zip(ms))
+                .for_each(|(o, p)| scale(o, p)),
         }
     }
 

@@ -26,8 +26,8 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     s
 }
 
-/// Cholesky factor of the s × s matrix `a` (row-major, stride s) into `l` (lower
-/// triangle, stride s). `Err(r)` when the pivot at row r is not positive enough
+/// Cholesky factor of the s × s matrix `a` (row-major, stride s; only its lower triangle
+/// is read) into `l` (lower triangle, stride s). `Err(r)` when the pivot at row r is not positive enough
 /// (relative to the diagonal); rows before r are then valid.
 pub fn cholesky(s: usize, a: &[f64], l: &mut [f64]) -> Result<(), usize> {
     for i in 0..s {

@@ -19,8 +19,10 @@
 //! monotonically. On BTS3 (K = 29, λ = 1) this reaches F ≤ 5.38 in about 20 iterations
 //! instead of 40–90 and ends lower (see the report in `docs/`).
 
+use std::cell::Cell;
 use std::time::Instant;
 
+use ndarray::linalg::general_mat_mul;
 use ndarray::{Array1, Array2, ArrayView1, ArrayView2};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -384,6 +386,12 @@ fn check_data(x: ArrayView2<f64>) -> Result<(), SparseError> {
 /// Minimum patch count per parallel task (keeps task overhead below the work).
 const MIN_PATCHES_PER_TASK: usize = 64;
 
+thread_local! {
+    /// X Dᵀ of [`code_step`] (patches × bases), kept between calls: a fresh product as
+    /// large as the codes at every learning iteration and every coding costs page faults.
+    static PRODUCT: Cell<Array2<f64>> = Cell::new(Array2::zeros((0, 0)));
+}
+
 /// Exact codes of every patch for dictionary `d` (warm start: `codes` on entry).
 /// Returns the mean objective; deterministic for any thread count (per-patch values
 /// are summed in order).
@@ -400,9 +408,14 @@ fn code_step(
     let g = d.dot(&d.t());
     let g = g.as_standard_layout();
     let g = g.as_slice().expect("standard layout");
-    let c = x.dot(&d.t());
-    let c = c.as_standard_layout();
-    let c = c.as_slice().expect("standard layout");
+    // C = X Dᵀ into this thread's buffer (taken out, so a nested call made while the
+    // parallel loop below waits finds none and makes its own).
+    let mut c = PRODUCT.take();
+    if c.dim() != (n_patches, k) {
+        c = Array2::zeros((n_patches, k));
+    }
+    general_mat_mul(1.0, &x, &d.t(), 0.0, &mut c);
+    let c_all = c.as_slice().expect("standard layout");
     if !codes.is_standard_layout() {
         *codes = codes.as_standard_layout().into_owned();
     }
@@ -412,7 +425,7 @@ fn code_step(
         CodePenalty::L1 => {
             a_all
                 .par_chunks_mut(k)
-                .zip(c.par_chunks(k))
+                .zip(c_all.par_chunks(k))
                 .zip(per_patch.par_iter_mut())
                 .with_min_len(MIN_PATCHES_PER_TASK)
                 .for_each_init(
@@ -437,7 +450,7 @@ fn code_step(
         CodePenalty::EpsilonL1 { epsilon } => {
             a_all
                 .par_chunks_mut(k)
-                .zip(c.par_chunks(k))
+                .zip(c_all.par_chunks(k))
                 .zip(per_patch.par_iter_mut())
                 .with_min_len(MIN_PATCHES_PER_TASK)
                 .for_each_init(
@@ -449,6 +462,7 @@ fn code_step(
                 );
         }
     }
+    PRODUCT.set(c);
     let total: f64 = per_patch.iter().zip(xn2).map(|(f, x2)| f + 0.5 * x2).sum();
     total / n_patches.max(1) as f64
 }

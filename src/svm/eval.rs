@@ -11,12 +11,14 @@
 //! exactly once) into one confusion matrix; the per-fold weighted success rates give the
 //! standard error used by the parsimony rule.
 
+use std::cell::RefCell;
+
 use ndarray::{Array2, ArrayView2};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::SvmError;
-use super::linear::LinearSvmParams;
+use super::linear::{LinearSvmParams, SvmWorkspace};
 use crate::rng::Rng;
 
 /// 2 × 2 confusion counts: `matrix[true class][predicted class]`, class 0 = success
@@ -227,7 +229,10 @@ pub fn cross_validate(
     // The primal Newton solver starts every fold from the all-data model (same optimum,
     // fewer steps).
     let warm = match params.resolved_solver() {
-        super::linear::Solver::PrimalNewton => Some(params.fit(x, y)?),
+        super::linear::Solver::PrimalNewton => {
+            let all: Vec<usize> = (0..n).collect();
+            Some(with_workspace(|ws| params.fit_rows(x, &all, y, None, ws))?)
+        }
         _ => None,
     };
     type FoldOut = Result<(FoldScore, Vec<(usize, bool, f64)>), SvmError>;
@@ -236,11 +241,10 @@ pub fn cross_validate(
         .map(|f| {
             let train = folds.train_indices(f);
             let test = folds.test_indices(f);
-            let xt = gather(x, &train);
             let yt: Vec<bool> = train.iter().map(|&i| y[i]).collect();
             let mut p = params.clone();
             p.seed = Rng::stream(params.seed, f as u64).next_u64();
-            let model = p.fit_from(xt.view(), &yt, warm.as_ref())?;
+            let model = with_workspace(|ws| p.fit_rows(x, &train, &yt, warm.as_ref(), ws))?;
             let preds: Vec<(usize, bool, f64)> = test
                 .iter()
                 .map(|&i| (i, model.predict(x.row(i)), model.decision(x.row(i))))
@@ -289,6 +293,21 @@ pub fn cross_validate(
         fold_wsr_se,
         predictions,
         decisions,
+    })
+}
+
+thread_local! {
+    /// The SVM's buffers on this thread, kept across folds and cross validations (the
+    /// grid search cross-validates hundreds of times on rows of one size).
+    static WORKSPACE: RefCell<SvmWorkspace> = RefCell::new(SvmWorkspace::default());
+}
+
+/// Run `f` with this thread's SVM workspace (a fit never re-enters it; should it, the
+/// nested fit gets a fresh one).
+fn with_workspace<T>(f: impl FnOnce(&mut SvmWorkspace) -> T) -> T {
+    WORKSPACE.with(|cell| match cell.try_borrow_mut() {
+        Ok(mut ws) => f(&mut ws),
+        Err(_) => f(&mut SvmWorkspace::default()),
     })
 }
 

@@ -17,7 +17,8 @@
 //! so an epoch costs O(nnz). Features are standardised on the training data only
 //! (`standardize`), and the same scaling is applied at prediction.
 
-use ndarray::{Array1, ArrayView1, ArrayView2};
+use ndarray::linalg::general_mat_mul;
+use ndarray::{Array1, ArrayView1, ArrayView2, ArrayViewMut2};
 use serde::{Deserialize, Serialize};
 
 use super::SvmError;
@@ -178,8 +179,24 @@ impl LinearSvmParams {
         y: &[bool],
         init: Option<&LinearSvm>,
     ) -> Result<LinearSvm, SvmError> {
+        let all: Vec<usize> = (0..x.nrows()).collect();
+        self.fit_rows(x, &all, y, init, &mut SvmWorkspace::default())
+    }
+
+    /// [`LinearSvmParams::fit_from`] on the rows `rows` of `x` (in that order; `y[r]` is
+    /// the label of row `rows[r]`), with the solver's buffers in `ws`: the same model as
+    /// fitting the gathered rows, without the copy, and without fresh buffers when `ws`
+    /// is reused (cross validation fits many folds of one size).
+    pub fn fit_rows(
+        &self,
+        x: ArrayView2<f64>,
+        rows: &[usize],
+        y: &[bool],
+        init: Option<&LinearSvm>,
+        ws: &mut SvmWorkspace,
+    ) -> Result<LinearSvm, SvmError> {
         self.validate()?;
-        let (n, d) = x.dim();
+        let (n, d) = (rows.len(), x.ncols());
         if n != y.len() {
             return Err(SvmError::Data(format!(
                 "{n} samples but {} labels",
@@ -189,25 +206,42 @@ impl LinearSvmParams {
         if n == 0 || d == 0 {
             return Err(SvmError::Data(format!("no training data ({n} × {d})")));
         }
+        if let Some(&i) = rows.iter().find(|&&i| i >= x.nrows()) {
+            return Err(SvmError::Data(format!(
+                "row {i} of {} requested",
+                x.nrows()
+            )));
+        }
         let pos = y.iter().filter(|v| **v).count();
         if pos == 0 || pos == n {
             return Err(SvmError::Data(
                 "the training data hold a single class; an SVM needs both".into(),
             ));
         }
-        if let Some(p) = x.iter().position(|v| !v.is_finite()) {
-            return Err(SvmError::Data(format!(
-                "sample {} feature {} is not finite",
-                p / d,
-                p % d
-            )));
+        for (r, &i) in rows.iter().enumerate() {
+            let row = x.row(i);
+            // (A branch-free test on a contiguous row; the position only on failure.)
+            let finite = match row.as_slice() {
+                Some(v) => v.iter().fold(true, |ok, v| ok & v.is_finite()),
+                None => row.iter().all(|v| v.is_finite()),
+            };
+            if let Some(j) = (!finite)
+                .then(|| row.iter().position(|v| !v.is_finite()))
+                .flatten()
+            {
+                return Err(SvmError::Data(format!(
+                    "sample {r} feature {j} is not finite"
+                )));
+            }
         }
-        let scaler = self.standardize.then(|| Standardizer::fit(x));
+        let scaler = self.standardize.then(|| Standardizer::fit_rows(x, rows));
         // Augmented, standardised rows, contiguous with stride d + 1.
         let stride = d + 1;
-        let mut xs = vec![0.0; n * stride];
-        for (i, row) in x.rows().into_iter().enumerate() {
-            let out = &mut xs[i * stride..(i + 1) * stride];
+        let mut xs = std::mem::take(&mut ws.xs);
+        xs.resize(n * stride, 0.0);
+        for (r, &i) in rows.iter().enumerate() {
+            let row = x.row(i);
+            let out = &mut xs[r * stride..(r + 1) * stride];
             match &scaler {
                 Some(s) => s.transform_into(row, &mut out[..d]),
                 None => out[..d]
@@ -217,6 +251,22 @@ impl LinearSvmParams {
             }
             out[d] = self.bias;
         }
+        let fit = self.solve(&xs, stride, y, init, scaler, ws);
+        ws.xs = xs;
+        fit
+    }
+
+    /// Solve on the augmented, standardised rows `xs` (stride d + 1).
+    fn solve(
+        &self,
+        xs: &[f64],
+        stride: usize,
+        y: &[bool],
+        init: Option<&LinearSvm>,
+        scaler: Option<Standardizer>,
+        ws: &mut SvmWorkspace,
+    ) -> Result<LinearSvm, SvmError> {
+        let (n, d) = (y.len(), stride - 1);
         let (c_neg, c_pos) = self.class_costs(y);
         let cost = |i: usize| if y[i] { c_pos } else { c_neg };
         let (upper, diag): (Vec<f64>, Vec<f64>) = (0..n)
@@ -228,7 +278,7 @@ impl LinearSvmParams {
         let ys: Vec<f64> = y.iter().map(|&v| if v { 1.0 } else { -1.0 }).collect();
         let costs: Vec<f64> = (0..n).map(cost).collect();
         let prob = Problem {
-            xs: &xs,
+            xs,
             stride,
             ys: &ys,
             costs: &costs,
@@ -260,7 +310,7 @@ impl LinearSvmParams {
                     }
                     w0
                 });
-                primal_newton(&prob, w0, self.tol, self.max_epochs)
+                primal_newton(&prob, w0, self.tol, self.max_epochs, ws)
             }
             _ => dual_cd(&prob, self.tol, self.max_epochs, self.seed),
         };
@@ -306,6 +356,18 @@ impl LinearSvmParams {
             dual_objective: dual,
         })
     }
+}
+
+/// Buffers of a fit, reused across fits (the folds of a cross validation): the
+/// augmented, standardised rows, and the primal Newton solver's Hessian, its factor and
+/// the scaled violator rows. Each fit writes every value it reads, so a workspace carries
+/// no state from one fit to the next, only capacity.
+#[derive(Debug, Default)]
+pub struct SvmWorkspace {
+    xs: Vec<f64>,
+    h: Vec<f64>,
+    l: Vec<f64>,
+    xv: Vec<f64>,
 }
 
 /// The training problem on augmented, standardised rows (stride = features + 1).
@@ -420,6 +482,7 @@ fn primal_newton(
     w0: Option<Vec<f64>>,
     tol: f64,
     max_steps: usize,
+    ws: &mut SvmWorkspace,
 ) -> (Vec<f64>, Vec<f64>, usize, bool) {
     let n = p.ys.len();
     let d = p.stride;
@@ -429,11 +492,13 @@ fn primal_newton(
     let mut steps = 0;
     let mut converged = false;
     let gtol = 1e-3 * tol;
-    // H = I + 2 Σ_{i ∈ in_h} C_i x_i x_iᵀ, lower triangle.
-    let mut h = vec![0.0; d * d];
+    // H = I + 2 Σ_{i ∈ in_h} C_i x_i x_iᵀ, lower triangle (the first step builds it whole,
+    // so nothing of an earlier problem in `ws` is read).
+    let SvmWorkspace { h, l, xv, .. } = ws;
+    h.resize(d * d, 0.0);
+    l.resize(d * d, 0.0);
     let mut in_h = vec![false; n];
     let mut built = false;
-    let mut l = vec![0.0; d * d];
     let mut dir = vec![0.0; d];
     let mut g = vec![0.0; d];
     while steps < max_steps {
@@ -459,23 +524,26 @@ fn primal_newton(
         }
         steps += 1;
         if !built || 2 * changes > viol {
-            // Rebuild: I + 2 X_Vᵀ diag(C) X_V by a matrix product.
-            let mut xv = ndarray::Array2::<f64>::zeros((viol, d));
+            // Rebuild: I + 2 X_Vᵀ diag(C) X_V by a matrix product (into H whole; only its
+            // lower triangle is kept up to date and read).
+            xv.resize(viol * d, 0.0);
             let mut r = 0;
             for i in 0..n {
                 in_h[i] = o[i] < 1.0;
                 if in_h[i] {
                     let s = (2.0 * p.costs[i]).sqrt();
-                    for (o2, v) in xv.row_mut(r).iter_mut().zip(p.row(i)) {
+                    for (o2, v) in xv[r * d..(r + 1) * d].iter_mut().zip(p.row(i)) {
                         *o2 = s * v;
                     }
                     r += 1;
                 }
             }
-            let full = xv.t().dot(&xv);
+            let xv = ArrayView2::from_shape((viol, d), &xv[..viol * d]).expect("viol × d");
+            let mut full = ArrayViewMut2::from_shape((d, d), &mut h[..]).expect("d × d");
+            general_mat_mul(1.0, &xv.t(), &xv, 0.0, &mut full);
             for a in 0..d {
                 for b in 0..=a {
-                    h[a * d + b] = full[[a, b]] + if a == b { 1.0 } else { 0.0 };
+                    h[a * d + b] += if a == b { 1.0 } else { 0.0 };
                 }
             }
             built = true;
@@ -499,17 +567,12 @@ fn primal_newton(
                 }
             }
         }
-        // Mirror the lower triangle for the factorisation.
-        for a in 0..d {
-            for b in 0..a {
-                h[b * d + a] = h[a * d + b];
-            }
-        }
-        if dense::cholesky(d, &h, &mut l).is_err() {
+        // (The factorisation reads the lower triangle only.)
+        if dense::cholesky(d, h, l).is_err() {
             break;
         }
         g.iter_mut().for_each(|v| *v = -*v);
-        dense::chol_solve(d, d, &l, &g, &mut dir);
+        dense::chol_solve(d, d, l, &g, &mut dir);
         // Exact line search: φ'(t) = wᵀp + t pᵀp − 2 Σ C_i max(0, 1 − o_i − t δ_i) δ_i.
         let wp = dense::dot(&w, &dir);
         let pp = dense::dot(&dir, &dir);

@@ -10,7 +10,7 @@ pub use eval::{
     Confusion, CvResult, FoldScore, Folds, cross_validate, gather, group_k_fold, mean_se,
     stratified_k_fold,
 };
-pub use linear::{ClassWeight, LinearSvm, LinearSvmParams, Loss, Solver};
+pub use linear::{ClassWeight, LinearSvm, LinearSvmParams, Loss, Solver, SvmWorkspace};
 
 /// Errors of the SVM engine: bad parameters or data, never a panic.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -149,9 +149,13 @@ pub fn grid_task(
     let mut cells = Vec::with_capacity(gamma.len());
     for &gamma in gamma {
         progress.checkpoint()?;
-        let (codes, cvr, coding_secs, cv_secs) =
-            score_codes(data, &fit.dictionary, gamma, folds, settings)?;
-        let (sparsity, active) = sparsity_of(codes.view());
+        let ScoredCodes {
+            sparsity: (sparsity, active),
+            cv: cvr,
+            coding_secs,
+            cv_secs,
+            ..
+        } = score_codes(data, &fit.dictionary, gamma, folds, settings)?;
         let cell = CellResult {
             config: Config {
                 num_bases,

@@ -329,7 +329,11 @@ impl std::fmt::Display for PipelineInputs {
 /// A grasp's feature vector: its patches' codes side by side (G·S × K → G × S·K).
 pub fn concatenated_codes(codes: Array2<f64>, sensors: usize) -> Array2<f64> {
     let (rows, k) = codes.dim();
-    let codes = codes.as_standard_layout().into_owned();
+    let codes = if codes.is_standard_layout() {
+        codes
+    } else {
+        codes.as_standard_layout().into_owned()
+    };
     codes
         .into_shape_with_order((rows / sensors, sensors * k))
         .expect("codes hold whole grasps")
@@ -417,7 +421,7 @@ impl std::fmt::Display for Config {
 /// Share of zero coefficients and mean non-zero coefficients per patch.
 fn sparsity_of(codes: ArrayView2<f64>) -> (f64, f64) {
     let total = codes.len().max(1) as f64;
-    let nz = codes.iter().filter(|v| **v != 0.0).count() as f64;
+    let nz = codes.iter().map(|v| usize::from(*v != 0.0)).sum::<usize>() as f64;
     (1.0 - nz / total, nz / codes.nrows().max(1) as f64)
 }
 
@@ -444,6 +448,17 @@ pub struct CellResult {
     pub cv_secs: f64,
 }
 
+/// What [`score_codes`] leaves: the SVM's features, the codes' sparsity and active bases
+/// per patch ([`sparsity_of`]), the cross validation and the seconds of coding and of
+/// cross-validating.
+struct ScoredCodes {
+    features: Array2<f64>,
+    sparsity: (f64, f64),
+    cv: CvResult,
+    coding_secs: f64,
+    cv_secs: f64,
+}
+
 /// Code every patch with `gamma` and cross-validate the SVM on the grasp features.
 fn score_codes(
     data: &StabilityData,
@@ -451,14 +466,21 @@ fn score_codes(
     gamma: f64,
     folds: &Folds,
     settings: &PipelineSettings,
-) -> Result<(Array2<f64>, CvResult, f64, f64), StabilityError> {
+) -> Result<ScoredCodes, StabilityError> {
     let t0 = Instant::now();
     let codes = dict.encode(data.x.view(), gamma)?;
     let coding_secs = t0.elapsed().as_secs_f64();
+    let sparsity = sparsity_of(codes.view());
     let t1 = Instant::now();
-    let features = data.features(codes.clone(), settings.inputs);
+    let features = data.features(codes, settings.inputs);
     let cv = cross_validate(features.view(), &data.labels, folds, &settings.svm)?;
-    Ok((codes, cv, coding_secs, t1.elapsed().as_secs_f64()))
+    Ok(ScoredCodes {
+        features,
+        sparsity,
+        cv,
+        coding_secs,
+        cv_secs: t1.elapsed().as_secs_f64(),
+    })
 }
 
 // ---------------------------------------------------------------------------------------

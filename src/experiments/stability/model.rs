@@ -114,11 +114,14 @@ pub fn evaluate_config(
     let dictionary_secs = t0.elapsed().as_secs_f64();
     progress.checkpoint()?;
     let kf = kfold.folds(data, settings.cv_seed)?;
-    let (codes, kcv, _, _) = score_codes(data, &dict, config.gamma, &kf, settings)?;
+    let ScoredCodes {
+        features,
+        sparsity: (sparsity, active),
+        cv: kcv,
+        ..
+    } = score_codes(data, &dict, config.gamma, &kf, settings)?;
     let of = objects.folds(data, settings.cv_seed)?;
-    let features = data.features(codes.clone(), settings.inputs);
     let ocv = cross_validate(features.view(), &data.labels, &of, &settings.svm)?;
-    let (sparsity, active) = sparsity_of(codes.view());
     Ok((
         Evaluation {
             config,
