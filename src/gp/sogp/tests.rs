@@ -1,6 +1,17 @@
 use super::gram::{GradBuffers, tri};
 use super::*;
 
+/// Hyperparameter adaptation over a window of 4 observations, starting after
+/// `start_after` updates and never stopping within a test.
+fn adapting_after(start_after: usize) -> SngdParams {
+    SngdParams {
+        window: 4,
+        start_after,
+        stop_count: 1000,
+        ..SngdParams::default()
+    }
+}
+
 /// The training path keeps the Gram derivatives incrementally (new rows from the
 /// observation's derivatives, swaps on deletion, compaction on rebuild) and reuses the
 /// observation's per-lag kernel values; after every update, through deletions and
@@ -13,12 +24,7 @@ fn cached_gradient_terms_equal_a_fresh_computation() {
             capacity: 6,
             tau: 3,
             likelihood,
-            adaptation: Some(SngdParams {
-                window: 4,
-                start_after: 8,
-                stop_count: 1000,
-                ..SngdParams::default()
-            }),
+            adaptation: Some(adapting_after(8)),
             ..SogpParams::default()
         };
         let (dim, tau) = (2, 3);
@@ -87,12 +93,7 @@ fn kernel_from_input_rows_equals_the_direct_evaluation() {
     let p = SogpParams {
         capacity: 9,
         tau,
-        adaptation: Some(SngdParams {
-            window: 4,
-            start_after: 12,
-            stop_count: 1000,
-            ..SngdParams::default()
-        }),
+        adaptation: Some(adapting_after(12)),
         ..SogpParams::default()
     };
     let mut gp = Sogp::new(dim, 1, &p).unwrap();
@@ -151,12 +152,7 @@ fn stamped_windows_observe_what_compared_windows_do() {
     let p = SogpParams {
         capacity: 6,
         tau,
-        adaptation: Some(SngdParams {
-            window: 4,
-            start_after: 8,
-            stop_count: 1000,
-            ..SngdParams::default()
-        }),
+        adaptation: Some(adapting_after(8)),
         ..SogpParams::default()
     };
     let mut by_slice = Sogp::new(dim, 1, &p).unwrap();
@@ -401,12 +397,7 @@ fn a_damaged_model_state_is_an_error_naming_the_field() {
     let p = SogpParams {
         capacity: 5,
         tau: 2,
-        adaptation: Some(SngdParams {
-            window: 4,
-            start_after: 10,
-            stop_count: 1000,
-            ..SngdParams::default()
-        }),
+        adaptation: Some(adapting_after(10)),
         ..SogpParams::default()
     };
     let mut m = Sogp::new(2, 1, &p).unwrap();
@@ -497,12 +488,7 @@ fn at_the_budget_an_update_equals_storing_then_deleting_the_least_informative() 
                 capacity,
                 tau,
                 likelihood,
-                adaptation: adaptation.then_some(SngdParams {
-                    window: 4,
-                    start_after: 20,
-                    stop_count: 1000,
-                    ..SngdParams::default()
-                }),
+                adaptation: adaptation.then_some(adapting_after(20)),
                 ..SogpParams::default()
             };
             let probit = likelihood == Likelihood::Probit;
@@ -643,12 +629,7 @@ fn the_removal_by_reciprocals_equals_the_removal_by_division() {
         let params = SogpParams {
             capacity: cap,
             tau,
-            adaptation: adaptation.then_some(SngdParams {
-                window: 4,
-                start_after: 20,
-                stop_count: 1000,
-                ..SngdParams::default()
-            }),
+            adaptation: adaptation.then_some(adapting_after(20)),
             ..SogpParams::default()
         };
         let mut gp = Sogp::new(dim, 1, &params).unwrap();
