@@ -43,7 +43,6 @@ pub fn cholesky(s: usize, a: &[f64], l: &mut [f64]) -> Result<(), usize> {
 /// row n of L is one forward substitution against the rows above. This is exactly row n of
 /// [`cholesky`] (the same operations in the same order). False when the new pivot is not
 /// positive enough relative to its diagonal entry (row n is then not valid).
-#[inline]
 pub fn chol_append(n: usize, stride: usize, l: &mut [f64], a_row: &[f64]) -> bool {
     let (done, rest) = l.split_at_mut(n * stride);
     let li = &mut rest[..n + 1];
@@ -104,7 +103,6 @@ pub fn chol_delete(n: usize, stride: usize, l: &mut [f64], p: usize, rot: &mut [
 
 /// Solve L Lᵀ x = b for the leading r × r block of a factor stored with row stride
 /// `stride` (as written by [`cholesky`] with s = stride; rows before a failed pivot are valid).
-#[inline]
 pub fn chol_solve(r: usize, stride: usize, l: &[f64], b: &[f64], x: &mut [f64]) {
     for i in 0..r {
         let row = &l[i * stride..i * stride + i + 1];
