@@ -6,6 +6,8 @@
 //! feature carries no information into a distance. They also round differently (divide by
 //! sd, multiply by 1/spread), and the published figures of each pipeline rest on its own.
 
+use std::borrow::Cow;
+
 use ndarray::{Array2, ArrayView1, ArrayView2};
 use serde::{Deserialize, Serialize};
 
@@ -33,29 +35,16 @@ impl Standardizer {
         let mut mean = vec![0.0; d];
         let mut m2 = vec![0.0; d];
         for &i in rows {
-            let row = x.row(i);
-            match row.as_slice() {
-                Some(r) => mean.iter_mut().zip(r).for_each(|(m, v)| *m += v),
-                None => mean.iter_mut().zip(row.iter()).for_each(|(m, v)| *m += v),
+            for (m, v) in mean.iter_mut().zip(&*contiguous(x.row(i))) {
+                *m += v;
             }
         }
         let nf = n.max(1) as f64;
         mean.iter_mut().for_each(|m| *m /= nf);
         for &i in rows {
-            let row = x.row(i);
-            match row.as_slice() {
-                Some(r) => {
-                    for ((s, m), v) in m2.iter_mut().zip(&mean).zip(r) {
-                        let e = v - m;
-                        *s += e * e;
-                    }
-                }
-                None => {
-                    for ((s, m), v) in m2.iter_mut().zip(&mean).zip(row.iter()) {
-                        let e = v - m;
-                        *s += e * e;
-                    }
-                }
+            for ((s, m), v) in m2.iter_mut().zip(&mean).zip(&*contiguous(x.row(i))) {
+                let e = v - m;
+                *s += e * e;
             }
         }
         let sd = m2
@@ -80,17 +69,9 @@ impl Standardizer {
     /// Scale one row into `out`.
     #[inline]
     pub fn transform_into(&self, row: ArrayView1<f64>, out: &mut [f64]) {
-        let scale = |o: &mut f64, (v, (m, s)): (&f64, (&f64, &f64))| *o = (v - m) / s;
         let ms = self.mean.iter().zip(&self.sd);
-        match row.as_slice() {
-            Some(r) => out
-                .iter_mut()
-                .zip(r.iter().zip(ms))
-                .for_each(|(o, p)| scale(o, p)),
-            None => out
-                .iter_mut()
-                .zip(row.iter().zip(ms))
-                .for_each(|(o, p)| scale(o, p)),
+        for (o, (v, (m, sd))) in out.iter_mut().zip(contiguous(row).iter().zip(ms)) {
+            *o = (v - m) / sd;
         }
     }
 
@@ -216,4 +197,13 @@ pub(crate) fn check_width(data: ArrayView2<f64>, width: usize) -> Result<(), Fea
         )));
     }
     Ok(())
+}
+
+/// A row as a slice, borrowed when it is contiguous (nearly always), so that the loops over
+/// it run on a slice rather than through ndarray's strided iterator.
+fn contiguous(row: ArrayView1<'_, f64>) -> Cow<'_, [f64]> {
+    match row.to_slice() {
+        Some(r) => Cow::Borrowed(r),
+        None => Cow::Owned(row.to_vec()),
+    }
 }

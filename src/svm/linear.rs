@@ -220,14 +220,9 @@ impl LinearSvmParams {
         }
         for (r, &i) in rows.iter().enumerate() {
             let row = x.row(i);
-            // (A branch-free test on a contiguous row; the position only on failure.)
-            let finite = match row.as_slice() {
-                Some(v) => v.iter().fold(true, |ok, v| ok & v.is_finite()),
-                None => row.iter().all(|v| v.is_finite()),
-            };
-            if let Some(j) = (!finite)
-                .then(|| row.iter().position(|v| !v.is_finite()))
-                .flatten()
+            // (A fold without early exit is branch-free; the position only on failure.)
+            if !row.fold(true, |ok, v| ok & v.is_finite())
+                && let Some(j) = row.iter().position(|v| !v.is_finite())
             {
                 return Err(SvmError::Data(format!(
                     "sample {r} feature {j} is not finite"
