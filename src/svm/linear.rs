@@ -18,7 +18,7 @@
 //! (`standardize`), and the same scaling is applied at prediction.
 
 use ndarray::linalg::general_mat_mul;
-use ndarray::{Array1, ArrayView1, ArrayView2, ArrayViewMut2};
+use ndarray::{Array1, ArrayView1, ArrayView2, ArrayViewMut2, s};
 use serde::{Deserialize, Serialize};
 
 use super::SvmError;
@@ -334,10 +334,7 @@ impl LinearSvmParams {
                 }
                 (wr, b)
             }
-            None => (
-                w_std.slice(ndarray::s![..d]).to_owned(),
-                w_std[d] * self.bias,
-            ),
+            None => (w_std.slice(s![..d]).to_owned(), w_std[d] * self.bias),
         };
         Ok(LinearSvm {
             weights,
@@ -472,6 +469,9 @@ fn dual_cd(
 /// the violator set stops changing, typically in 5–15 steps whatever the conditioning.
 /// The Hessian is updated by rank-one terms for the samples entering or leaving the
 /// violator set. Returns (w, α with α_i = 2 C_i max(0, 1 − y_i wᵀx_i), steps, converged).
+/// Columns per block of the Hessian's product (a multiple of the product kernel's widths).
+const GRAM_BLOCK: usize = 32;
+
 fn primal_newton(
     p: &Problem,
     w0: Option<Vec<f64>>,
@@ -535,7 +535,19 @@ fn primal_newton(
             }
             let xv = ArrayView2::from_shape((viol, d), &xv[..viol * d]).expect("viol × d");
             let mut full = ArrayViewMut2::from_shape((d, d), &mut h[..]).expect("d × d");
-            general_mat_mul(1.0, &xv.t(), &xv, 0.0, &mut full);
+            // By blocks of columns, each from its diagonal down: about 60 % of the whole
+            // product's work. Every entry is the same sum in the same order as in one
+            // product of the whole (the blocking splits the output, not the sum).
+            for j0 in (0..d).step_by(GRAM_BLOCK) {
+                let cols = j0..(j0 + GRAM_BLOCK).min(d);
+                general_mat_mul(
+                    1.0,
+                    &xv.slice(s![.., j0..]).t(),
+                    &xv.slice(s![.., cols.clone()]),
+                    0.0,
+                    &mut full.slice_mut(s![j0.., cols]),
+                );
+            }
             for a in 0..d {
                 for b in 0..=a {
                     h[a * d + b] += if a == b { 1.0 } else { 0.0 };
