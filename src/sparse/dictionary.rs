@@ -486,15 +486,16 @@ fn sufficient_statistics(codes: ArrayView2<f64>, x: ArrayView2<f64>) -> (Array2<
     );
     let mut ata = vec![0.0; k * k];
     let mut atx = vec![0.0; k * n];
-    let mut idx: Vec<(usize, f64)> = Vec::with_capacity(k);
+    let mut nonzero = vec![(0usize, 0.0f64); k];
     for (a, xr) in a_all.chunks_exact(k).zip(x_all.chunks_exact(n)) {
-        idx.clear();
-        idx.extend(
-            a.iter()
-                .enumerate()
-                .filter(|(_, v)| **v != 0.0)
-                .map(|(j, v)| (j, *v)),
-        );
+        // The non-zero coefficients without a branch on each (every one is written at
+        // the next free place, which moves on only past a non-zero).
+        let mut count = 0;
+        for (j, &v) in a.iter().enumerate() {
+            nonzero[count] = (j, v);
+            count += usize::from(v != 0.0);
+        }
+        let idx = &nonzero[..count];
         for (m, &(p, ap)) in idx.iter().enumerate() {
             let row = &mut ata[p * k..(p + 1) * k];
             for &(q, aq) in &idx[..=m] {
