@@ -69,12 +69,12 @@ pub fn cholesky(s: usize, a: &[f64], l: &mut [f64]) -> Result<(), usize> {
 }
 
 /// Rows of a block of [`cholesky`].
-const ROWS: usize = 4;
+pub const ROWS: usize = 4;
 
 /// [`dot`] of each of four rows with `y` (as long as `y`), each summed exactly as [`dot`]
 /// sums it.
 #[inline]
-fn dot_rows(x: [&[f64]; ROWS], y: &[f64]) -> [f64; ROWS] {
+pub fn dot_rows(x: [&[f64]; ROWS], y: &[f64]) -> [f64; ROWS] {
     let n = y.len();
     let x = x.map(|r| &r[..n]);
     let mut acc = [[0.0f64; 4]; ROWS];

@@ -312,9 +312,10 @@ impl LinearSvmParams {
         // Objectives (primal over all samples; dual from α).
         let mut primal = 0.5 * dot(&w, &w);
         let mut dual = -0.5 * dot(&w, &w);
+        let mut wx = vec![0.0; n];
+        for_rows(xs, stride, &mut wx, |rows| sequential_dots(rows, &w));
         for i in 0..n {
-            let xi = &xs[i * stride..(i + 1) * stride];
-            let margin = (1.0 - ys[i] * dot(&w, xi)).max(0.0);
+            let margin = (1.0 - ys[i] * wx[i]).max(0.0);
             primal += cost(i)
                 * match self.loss {
                     Loss::Hinge => margin,
@@ -378,6 +379,44 @@ impl Problem<'_> {
     fn row(&self, i: usize) -> &[f64] {
         &self.xs[i * self.stride..(i + 1) * self.stride]
     }
+
+    /// `dense::dot(v, x_i)` of every row into `out`.
+    fn dots(&self, v: &[f64], out: &mut [f64]) {
+        for_rows(self.xs, self.stride, out, |rows| dense::dot_rows(rows, v));
+    }
+}
+
+/// `out[i] = f(rows)[i − first]` for the rows of `xs` (stride `stride`), four at a time:
+/// their sums are independent, so four run side by side instead of one after the other
+/// (each is still the same sum in the same order). The last rows, fewer than four, are
+/// passed again among the four and their duplicates dropped.
+fn for_rows(
+    xs: &[f64],
+    stride: usize,
+    out: &mut [f64],
+    f: impl Fn([&[f64]; dense::ROWS]) -> [f64; dense::ROWS],
+) {
+    let n = out.len();
+    let row = |i: usize| &xs[i * stride..(i + 1) * stride];
+    for first in (0..n).step_by(dense::ROWS) {
+        let rows = std::array::from_fn(|m| row((first + m).min(n - 1)));
+        let sums = f(rows);
+        let take = dense::ROWS.min(n - first);
+        out[first..first + take].copy_from_slice(&sums[..take]);
+    }
+}
+
+/// [`dot`] of each of four rows with `v`, summed as [`dot`] sums it (in order, from −0).
+#[inline]
+fn sequential_dots(rows: [&[f64]; dense::ROWS], v: &[f64]) -> [f64; dense::ROWS] {
+    let rows = rows.map(|r| &r[..v.len()]);
+    let mut sums = [-0.0f64; dense::ROWS];
+    for (t, vt) in v.iter().enumerate() {
+        for (s, r) in sums.iter_mut().zip(&rows) {
+            *s += r[t] * vt;
+        }
+    }
+    sums
 }
 
 /// Dual coordinate descent with shrinking (liblinear's solve_l2r_l1l2_svc).
@@ -482,7 +521,11 @@ fn primal_newton(
     let n = p.ys.len();
     let d = p.stride;
     let mut w = w0.unwrap_or_else(|| vec![0.0; d]);
-    let mut o: Vec<f64> = (0..n).map(|i| p.ys[i] * dense::dot(&w, p.row(i))).collect();
+    let mut o = vec![0.0; n];
+    p.dots(&w, &mut o);
+    for (oi, yi) in o.iter_mut().zip(p.ys) {
+        *oi *= yi;
+    }
     let mut delta = vec![0.0; n];
     let mut steps = 0;
     let mut converged = false;
@@ -583,8 +626,9 @@ fn primal_newton(
         // Exact line search: φ'(t) = wᵀp + t pᵀp − 2 Σ C_i max(0, 1 − o_i − t δ_i) δ_i.
         let wp = dense::dot(&w, &dir);
         let pp = dense::dot(&dir, &dir);
-        for (i, di) in delta.iter_mut().enumerate() {
-            *di = p.ys[i] * dense::dot(&dir, p.row(i));
+        p.dots(&dir, &mut delta);
+        for (di, yi) in delta.iter_mut().zip(p.ys) {
+            *di *= yi;
         }
         let dphi = |t: f64| -> (f64, f64) {
             let (mut d1, mut d2) = (wp + t * pp, pp);
@@ -617,12 +661,12 @@ fn primal_newton(
             o[i] += t * delta[i];
         }
     }
-    let alpha: Vec<f64> = (0..n)
-        .map(|i| {
-            let oi = p.ys[i] * dense::dot(&w, p.row(i));
-            2.0 * p.costs[i] * (1.0 - oi).max(0.0)
-        })
-        .collect();
+    let mut alpha = vec![0.0; n];
+    p.dots(&w, &mut alpha);
+    for ((ai, yi), ci) in alpha.iter_mut().zip(p.ys).zip(p.costs) {
+        let oi = yi * *ai;
+        *ai = 2.0 * ci * (1.0 - oi).max(0.0);
+    }
     (w, alpha, steps, converged)
 }
 
