@@ -214,16 +214,16 @@ impl FeatureSign {
         let s = self.active.len();
         for p in 0..s {
             let i = self.active[p];
-            for q in 0..s {
-                self.gs[p * s + q] = g[i * k + self.active[q]];
-            }
             self.rhs[p] = c[i] - gamma * self.theta[p];
             self.cur[p] = a[i];
         }
-        // Append the rows of the bases activated since the factor was last valid.
+        // Append the rows of the bases activated since the factor was last valid (each
+        // needs its row of the active Gram matrix up to the diagonal).
+        self.gather_gram(g, self.factored..s, false);
         while self.factored < s {
             let p = self.factored;
             if !chol_append(p, k, &mut self.l, &self.gs[p * s..p * s + p + 1]) {
+                self.gather_gram(g, 0..s, true);
                 return self.null_step(p, c, gamma, a);
             }
             self.factored += 1;
@@ -235,6 +235,8 @@ impl FeatureSign {
             }
             return Step::Full;
         }
+        // The line search reads the whole active Gram matrix.
+        self.gather_gram(g, 0..s, true);
         // Discrete line search on the segment cur → z: the objective change
         // Δf(t) = t b + t² q + γ (Σ|cur + t d| − Σ|cur|).
         let mut b = 0.0;
@@ -298,6 +300,19 @@ impl FeatureSign {
         }
         self.compact(a);
         Step::Partial
+    }
+
+    /// Rows `rows` of the active Gram matrix `G[active, active]` into `gs` (stride: the
+    /// active set's size), whole or up to their diagonal.
+    fn gather_gram(&mut self, g: &[f64], rows: std::ops::Range<usize>, whole: bool) {
+        let (k, s) = (self.k, self.active.len());
+        for p in rows {
+            let gi = &g[self.active[p] * k..(self.active[p] + 1) * k];
+            let width = if whole { s } else { p + 1 };
+            for (gpq, &j) in self.gs[p * s..p * s + width].iter_mut().zip(&self.active) {
+                *gpq = gi[j];
+            }
+        }
     }
 
     /// The active Gram matrix is singular at pivot `r`: basis `active[r]` is a linear
