@@ -454,46 +454,52 @@ impl FeatureSign {
 
 /// The zero coefficient to activate: the first j with `a_j = 0` and `G_jj > 0` whose
 /// `|∇_j|` is the largest, and that value; `(0, usize::MAX)` when none is positive.
-/// The largest value is found first in a branch-free pass (four lanes: a maximum does
-/// not round, so their order does not matter), then its first index; only when that
+/// One branch-free pass in four lanes, each keeping its largest value and the first index
+/// holding it (a maximum does not round, so the lanes' order does not matter); the first
+/// index overall is the smallest among the lanes holding the largest value. Only when that
 /// index is a zero basis (`G_jj = 0`, rare) is the eligible set scanned coefficient by
 /// coefficient. The answer is that of the direct scan in every case.
 fn most_violating(grad: &[f64], a: &[f64], g: &[f64], k: usize) -> (f64, usize) {
     let masked = |gr: f64, aj: f64| if aj == 0.0 { gr.abs() } else { 0.0 };
-    let max = |m: f64, v: f64| if v > m { v } else { m };
     let mut lanes = [0.0f64; 4];
+    let mut at = [usize::MAX; 4];
+    let mut take = |l: usize, j: usize, v: f64| {
+        let better = v > lanes[l];
+        lanes[l] = if better { v } else { lanes[l] };
+        at[l] = if better { j } else { at[l] };
+    };
     let (gc, ac) = (grad.chunks_exact(4), a.chunks_exact(4));
     let (gr_rest, a_rest) = (gc.remainder(), ac.remainder());
-    for (gq, aq) in gc.zip(ac) {
+    let whole = grad.len() - gr_rest.len();
+    for (c, (gq, aq)) in gc.zip(ac).enumerate() {
         for l in 0..4 {
-            lanes[l] = max(lanes[l], masked(gq[l], aq[l]));
+            take(l, 4 * c + l, masked(gq[l], aq[l]));
         }
     }
-    let mut best = max(max(lanes[0], lanes[1]), max(lanes[2], lanes[3]));
-    for (gr, aj) in gr_rest.iter().zip(a_rest) {
-        best = max(best, masked(*gr, *aj));
+    for (l, (gr, aj)) in gr_rest.iter().zip(a_rest).enumerate() {
+        take(l, whole + l, masked(*gr, *aj));
     }
+    let best = lanes.iter().fold(0.0f64, |m, &v| if v > m { v } else { m });
     if best == 0.0 {
         return (0.0, usize::MAX);
     }
-    let first = grad
-        .iter()
-        .zip(a)
-        .position(|(gr, aj)| *aj == 0.0 && gr.abs() == best);
-    match first {
-        Some(j) if g[j * k + j] > 0.0 => (best, j),
-        _ => {
-            let (mut best, mut best_j) = (0.0, usize::MAX);
-            for j in 0..k {
-                let grad = grad[j].abs();
-                if a[j] == 0.0 && grad > best && g[j * k + j] > 0.0 {
-                    best = grad;
-                    best_j = j;
-                }
-            }
-            (best, best_j)
+    let first = (0..4)
+        .filter(|&l| lanes[l] == best)
+        .map(|l| at[l])
+        .min()
+        .expect("a lane holds the largest value");
+    if g[first * k + first] > 0.0 {
+        return (best, first);
+    }
+    let (mut best, mut best_j) = (0.0, usize::MAX);
+    for j in 0..k {
+        let grad = grad[j].abs();
+        if a[j] == 0.0 && grad > best && g[j * k + j] > 0.0 {
+            best = grad;
+            best_j = j;
         }
     }
+    (best, best_j)
 }
 
 #[inline]
