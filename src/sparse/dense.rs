@@ -40,15 +40,7 @@ pub fn cholesky(s: usize, a: &[f64], l: &mut [f64]) -> Result<(), usize> {
         let (done, rest) = l.split_at_mut(i * s);
         for j in 0..i {
             let lj = &done[j * s..j * s + j + 1];
-            let sums = dot_rows(
-                [
-                    &rest[..j],
-                    &rest[s..s + j],
-                    &rest[2 * s..2 * s + j],
-                    &rest[3 * s..3 * s + j],
-                ],
-                &lj[..j],
-            );
+            let sums = dot_rows(std::array::from_fn(|m| &rest[m * s..m * s + j]), &lj[..j]);
             for (m, sum) in sums.iter().enumerate() {
                 rest[m * s + j] = (a[(i + m) * s + j] - sum) / lj[j];
             }

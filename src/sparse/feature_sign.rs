@@ -122,7 +122,7 @@ impl FeatureSign {
             self.active[kept] = j;
             self.theta[kept] = v.signum();
             kept += usize::from(keep);
-            if nonzero != keep || (v.to_bits() != 0 && !nonzero) {
+            if !keep && v.to_bits() != 0 {
                 // Not finite, on a zero basis, or −0: a plain zero.
                 a[j] = 0.0;
             }
