@@ -501,6 +501,9 @@ fn dual_cd(
     (w, alpha, epochs, converged)
 }
 
+/// Columns per block of the Hessian's product (a multiple of the product kernel's widths).
+const GRAM_BLOCK: usize = 32;
+
 /// Finite Newton on the primal of the squared-hinge SVM: with the set of margin
 /// violators fixed the objective is quadratic, so each step solves
 /// `(I + 2 Σ_viol C_i x_i x_iᵀ) p = −∇f` and an exact line search along p (the objective
@@ -508,9 +511,6 @@ fn dual_cd(
 /// the violator set stops changing, typically in 5–15 steps whatever the conditioning.
 /// The Hessian is updated by rank-one terms for the samples entering or leaving the
 /// violator set. Returns (w, α with α_i = 2 C_i max(0, 1 − y_i wᵀx_i), steps, converged).
-/// Columns per block of the Hessian's product (a multiple of the product kernel's widths).
-const GRAM_BLOCK: usize = 32;
-
 fn primal_newton(
     p: &Problem,
     w0: Option<Vec<f64>>,
