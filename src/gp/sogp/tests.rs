@@ -199,17 +199,24 @@ fn stamped_windows_observe_what_compared_windows_do() {
 
 /// A model that observed a whole sequence at once, then learns at its last window,
 /// ends as one that observed the windows step by step: the window it learns is the
-/// sequence's last.
+/// sequence's last, and with adaptation its gradient reads that window's K_t per lag.
 #[test]
 fn a_sequence_observed_at_once_learns_its_last_window() {
-    use crate::gp::{SequenceWindows, Window};
     let (dim, tau) = (2, 3);
-    let p = SogpParams {
-        capacity: 8,
-        tau,
-        ..SogpParams::default()
-    };
-    let mut at_once = Sogp::new(dim, 1, &p).unwrap();
+    for adaptation in [None, Some(adapting_after(6))] {
+        let p = SogpParams {
+            capacity: 8,
+            tau,
+            adaptation,
+            ..SogpParams::default()
+        };
+        learn_sequences_at_once_and_by_step(dim, tau, &p);
+    }
+}
+
+fn learn_sequences_at_once_and_by_step(dim: usize, tau: usize, p: &SogpParams) {
+    use crate::gp::{SequenceWindows, Window};
+    let mut at_once = Sogp::new(dim, 1, p).unwrap();
     let mut by_step = at_once.clone();
     for g in 0..40 {
         let f = g as f64;
@@ -231,8 +238,16 @@ fn a_sequence_observed_at_once_learns_its_last_window() {
         by_step.update(&[y]);
         assert_eq!(at_once.basis(), by_step.basis(), "grasp {g}");
         assert_eq!(at_once.alpha, by_step.alpha, "grasp {g}");
+        assert_eq!(
+            at_once.kernel.params(),
+            by_step.kernel.params(),
+            "grasp {g}"
+        );
     }
     assert_eq!(at_once.n_basis(), p.capacity);
+    if p.adaptation.is_some() {
+        assert!(at_once.hyper_updates() >= 5, "{}", at_once.hyper_updates());
+    }
 }
 
 #[test]
