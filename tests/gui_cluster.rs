@@ -61,11 +61,11 @@ fn a_clustering_form_planned_for_a_cluster_merges_into_the_local_result() {
         "messages: {texts:?}"
     );
 
-    // Two thresholds × two orders, and for each order the sequential k-means baseline at
-    // k = 2 … 20, in the three shards asked for.
+    // Two orders (each learned under both thresholds at once), and for each order the
+    // sequential k-means baseline at k = 2 … 20, in the three shards asked for.
     let (plan, _) = sweep::read_plan(&dir).expect("the plan reads");
     assert_eq!(plan.experiment.name(), "clustering");
-    assert_eq!(plan.items.len(), 2 * 2 + 2 * 19);
+    assert_eq!(plan.items.len(), 2 + 2 * 19);
     assert_eq!(plan.shard_count(), 3);
     assert_eq!(plan.session.name, "Simulated object recognition");
     let script = std::fs::read_to_string(dir.join(sweep::SBATCH_FILE)).unwrap();

@@ -1,7 +1,9 @@
 use ndarray::Array2;
 use tactile_workbench::cluster::scores;
 use tactile_workbench::gp::SngdParams;
-use tactile_workbench::learners::{Du, DuParams, EvtDraws, Gu, GuAggregate, GuParams, du_novelty};
+use tactile_workbench::learners::{
+    Du, DuParams, EvtDraws, Gu, GuAggregate, GuParams, NoveltyLearner, du_novelty,
+};
 use tactile_workbench::rng::Rng;
 
 fn sequence(class: usize, rng: &mut Rng) -> Array2<f64> {

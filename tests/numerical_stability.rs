@@ -8,7 +8,7 @@ use tactile_workbench::gp::{Likelihood, Sogp, SogpParams, Window};
 use tactile_workbench::jobs::Progress;
 use tactile_workbench::learners::evt::evt_novelty;
 use tactile_workbench::learners::{
-    Ds, DsParams, Du, DuParams, Gs, GsParams, Gu, GuParams, SequenceClassifier,
+    Ds, DsParams, Du, DuParams, Gs, GsParams, Gu, GuParams, NoveltyLearner, SequenceClassifier,
 };
 use tactile_workbench::rng::Rng;
 use tactile_workbench::sparse::{

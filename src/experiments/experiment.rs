@@ -322,7 +322,7 @@ impl Experiment for ClusteringParams {
 
     fn cost(&self, session: &Session, item: &ClusteringItem) -> f64 {
         let share = match item {
-            ClusteringItem::Run { .. } => 1.0,
+            ClusteringItem::Order { .. } => self.thresholds.len() as f64,
             ClusteringItem::Baseline { .. } => 0.1,
         };
         CLUSTERING_COST * share * readings(session)

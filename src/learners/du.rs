@@ -9,9 +9,10 @@
 //! clusters trained on fewer than [`DuParams::min_grasps`] grasps (default 1: keep all, as
 //! the paper's DU).
 
-use ndarray::{ArrayView2, Axis};
+use ndarray::{Array2, ArrayView2, Axis};
 use serde::{Deserialize, Serialize};
 
+use super::novelty::{Assignment, NoveltyLearner};
 use super::{Ds, DsParams, LearnerError, SequenceClassifier, argmax_of_mean};
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -48,14 +49,6 @@ impl DuParams {
         }
         self.ds.validate()
     }
-}
-
-/// What learning one grasp did.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Assignment {
-    pub cluster: usize,
-    pub novelty: f64,
-    pub created: bool,
 }
 
 /// Saved with serde as its DS learner, its own parameters and the grasps of each cluster;
@@ -147,36 +140,6 @@ impl Du {
         &self.grasps
     }
 
-    /// Assign one grasp (opening a cluster if it is novel) and train on it.
-    pub fn learn(&mut self, seq: ArrayView2<f64>) -> Result<Assignment, LearnerError> {
-        if self.ds.n_classes() == 0 {
-            let c = self.ds.add_class()?;
-            self.ds.train_sequence(seq, c);
-            self.grasps.push(1);
-            return Ok(Assignment {
-                cluster: c,
-                novelty: 1.0,
-                created: true,
-            });
-        }
-        let (q, p) = self.ds.predict_q_and_p(seq);
-        let s = argmax_of_mean(p.view());
-        let novelty = du_novelty(q.column(s).iter().copied());
-        let (cluster, created) = if novelty > self.threshold {
-            self.grasps.push(0);
-            (self.ds.add_class()?, true)
-        } else {
-            (s, false)
-        };
-        self.grasps[cluster] += 1;
-        self.ds.train_sequence_predicted(seq, cluster, q.view());
-        Ok(Assignment {
-            cluster,
-            novelty,
-            created,
-        })
-    }
-
     /// The cluster of a grasp under the learned models (no training): the DS decision
     /// among the clusters trained on at least `min_grasps` grasps (all if none is), with
     /// p renormalised over them.
@@ -190,6 +153,76 @@ impl Du {
         }
         let (q, _) = self.ds.predict_q_and_p(seq);
         confirmed_decision(q.view(), &confirmed)
+    }
+}
+
+/// A grasp assessed by DU: every cluster's q at each step (T × C), the DS winner and its
+/// nu_D.
+#[derive(Clone, Debug)]
+pub struct DuAssessment {
+    q: Array2<f64>,
+    winner: usize,
+    novelty: f64,
+}
+
+impl NoveltyLearner for Du {
+    type Assessment = DuAssessment;
+
+    fn threshold(&self) -> f64 {
+        self.threshold
+    }
+
+    fn n_clusters(&self) -> usize {
+        Du::n_clusters(self)
+    }
+
+    fn assess(&mut self, seq: ArrayView2<f64>) -> Option<DuAssessment> {
+        if self.ds.n_classes() == 0 {
+            return None;
+        }
+        let (q, p) = self.ds.predict_q_and_p(seq);
+        let winner = argmax_of_mean(p.view());
+        let novelty = du_novelty(q.column(winner).iter().copied());
+        Some(DuAssessment { q, winner, novelty })
+    }
+
+    fn novelty(a: &DuAssessment) -> f64 {
+        a.novelty
+    }
+
+    fn commit(
+        &mut self,
+        seq: ArrayView2<f64>,
+        a: Option<DuAssessment>,
+        create: bool,
+    ) -> Result<Assignment, LearnerError> {
+        let Some(a) = a else {
+            let c = self.ds.add_class()?;
+            self.ds.train_sequence(seq, c);
+            self.grasps.push(1);
+            return Ok(Assignment {
+                cluster: c,
+                novelty: 1.0,
+                created: true,
+            });
+        };
+        let cluster = if create {
+            self.grasps.push(0);
+            self.ds.add_class()?
+        } else {
+            a.winner
+        };
+        self.grasps[cluster] += 1;
+        self.ds.train_sequence_predicted(seq, cluster, a.q.view());
+        Ok(Assignment {
+            cluster,
+            novelty: a.novelty,
+            created: create,
+        })
+    }
+
+    fn assign(&mut self, seq: ArrayView2<f64>) -> usize {
+        Du::assign(self, seq)
     }
 }
 

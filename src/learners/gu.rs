@@ -37,8 +37,8 @@
 use ndarray::ArrayView2;
 use serde::{Deserialize, Serialize};
 
-use super::du::Assignment;
 use super::evt::evt_novelty;
+use super::novelty::{Assignment, NoveltyLearner};
 use super::{Gs, GsParams, LearnerError, SequenceClassifier, argmax, argmax_of_last};
 
 /// How the per-step novelties of a grasp become one score.
@@ -422,32 +422,6 @@ impl Gu {
         }
     }
 
-    /// Assign one grasp (opening a cluster if it is novel) and train on it.
-    pub fn learn(&mut self, seq: ArrayView2<f64>) -> Result<Assignment, LearnerError> {
-        if self.gs.n_classes() == 0 {
-            let c = self.gs.add_class()?;
-            self.train(seq, c);
-            return Ok(Assignment {
-                cluster: c,
-                novelty: 1.0,
-                created: true,
-            });
-        }
-        let s = self.winner(seq);
-        let novelty = self.novelty(s, seq);
-        let (cluster, created) = if novelty > self.threshold {
-            (self.gs.add_class()?, true)
-        } else {
-            (s, false)
-        };
-        self.train(seq, cluster);
-        Ok(Assignment {
-            cluster,
-            novelty,
-            created,
-        })
-    }
-
     /// m under [`EvtDraws::Grasps`]: expert `c`'s grasps and the tested one.
     fn grasps_drawn(&self, c: usize) -> usize {
         self.grasps.get(c).map_or(1, |g| g + 1)
@@ -500,6 +474,61 @@ impl Gu {
                 log_likelihood_diag(o, mu, &variance)
             });
         experts[argmax(totals.into_iter())]
+    }
+}
+
+/// A grasp assessed by GU: the GS winner and its nu_G.
+#[derive(Clone, Copy, Debug)]
+pub struct GuAssessment {
+    winner: usize,
+    novelty: f64,
+}
+
+impl NoveltyLearner for Gu {
+    type Assessment = GuAssessment;
+
+    fn threshold(&self) -> f64 {
+        self.threshold
+    }
+
+    fn n_clusters(&self) -> usize {
+        Gu::n_clusters(self)
+    }
+
+    fn assess(&mut self, seq: ArrayView2<f64>) -> Option<GuAssessment> {
+        if self.gs.n_classes() == 0 {
+            return None;
+        }
+        let winner = self.winner(seq);
+        let novelty = self.novelty(winner, seq);
+        Some(GuAssessment { winner, novelty })
+    }
+
+    fn novelty(a: &GuAssessment) -> f64 {
+        a.novelty
+    }
+
+    fn commit(
+        &mut self,
+        seq: ArrayView2<f64>,
+        a: Option<GuAssessment>,
+        create: bool,
+    ) -> Result<Assignment, LearnerError> {
+        let (cluster, novelty, created) = match a {
+            None => (self.gs.add_class()?, 1.0, true),
+            Some(a) if create => (self.gs.add_class()?, a.novelty, true),
+            Some(a) => (a.winner, a.novelty, false),
+        };
+        self.train(seq, cluster);
+        Ok(Assignment {
+            cluster,
+            novelty,
+            created,
+        })
+    }
+
+    fn assign(&mut self, seq: ArrayView2<f64>) -> usize {
+        Gu::assign(self, seq)
     }
 }
 

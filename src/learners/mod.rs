@@ -14,13 +14,15 @@ pub mod du;
 pub mod evt;
 pub mod gs;
 pub mod gu;
+pub mod novelty;
 
 use ndarray::{Array2, ArrayView2};
 
 pub use ds::{Ds, DsParams};
-pub use du::{Assignment, Du, DuParams, du_novelty};
+pub use du::{Du, DuParams, du_novelty};
 pub use gs::{Gs, GsParams};
 pub use gu::{EvtDraws, Gu, GuAggregate, GuNoise, GuParams};
+pub use novelty::{Assignment, NoveltyLearner};
 
 use crate::gp::{GpError, Sogp, SogpParams, Window};
 

@@ -15,7 +15,7 @@ use crate::catalogue::MethodId;
 use crate::experiments::clustering::{ClusteringParams, ClusteringResult, UnsupervisedLearner};
 use crate::experiments::result::SizeReason;
 use crate::features::FeatureSet;
-use crate::learners::{Du, DuParams, Gu, GuParams};
+use crate::learners::{Du, DuParams, Gu, GuParams, NoveltyLearner};
 use crate::rng::Rng;
 use crate::session::Session;
 

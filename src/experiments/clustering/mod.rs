@@ -16,6 +16,7 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
+pub mod forked;
 pub mod report;
 
 use crate::cluster::order_agreement::{ThresholdChoice, ThresholdCriterion, choose_threshold};
@@ -247,11 +248,72 @@ pub struct ClusteringResult {
     pub features_used: Option<FeatureSet>,
 }
 
-enum Learner {
-    Du(Du),
-    Gu(Gu),
+/// Every threshold's run on presentation order `rep` (in the thresholds' order), learned
+/// together and forked where their decisions part ([`forked`]): the runs each threshold
+/// learns alone, bit for bit.
+pub fn order_runs(
+    params: &ClusteringParams,
+    seqs: &[ndarray::Array2<f64>],
+    labels: &[usize],
+    dim: usize,
+    thresholds: &[f64],
+    rep: usize,
+) -> Result<Vec<ClusteringRun>, ExperimentError> {
+    let Some(&first) = thresholds.first() else {
+        return Ok(Vec::new());
+    };
+    let order = Rng::stream(params.seed, rep as u64).permutation(seqs.len());
+    let outcomes = match params.learner {
+        UnsupervisedLearner::Du => {
+            let du = Du::new(
+                dim,
+                &DuParams {
+                    ds: params.ds.clone(),
+                    threshold: first,
+                    min_grasps: params.du_min_grasps,
+                },
+            )?;
+            forked::learn_order(du, seqs, &order, thresholds)?
+        }
+        UnsupervisedLearner::Gu => {
+            let gu = Gu::new(
+                dim,
+                &GuParams {
+                    gs: params.gs.clone(),
+                    threshold: first,
+                    aggregate: params.gu_aggregate,
+                    draws: params.gu_draws,
+                    noise: params.gu_noise,
+                    noise_floor: params.gu_noise_floor,
+                    min_grasps: params.gu_min_grasps,
+                },
+            )?;
+            forked::learn_order(gu, seqs, &order, thresholds)?
+        }
+    };
+    let steps = seqs.iter().map(|s| s.nrows()).sum::<usize>().max(1) as f64;
+    Ok(outcomes
+        .into_iter()
+        .zip(thresholds)
+        .map(|(o, &threshold)| {
+            let sc = scores(labels, &o.assignment);
+            ClusteringRun {
+                threshold,
+                rep,
+                clusters: o.clusters,
+                effective: distinct(&o.assignment),
+                purity: sc.purity,
+                ari: sc.ari,
+                nmi: sc.nmi,
+                learn_step_us: 1e6 * o.learn_seconds / steps,
+                assign_step_us: 1e6 * o.assign_seconds / steps,
+                assignment: Some(o.assignment),
+            }
+        })
+        .collect())
 }
 
+/// One learning run at one threshold.
 pub fn one_run(
     params: &ClusteringParams,
     seqs: &[ndarray::Array2<f64>],
@@ -260,64 +322,9 @@ pub fn one_run(
     threshold: f64,
     rep: usize,
 ) -> Result<ClusteringRun, ExperimentError> {
-    let order = Rng::stream(params.seed, rep as u64).permutation(seqs.len());
-    let mut learner = match params.learner {
-        UnsupervisedLearner::Du => Learner::Du(Du::new(
-            dim,
-            &DuParams {
-                ds: params.ds.clone(),
-                threshold,
-                min_grasps: params.du_min_grasps,
-            },
-        )?),
-        UnsupervisedLearner::Gu => Learner::Gu(Gu::new(
-            dim,
-            &GuParams {
-                gs: params.gs.clone(),
-                threshold,
-                aggregate: params.gu_aggregate,
-                draws: params.gu_draws,
-                noise: params.gu_noise,
-                noise_floor: params.gu_noise_floor,
-                min_grasps: params.gu_min_grasps,
-            },
-        )?),
-    };
-    let t0 = Instant::now();
-    let mut steps = 0;
-    for &g in &order {
-        steps += seqs[g].nrows();
-        match &mut learner {
-            Learner::Du(l) => l.learn(seqs[g].view())?,
-            Learner::Gu(l) => l.learn(seqs[g].view())?,
-        };
-    }
-    let learn_step_us = 1e6 * t0.elapsed().as_secs_f64() / steps.max(1) as f64;
-    let t1 = Instant::now();
-    let (clusters, pred): (usize, Vec<usize>) = match &mut learner {
-        Learner::Du(l) => (
-            l.n_clusters(),
-            seqs.iter().map(|s| l.assign(s.view())).collect(),
-        ),
-        Learner::Gu(l) => (
-            l.n_clusters(),
-            seqs.iter().map(|s| l.assign(s.view())).collect(),
-        ),
-    };
-    let assign_step_us = 1e6 * t1.elapsed().as_secs_f64() / steps.max(1) as f64;
-    let sc = scores(labels, &pred);
-    Ok(ClusteringRun {
-        threshold,
-        rep,
-        clusters,
-        effective: distinct(&pred),
-        purity: sc.purity,
-        ari: sc.ari,
-        nmi: sc.nmi,
-        learn_step_us,
-        assign_step_us,
-        assignment: Some(pred),
-    })
+    order_runs(params, seqs, labels, dim, &[threshold], rep)?
+        .pop()
+        .ok_or_else(|| ExperimentError::param("thresholds", "needs at least one"))
 }
 
 /// Clusters that hold at least one grasp.
@@ -373,13 +380,14 @@ pub fn baseline_seed(seed: u64, k: usize, rep: usize) -> u64 {
 /// (effective clusters, purity, ARI, NMI) of one clustering.
 pub type Scored = (usize, f64, f64, f64);
 
-/// A unit of a clustering run: one learning run (threshold, order) or one seeded run of
-/// the k-means and SOM baselines with `k` centres / units. Its seeds follow from the run's
-/// seed and the item, so any machine computes it alike.
+/// A unit of a clustering run: one presentation order learned under every threshold (see
+/// [`order_runs`]) or one seeded run of the k-means and SOM baselines with `k` centres /
+/// units. Its seeds follow from the run's seed and the item, so any machine computes it
+/// alike.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum ClusteringItem {
-    Run { threshold: f64, rep: usize },
+    Order { rep: usize },
     Baseline { k: usize, rep: usize },
 }
 
@@ -387,8 +395,14 @@ pub enum ClusteringItem {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum ClusteringOutput {
-    Run { run: ClusteringRun },
-    Baseline { kmeans: Scored, som: Scored },
+    /// One run per threshold, in the thresholds' order.
+    Order {
+        runs: Vec<ClusteringRun>,
+    },
+    Baseline {
+        kmeans: Scored,
+        som: Scored,
+    },
 }
 
 /// What every item shares: the labels, the feature sequences and the baselines' z-scored
@@ -438,15 +452,11 @@ pub fn prepare_clustering(
     })
 }
 
-/// The items of a run on `grasps` grasps: every (threshold, order), then every (k, order)
-/// of the baselines.
+/// The items of a run on `grasps` grasps: every order, then every (k, order) of the
+/// baselines.
 pub fn clustering_items(params: &ClusteringParams, grasps: usize) -> Vec<ClusteringItem> {
-    let mut items: Vec<ClusteringItem> = params
-        .thresholds
-        .iter()
-        .flat_map(|&threshold| {
-            (0..params.reps).map(move |rep| ClusteringItem::Run { threshold, rep })
-        })
+    let mut items: Vec<ClusteringItem> = (0..params.reps)
+        .map(|rep| ClusteringItem::Order { rep })
         .collect();
     if params.baseline_max_k >= 2 {
         items
@@ -464,13 +474,13 @@ pub fn clustering_item(
     item: ClusteringItem,
 ) -> Result<ClusteringOutput, ExperimentError> {
     match item {
-        ClusteringItem::Run { threshold, rep } => Ok(ClusteringOutput::Run {
-            run: one_run(
+        ClusteringItem::Order { rep } => Ok(ClusteringOutput::Order {
+            runs: order_runs(
                 params,
                 &prep.feats.sequences,
                 &prep.labels,
                 prep.feats.dim(),
-                threshold,
+                &params.thresholds,
                 rep,
             )?,
         }),
@@ -504,13 +514,18 @@ pub fn assemble_clustering(
     outputs: Vec<ClusteringOutput>,
     wall_seconds: f64,
 ) -> ClusteringResult {
-    let mut runs = Vec::new();
+    let mut orders = Vec::new();
     let mut base: Vec<(Scored, Scored)> = Vec::new();
     for o in outputs {
         match o {
-            ClusteringOutput::Run { run } => runs.push(run),
+            ClusteringOutput::Order { runs } => orders.push(runs.into_iter()),
             ClusteringOutput::Baseline { kmeans, som } => base.push((kmeans, som)),
         }
+    }
+    // Threshold by threshold, each in order of the orders.
+    let mut runs = Vec::new();
+    for _ in &params.thresholds {
+        runs.extend(orders.iter_mut().filter_map(Iterator::next));
     }
     let sweep = params
         .thresholds

@@ -31,8 +31,8 @@ use crate::catalogue::MethodId;
 use crate::cluster::{SequentialKMeansParams, scores};
 use crate::experiments::ExperimentError;
 use crate::experiments::clustering::{
-    ClusteringItem, ClusteringOutput, ClusteringParams, ClusteringPrep, ClusteringRun,
-    UnsupervisedLearner, baseline_seed, clustering_item, distinct, prepare_clustering, som_setup,
+    ClusteringParams, ClusteringPrep, ClusteringRun, UnsupervisedLearner, baseline_seed, distinct,
+    one_run, prepare_clustering, som_setup,
 };
 use crate::experiments::labels::session_labels;
 use crate::experiments::parallel::compute_items;

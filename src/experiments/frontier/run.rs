@@ -296,11 +296,14 @@ pub fn frontier_item(
                 .map(|cells| FrontierOutput::Dictionary { cells })
         }
         (FrontierPrep::Clustering(base, prep), FrontierItem::Threshold { threshold, rep }) => {
-            let ClusteringOutput::Run { run } =
-                clustering_item(base, prep, ClusteringItem::Run { threshold, rep })?
-            else {
-                return Err(wrong_item(item, params));
-            };
+            let run = one_run(
+                base,
+                &prep.feats.sequences,
+                &prep.labels,
+                prep.feats.dim(),
+                threshold,
+                rep,
+            )?;
             // Per grasp, as the other clusterers: the observations of a grasp, each
             // scored by every expert.
             let seqs = &prep.feats.sequences;
