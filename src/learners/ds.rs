@@ -175,7 +175,6 @@ impl Ds {
         let windows = SequenceWindows::new(self.dim, self.params.gp.tau, steps);
         let t_len = windows.len();
         let mut qs = Array2::zeros((t_len, c));
-        let mut ps = Array2::zeros((t_len, c));
         match self.shared.as_mut() {
             // Step by step: each step's new distances once for all the experts.
             Some(shared) => {
@@ -193,13 +192,36 @@ impl Ds {
                 }
             }
         }
-        for (q, mut p) in qs.rows().into_iter().zip(ps.rows_mut()) {
-            let sum: f64 = q.iter().sum();
-            for (p, q) in p.iter_mut().zip(q) {
-                *p = if sum > 0.0 { q / sum } else { 1.0 / c as f64 };
+        let ps = p_of_q(qs.view());
+        (qs, ps)
+    }
+
+    /// The q (T × C) of each of `seqs`, as [`Ds::predict_q_and_p`] gives them. Experts
+    /// with their own distance tables go over all the sequences one expert at a time (its
+    /// state stays in the caches); a shared table is filled step by step, one sequence at
+    /// a time.
+    pub fn predict_q_many(&mut self, seqs: &[ArrayView2<f64>]) -> Vec<Array2<f64>> {
+        if self.shared.is_some() {
+            return seqs.iter().map(|s| self.predict_q_and_p(*s).0).collect();
+        }
+        let c = self.models.len();
+        let windows: Vec<SequenceWindows> = seqs
+            .iter()
+            .map(|s| {
+                let s = s.as_standard_layout();
+                SequenceWindows::new(self.dim, self.params.gp.tau, super::steps(&s, self.dim))
+            })
+            .collect();
+        let mut qs: Vec<Array2<f64>> = windows
+            .iter()
+            .map(|w| Array2::zeros((w.len(), c)))
+            .collect();
+        for (j, m) in self.models.iter_mut().enumerate() {
+            for (w, q) in windows.iter().zip(qs.iter_mut()) {
+                m.observe_sequence(w, 1, |t, m| q[[t, j]] = m.probability());
             }
         }
-        (qs, ps)
+        qs
     }
 
     /// Train on a grasp as [`SequenceClassifier::train_sequence`] does, given its q (T × C)
@@ -251,6 +273,19 @@ impl Ds {
             }
         }
     }
+}
+
+/// p (T × C): each step's q normalised over the experts (uniform where every q is 0).
+pub fn p_of_q(qs: ArrayView2<f64>) -> Array2<f64> {
+    let c = qs.ncols();
+    let mut ps = Array2::zeros(qs.raw_dim());
+    for (q, mut p) in qs.rows().into_iter().zip(ps.rows_mut()) {
+        let sum: f64 = q.iter().sum();
+        for (p, q) in p.iter_mut().zip(q) {
+            *p = if sum > 0.0 { q / sum } else { 1.0 / c as f64 };
+        }
+    }
+    ps
 }
 
 /// Expert `m` observes `window`, from the shared distances when there are.

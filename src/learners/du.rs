@@ -12,6 +12,7 @@
 use ndarray::{Array2, ArrayView2, Axis};
 use serde::{Deserialize, Serialize};
 
+use super::ds::p_of_q;
 use super::novelty::{Assignment, NoveltyLearner};
 use super::{Ds, DsParams, LearnerError, SequenceClassifier, argmax_of_mean};
 
@@ -144,15 +145,22 @@ impl Du {
     /// among the clusters trained on at least `min_grasps` grasps (all if none is), with
     /// p renormalised over them.
     pub fn assign(&mut self, seq: ArrayView2<f64>) -> usize {
+        self.assign_all(&[seq])[0]
+    }
+
+    /// [`Du::assign`] of each of `seqs`, every expert scoring all of them in turn.
+    pub fn assign_all(&mut self, seqs: &[ArrayView2<f64>]) -> Vec<usize> {
         let confirmed: Vec<usize> = (0..self.grasps.len())
             .filter(|&c| self.grasps[c] >= self.min_grasps)
             .collect();
-        if confirmed.len() == self.grasps.len() || confirmed.is_empty() {
-            let p = self.ds.predict_sequence(seq);
-            return argmax_of_mean(p.view());
-        }
-        let (q, _) = self.ds.predict_q_and_p(seq);
-        confirmed_decision(q.view(), &confirmed)
+        let every = confirmed.len() == self.grasps.len() || confirmed.is_empty();
+        let qs = self.ds.predict_q_many(seqs);
+        qs.iter()
+            .map(|q| match every {
+                true => argmax_of_mean(p_of_q(q.view()).view()),
+                false => confirmed_decision(q.view(), &confirmed),
+            })
+            .collect()
     }
 }
 
@@ -221,8 +229,8 @@ impl NoveltyLearner for Du {
         })
     }
 
-    fn assign(&mut self, seq: ArrayView2<f64>) -> usize {
-        Du::assign(self, seq)
+    fn assign_all(&mut self, seqs: &[ArrayView2<f64>]) -> Vec<usize> {
+        Du::assign_all(self, seqs)
     }
 }
 

@@ -527,8 +527,8 @@ impl NoveltyLearner for Gu {
         })
     }
 
-    fn assign(&mut self, seq: ArrayView2<f64>) -> usize {
-        Gu::assign(self, seq)
+    fn assign_all(&mut self, seqs: &[ArrayView2<f64>]) -> Vec<usize> {
+        seqs.iter().map(|s| self.assign(*s)).collect()
     }
 }
 

@@ -39,8 +39,8 @@ pub trait NoveltyLearner: Clone {
         a: Option<Self::Assessment>,
         create: bool,
     ) -> Result<Assignment, LearnerError>;
-    /// The cluster of a grasp under the learned models (no training).
-    fn assign(&mut self, seq: ArrayView2<f64>) -> usize;
+    /// The cluster of each grasp under the learned models (no training).
+    fn assign_all(&mut self, seqs: &[ArrayView2<f64>]) -> Vec<usize>;
 
     /// Assign one grasp (opening a cluster if it is novel) and train on it.
     fn learn(&mut self, seq: ArrayView2<f64>) -> Result<Assignment, LearnerError> {

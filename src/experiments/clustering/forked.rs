@@ -13,7 +13,7 @@
 
 use std::time::Instant;
 
-use ndarray::Array2;
+use ndarray::{Array2, ArrayView2};
 
 use crate::learners::{LearnerError, NoveltyLearner};
 
@@ -48,6 +48,7 @@ pub fn learn_order<L: NoveltyLearner>(
     order: &[usize],
     thresholds: &[f64],
 ) -> Result<Vec<ThresholdOutcome>, LearnerError> {
+    let views: Vec<ArrayView2<f64>> = seqs.iter().map(|s| s.view()).collect();
     let mut learn_seconds = vec![0.0; thresholds.len()];
     let mut outcomes: Vec<(usize, ThresholdOutcome)> = Vec::with_capacity(thresholds.len());
     let mut pending = vec![Branch {
@@ -96,7 +97,7 @@ pub fn learn_order<L: NoveltyLearner>(
             );
         }
         let t0 = Instant::now();
-        let assignment: Vec<usize> = seqs.iter().map(|s| b.learner.assign(s.view())).collect();
+        let assignment = b.learner.assign_all(&views);
         let assign_seconds = t0.elapsed().as_secs_f64();
         for &m in &b.members {
             outcomes.push((
@@ -169,7 +170,7 @@ mod tests {
     }
 
     /// Every threshold's outcome of the forked learning is that of its own learner,
-    /// learning the grasps one by one and then re-assigning them; returns how many
+    /// learning the grasps one by one and then re-assigning them one by one; returns how many
     /// different clusterings the thresholds ended with.
     fn forked_equals_alone<L: NoveltyLearner>(make: impl Fn(f64) -> L) -> usize {
         let seqs: Vec<Array2<f64>> = grasps(5, 30, 5, 3).into_iter().map(|g| g.1).collect();
@@ -181,7 +182,11 @@ mod tests {
             for &g in &order {
                 alone.learn(seqs[g].view()).unwrap();
             }
-            let assignment: Vec<usize> = seqs.iter().map(|s| alone.assign(s.view())).collect();
+            // One grasp at a time (the forked learning re-assigns them all at once).
+            let assignment: Vec<usize> = seqs
+                .iter()
+                .map(|s| alone.assign_all(&[s.view()])[0])
+                .collect();
             assert_eq!(
                 (o.clusters, &o.assignment),
                 (alone.n_clusters(), &assignment),
