@@ -322,6 +322,7 @@ impl Experiment for ClusteringParams {
 
     fn cost(&self, session: &Session, item: &ClusteringItem) -> f64 {
         let share = match item {
+            // At most a run per threshold: the thresholds share their early learning.
             ClusteringItem::Order { .. } => self.thresholds.len() as f64,
             ClusteringItem::Baseline { .. } => 0.1,
         };
@@ -344,7 +345,7 @@ impl Experiment for ClusteringParams {
         progress: &Progress,
     ) -> Result<ClusteringOutput, ExperimentError> {
         progress.checkpoint()?;
-        clustering_item(self, prep, *item)
+        clustering_item(self, prep, *item, progress)
     }
 
     fn assemble(

@@ -15,7 +15,9 @@ use std::time::Instant;
 
 use ndarray::{Array2, ArrayView2};
 
-use crate::learners::{LearnerError, NoveltyLearner};
+use crate::experiments::ExperimentError;
+use crate::jobs::Progress;
+use crate::learners::NoveltyLearner;
 
 /// One threshold's run on the order.
 #[derive(Clone, Debug, PartialEq)]
@@ -41,13 +43,14 @@ struct Branch<L: NoveltyLearner> {
 
 /// Learn the grasps `seqs` in `order` under each of `thresholds`, starting from `learner`
 /// (its own threshold is not used), then re-assign every grasp; one outcome per threshold,
-/// in their order.
+/// in their order. Stops at the next grasp once `progress` is cancelled.
 pub fn learn_order<L: NoveltyLearner>(
     learner: L,
     seqs: &[Array2<f64>],
     order: &[usize],
     thresholds: &[f64],
-) -> Result<Vec<ThresholdOutcome>, LearnerError> {
+    progress: &Progress,
+) -> Result<Vec<ThresholdOutcome>, ExperimentError> {
     let views: Vec<ArrayView2<f64>> = seqs.iter().map(|s| s.view()).collect();
     let mut learn_seconds = vec![0.0; thresholds.len()];
     let mut outcomes: Vec<(usize, ThresholdOutcome)> = Vec::with_capacity(thresholds.len());
@@ -66,6 +69,7 @@ pub fn learn_order<L: NoveltyLearner>(
             b.next += 1;
         }
         for (i, &g) in order.iter().enumerate().skip(b.next) {
+            progress.checkpoint()?;
             let seq = seqs[g].view();
             let t0 = Instant::now();
             let a = b.learner.assess(seq);
@@ -169,13 +173,18 @@ mod tests {
         }
     }
 
+    fn grasps_and_order() -> (Vec<Array2<f64>>, Vec<usize>) {
+        let seqs: Vec<Array2<f64>> = grasps(5, 30, 5, 3).into_iter().map(|g| g.1).collect();
+        let order = (0..seqs.len()).map(|i| (7 * i) % seqs.len()).collect();
+        (seqs, order)
+    }
+
     /// Every threshold's outcome of the forked learning is that of its own learner,
     /// learning the grasps one by one and then re-assigning them one by one; returns how many
     /// different clusterings the thresholds ended with.
     fn forked_equals_alone<L: NoveltyLearner>(make: impl Fn(f64) -> L) -> usize {
-        let seqs: Vec<Array2<f64>> = grasps(5, 30, 5, 3).into_iter().map(|g| g.1).collect();
-        let order: Vec<usize> = (0..seqs.len()).map(|i| (7 * i) % seqs.len()).collect();
-        let forked = learn_order(make(0.5), &seqs, &order, &THRESHOLDS).unwrap();
+        let (seqs, order) = grasps_and_order();
+        let forked = learn_order(make(0.5), &seqs, &order, &THRESHOLDS, &Progress::new()).unwrap();
         assert_eq!(forked.len(), THRESHOLDS.len());
         for (&t, o) in THRESHOLDS.iter().zip(&forked) {
             let mut alone = make(t);
@@ -216,5 +225,16 @@ mod tests {
             let n = forked_equals_alone(gu(noise));
             assert!(n >= 4, "GU {noise:?}: {n} clusterings");
         }
+    }
+
+    /// A cancelled sweep stops at the next grasp: an order under every threshold is long,
+    /// and a cancel must not wait for its end.
+    #[test]
+    fn a_cancelled_order_stops_at_the_next_grasp() {
+        let (seqs, order) = grasps_and_order();
+        let progress = Progress::new();
+        progress.cancel();
+        let r = learn_order(du(true)(0.5), &seqs, &order, &THRESHOLDS, &progress);
+        assert!(matches!(r, Err(ExperimentError::Cancelled)), "{r:?}");
     }
 }

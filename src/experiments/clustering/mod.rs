@@ -258,6 +258,7 @@ pub fn order_runs(
     dim: usize,
     thresholds: &[f64],
     rep: usize,
+    progress: &Progress,
 ) -> Result<Vec<ClusteringRun>, ExperimentError> {
     let Some(&first) = thresholds.first() else {
         return Ok(Vec::new());
@@ -273,7 +274,7 @@ pub fn order_runs(
                     min_grasps: params.du_min_grasps,
                 },
             )?;
-            forked::learn_order(du, seqs, &order, thresholds)?
+            forked::learn_order(du, seqs, &order, thresholds, progress)?
         }
         UnsupervisedLearner::Gu => {
             let gu = Gu::new(
@@ -288,7 +289,7 @@ pub fn order_runs(
                     min_grasps: params.gu_min_grasps,
                 },
             )?;
-            forked::learn_order(gu, seqs, &order, thresholds)?
+            forked::learn_order(gu, seqs, &order, thresholds, progress)?
         }
     };
     let steps = seqs.iter().map(|s| s.nrows()).sum::<usize>().max(1) as f64;
@@ -321,8 +322,9 @@ pub fn one_run(
     dim: usize,
     threshold: f64,
     rep: usize,
+    progress: &Progress,
 ) -> Result<ClusteringRun, ExperimentError> {
-    order_runs(params, seqs, labels, dim, &[threshold], rep)?
+    order_runs(params, seqs, labels, dim, &[threshold], rep, progress)?
         .pop()
         .ok_or_else(|| ExperimentError::param("thresholds", "needs at least one"))
 }
@@ -472,6 +474,7 @@ pub fn clustering_item(
     params: &ClusteringParams,
     prep: &ClusteringPrep,
     item: ClusteringItem,
+    progress: &Progress,
 ) -> Result<ClusteringOutput, ExperimentError> {
     match item {
         ClusteringItem::Order { rep } => Ok(ClusteringOutput::Order {
@@ -482,6 +485,7 @@ pub fn clustering_item(
                 prep.feats.dim(),
                 &params.thresholds,
                 rep,
+                progress,
             )?,
         }),
         ClusteringItem::Baseline { k, rep } => {
@@ -618,8 +622,8 @@ pub fn run_clustering(
     let prep = prepare_clustering(session, params)?;
     let items = clustering_items(params, session.grasps.len());
     progress.set(0.0, "clustering: starting");
-    let outputs = compute_items(&items, progress, "clustering", "runs", |&item| {
-        clustering_item(params, &prep, item)
+    let outputs = compute_items(&items, progress, "clustering", "items", |&item| {
+        clustering_item(params, &prep, item, progress)
     })?;
     Ok(assemble_clustering(
         params,

@@ -303,6 +303,7 @@ pub fn frontier_item(
                 prep.feats.dim(),
                 threshold,
                 rep,
+                progress,
             )?;
             // Per grasp, as the other clusterers: the observations of a grasp, each
             // scored by every expert.

@@ -210,7 +210,17 @@ fn unsupervised_nmi(
         // The rest as the clustering experiment's defaults.
         ..ClusteringParams::default()
     };
-    Ok(one_run(&cp, sub_seqs, sub_labels, dim, threshold, rep)?.nmi)
+    // One threshold on a subset: as short as the other tasks, cancelled between them.
+    Ok(one_run(
+        &cp,
+        sub_seqs,
+        sub_labels,
+        dim,
+        threshold,
+        rep,
+        &Progress::new(),
+    )?
+    .nmi)
 }
 
 /// Sequential k-means' or the SOM's NMI on the Table I test rows of the kept grasps.
