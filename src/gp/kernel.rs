@@ -501,6 +501,11 @@ impl RecursiveArd {
         ))
     }
 
+    /// Each entry's derivative is its own recursion over the lags, so the entries are taken
+    /// a block of BVs and `G` lengthscales at a time, each through all the lags in
+    /// registers: `G` independent chains hide the recursion's latency, and no partial sum
+    /// goes through memory between lags. Every entry sees the same operations in the same
+    /// order as lag by lag over all the entries: the same bits.
     #[inline(always)]
     fn unit_grad_many_portable(
         &self,
@@ -512,42 +517,64 @@ impl RecursiveArd {
     ) {
         let (dim, s, m) = (self.dim, basis.stride, n.div_ceil(LANES) * LANES);
         let inv_rho = 1.0 / self.params.sigma_rho;
-        let ones = [1.0; LANES];
-        for p in 0..=dim {
-            grad[p * s..p * s + m].fill(0.0);
+        for c in 0..m / LANES {
+            let mut j = 0;
+            while j + 4 <= dim {
+                self.lengthscale_chains::<4>(x, basis, lag_k, grad, c, j, inv_rho);
+                j += 4;
+            }
+            while j < dim {
+                self.lengthscale_chains::<1>(x, basis, lag_k, grad, c, j, inv_rho);
+                j += 1;
+            }
+            // ∂K/∂sigma_rho, with K_0 = 1 before the oldest lag.
+            let mut g = [0.0; LANES];
+            let mut kp = [1.0; LANES];
+            for k in lag_k[c * LANES..].chunks(s).take(self.tau) {
+                let k: &[f64; LANES] = k[..LANES].try_into().unwrap_or(&[f64::NAN; LANES]);
+                for l in 0..LANES {
+                    g[l] = k[l] * (g[l] * inv_rho + (1.0 - kp[l]) * inv_rho * inv_rho);
+                }
+                kp = *k;
+            }
+            grad[dim * s + c * LANES..][..LANES].copy_from_slice(&g);
         }
-        for lag in 0..self.tau {
-            let xl = &x[lag * dim..(lag + 1) * dim];
-            let kt = &lag_k[lag * s..lag * s + m];
-            let lag_data = &basis.data[lag * dim * s..(lag + 1) * dim * s];
-            for (c, blk) in lag_data
-                .chunks_exact(dim * LANES)
-                .take(m / LANES)
-                .enumerate()
-            {
-                let kb = &kt[c * LANES..(c + 1) * LANES];
-                for (j, (row, xj)) in blk.chunks_exact(LANES).zip(xl).enumerate() {
-                    let g = &mut grad[j * s + c * LANES..j * s + (c + 1) * LANES];
-                    for ((g, b), k) in g.iter_mut().zip(row).zip(kb) {
-                        *g = k * (*g * inv_rho + (xj - b) * (xj - b));
-                    }
+    }
+
+    /// ∂K/∂ln l_j for the `G` lengthscales from `j0` and the BVs of block `c`.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn lengthscale_chains<const G: usize>(
+        &self,
+        x: &[f64],
+        basis: &LagMajor,
+        lag_k: &[f64],
+        grad: &mut [f64],
+        c: usize,
+        j0: usize,
+        inv_rho: f64,
+    ) {
+        let (dim, s) = (self.dim, basis.stride);
+        let mut g = [[0.0; LANES]; G];
+        let lags = basis.data[c * dim * LANES + j0 * LANES..]
+            .chunks(dim * s)
+            .zip(lag_k[c * LANES..].chunks(s))
+            .zip(x[j0..].chunks(dim))
+            .take(self.tau);
+        for ((b, k), xl) in lags {
+            let k: &[f64; LANES] = k[..LANES].try_into().unwrap_or(&[f64::NAN; LANES]);
+            for (q, g) in g.iter_mut().enumerate() {
+                let xj = xl[q];
+                let b: &[f64; LANES] = b[q * LANES..(q + 1) * LANES]
+                    .try_into()
+                    .unwrap_or(&[f64::NAN; LANES]);
+                for l in 0..LANES {
+                    g[l] = k[l] * (g[l] * inv_rho + (xj - b[l]) * (xj - b[l]));
                 }
             }
-            let g = &mut grad[dim * s..dim * s + m];
-            for (c, (g, k)) in g
-                .chunks_exact_mut(LANES)
-                .zip(kt.chunks_exact(LANES))
-                .enumerate()
-            {
-                // K_0 = 1 before the oldest lag.
-                let kp = match lag {
-                    0 => &ones[..],
-                    _ => &lag_k[(lag - 1) * s + c * LANES..(lag - 1) * s + (c + 1) * LANES],
-                };
-                for ((g, k), kp) in g.iter_mut().zip(k).zip(kp) {
-                    *g = k * (*g * inv_rho + (1.0 - kp) * inv_rho * inv_rho);
-                }
-            }
+        }
+        for (q, g) in g.iter().enumerate() {
+            grad[(j0 + q) * s + c * LANES..][..LANES].copy_from_slice(g);
         }
     }
 
