@@ -169,41 +169,19 @@ impl Ds {
     /// in turn (its state stays in the cache; experts do not depend on each other while
     /// predicting), then p follows step by step.
     pub fn predict_q_and_p(&mut self, seq: ArrayView2<f64>) -> (Array2<f64>, Array2<f64>) {
-        let c = self.models.len();
-        let seq = seq.as_standard_layout();
-        let steps = super::steps(&seq, self.dim);
-        let windows = SequenceWindows::new(self.dim, self.params.gp.tau, steps);
-        let t_len = windows.len();
-        let mut qs = Array2::zeros((t_len, c));
-        match self.shared.as_mut() {
-            // Step by step: each step's new distances once for all the experts.
-            Some(shared) => {
-                for (t, mut q) in qs.rows_mut().into_iter().enumerate() {
-                    let (window, stamp) = windows.after(t + 1);
-                    for (m, q) in self.models.iter_mut().zip(q.iter_mut()) {
-                        m.observe_in(shared, window, stamp);
-                        *q = m.probability();
-                    }
-                }
-            }
-            None => {
-                for (j, m) in self.models.iter_mut().enumerate() {
-                    m.observe_sequence(&windows, 1, |t, m| qs[[t, j]] = m.probability());
-                }
-            }
-        }
+        let qs = match self.predict_q_many(&[seq]).pop() {
+            Some(qs) => qs,
+            None => Array2::zeros((0, self.models.len())),
+        };
         let ps = p_of_q(qs.view());
         (qs, ps)
     }
 
-    /// The q (T × C) of each of `seqs`, as [`Ds::predict_q_and_p`] gives them. Experts
-    /// with their own distance tables go over all the sequences one expert at a time (its
-    /// state stays in the caches); a shared table is filled step by step, one sequence at
-    /// a time.
+    /// The q (T × C) of each of `seqs`. Experts with their own distance tables go over all
+    /// the sequences one expert at a time (its state stays in the caches); a shared table
+    /// is filled step by step, one sequence at a time, each step's new distances once for
+    /// all the experts.
     pub fn predict_q_many(&mut self, seqs: &[ArrayView2<f64>]) -> Vec<Array2<f64>> {
-        if self.shared.is_some() {
-            return seqs.iter().map(|s| self.predict_q_and_p(*s).0).collect();
-        }
         let c = self.models.len();
         let windows: Vec<SequenceWindows> = seqs
             .iter()
@@ -216,9 +194,24 @@ impl Ds {
             .iter()
             .map(|w| Array2::zeros((w.len(), c)))
             .collect();
-        for (j, m) in self.models.iter_mut().enumerate() {
-            for (w, q) in windows.iter().zip(qs.iter_mut()) {
-                m.observe_sequence(w, 1, |t, m| q[[t, j]] = m.probability());
+        match self.shared.as_mut() {
+            Some(shared) => {
+                for (w, qs) in windows.iter().zip(qs.iter_mut()) {
+                    for (t, mut q) in qs.rows_mut().into_iter().enumerate() {
+                        let (window, stamp) = w.after(t + 1);
+                        for (m, q) in self.models.iter_mut().zip(q.iter_mut()) {
+                            m.observe_in(shared, window, stamp);
+                            *q = m.probability();
+                        }
+                    }
+                }
+            }
+            None => {
+                for (j, m) in self.models.iter_mut().enumerate() {
+                    for (w, q) in windows.iter().zip(qs.iter_mut()) {
+                        m.observe_sequence(w, 1, |t, m| q[[t, j]] = m.probability());
+                    }
+                }
             }
         }
         qs

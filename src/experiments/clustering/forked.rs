@@ -37,8 +37,8 @@ struct Branch<L: NoveltyLearner> {
     /// Indices into the thresholds.
     members: Vec<usize>,
     next: usize,
-    /// A copy's grasp at `next`: already assessed, and whether it opens a cluster.
-    decided: Option<(L::Assessment, bool)>,
+    /// A copy's grasp at `next`, already assessed: it goes to its winner.
+    assessed: Option<L::Assessment>,
 }
 
 /// Learn the grasps `seqs` in `order` under each of `thresholds`, starting from `learner`
@@ -58,13 +58,13 @@ pub fn learn_order<L: NoveltyLearner>(
         learner,
         members: (0..thresholds.len()).collect(),
         next: 0,
-        decided: None,
+        assessed: None,
     }];
     while let Some(mut b) = pending.pop() {
-        if let Some((a, create)) = b.decided.take() {
+        if let Some(a) = b.assessed.take() {
             let t0 = Instant::now();
             b.learner
-                .commit(seqs[order[b.next]].view(), Some(a), create)?;
+                .commit(seqs[order[b.next]].view(), Some(a), false)?;
             add(&mut learn_seconds, &b.members, t0.elapsed().as_secs_f64());
             b.next += 1;
         }
@@ -88,7 +88,7 @@ pub fn learn_order<L: NoveltyLearner>(
                     learner: b.learner.clone(),
                     members: keep,
                     next: i,
-                    decided: Some((a.clone(), false)),
+                    assessed: Some(a.clone()),
                 });
                 b.members = create;
             }
