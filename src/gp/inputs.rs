@@ -28,7 +28,7 @@ use super::window::Stamp;
 pub(crate) struct Table {
     dim: usize,
     tau: usize,
-    /// Input slots: the most inputs held at once.
+    /// Input slots (twice as many once every one is taken).
     slots: usize,
     /// Scaled inputs (one lag each), blocked for the many-input distance.
     data: LagMajor,
@@ -83,8 +83,6 @@ pub(crate) struct SharedInputs {
     pub(super) table: Table,
     /// The stamp of the window the rows are for.
     pub(super) stamp: Option<Stamp>,
-    /// Input slots the models joined so far may hold at once.
-    room: usize,
 }
 
 /// How an observed window stands to the one observed before it.
@@ -192,6 +190,11 @@ impl Table {
         let j = match self.free.pop() {
             Some(j) => j as usize,
             None => {
+                // Every slot is taken: twice the room (a model's table starts small,
+                // [`OWN_TABLE_START`], as most models hold far fewer inputs than they could).
+                if self.used == self.slots {
+                    self.grow(2 * self.slots);
+                }
                 self.used += 1;
                 self.used - 1
             }
@@ -223,21 +226,11 @@ impl Table {
         }
     }
 
-    /// Room for `slots` inputs: the inputs, their slots and the rows are kept (the
-    /// stored scaled inputs are scaled again from the raw ones by `kernel`, the
-    /// kernel that scaled them: the same bits).
-    fn grow(&mut self, kernel: &RecursiveArd, slots: usize) {
-        if slots <= self.slots {
-            return;
-        }
+    /// Room for `slots` inputs: the inputs, their slots and the rows are kept.
+    fn grow(&mut self, slots: usize) {
         let (d, old) = (self.dim, self.slots);
-        self.data = LagMajor::new(d, 1, slots);
+        self.data.grow_single_lag(slots);
         self.slots = self.data.stride();
-        let mut scaled = vec![0.0; d];
-        for j in 0..self.used {
-            kernel.scale_into(&self.raw[j * d..(j + 1) * d], &mut scaled);
-            self.data.set(j, &scaled);
-        }
         self.raw.resize(self.slots * d, 0.0);
         self.refs.resize(self.slots, 0);
         let mut rows = vec![0.0; self.tau * self.slots];
@@ -305,6 +298,15 @@ impl Table {
     }
 }
 
+/// Input slots a model's own table starts with (it grows as it fills): its BVs could hold
+/// tau inputs each, but consecutive BV windows of a sequence share all but one.
+const OWN_TABLE_START: usize = 128;
+
+/// The slots a model's own table starts with, for `bv_slots` BVs of `tau` lags.
+pub(crate) fn own_table_start(bv_slots: usize, tau: usize) -> usize {
+    (bv_slots * tau).min(OWN_TABLE_START)
+}
+
 impl Inputs {
     /// Room for `bv_slots` BVs of `tau` lags of `dim` inputs; `lanes` is the BV stride of
     /// the kernel buffers (a multiple of [`LANES`], at least `bv_slots`).
@@ -314,7 +316,7 @@ impl Inputs {
             lanes,
             index: vec![0; tau * lanes],
             prefix: vec![0.0; tau * lanes],
-            table: Table::new(dim, tau, bv_slots * tau),
+            table: Table::new(dim, tau, own_table_start(bv_slots, tau)),
             shared: false,
         }
     }
@@ -481,7 +483,6 @@ impl SharedInputs {
             kernel: kernel.clone(),
             table: Table::new(kernel.dim(), kernel.tau(), 0),
             stamp: None,
-            room: 0,
         }
     }
 
@@ -502,12 +503,6 @@ impl SharedInputs {
             && same(a.sigma_rho, b.sigma_rho)
             && same(a.sigma_f, b.sigma_f)
             && same(a.sigma_n, b.sigma_n)
-    }
-
-    /// Room for `slots` more inputs held at once (a model joining).
-    pub(crate) fn reserve(&mut self, slots: usize) {
-        self.room += slots;
-        self.table.grow(&self.kernel, self.room);
     }
 
     /// The rows made those of `window` stamped `stamp` (None: unknown, every row again).

@@ -262,13 +262,22 @@ impl LagMajor {
         self.stride
     }
 
-    /// Store a scaled window (oldest lag first) as BV `i`.
+    /// Room for `slots` BVs in a store of one lag, the stored ones kept: with one lag, an
+    /// entry's position does not depend on the stride.
+    pub(super) fn grow_single_lag(&mut self, slots: usize) {
+        debug_assert_eq!(self.tau, 1);
+        self.stride = self.stride.max(slots.div_ceil(LANES) * LANES);
+        self.data.resize(self.dim * self.stride, 0.0);
+        self.norms.resize(self.stride, 0.0);
+    }
+
     /// Position of entry (lag, k) of BV i.
     #[inline(always)]
     fn index(&self, lag: usize, k: usize, i: usize) -> usize {
         ((lag * (self.stride / LANES) + i / LANES) * self.dim + k) * LANES + i % LANES
     }
 
+    /// Store a scaled window (oldest lag first) as BV `i`.
     pub fn set(&mut self, i: usize, window: &[f64]) {
         let s = self.stride;
         for (lag, l) in window.chunks_exact(self.dim).take(self.tau).enumerate() {

@@ -8,7 +8,7 @@
 //! other call first gives the model a table of its own again, rebuilt from its BVs (a
 //! copy of an expert taken out of its learner goes on as it would have).
 
-use super::super::inputs::{SharedInputs, Table};
+use super::super::inputs::{SharedInputs, Table, own_table_start};
 use super::super::window::Stamp;
 use super::Sogp;
 
@@ -38,7 +38,6 @@ impl Sogp {
             return false;
         }
         let (dim, tau) = (self.kernel.dim(), self.kernel.tau());
-        shared.reserve(self.stride * tau);
         self.inputs.table = Table::new(dim, tau, 0);
         self.inputs.shared = true;
         self.lend(shared, Sogp::add_every_bv);
@@ -53,7 +52,7 @@ impl Sogp {
             return;
         }
         let (dim, tau) = (self.kernel.dim(), self.kernel.tau());
-        self.inputs.table = Table::new(dim, tau, self.stride * tau);
+        self.inputs.table = Table::new(dim, tau, own_table_start(self.stride, tau));
         self.inputs.shared = false;
         self.add_every_bv();
         // The new table has no rows yet: the next observation computes them all.

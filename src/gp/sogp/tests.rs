@@ -110,26 +110,7 @@ fn kernel_from_input_rows_equals_the_direct_evaluation() {
         window.push(&x);
         for _ in 0..1 + usize::from(t % 7 == 0) {
             gp.observe(window.as_slice());
-            let mut xs = vec![0.0; gp.wlen];
-            gp.kernel.scale_into(window.as_slice(), &mut xs);
-            // The BVs' lag-major store, built afresh.
-            let mut basis = LagMajor::new(dim, tau, gp.stride);
-            for i in 0..gp.n {
-                basis.set(i, gp.bv(i));
-            }
-            let lanes = basis.stride();
-            let (mut lag_k, mut k) = (vec![0.0; tau * lanes], vec![0.0; lanes]);
-            gp.kernel.unit_many(&xs, &basis, gp.n, &mut lag_k, &mut k);
-            let sf2 = gp.kernel.sigma_f2();
-            for i in 0..gp.n {
-                let direct = sf2 * gp.kernel.unit_scaled(&xs, gp.bv(i));
-                assert_eq!(gp.k[i].to_bits(), direct.to_bits(), "step {t}, BV {i}");
-                for lag in 0..tau {
-                    let at = lag * lanes + i;
-                    assert_eq!(gp.lag_k[at].to_bits(), lag_k[at].to_bits(), "step {t}");
-                }
-            }
-            checked += gp.n;
+            checked += assert_rows_give_the_direct_kernel(&gp, &window, t);
         }
         gp.update(&[if (0.23 * t as f64).cos() > 0.0 {
             1.0
@@ -137,6 +118,68 @@ fn kernel_from_input_rows_equals_the_direct_evaluation() {
             -1.0
         }]);
     }
+    assert!(gp.n_basis() == p.capacity && gp.hyper_updates() >= 20);
+    assert!(checked > 5000, "{checked}");
+}
+
+/// The kernel vector and K_t per lag of `gp`'s last observation (of `window`, at step
+/// `t`) equal the direct evaluation, bit for bit; returns the BVs checked.
+fn assert_rows_give_the_direct_kernel(gp: &Sogp, window: &crate::gp::Window, t: usize) -> usize {
+    let (dim, tau) = (gp.kernel.dim(), gp.kernel.tau());
+    let mut xs = vec![0.0; gp.wlen];
+    gp.kernel.scale_into(window.as_slice(), &mut xs);
+    // The BVs' lag-major store, built afresh.
+    let mut basis = LagMajor::new(dim, tau, gp.stride);
+    for i in 0..gp.n {
+        basis.set(i, gp.bv(i));
+    }
+    let lanes = basis.stride();
+    let (mut lag_k, mut k) = (vec![0.0; tau * lanes], vec![0.0; lanes]);
+    gp.kernel.unit_many(&xs, &basis, gp.n, &mut lag_k, &mut k);
+    let sf2 = gp.kernel.sigma_f2();
+    for i in 0..gp.n {
+        let direct = sf2 * gp.kernel.unit_scaled(&xs, gp.bv(i));
+        assert_eq!(gp.k[i].to_bits(), direct.to_bits(), "step {t}, BV {i}");
+        for lag in 0..tau {
+            let at = lag * lanes + i;
+            assert_eq!(gp.lag_k[at].to_bits(), lag_k[at].to_bits(), "step {t}");
+        }
+    }
+    gp.n
+}
+
+/// A model's own table starts with fewer input slots than its BVs can hold and grows as
+/// they fill: BVs of windows that share no input (a BV every tau steps) hold more
+/// distinct inputs than it starts with, and every kernel value stays the direct one.
+#[test]
+fn an_own_table_grows_as_the_bvs_hold_more_inputs() {
+    use crate::gp::Window;
+    use crate::gp::inputs::own_table_start;
+    let (dim, tau) = (3, 4);
+    let p = SogpParams {
+        capacity: 40,
+        tau,
+        adaptation: Some(adapting_after(12)),
+        ..SogpParams::default()
+    };
+    let mut gp = Sogp::new(dim, 1, &p).unwrap();
+    let mut window = Window::new(dim, tau);
+    let mut rng = crate::rng::Rng::new(7);
+    let (mut checked, mut most) = (0, 0);
+    for t in 0..400 {
+        let x: Vec<f64> = (0..dim).map(|_| rng.range(-4.0, 4.0)).collect();
+        window.push(&x);
+        gp.observe(window.as_slice());
+        checked += assert_rows_give_the_direct_kernel(&gp, &window, t);
+        if t % tau == tau - 1 {
+            gp.update(&[if rng.bernoulli(0.5) { 1.0 } else { -1.0 }]);
+            most = most.max(gp.distinct_inputs());
+        }
+    }
+    assert!(
+        most > own_table_start(p.capacity, tau),
+        "{most} distinct inputs"
+    );
     assert!(gp.n_basis() == p.capacity && gp.hyper_updates() >= 20);
     assert!(checked > 5000, "{checked}");
 }
