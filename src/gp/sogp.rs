@@ -355,7 +355,8 @@ impl Sogp {
     /// Observe the windows of a sequence after `from`, `from` + 1, … and all of its
     /// inputs in turn (as [`Sogp::observe_window`] each), calling `each(t, self)` after the
     /// window of the first `from` + t inputs. The raw window an update would learn is kept
-    /// only once, at the end: nothing updates the model in between.
+    /// only once, at the end: nothing updates the model in between, so only the last window
+    /// keeps its K_t per lag (an update's gradient reads them).
     pub fn observe_sequence(
         &mut self,
         windows: &SequenceWindows,
@@ -371,7 +372,7 @@ impl Sogp {
                 self.x_stamp = Some(stamp);
                 self.x_scaled_current = false;
             }
-            self.evaluate();
+            self.evaluate_keeping(n == windows.len());
             each(t, self);
         }
         if from <= windows.len() {
