@@ -190,8 +190,8 @@ impl Table {
         let j = match self.free.pop() {
             Some(j) => j as usize,
             None => {
-                // Every slot is taken: twice the room (a model's table starts small,
-                // [`OWN_TABLE_START`], as most models hold far fewer inputs than they could).
+                // Every slot is taken: twice the room (a model's own table starts at
+                // OWN_TABLE_START, as most models hold far fewer inputs than they could).
                 if self.used == self.slots {
                     self.grow(2 * self.slots);
                 }
