@@ -165,9 +165,8 @@ impl Ds {
         &self.q
     }
 
-    /// q (T × C) and p (T × C) over a sequence. Each expert goes over the whole sequence
-    /// in turn (its state stays in the cache; experts do not depend on each other while
-    /// predicting), then p follows step by step.
+    /// q (T × C) and p (T × C) over a sequence: its q as [`Ds::predict_q_many`] gives it,
+    /// then p step by step ([`p_of_q`]).
     pub fn predict_q_and_p(&mut self, seq: ArrayView2<f64>) -> (Array2<f64>, Array2<f64>) {
         let qs = match self.predict_q_many(&[seq]).pop() {
             Some(qs) => qs,
