@@ -16,9 +16,12 @@
 //! new input's distances are then computed once per step for all of them.
 
 use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
+use std::hash::BuildHasherDefault;
+use std::sync::Arc;
 
+use super::bits::{Prehashed, hash_bits, same_bits};
 use super::kernel::{LANES, LagMajor, RecursiveArd, exp_nonpos};
+use super::pairs::PairDistances;
 use super::wide::dispatch_wide;
 use super::window::Stamp;
 
@@ -52,6 +55,12 @@ pub(crate) struct Table {
     /// The rows belong to the window last given to [`Table::observe`] and the stored
     /// inputs.
     current: bool,
+    /// A session's pair table that holds every input here: the rows are then copied from
+    /// its rows instead of computed. `pid` names each slot's input there, `row_of` each
+    /// row's (every lag's, the padding ones too).
+    pub(super) pairs: Option<Arc<PairDistances>>,
+    pid: Vec<u32>,
+    row_of: Vec<u32>,
 }
 
 /// The inputs of one model's BVs: where each (BV, lag) input is in a [`Table`], and the
@@ -108,36 +117,6 @@ impl Shift {
     }
 }
 
-/// The map's hasher: its keys are already hashes ([`hash_bits`]), so they are taken as
-/// they are instead of being hashed again.
-#[derive(Default)]
-struct Prehashed(u64);
-
-impl Hasher for Prehashed {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for b in bytes {
-            self.0 = (self.0 << 8) | u64::from(*b);
-        }
-    }
-    fn write_u64(&mut self, v: u64) {
-        self.0 = v;
-    }
-}
-
-/// Hash of the bits of a raw input (FxHash's mix).
-fn hash_bits(x: &[f64]) -> u64 {
-    x.iter().fold(0u64, |h, v| {
-        (h.rotate_left(5) ^ v.to_bits()).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95)
-    })
-}
-
-fn same_bits(a: &[f64], b: &[f64]) -> bool {
-    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
-}
-
 impl Table {
     /// Room for `slots` inputs of `dim` values, over `tau` lags.
     pub(crate) fn new(dim: usize, tau: usize, slots: usize) -> Table {
@@ -158,6 +137,17 @@ impl Table {
             head: 0,
             seen: vec![0.0; tau * dim],
             current: false,
+            pairs: None,
+            pid: vec![0; slots],
+            row_of: vec![0; tau],
+        }
+    }
+
+    /// Room for `slots` inputs of `pairs` (for `tau` lags), whose rows are copied from it.
+    pub(crate) fn over(pairs: Arc<PairDistances>, tau: usize, slots: usize) -> Table {
+        Table {
+            pairs: Some(pairs.clone()),
+            ..Table::new(pairs.dim(), tau, slots)
         }
     }
 
@@ -200,15 +190,30 @@ impl Table {
             }
         };
         self.raw[j * self.dim..(j + 1) * self.dim].copy_from_slice(raw);
-        self.data.set(j, scaled);
         self.refs[j] = 1;
         // On a hash collision the earlier input keeps the entry; this one is only unshared.
         self.lookup.entry(h).or_insert(j as u32);
-        if self.current {
-            let d = self.dim;
-            for r in 0..self.tau {
-                let x = &self.seen[r * d..(r + 1) * d];
-                self.rows[r * self.slots + j] = super::kernel::sq_dist(x, scaled);
+        match &self.pairs {
+            Some(p) => {
+                // A model leaves the pair table at the first window with an input it does
+                // not hold, and a BV is an observed window.
+                let id = p.id_hashed(h, raw).expect("a BV input of the pair table");
+                self.pid[j] = id;
+                if self.current {
+                    for (r, &a) in self.row_of.iter().enumerate() {
+                        self.rows[r * self.slots + j] = p.row(a)[id as usize];
+                    }
+                }
+            }
+            None => {
+                self.data.set(j, scaled);
+                if self.current {
+                    let d = self.dim;
+                    for r in 0..self.tau {
+                        let x = &self.seen[r * d..(r + 1) * d];
+                        self.rows[r * self.slots + j] = super::kernel::sq_dist(x, scaled);
+                    }
+                }
             }
         }
         j
@@ -233,6 +238,7 @@ impl Table {
         self.slots = self.data.stride();
         self.raw.resize(self.slots * d, 0.0);
         self.refs.resize(self.slots, 0);
+        self.pid.resize(self.slots, 0);
         let mut rows = vec![0.0; self.tau * self.slots];
         for (to, from) in rows
             .chunks_exact_mut(self.slots)
@@ -246,20 +252,25 @@ impl Table {
     /// Make the rows those of `window` (raw, oldest lag first), which stands to the window
     /// they were computed for as `shift` says: nothing for the same window, one new row for
     /// that window shifted by one input, else every row past the leading padding lags.
-    pub(crate) fn observe(&mut self, kernel: &RecursiveArd, shift: Shift, window: &[f64]) {
+    /// False (the rows are then of no window) if the table is over a pair table that does
+    /// not hold an input of the window.
+    #[must_use]
+    pub(crate) fn observe(&mut self, kernel: &RecursiveArd, shift: Shift, window: &[f64]) -> bool {
         let (d, tau) = (self.dim, self.tau);
         if self.current {
             match shift {
-                Shift::Same => return,
+                Shift::Same => return true,
                 Shift::ByOne => {
                     self.head = (self.head + 1) % tau;
                     let newest = &window[(tau - 1) * d..];
-                    self.fill_row(kernel, tau - 1, newest);
+                    if !self.fill_row(kernel, tau - 1, newest) {
+                        return false;
+                    }
                     self.lead = match self.lead {
                         l if l == tau => tau - 1 + usize::from(newest.iter().all(|v| *v == 0.0)),
                         l => l.saturating_sub(1),
                     };
-                    return;
+                    return true;
                 }
                 Shift::Other => {}
             }
@@ -270,31 +281,93 @@ impl Table {
             .count();
         // The leading padding lags take the BVs' prefixes: their rows are never read (and
         // stay padding until they leave the window), so only the later ones are filled.
+        // Over a pair table the padding lags are looked up too, so that every input of the
+        // window (a BV to be) is known to be held.
+        if self.pairs.is_some() {
+            for lag in 0..self.lead {
+                if !self.look_up(lag, &window[lag * d..(lag + 1) * d]) {
+                    return false;
+                }
+            }
+        }
         for lag in self.lead..tau {
-            self.fill_row(kernel, lag, &window[lag * d..(lag + 1) * d]);
+            if !self.fill_row(kernel, lag, &window[lag * d..(lag + 1) * d]) {
+                return false;
+            }
         }
         self.current = true;
+        true
     }
 
-    /// Row of lag `lag`: the distances of the raw input `x` to every used slot.
-    fn fill_row(&mut self, kernel: &RecursiveArd, lag: usize, x: &[f64]) {
+    /// Over a pair table, note that the input of lag `lag` is its input `x`; false (the
+    /// rows then current for no window) if the pair table does not hold `x`.
+    fn look_up(&mut self, lag: usize, x: &[f64]) -> bool {
+        let Some(p) = &self.pairs else {
+            return true;
+        };
+        match p.id(x) {
+            Some(a) => {
+                self.row_of[(self.head + lag) % self.tau] = a;
+                true
+            }
+            None => {
+                self.current = false;
+                false
+            }
+        }
+    }
+
+    /// Row of lag `lag`: the distances of the raw input `x` to every used slot, copied
+    /// from a pair table's row or computed; false as [`Table::look_up`].
+    fn fill_row(&mut self, kernel: &RecursiveArd, lag: usize, x: &[f64]) -> bool {
+        if !self.look_up(lag, x) {
+            return false;
+        }
         dispatch_wide!(["avx512f", "avx2"] Table::fill_row_portable, (
             this: &mut Table = self,
             kernel: &RecursiveArd = kernel,
             lag: usize = lag,
             x: &[f64] = x,
-        ))
+        ) -> bool)
     }
 
     #[inline(always)]
-    fn fill_row_portable(&mut self, kernel: &RecursiveArd, lag: usize, x: &[f64]) {
+    fn fill_row_portable(&mut self, kernel: &RecursiveArd, lag: usize, x: &[f64]) -> bool {
         let r = (self.head + lag) % self.tau;
-        let seen = &mut self.seen[r * self.dim..(r + 1) * self.dim];
-        kernel.scale_into(x, seen);
         let m = self.used.div_ceil(LANES) * LANES;
         let at = r * self.slots;
-        self.data
-            .lag_sq_dist(0, seen, m, &mut self.rows[at..at + m]);
+        let row = &mut self.rows[at..at + m];
+        match &self.pairs {
+            Some(p) => {
+                let from = p.row(self.row_of[r]);
+                for (d, &j) in row.iter_mut().zip(&self.pid[..m]) {
+                    // `get`: a gather (every slot's input is one of the pair table's).
+                    *d = from.get(j as usize).copied().unwrap_or(f64::NAN);
+                }
+            }
+            None => {
+                let seen = &mut self.seen[r * self.dim..(r + 1) * self.dim];
+                kernel.scale_into(x, seen);
+                self.data.lag_sq_dist(0, seen, m, row);
+            }
+        }
+        true
+    }
+
+    /// The distances of the observed window's lag `lag` to every slot.
+    #[inline(always)]
+    fn row(&self, lag: usize) -> &[f64] {
+        let r = (self.head + lag) % self.tau;
+        &self.rows[r * self.slots..(r + 1) * self.slots]
+    }
+
+    /// Squared norm of slot `j`'s input (its distance to a padding lag).
+    #[inline(always)]
+    fn norm(&self, j: usize) -> f64 {
+        match &self.pairs {
+            Some(p) => p.norm(self.pid[j]),
+            None => self.data.norm(0, j),
+        }
     }
 }
 
@@ -357,7 +430,7 @@ impl Inputs {
             let j = self.table.acquire(r, s);
             self.index[lag * self.lanes + i] = j as u32;
             // As the recursion runs at a padding lag: the distance is the input's norm.
-            k = exp_nonpos(-0.5 * self.table.data.norm(0, j) + (k - 1.0) * inv_rho);
+            k = exp_nonpos(-0.5 * self.table.norm(j) + (k - 1.0) * inv_rho);
             self.prefix[lag * self.lanes + i] = k;
         }
     }
@@ -379,8 +452,21 @@ impl Inputs {
     }
 
     /// The table's rows made those of `window` (see [`Table::observe`]).
-    pub(crate) fn observe(&mut self, kernel: &RecursiveArd, shift: Shift, window: &[f64]) {
-        self.table.observe(kernel, shift, window);
+    #[must_use]
+    pub(crate) fn observe(&mut self, kernel: &RecursiveArd, shift: Shift, window: &[f64]) -> bool {
+        self.table.observe(kernel, shift, window)
+    }
+
+    /// Hold the inputs in `table` from now on (the BVs are about to be stored again): the
+    /// slots of the lanes past the BVs, read but ignored, are made slots of the new table.
+    pub(crate) fn set_table(&mut self, table: Table) {
+        self.table = table;
+        self.index.fill(0);
+    }
+
+    /// True while the inputs are those of a session's pair table.
+    pub(crate) fn over_pairs(&self) -> bool {
+        self.table.pairs.is_some()
     }
 
     /// Distinct inputs held by BVs 0..n (with those of other models, in a shared table).
@@ -426,8 +512,7 @@ impl Inputs {
             p => out[..m].copy_from_slice(&self.prefix[(p - 1) * s..(p - 1) * s + m]),
         }
         for lag in p..self.tau {
-            let at = (t.head + lag) % self.tau * t.slots;
-            let row = &t.rows[at..at + t.slots];
+            let row = t.row(lag);
             let kt = &mut lag_k[lag * s..lag * s + m];
             // Every index is a slot of the table, below the row's length: `get` instead of
             // indexing lets the loop compile to vector gathers (a bounds check that may
@@ -465,8 +550,7 @@ impl Inputs {
             p => out[..m].copy_from_slice(&self.prefix[(p - 1) * s..(p - 1) * s + m]),
         }
         for lag in p..self.tau {
-            let at = (t.head + lag) % self.tau * t.slots;
-            let row = &t.rows[at..at + t.slots];
+            let row = t.row(lag);
             for (k, &j) in out[..m].iter_mut().zip(&self.index[lag * s..lag * s + m]) {
                 debug_assert!((j as usize) < row.len());
                 let r = row.get(j as usize).copied().unwrap_or(f64::NAN);
@@ -512,7 +596,9 @@ impl SharedInputs {
             (Some(a), Some(b)) if b.follows(a) => Shift::ByOne,
             _ => Shift::Other,
         };
-        self.table.observe(&self.kernel, shift, window);
+        // A shared table holds its inputs itself, so every window is observed.
+        let held = self.table.observe(&self.kernel, shift, window);
+        debug_assert!(held);
         self.stamp = stamp;
     }
 

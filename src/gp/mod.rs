@@ -9,10 +9,12 @@
 //! constructor: a state whose lengths, dimensions, counts or values disagree is an
 //! [`GpError::InvalidState`] naming the field, so an inconsistent model cannot be obtained.
 
+mod bits;
 pub(crate) mod floats;
 mod inputs;
 pub mod kernel;
 pub mod normal;
+mod pairs;
 mod quotient;
 pub mod sngd;
 pub mod sogp;
@@ -21,6 +23,7 @@ pub mod window;
 
 pub(crate) use inputs::SharedInputs;
 pub use kernel::{KernelParams, LagMajor, RecursiveArd};
+pub use pairs::{MAX_PAIR_INPUTS, PairDistances};
 pub use sngd::{Sngd, SngdParams};
 pub use sogp::{Likelihood, Sogp, SogpParams};
 pub use window::{SequenceWindows, Stamp, Window};

@@ -24,6 +24,7 @@
 mod adapt;
 mod gram;
 mod online;
+mod pairs;
 mod shared;
 mod state;
 #[cfg(test)]
@@ -311,7 +312,7 @@ impl Sogp {
     pub fn observe(&mut self, window: &[f64]) {
         self.own_inputs();
         let shift = Shift::between(&self.x_raw, window, self.kernel.dim());
-        self.inputs.observe(&self.kernel, shift, window);
+        self.observe_inputs(shift, window);
         // Copied even when equal as numbers: a BV keeps the window's bits.
         self.x_raw.copy_from_slice(window);
         self.x_stamp = None;
@@ -329,7 +330,7 @@ impl Sogp {
     fn observe_stamped(&mut self, window: &[f64], stamp: Stamp) {
         self.own_inputs();
         let shift = self.shift_to(stamp);
-        self.inputs.observe(&self.kernel, shift, window);
+        self.observe_inputs(shift, window);
         self.take_window(shift, window, stamp);
         self.evaluate();
     }
@@ -367,7 +368,7 @@ impl Sogp {
         for (t, n) in (from..=windows.len()).enumerate() {
             let (window, stamp) = windows.after(n);
             let shift = self.shift_to(stamp);
-            self.inputs.observe(&self.kernel, shift, window);
+            self.observe_inputs(shift, window);
             if shift != Shift::Same {
                 self.x_stamp = Some(stamp);
                 self.x_scaled_current = false;
@@ -382,7 +383,9 @@ impl Sogp {
 
     /// Evaluate again at the same window (the model changed).
     fn refresh(&mut self) {
-        self.inputs.observe(&self.kernel, Shift::Same, &self.x_raw);
+        let x = std::mem::take(&mut self.x_raw);
+        self.observe_inputs(Shift::Same, &x);
+        self.x_raw = x;
         self.evaluate();
     }
 

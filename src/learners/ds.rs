@@ -9,11 +9,15 @@
 //!   expert gets −1 (the paper's closest-model scheme; the code's `TRAIN_SEC` takes the
 //!   second best by q and skips the negative when that is the true class).
 
+use std::sync::Arc;
+
 use ndarray::{Array2, ArrayView2};
 use serde::{Deserialize, Serialize};
 
 use super::{LearnerError, SequenceClassifier};
-use crate::gp::{Likelihood, SequenceWindows, SharedInputs, Sogp, SogpParams, Window};
+use crate::gp::{
+    Likelihood, PairDistances, SequenceWindows, SharedInputs, Sogp, SogpParams, Window,
+};
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DsParams {
@@ -62,6 +66,10 @@ pub struct Ds {
     /// per step for all of them (rebuilt on load).
     #[serde(skip_serializing)]
     shared: Option<Box<SharedInputs>>,
+    /// The pair table of the inputs the learner observes, when it was given one
+    /// ([`Ds::use_pairs`]; not saved).
+    #[serde(skip_serializing)]
+    pairs: Option<Arc<PairDistances>>,
 }
 
 /// A [`Ds`] as it is saved: the fields of [`Ds`].
@@ -127,7 +135,18 @@ impl Ds {
             window: Window::new(dim, params.gp.tau),
             q: Vec::new(),
             shared,
+            pairs: None,
         })
+    }
+
+    /// Read the experts' distances from `pairs` while their lengthscales are its own and
+    /// they observe its inputs (every value the same, see [`Sogp::use_pairs`]): the experts
+    /// there now and those added later.
+    pub fn use_pairs(&mut self, pairs: Arc<PairDistances>) {
+        for m in &mut self.models {
+            m.use_pairs(&pairs);
+        }
+        self.pairs = Some(pairs);
     }
 
     /// The parameters the learner was built with.
@@ -176,10 +195,10 @@ impl Ds {
         (qs, ps)
     }
 
-    /// The q (T × C) of each of `seqs`. Experts with their own distance tables go over all
-    /// the sequences one expert at a time (its state stays in the caches); a shared table
-    /// is filled step by step, one sequence at a time, each step's new distances once for
-    /// all the experts.
+    /// The q (T × C) of each of `seqs`. Experts with distance tables of their own go over
+    /// the sequences one expert at a time (its state stays in the caches), in blocks when
+    /// they read a pair table ([`Ds::block_end`]); a shared table is filled step by step,
+    /// one sequence at a time, each step's new distances once for all the experts.
     pub fn predict_q_many(&mut self, seqs: &[ArrayView2<f64>]) -> Vec<Array2<f64>> {
         let c = self.models.len();
         let windows: Vec<SequenceWindows> = seqs
@@ -193,7 +212,8 @@ impl Ds {
             .iter()
             .map(|w| Array2::zeros((w.len(), c)))
             .collect();
-        match self.shared.as_mut() {
+        let sharing = self.models.iter().any(Sogp::shares_inputs);
+        match self.shared.as_mut().filter(|_| sharing) {
             Some(shared) => {
                 for (w, qs) in windows.iter().zip(qs.iter_mut()) {
                     for (t, mut q) in qs.rows_mut().into_iter().enumerate() {
@@ -206,14 +226,37 @@ impl Ds {
                 }
             }
             None => {
-                for (j, m) in self.models.iter_mut().enumerate() {
-                    for (w, q) in windows.iter().zip(qs.iter_mut()) {
-                        m.observe_sequence(w, 1, |t, m| q[[t, j]] = m.probability());
+                let mut from = 0;
+                while from < windows.len() {
+                    let to = self.block_end(&windows, from);
+                    for (j, m) in self.models.iter_mut().enumerate() {
+                        for (w, q) in windows[from..to].iter().zip(&mut qs[from..to]) {
+                            m.observe_sequence(w, 1, |t, m| q[[t, j]] = m.probability());
+                        }
                     }
+                    from = to;
                 }
             }
         }
         qs
+    }
+
+    /// The end of the block of sequences from `from` that the experts score one after
+    /// the other: all of them, or with a pair table as many as the rows of their inputs
+    /// fit in [`PAIR_ROWS_CACHED`] bytes (at least one), so that after the first expert the
+    /// others read those rows from a core's own cache.
+    fn block_end(&self, windows: &[SequenceWindows], from: usize) -> usize {
+        let Some(p) = &self.pairs else {
+            return windows.len();
+        };
+        let rows = (PAIR_ROWS_CACHED / p.row_bytes()).max(1);
+        let mut steps = 0;
+        let mut to = from;
+        while to < windows.len() && (to == from || steps + windows[to].len() <= rows) {
+            steps += windows[to].len();
+            to += 1;
+        }
+        to
     }
 
     /// Train on a grasp as [`SequenceClassifier::train_sequence`] does, given its q (T × C)
@@ -267,6 +310,10 @@ impl Ds {
     }
 }
 
+/// Bytes of pair-table rows a block of sequences may read (half a core's 2 MiB L2 here,
+/// leaving room for the expert's own state).
+const PAIR_ROWS_CACHED: usize = 1 << 20;
+
 /// p (T × C): each step's q normalised over the experts (uniform where every q is 0).
 pub fn p_of_q(qs: ArrayView2<f64>) -> Array2<f64> {
     let c = qs.ncols();
@@ -299,7 +346,8 @@ impl SequenceClassifier for Ds {
 
     fn add_class(&mut self) -> Result<usize, LearnerError> {
         let mut m = Sogp::new(self.dim, 1, &self.params.gp)?;
-        if let Some(shared) = self.shared.as_mut() {
+        let paired = self.pairs.as_ref().is_some_and(|p| m.use_pairs(p));
+        if let (false, Some(shared)) = (paired, self.shared.as_mut()) {
             m.join(shared);
         }
         self.models.push(m);
@@ -522,6 +570,106 @@ mod tests {
             mb.update(&[1.0]);
         }
         assert!(!ma.shares_inputs());
+    }
+
+    /// Experts reading a session's pair table give the numbers of experts with tables of
+    /// their own, to the bit: with and without adaptation (new lengthscales make an expert
+    /// leave the pair table), through every way of predicting and training, deletions at
+    /// the budget and classes added midway. The pair table holds the inputs of the first 24
+    /// grasps only, so each expert leaves it at the first later grasp it observes.
+    #[test]
+    fn experts_reading_a_pair_table_equal_experts_with_their_own_bit_for_bit() {
+        for adapting in [false, true] {
+            let params = small(adapting);
+            let all = grasps(7, 40, 4, 3);
+            let (mut a, mut b) = (Ds::new(3, &params).unwrap(), Ds::new(3, &params).unwrap());
+            b.shared = None;
+            let kernel = Sogp::new(3, 1, &params.gp).unwrap().kernel().clone();
+            let known = all[..24].iter().map(|(_, g)| g.as_slice().unwrap());
+            a.use_pairs(Arc::new(PairDistances::new(&kernel, known).unwrap()));
+            let classes_at = |i: usize| if i < 10 { 3 } else { 4 };
+            let mut paired = 0;
+            for (i, (c, g)) in all.iter().enumerate() {
+                while a.n_classes() < classes_at(i) {
+                    assert_eq!(a.add_class().unwrap(), b.add_class().unwrap());
+                }
+                let (qa, pa) = a.predict_q_and_p(g.view());
+                let (qb, pb) = b.predict_q_and_p(g.view());
+                assert_eq!(bits(&qa), bits(&qb), "adapting {adapting}, grasp {i}");
+                assert_eq!(bits(&pa), bits(&pb), "adapting {adapting}, grasp {i}");
+                let c = c % a.n_classes();
+                match i % 3 {
+                    0 => {
+                        a.train_sequence(g.view(), c);
+                        b.train_sequence(g.view(), c);
+                    }
+                    1 => {
+                        a.train_sequence_predicted(g.view(), c, qa.view());
+                        b.train_sequence_predicted(g.view(), c, qb.view());
+                    }
+                    _ => {
+                        a.start_sequence();
+                        b.start_sequence();
+                        for o in g.rows() {
+                            a.train_step(o.as_slice().unwrap(), c);
+                            b.train_step(o.as_slice().unwrap(), c);
+                            assert_eq!(bits(a.q()), bits(b.q()), "grasp {i}");
+                        }
+                    }
+                }
+                let reading = a.models().iter().filter(|m| m.reads_pairs()).count();
+                if i < 24 {
+                    paired += reading;
+                } else {
+                    assert_eq!(reading, 0, "grasp {i}: its inputs are not in the table");
+                }
+            }
+            let (ja, jb) = (serde_json::to_string(&a), serde_json::to_string(&b));
+            assert_eq!(ja.unwrap(), jb.unwrap());
+            // Without adaptation every expert read the table until grasp 24 (4 experts from
+            // grasp 10); adapting, some left it earlier.
+            match adapting {
+                false => assert_eq!(paired, 10 * 3 + 14 * 4),
+                true => assert!(paired > 0 && paired < 10 * 3 + 14 * 4, "{paired}"),
+            }
+            assert!(b.models().iter().all(|m| !m.reads_pairs()));
+            if adapting {
+                assert!(a.models().iter().all(|m| m.hyper_updates() > 0));
+            }
+        }
+    }
+
+    /// Experts reading a pair table score many sequences block by block (here about 100
+    /// steps of rows to a block, 14 blocks): each sequence's q are those it gets alone from
+    /// experts with tables of their own.
+    #[test]
+    fn sequences_scored_block_by_block_get_their_own_q() {
+        let params = small(false);
+        let all = grasps(9, 120, 3, 3);
+        let (mut a, mut b) = (Ds::new(3, &params).unwrap(), Ds::new(3, &params).unwrap());
+        b.shared = None;
+        let kernel = Sogp::new(3, 1, &params.gp).unwrap().kernel().clone();
+        let pairs = PairDistances::new(&kernel, all.iter().map(|(_, g)| g.as_slice().unwrap()));
+        let pairs = Arc::new(pairs.unwrap());
+        let rows = PAIR_ROWS_CACHED / pairs.row_bytes();
+        a.use_pairs(pairs);
+        for ds in [&mut a, &mut b] {
+            for _ in 0..3 {
+                ds.add_class().unwrap();
+            }
+            for (c, g) in &all[..12] {
+                ds.train_sequence(g.view(), *c);
+            }
+        }
+        assert!(a.models().iter().all(|m| m.reads_pairs()));
+        let views: Vec<ArrayView2<f64>> = all.iter().map(|(_, g)| g.view()).collect();
+        let steps: usize = views.iter().map(|v| v.nrows()).sum();
+        assert!(steps > 10 * rows, "{steps} steps, {rows} rows to a block");
+        let qa = a.predict_q_many(&views);
+        for (i, (q, v)) in qa.iter().zip(&views).enumerate() {
+            let qb = b.predict_q_many(&[*v]).pop().unwrap();
+            assert_eq!(bits(q), bits(&qb), "sequence {i}");
+        }
     }
 
     /// Only models whose hyperparameters are equal to the bit and cannot adapt join a

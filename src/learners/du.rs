@@ -123,6 +123,11 @@ impl Du {
         self.ds.n_classes()
     }
 
+    /// Read the experts' distances from a pair table of the inputs ([`Ds::use_pairs`]).
+    pub fn use_pairs(&mut self, pairs: std::sync::Arc<crate::gp::PairDistances>) {
+        self.ds.use_pairs(pairs);
+    }
+
     pub fn learner(&self) -> &Ds {
         &self.ds
     }

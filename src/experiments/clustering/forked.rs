@@ -127,8 +127,10 @@ fn add(seconds: &mut [f64], members: &[usize], s: f64) {
 
 #[cfg(test)]
 mod tests {
+    use std::sync::Arc;
+
     use super::*;
-    use crate::gp::SogpParams;
+    use crate::gp::{PairDistances, Sogp, SogpParams};
     use crate::learners::testing::{grasps, quick_adaptation};
     use crate::learners::{DsParams, Du, DuParams, GsParams, Gu, GuNoise, GuParams};
 
@@ -179,15 +181,19 @@ mod tests {
         (seqs, order)
     }
 
-    /// Every threshold's outcome of the forked learning is that of its own learner,
-    /// learning the grasps one by one and then re-assigning them one by one; returns how many
-    /// different clusterings the thresholds ended with.
-    fn forked_equals_alone<L: NoveltyLearner>(make: impl Fn(f64) -> L) -> usize {
+    /// Every threshold's outcome of the forked learning (from `forked`'s learner) is that
+    /// of its own learner (`alone`'s), learning the grasps one by one and then re-assigning
+    /// them one by one; returns how many different clusterings the thresholds ended with.
+    fn forked_equals_alone<L: NoveltyLearner>(
+        forked: impl Fn(f64) -> L,
+        alone: impl Fn(f64) -> L,
+    ) -> usize {
         let (seqs, order) = grasps_and_order();
-        let forked = learn_order(make(0.5), &seqs, &order, &THRESHOLDS, &Progress::new()).unwrap();
+        let forked =
+            learn_order(forked(0.5), &seqs, &order, &THRESHOLDS, &Progress::new()).unwrap();
         assert_eq!(forked.len(), THRESHOLDS.len());
         for (&t, o) in THRESHOLDS.iter().zip(&forked) {
-            let mut alone = make(t);
+            let mut alone = alone(t);
             for &g in &order {
                 alone.learn(seqs[g].view()).unwrap();
             }
@@ -218,12 +224,33 @@ mod tests {
     #[test]
     fn forked_learning_equals_each_threshold_learned_alone() {
         for adapting in [false, true] {
-            let n = forked_equals_alone(du(adapting));
+            let n = forked_equals_alone(du(adapting), du(adapting));
             assert!(n >= 4, "DU adapting {adapting}: {n} clusterings");
         }
         for noise in [GuNoise::Shared, GuNoise::PerDimension] {
-            let n = forked_equals_alone(gu(noise));
+            let n = forked_equals_alone(gu(noise), gu(noise));
             assert!(n >= 4, "GU {noise:?}: {n} clusterings");
+        }
+    }
+
+    /// DU whose experts read a pair table of the grasps' inputs (until they adapt) learns,
+    /// forked, what each threshold learns alone with tables of their own.
+    #[test]
+    fn forked_du_reading_a_pair_table_equals_each_threshold_learned_alone() {
+        for adapting in [false, true] {
+            let plain = du(adapting);
+            let gp = gp(adapting, DsParams::default().gp);
+            let kernel = Sogp::new(3, 1, &gp).unwrap().kernel().clone();
+            let seqs = grasps_and_order().0;
+            let steps = seqs.iter().map(|s| s.as_slice().unwrap());
+            let pairs = Arc::new(PairDistances::new(&kernel, steps).unwrap());
+            let paired = |t: f64| {
+                let mut d = plain(t);
+                d.use_pairs(pairs.clone());
+                d
+            };
+            let n = forked_equals_alone(paired, du(adapting));
+            assert!(n >= 4, "DU adapting {adapting}: {n} clusterings");
         }
     }
 

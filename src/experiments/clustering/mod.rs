@@ -12,6 +12,7 @@
 
 use std::collections::BTreeMap;
 use std::str::FromStr;
+use std::sync::Arc;
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
@@ -27,6 +28,7 @@ use crate::experiments::parallel::compute_items;
 use crate::experiments::result::MeanSd;
 use crate::features::{FeatureSequences, FeatureSet, SequenceParams, feature_sequences};
 use crate::features::{Normalisation, Normaliser, table_one::session_features};
+use crate::gp::{PairDistances, Sogp};
 use crate::jobs::Progress;
 use crate::learners::{
     DsParams, Du, DuParams, EvtDraws, Gs, GsParams, Gu, GuAggregate, GuNoise, GuParams,
@@ -250,7 +252,9 @@ pub struct ClusteringResult {
 
 /// Every threshold's run on presentation order `rep` (in the thresholds' order), learned
 /// together and forked where their decisions part ([`forked`]): the runs each threshold
-/// learns alone, bit for bit.
+/// learns alone, bit for bit. DU's experts read their distances from `pairs` when given
+/// (the same numbers).
+#[allow(clippy::too_many_arguments)]
 pub fn order_runs(
     params: &ClusteringParams,
     seqs: &[ndarray::Array2<f64>],
@@ -258,6 +262,7 @@ pub fn order_runs(
     dim: usize,
     thresholds: &[f64],
     rep: usize,
+    pairs: Option<&Arc<PairDistances>>,
     progress: &Progress,
 ) -> Result<Vec<ClusteringRun>, ExperimentError> {
     let Some(&first) = thresholds.first() else {
@@ -266,7 +271,7 @@ pub fn order_runs(
     let order = Rng::stream(params.seed, rep as u64).permutation(seqs.len());
     let outcomes = match params.learner {
         UnsupervisedLearner::Du => {
-            let du = Du::new(
+            let mut du = Du::new(
                 dim,
                 &DuParams {
                     ds: params.ds.clone(),
@@ -274,6 +279,9 @@ pub fn order_runs(
                     min_grasps: params.du_min_grasps,
                 },
             )?;
+            if let Some(pairs) = pairs {
+                du.use_pairs(pairs.clone());
+            }
             forked::learn_order(du, seqs, &order, thresholds, progress)?
         }
         UnsupervisedLearner::Gu => {
@@ -315,6 +323,7 @@ pub fn order_runs(
 }
 
 /// One learning run at one threshold.
+#[allow(clippy::too_many_arguments)]
 pub fn one_run(
     params: &ClusteringParams,
     seqs: &[ndarray::Array2<f64>],
@@ -322,11 +331,21 @@ pub fn one_run(
     dim: usize,
     threshold: f64,
     rep: usize,
+    pairs: Option<&Arc<PairDistances>>,
     progress: &Progress,
 ) -> Result<ClusteringRun, ExperimentError> {
-    order_runs(params, seqs, labels, dim, &[threshold], rep, progress)?
-        .pop()
-        .ok_or_else(|| ExperimentError::param("thresholds", "needs at least one"))
+    order_runs(
+        params,
+        seqs,
+        labels,
+        dim,
+        &[threshold],
+        rep,
+        pairs,
+        progress,
+    )?
+    .pop()
+    .ok_or_else(|| ExperimentError::param("thresholds", "needs at least one"))
 }
 
 /// Clusters that hold at least one grasp.
@@ -407,13 +426,18 @@ pub enum ClusteringOutput {
     },
 }
 
-/// What every item shares: the labels, the feature sequences and the baselines' z-scored
-/// Table I features (None without baselines).
+/// What every item shares: the labels, the feature sequences, the baselines' z-scored
+/// Table I features (None without baselines) and DU's pair table of the inputs.
 pub struct ClusteringPrep {
     pub labels: Vec<usize>,
     pub class_names: Vec<String>,
     pub feats: FeatureSequences,
     pub table: Option<Array2<f64>>,
+    /// The squared distances between the sequences' inputs under DU's initial
+    /// lengthscales: every order learns and re-assigns the same grasps, so the experts
+    /// read their distances here until they adapt (None for GU, or past
+    /// [`crate::gp::MAX_PAIR_INPUTS`] inputs).
+    pub pairs: Option<Arc<PairDistances>>,
 }
 
 fn cluster_err(e: crate::cluster::ClusterError) -> ExperimentError {
@@ -446,12 +470,36 @@ pub fn prepare_clustering(
     } else {
         None
     };
+    let pairs = match params.learner {
+        UnsupervisedLearner::Du => du_pairs(&feats, &params.ds)?,
+        UnsupervisedLearner::Gu => None,
+    };
     Ok(ClusteringPrep {
         labels,
         class_names,
         feats,
         table,
+        pairs,
     })
+}
+
+/// The pair table of the sequences' inputs under the lengthscales DU's experts start with
+/// (None past [`crate::gp::MAX_PAIR_INPUTS`] inputs).
+pub fn du_pairs(
+    feats: &FeatureSequences,
+    ds: &DsParams,
+) -> Result<Option<Arc<PairDistances>>, ExperimentError> {
+    let kernel = Sogp::new(feats.dim(), 1, &ds.gp)
+        .map_err(crate::learners::LearnerError::from)?
+        .kernel()
+        .clone();
+    let seqs: Vec<_> = feats
+        .sequences
+        .iter()
+        .map(|s| s.as_standard_layout())
+        .collect();
+    let steps = seqs.iter().filter_map(|s| s.as_slice());
+    Ok(PairDistances::new(&kernel, steps).map(Arc::new))
 }
 
 /// The items of a run on `grasps` grasps: every order, then every (k, order) of the
@@ -485,6 +533,7 @@ pub fn clustering_item(
                 prep.feats.dim(),
                 &params.thresholds,
                 rep,
+                prep.pairs.as_ref(),
                 progress,
             )?,
         }),

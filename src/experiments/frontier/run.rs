@@ -303,6 +303,7 @@ pub fn frontier_item(
                 prep.feats.dim(),
                 threshold,
                 rep,
+                prep.pairs.as_ref(),
                 progress,
             )?;
             // Per grasp, as the other clusterers: the observations of a grasp, each

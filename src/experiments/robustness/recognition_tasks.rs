@@ -218,6 +218,7 @@ fn unsupervised_nmi(
         dim,
         threshold,
         rep,
+        None,
         &Progress::new(),
     )?
     .nmi)

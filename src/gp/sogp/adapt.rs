@@ -117,6 +117,7 @@ impl Sogp {
             return;
         };
         self.own_inputs();
+        self.leave_pairs();
         self.kernel = kernel;
         // The re-run below stores the BVs it keeps again.
         self.inputs.clear();

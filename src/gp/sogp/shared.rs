@@ -38,7 +38,7 @@ impl Sogp {
             return false;
         }
         let (dim, tau) = (self.kernel.dim(), self.kernel.tau());
-        self.inputs.table = Table::new(dim, tau, 0);
+        self.inputs.set_table(Table::new(dim, tau, 0));
         self.inputs.shared = true;
         self.lend(shared, Sogp::add_every_bv);
         // The shared rows may be of another window than the one this model observed.
@@ -52,7 +52,8 @@ impl Sogp {
             return;
         }
         let (dim, tau) = (self.kernel.dim(), self.kernel.tau());
-        self.inputs.table = Table::new(dim, tau, own_table_start(self.stride, tau));
+        self.inputs
+            .set_table(Table::new(dim, tau, own_table_start(self.stride, tau)));
         self.inputs.shared = false;
         self.add_every_bv();
         // The new table has no rows yet: the next observation computes them all.
@@ -61,7 +62,7 @@ impl Sogp {
     }
 
     /// Put every BV's inputs in the table the model holds now (its own, or a lent one).
-    fn add_every_bv(&mut self) {
+    pub(super) fn add_every_bv(&mut self) {
         let w = self.wlen;
         let inv_rho = 1.0 / self.kernel.params().sigma_rho;
         for i in 0..self.n {
