@@ -21,7 +21,7 @@ use std::sync::Arc;
 
 use super::bits::{Prehashed, hash_bits, same_bits};
 use super::kernel::{LANES, LagMajor, RecursiveArd, exp_nonpos};
-use super::pairs::PairDistances;
+use super::pairs::{NO_WINDOW, PairDistances};
 use super::wide::dispatch_wide;
 use super::window::Stamp;
 
@@ -56,12 +56,21 @@ pub(crate) struct Table {
     /// inputs.
     current: bool,
     /// A session's pair table that holds every input here: the rows are then copied from
-    /// its rows instead of computed. `pid` names each slot's input there, `row_of` each
-    /// row's (every lag's, the padding ones too).
+    /// its rows, when first read, instead of computed. `pid` names each slot's input
+    /// there, `row_of` each row's (every lag's, the padding ones too), `rows_for` the
+    /// input each row was copied for (the copy holds every used slot), and `window` the
+    /// observed window there ([`NO_WINDOW`] if not held).
     pub(super) pairs: Option<Arc<PairDistances>>,
     pid: Vec<u32>,
     row_of: Vec<u32>,
+    rows_for: Vec<u32>,
+    window: u32,
+    /// The observed window's input ids in lag order, to look the window up.
+    ids: Vec<u32>,
 }
+
+/// A row copied for no input.
+const NO_ROW: u32 = u32::MAX;
 
 /// The inputs of one model's BVs: where each (BV, lag) input is in a [`Table`], and the
 /// table itself (the model's own, or a stand-in while a learner's shared one serves it).
@@ -75,6 +84,8 @@ pub(crate) struct Inputs {
     /// K_t of BV i after t = l + 1 padding lags (all-zero inputs, as at the start of a
     /// sequence): `prefix[l * lanes + i]`. It depends on the BV alone.
     prefix: Vec<f64>,
+    /// Over a pair table, BV i's window there ([`NO_WINDOW`] if not held): `window[i]`.
+    window: Vec<u32>,
     pub(super) table: Table,
     /// The BVs' inputs are in a [`SharedInputs`]; `table` is an empty stand-in, swapped
     /// with the shared table for the calls that read it.
@@ -140,6 +151,9 @@ impl Table {
             pairs: None,
             pid: vec![0; slots],
             row_of: vec![0; tau],
+            rows_for: vec![NO_ROW; tau],
+            window: NO_WINDOW,
+            ids: vec![0; tau],
         }
     }
 
@@ -153,6 +167,7 @@ impl Table {
 
     /// Forget every input and the distance rows.
     fn clear(&mut self) {
+        self.rows_for.fill(NO_ROW);
         self.refs.fill(0);
         self.free.clear();
         self.used = 0;
@@ -199,8 +214,8 @@ impl Table {
                 // not hold, and a BV is an observed window.
                 let id = p.id_hashed(h, raw).expect("a BV input of the pair table");
                 self.pid[j] = id;
-                if self.current {
-                    for (r, &a) in self.row_of.iter().enumerate() {
+                for (r, &a) in self.rows_for.iter().enumerate() {
+                    if a != NO_ROW {
                         self.rows[r * self.slots + j] = p.row(a)[id as usize];
                     }
                 }
@@ -270,6 +285,7 @@ impl Table {
                         l if l == tau => tau - 1 + usize::from(newest.iter().all(|v| *v == 0.0)),
                         l => l.saturating_sub(1),
                     };
+                    self.find_window(kernel);
                     return true;
                 }
                 Shift::Other => {}
@@ -295,8 +311,55 @@ impl Table {
                 return false;
             }
         }
+        self.find_window(kernel);
         self.current = true;
         true
+    }
+
+    /// Over a pair table, the observed window's id there (under `kernel`'s recursion).
+    fn find_window(&mut self, kernel: &RecursiveArd) {
+        let Some(p) = &self.pairs else {
+            return;
+        };
+        for (lag, id) in self.ids.iter_mut().enumerate() {
+            *id = self.row_of[(self.head + lag) % self.tau];
+        }
+        self.window = p.window(&self.ids, 1.0 / kernel.params().sigma_rho);
+    }
+
+    /// Copy the rows of the observed window's lags past the leading padding that are not
+    /// copied for their input yet (a table of its own computes its rows as it observes).
+    fn ensure_rows(&mut self) {
+        let Some(p) = self.pairs.clone() else {
+            return;
+        };
+        for lag in self.lead..self.tau {
+            let r = (self.head + lag) % self.tau;
+            if self.rows_for[r] != self.row_of[r] {
+                self.copy_row(&p, r);
+            }
+        }
+    }
+
+    /// Row `r` copied from the pair table's row of its input.
+    fn copy_row(&mut self, p: &PairDistances, r: usize) {
+        dispatch_wide!(["avx512f", "avx2"] Table::copy_row_portable, (
+            this: &mut Table = self,
+            p: &PairDistances = p,
+            r: usize = r,
+        ))
+    }
+
+    #[inline(always)]
+    fn copy_row_portable(&mut self, p: &PairDistances, r: usize) {
+        let m = self.used.div_ceil(LANES) * LANES;
+        let at = r * self.slots;
+        let from = p.row(self.row_of[r]);
+        for (d, &j) in self.rows[at..at + m].iter_mut().zip(&self.pid[..m]) {
+            // `get`: a gather (every slot's input is one of the pair table's).
+            *d = from.get(j as usize).copied().unwrap_or(f64::NAN);
+        }
+        self.rows_for[r] = self.row_of[r];
     }
 
     /// Over a pair table, note that the input of lag `lag` is its input `x`; false (the
@@ -317,41 +380,35 @@ impl Table {
         }
     }
 
-    /// Row of lag `lag`: the distances of the raw input `x` to every used slot, copied
-    /// from a pair table's row or computed; false as [`Table::look_up`].
+    /// Row of lag `lag`: the distances of the raw input `x` to every used slot, computed
+    /// (over a pair table, only its input noted: the row is copied when first read); false
+    /// as [`Table::look_up`].
     fn fill_row(&mut self, kernel: &RecursiveArd, lag: usize, x: &[f64]) -> bool {
-        if !self.look_up(lag, x) {
-            return false;
+        if self.pairs.is_some() {
+            return self.look_up(lag, x);
         }
+        self.compute_row(kernel, lag, x);
+        true
+    }
+
+    fn compute_row(&mut self, kernel: &RecursiveArd, lag: usize, x: &[f64]) {
         dispatch_wide!(["avx512f", "avx2"] Table::fill_row_portable, (
             this: &mut Table = self,
             kernel: &RecursiveArd = kernel,
             lag: usize = lag,
             x: &[f64] = x,
-        ) -> bool)
+        ))
     }
 
     #[inline(always)]
-    fn fill_row_portable(&mut self, kernel: &RecursiveArd, lag: usize, x: &[f64]) -> bool {
+    fn fill_row_portable(&mut self, kernel: &RecursiveArd, lag: usize, x: &[f64]) {
         let r = (self.head + lag) % self.tau;
+        let seen = &mut self.seen[r * self.dim..(r + 1) * self.dim];
+        kernel.scale_into(x, seen);
         let m = self.used.div_ceil(LANES) * LANES;
         let at = r * self.slots;
-        let row = &mut self.rows[at..at + m];
-        match &self.pairs {
-            Some(p) => {
-                let from = p.row(self.row_of[r]);
-                for (d, &j) in row.iter_mut().zip(&self.pid[..m]) {
-                    // `get`: a gather (every slot's input is one of the pair table's).
-                    *d = from.get(j as usize).copied().unwrap_or(f64::NAN);
-                }
-            }
-            None => {
-                let seen = &mut self.seen[r * self.dim..(r + 1) * self.dim];
-                kernel.scale_into(x, seen);
-                self.data.lag_sq_dist(0, seen, m, row);
-            }
-        }
-        true
+        self.data
+            .lag_sq_dist(0, seen, m, &mut self.rows[at..at + m]);
     }
 
     /// The distances of the observed window's lag `lag` to every slot.
@@ -389,6 +446,7 @@ impl Inputs {
             lanes,
             index: vec![0; tau * lanes],
             prefix: vec![0.0; tau * lanes],
+            window: vec![NO_WINDOW; lanes],
             table: Table::new(dim, tau, own_table_start(bv_slots, tau)),
             shared: false,
         }
@@ -433,6 +491,12 @@ impl Inputs {
             k = exp_nonpos(-0.5 * self.table.norm(j) + (k - 1.0) * inv_rho);
             self.prefix[lag * self.lanes + i] = k;
         }
+        if let Some(p) = &self.table.pairs {
+            for (lag, id) in self.table.ids.iter_mut().enumerate() {
+                *id = self.table.pid[self.index[lag * self.lanes + i] as usize];
+            }
+            self.window[i] = p.window(&self.table.ids, inv_rho);
+        }
     }
 
     /// Drop BV `i`'s references; inputs no BV holds any more are freed.
@@ -449,6 +513,7 @@ impl Inputs {
             self.index[lag * self.lanes + to] = self.index[lag * self.lanes + from];
             self.prefix[lag * self.lanes + to] = self.prefix[lag * self.lanes + from];
         }
+        self.window[to] = self.window[from];
     }
 
     /// The table's rows made those of `window` (see [`Table::observe`]).
@@ -462,6 +527,7 @@ impl Inputs {
     pub(crate) fn set_table(&mut self, table: Table) {
         self.table = table;
         self.index.fill(0);
+        self.window.fill(NO_WINDOW);
     }
 
     /// True while the inputs are those of a session's pair table.
@@ -487,7 +553,8 @@ impl Inputs {
     /// [`RecursiveArd::unit_many`] gives it (bit for bit), from the distance rows: K_t
     /// per lag into `lag_k` (tau rows of `lanes`), K_tau into `out`. Lanes past n hold
     /// values of stale slots.
-    pub(crate) fn unit_many(&self, inv_rho: f64, n: usize, lag_k: &mut [f64], out: &mut [f64]) {
+    pub(crate) fn unit_many(&mut self, inv_rho: f64, n: usize, lag_k: &mut [f64], out: &mut [f64]) {
+        self.table.ensure_rows();
         dispatch_wide!(["avx512f", "avx2"] Inputs::unit_many_portable, (
             this: &Inputs = self,
             inv_rho: f64 = inv_rho,
@@ -530,8 +597,46 @@ impl Inputs {
 }
 
 impl Inputs {
-    /// Unit K_tau as [`Inputs::unit_many`] gives it (bit for bit), without K_t per lag.
-    pub(crate) fn unit_k(&self, inv_rho: f64, n: usize, out: &mut [f64]) {
+    /// Unit K_tau as [`Inputs::unit_many`] gives it (bit for bit), without K_t per lag:
+    /// over a pair table that holds the observed window and every BV's, read from its
+    /// window kernel.
+    pub(crate) fn unit_k(&mut self, inv_rho: f64, n: usize, out: &mut [f64]) {
+        if self.window_k(n, out) {
+            return;
+        }
+        self.table.ensure_rows();
+        self.unit_k_from_rows(inv_rho, n, out);
+    }
+
+    /// K_tau of BVs 0..n read from the pair table's window kernel into `out`; false if it
+    /// does not hold the observed window or a BV's (`out` then holds nothing of use).
+    fn window_k(&self, n: usize, out: &mut [f64]) -> bool {
+        dispatch_wide!(["avx512f", "avx2"] Inputs::window_k_portable, (
+            this: &Inputs = self,
+            n: usize = n,
+            out: &mut [f64] = out,
+        ) -> bool)
+    }
+
+    #[inline(always)]
+    fn window_k_portable(&self, n: usize, out: &mut [f64]) -> bool {
+        let Some(row) = self
+            .table
+            .pairs
+            .as_ref()
+            .and_then(|p| p.window_row(self.table.window))
+        else {
+            return false;
+        };
+        let m = n.div_ceil(LANES) * LANES;
+        for (k, &w) in out[..m].iter_mut().zip(&self.window[..m]) {
+            // `get`: a gather (the ids of windows not held read as NaN).
+            *k = row.get(w as usize).copied().unwrap_or(f64::NAN);
+        }
+        !out[..n].iter().any(|k| k.is_nan())
+    }
+
+    fn unit_k_from_rows(&self, inv_rho: f64, n: usize, out: &mut [f64]) {
         dispatch_wide!(["avx512f", "avx2"] Inputs::unit_k_portable, (
             this: &Inputs = self,
             inv_rho: f64 = inv_rho,

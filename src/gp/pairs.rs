@@ -1,5 +1,6 @@
 //! The squared distances between every pair of a session's distinct inputs under one
-//! kernel's lengthscales, computed once and read by every model with those lengthscales.
+//! kernel's lengthscales, and the unit kernel between every pair of its windows, computed
+//! once and read by every model with those hyperparameters.
 //!
 //! A model's own distance table computes, at each step, the new input's distances to the
 //! inputs its BVs hold. When every window is made of a known session's inputs (a clustering
@@ -8,12 +9,20 @@
 //! instead. The entries come from the function that computes a table's rows
 //! ([`LagMajor::lag_sq_dist`], the observed input against the stored one), so every kernel
 //! value is bit-identical.
+//!
+//! The windows of the sequences (tau inputs each, padded at the start) are the BVs a model
+//! can hold and the windows it observes, so the unit kernel K_tau between two of them is
+//! also computed once: the recursion over the lags, from the same distances in the same
+//! order ([`super::Inputs::unit_k`]'s), so again the same bits. A model that observes one
+//! of them reads its kernel vector from that window's row, without an exponential.
 
 use std::collections::HashMap;
 use std::hash::BuildHasherDefault;
 
+use rayon::prelude::*;
+
 use super::bits::{Prehashed, hash_bits, same_bits};
-use super::kernel::{LagMajor, RecursiveArd};
+use super::kernel::{LANES, LagMajor, RecursiveArd, exp_nonpos};
 use super::wide::dispatch_wide;
 
 /// Distinct inputs a pair table holds at most: its rows take 8·n² bytes (128 MiB here).
@@ -21,6 +30,9 @@ pub const MAX_PAIR_INPUTS: usize = 4096;
 
 /// No further input of the same hash.
 const END: u32 = u32::MAX;
+
+/// The window id of a window not held (a read of its kernel values gives none).
+pub(super) const NO_WINDOW: u32 = u32::MAX;
 
 #[derive(Debug)]
 pub struct PairDistances {
@@ -38,6 +50,26 @@ pub struct PairDistances {
     /// Hash of a raw input → the last input of that hash; `next` chains the others.
     lookup: HashMap<u64, u32, BuildHasherDefault<Prehashed>>,
     next: Vec<u32>,
+    /// The unit kernel between the windows (None past [`MAX_PAIR_INPUTS`] windows).
+    windows: Option<Windows>,
+}
+
+/// The distinct windows of the sequences and the unit kernel K_tau between every pair.
+#[derive(Debug)]
+struct Windows {
+    tau: usize,
+    /// 1/sigma_rho of the recursion, to the bit.
+    inv_rho: f64,
+    /// The inputs of window w at lag l (oldest first): `ids[l * stride + w]`.
+    ids: Vec<u32>,
+    /// Row length: the windows and one more, rounded up to whole vectors.
+    stride: usize,
+    /// K_tau of observed window a against BV window b at `k[a * stride + b]` (NaN past
+    /// the windows).
+    k: Vec<f64>,
+    lookup: HashMap<u64, u32, BuildHasherDefault<Prehashed>>,
+    next: Vec<u32>,
+    len: usize,
 }
 
 impl PairDistances {
@@ -58,17 +90,26 @@ impl PairDistances {
             norms: Vec::new(),
             lookup: HashMap::default(),
             next: Vec::new(),
+            windows: None,
         };
         p.insert(&vec![0.0; dim]);
+        // Every sequence's inputs as ids, after tau padding inputs (id 0).
+        let tau = kernel.tau();
+        let mut padded: Vec<Vec<u32>> = Vec::new();
         for s in steps {
+            let mut ids = vec![0; tau];
             for x in s.chunks_exact(dim) {
-                if p.id(x).is_none() {
-                    if p.len() == MAX_PAIR_INPUTS {
-                        return None;
+                let id = match p.id(x) {
+                    Some(id) => id,
+                    None if p.len() == MAX_PAIR_INPUTS => return None,
+                    None => {
+                        p.insert(x);
+                        p.len() as u32 - 1
                     }
-                    p.insert(x);
-                }
+                };
+                ids.push(id);
             }
+            padded.push(ids);
         }
         let n = p.len();
         let mut data = LagMajor::new(dim, 1, n);
@@ -86,6 +127,7 @@ impl PairDistances {
         p.norms = (0..n).map(|i| data.norm(0, i)).collect();
         p.rows = vec![0.0; n * p.stride];
         p.fill_rows(&data, &scaled);
+        p.windows = Windows::new(&p, &padded, tau, 1.0 / kernel.params().sigma_rho);
         Some(p)
     }
 
@@ -178,6 +220,153 @@ impl PairDistances {
     pub(super) fn norm(&self, j: u32) -> f64 {
         self.norms[j as usize]
     }
+
+    /// The window whose inputs are `ids` (oldest first), if held for a recursion with
+    /// 1/sigma_rho `inv_rho`; else [`NO_WINDOW`].
+    pub(super) fn window(&self, ids: &[u32], inv_rho: f64) -> u32 {
+        match &self.windows {
+            Some(w) if w.fits(ids.len(), inv_rho) => w.find(ids).unwrap_or(NO_WINDOW),
+            _ => NO_WINDOW,
+        }
+    }
+
+    /// K_tau of observed window `a` against every window held (those past them NaN);
+    /// None if `a` is not held.
+    #[inline(always)]
+    pub(super) fn window_row(&self, a: u32) -> Option<&[f64]> {
+        let w = self.windows.as_ref()?;
+        let a = a as usize;
+        (a < w.len).then(|| &w.k[a * w.stride..(a + 1) * w.stride])
+    }
+}
+
+impl Windows {
+    /// The distinct windows of the `padded` input ids (tau padding ids, then a sequence's)
+    /// and their unit kernel under recursion divisor 1/`inv_rho`, the distances read from
+    /// `p`; None past [`MAX_PAIR_INPUTS`] windows.
+    fn new(p: &PairDistances, padded: &[Vec<u32>], tau: usize, inv_rho: f64) -> Option<Windows> {
+        let mut w = Windows {
+            tau,
+            inv_rho,
+            ids: Vec::new(),
+            stride: 0,
+            k: Vec::new(),
+            lookup: HashMap::default(),
+            next: Vec::new(),
+            len: 0,
+        };
+        // Window-major while collecting, lag-major once the count is known.
+        let mut found: Vec<u32> = Vec::new();
+        for ids in padded {
+            for win in ids.windows(tau) {
+                if w.find_in(&found, win).is_none() {
+                    if w.len == MAX_PAIR_INPUTS {
+                        return None;
+                    }
+                    let h = hash_ids(win);
+                    w.next.push(w.lookup.insert(h, w.len as u32).unwrap_or(END));
+                    found.extend_from_slice(win);
+                    w.len += 1;
+                }
+            }
+        }
+        w.stride = w.len.div_ceil(LANES) * LANES;
+        w.ids = vec![0; tau * w.stride];
+        for (b, win) in found.chunks_exact(tau).enumerate() {
+            for (l, &id) in win.iter().enumerate() {
+                w.ids[l * w.stride + b] = id;
+            }
+        }
+        w.k = vec![f64::NAN; w.len * w.stride];
+        let stride = w.stride;
+        let ids = &w.ids;
+        w.k.par_chunks_mut(stride)
+            .enumerate()
+            .for_each(|(a, row)| fill_window_row(p, ids, stride, tau, inv_rho, a, row));
+        for row in w.k.chunks_exact_mut(stride) {
+            row[w.len..].fill(f64::NAN);
+        }
+        Some(w)
+    }
+
+    fn fits(&self, tau: usize, inv_rho: f64) -> bool {
+        tau == self.tau && inv_rho.to_bits() == self.inv_rho.to_bits()
+    }
+
+    fn find(&self, win: &[u32]) -> Option<u32> {
+        let mut j = *self.lookup.get(&hash_ids(win))?;
+        while j != END {
+            let held = (0..self.tau).all(|l| self.ids[l * self.stride + j as usize] == win[l]);
+            if held {
+                return Some(j);
+            }
+            j = self.next[j as usize];
+        }
+        None
+    }
+
+    /// [`Windows::find`] while the windows are still window-major in `found`.
+    fn find_in(&self, found: &[u32], win: &[u32]) -> Option<u32> {
+        let mut j = *self.lookup.get(&hash_ids(win))?;
+        while j != END {
+            let at = j as usize * self.tau;
+            if found[at..at + self.tau] == *win {
+                return Some(j);
+            }
+            j = self.next[j as usize];
+        }
+        None
+    }
+}
+
+/// Hash of a window's input ids (FxHash's mix).
+fn hash_ids(ids: &[u32]) -> u64 {
+    const K: u64 = 0x51_7c_c1_b7_27_22_0a_95;
+    ids.iter().fold(0u64, |h, &v| {
+        (h.rotate_left(5) ^ u64::from(v)).wrapping_mul(K)
+    })
+}
+
+/// Row `a` of the window kernel: the recursion over the lags against every window at
+/// once, each lag's distances read from the pair table.
+fn fill_window_row(
+    p: &PairDistances,
+    ids: &[u32],
+    stride: usize,
+    tau: usize,
+    inv_rho: f64,
+    a: usize,
+    row: &mut [f64],
+) {
+    dispatch_wide!(["avx512f", "avx2"] fill_window_row_portable, (
+        p: &PairDistances = p,
+        ids: &[u32] = ids,
+        stride: usize = stride,
+        tau: usize = tau,
+        inv_rho: f64 = inv_rho,
+        a: usize = a,
+        row: &mut [f64] = row,
+    ))
+}
+
+#[inline(always)]
+fn fill_window_row_portable(
+    p: &PairDistances,
+    ids: &[u32],
+    stride: usize,
+    tau: usize,
+    inv_rho: f64,
+    a: usize,
+    row: &mut [f64],
+) {
+    row.fill(1.0);
+    for l in 0..tau {
+        let d = p.row(ids[l * stride + a]);
+        for (k, &b) in row.iter_mut().zip(&ids[l * stride..(l + 1) * stride]) {
+            let r = d.get(b as usize).copied().unwrap_or(f64::NAN);
+            *k = exp_nonpos(-0.5 * r + (*k - 1.0) * inv_rho);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -245,6 +434,46 @@ mod tests {
         let mut neg = vec![0.0; dim];
         neg[0] = -0.0;
         assert_eq!(p.id(&neg), None);
+    }
+
+    /// Every window of the sequences (three lags, padded at the start) is found by its
+    /// inputs, and the window kernel's entry of each pair is the recursion evaluated
+    /// directly on the scaled windows, to the bit; a window not in them, or another
+    /// recursion divisor, is not found.
+    #[test]
+    fn every_pair_of_windows_is_the_direct_kernel_of_the_scaled_windows() {
+        let dim = 5;
+        let k = kernel(dim, 0.7);
+        let inv_rho = 1.0 / k.params().sigma_rho;
+        let seqs = sequences(dim);
+        let p = PairDistances::new(&k, seqs.iter().map(|s| &s[..])).unwrap();
+        let mut windows: Vec<Vec<f64>> = Vec::new();
+        for s in &seqs {
+            let padded = [vec![0.0; 3 * dim], s.clone()].concat();
+            windows.extend(padded.windows(3 * dim).step_by(dim).map(|w| w.to_vec()));
+        }
+        let ids =
+            |w: &[f64]| -> Vec<u32> { w.chunks_exact(dim).map(|x| p.id(x).unwrap()).collect() };
+        let scaled = |w: &[f64]| {
+            let mut s = vec![0.0; w.len()];
+            k.scale_into(w, &mut s);
+            s
+        };
+        for a in &windows {
+            let wa = p.window(&ids(a), inv_rho);
+            let row = p.window_row(wa).unwrap();
+            for b in &windows {
+                let wb = p.window(&ids(b), inv_rho) as usize;
+                let direct = k.unit_scaled(&scaled(a), &scaled(b));
+                assert_eq!(row[wb].to_bits(), direct.to_bits(), "{wa} against {wb}");
+            }
+        }
+        let held = ids(&windows[4]);
+        assert_ne!(p.window(&held, inv_rho), NO_WINDOW);
+        let reversed: Vec<u32> = held.iter().rev().copied().collect();
+        assert_eq!(p.window(&reversed, inv_rho), NO_WINDOW);
+        assert_eq!(p.window(&held, 0.5 * inv_rho), NO_WINDOW);
+        assert!(p.window_row(NO_WINDOW).is_none());
     }
 
     /// The lengthscales decide whether a model reads the table; more distinct inputs

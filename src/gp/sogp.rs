@@ -357,7 +357,7 @@ impl Sogp {
     /// inputs in turn (as [`Sogp::observe_window`] each), calling `each(t, self)` after the
     /// window of the first `from` + t inputs. The raw window an update would learn is kept
     /// only once, at the end: nothing updates the model in between, so only the last window
-    /// keeps its K_t per lag (an update's gradient reads them).
+    /// keeps its K_t per lag, and only while adapting (an update's gradient reads them).
     pub fn observe_sequence(
         &mut self,
         windows: &SequenceWindows,
@@ -373,7 +373,7 @@ impl Sogp {
                 self.x_stamp = Some(stamp);
                 self.x_scaled_current = false;
             }
-            self.evaluate_keeping(n == windows.len());
+            self.evaluate_keeping(n == windows.len() && self.adapt.is_some());
             each(t, self);
         }
         if from <= windows.len() {
@@ -389,9 +389,10 @@ impl Sogp {
         self.evaluate();
     }
 
-    /// The kernel vector (from the inputs' distance rows), C·k and the mean.
+    /// The kernel vector (from the inputs' distance rows), C·k and the mean; K_t per lag
+    /// too while adapting (the next update's gradient reads them).
     fn evaluate(&mut self) {
-        self.evaluate_keeping(true);
+        self.evaluate_keeping(self.adapt.is_some());
     }
 
     /// [`Sogp::evaluate`], keeping K_t per lag (for the gradient) only if `lags`.

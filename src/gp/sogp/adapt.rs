@@ -202,6 +202,8 @@ impl Sogp {
     /// [`KernelParams::theta`] (for analysis and tests; training uses the cached form).
     pub fn log_predictive_gradient(&mut self, window: &[f64], y: &[f64]) -> (f64, Vec<f64>) {
         self.observe(window);
+        // The gradient reads K_t per lag, which an observation keeps only while adapting.
+        self.evaluate_keeping(true);
         self.ensure_scaled();
         self.y_tmp.copy_from_slice(&y[..self.n_out]);
         let mut buf = GradBuffers::new(
