@@ -56,14 +56,22 @@ pub(crate) struct Table {
     /// inputs.
     current: bool,
     /// A session's pair table that holds every input here: the rows are then copied from
-    /// its rows, when first read, instead of computed. `pid` names each slot's input
-    /// there, `row_of` each row's (every lag's, the padding ones too), `rows_for` the
-    /// input each row was copied for (the copy holds every used slot), and `window` the
-    /// observed window there ([`NO_WINDOW`] if not held).
-    pub(super) pairs: Option<Arc<PairDistances>>,
+    /// its rows, when first read, instead of computed (boxed: a shared table is swapped
+    /// in and out of its models at every step).
+    pub(super) paired: Option<Box<Paired>>,
+}
+
+/// The pair table a [`Table`] copies its rows from, and where its inputs are there.
+#[derive(Clone, Debug)]
+pub(super) struct Paired {
+    pairs: Arc<PairDistances>,
+    /// Each slot's input.
     pid: Vec<u32>,
+    /// Each row's input (every lag's, the padding ones too).
     row_of: Vec<u32>,
+    /// The input each row was copied for (the copy holds every used slot).
     rows_for: Vec<u32>,
+    /// The observed window ([`NO_WINDOW`] if not held).
     window: u32,
     /// The observed window's input ids in lag order, to look the window up.
     ids: Vec<u32>,
@@ -148,26 +156,31 @@ impl Table {
             head: 0,
             seen: vec![0.0; tau * dim],
             current: false,
-            pairs: None,
-            pid: vec![0; slots],
-            row_of: vec![0; tau],
-            rows_for: vec![NO_ROW; tau],
-            window: NO_WINDOW,
-            ids: vec![0; tau],
+            paired: None,
         }
     }
 
     /// Room for `slots` inputs of `pairs` (for `tau` lags), whose rows are copied from it.
     pub(crate) fn over(pairs: Arc<PairDistances>, tau: usize, slots: usize) -> Table {
+        let table = Table::new(pairs.dim(), tau, slots);
         Table {
-            pairs: Some(pairs.clone()),
-            ..Table::new(pairs.dim(), tau, slots)
+            paired: Some(Box::new(Paired {
+                pid: vec![0; table.slots],
+                row_of: vec![0; tau],
+                rows_for: vec![NO_ROW; tau],
+                window: NO_WINDOW,
+                ids: vec![0; tau],
+                pairs,
+            })),
+            ..table
         }
     }
 
     /// Forget every input and the distance rows.
     fn clear(&mut self) {
-        self.rows_for.fill(NO_ROW);
+        if let Some(p) = self.paired.as_mut() {
+            p.rows_for.fill(NO_ROW);
+        }
         self.refs.fill(0);
         self.free.clear();
         self.used = 0;
@@ -208,15 +221,18 @@ impl Table {
         self.refs[j] = 1;
         // On a hash collision the earlier input keeps the entry; this one is only unshared.
         self.lookup.entry(h).or_insert(j as u32);
-        match &self.pairs {
+        match self.paired.as_mut() {
             Some(p) => {
                 // A model leaves the pair table at the first window with an input it does
                 // not hold, and a BV is an observed window.
-                let id = p.id_hashed(h, raw).expect("a BV input of the pair table");
-                self.pid[j] = id;
-                for (r, &a) in self.rows_for.iter().enumerate() {
+                let id = p
+                    .pairs
+                    .id_hashed(h, raw)
+                    .expect("a BV input of the pair table");
+                p.pid[j] = id;
+                for (r, &a) in p.rows_for.iter().enumerate() {
                     if a != NO_ROW {
-                        self.rows[r * self.slots + j] = p.row(a)[id as usize];
+                        self.rows[r * self.slots + j] = p.pairs.row(a)[id as usize];
                     }
                 }
             }
@@ -253,7 +269,9 @@ impl Table {
         self.slots = self.data.stride();
         self.raw.resize(self.slots * d, 0.0);
         self.refs.resize(self.slots, 0);
-        self.pid.resize(self.slots, 0);
+        if let Some(p) = self.paired.as_mut() {
+            p.pid.resize(self.slots, 0);
+        }
         let mut rows = vec![0.0; self.tau * self.slots];
         for (to, from) in rows
             .chunks_exact_mut(self.slots)
@@ -299,7 +317,7 @@ impl Table {
         // stay padding until they leave the window), so only the later ones are filled.
         // Over a pair table the padding lags are looked up too, so that every input of the
         // window (a BV to be) is known to be held.
-        if self.pairs.is_some() {
+        if self.paired.is_some() {
             for lag in 0..self.lead {
                 if !self.look_up(lag, &window[lag * d..(lag + 1) * d]) {
                     return false;
@@ -318,59 +336,39 @@ impl Table {
 
     /// Over a pair table, the observed window's id there (under `kernel`'s recursion).
     fn find_window(&mut self, kernel: &RecursiveArd) {
-        let Some(p) = &self.pairs else {
+        let Some(p) = self.paired.as_mut() else {
             return;
         };
-        for (lag, id) in self.ids.iter_mut().enumerate() {
-            *id = self.row_of[(self.head + lag) % self.tau];
+        for (lag, id) in p.ids.iter_mut().enumerate() {
+            *id = p.row_of[(self.head + lag) % self.tau];
         }
-        self.window = p.window(&self.ids, 1.0 / kernel.params().sigma_rho);
+        p.window = p.pairs.window(&p.ids, 1.0 / kernel.params().sigma_rho);
     }
 
     /// Copy the rows of the observed window's lags past the leading padding that are not
     /// copied for their input yet (a table of its own computes its rows as it observes).
     fn ensure_rows(&mut self) {
-        let Some(p) = self.pairs.clone() else {
+        let Some(p) = self.paired.as_deref_mut() else {
             return;
         };
         for lag in self.lead..self.tau {
             let r = (self.head + lag) % self.tau;
-            if self.rows_for[r] != self.row_of[r] {
-                self.copy_row(&p, r);
+            if p.rows_for[r] != p.row_of[r] {
+                let m = self.used.div_ceil(LANES) * LANES;
+                copy_row(p, r, &mut self.rows[r * self.slots..r * self.slots + m]);
             }
         }
-    }
-
-    /// Row `r` copied from the pair table's row of its input.
-    fn copy_row(&mut self, p: &PairDistances, r: usize) {
-        dispatch_wide!(["avx512f", "avx2"] Table::copy_row_portable, (
-            this: &mut Table = self,
-            p: &PairDistances = p,
-            r: usize = r,
-        ))
-    }
-
-    #[inline(always)]
-    fn copy_row_portable(&mut self, p: &PairDistances, r: usize) {
-        let m = self.used.div_ceil(LANES) * LANES;
-        let at = r * self.slots;
-        let from = p.row(self.row_of[r]);
-        for (d, &j) in self.rows[at..at + m].iter_mut().zip(&self.pid[..m]) {
-            // `get`: a gather (every slot's input is one of the pair table's).
-            *d = from.get(j as usize).copied().unwrap_or(f64::NAN);
-        }
-        self.rows_for[r] = self.row_of[r];
     }
 
     /// Over a pair table, note that the input of lag `lag` is its input `x`; false (the
     /// rows then current for no window) if the pair table does not hold `x`.
     fn look_up(&mut self, lag: usize, x: &[f64]) -> bool {
-        let Some(p) = &self.pairs else {
+        let Some(p) = self.paired.as_mut() else {
             return true;
         };
-        match p.id(x) {
+        match p.pairs.id(x) {
             Some(a) => {
-                self.row_of[(self.head + lag) % self.tau] = a;
+                p.row_of[(self.head + lag) % self.tau] = a;
                 true
             }
             None => {
@@ -384,7 +382,7 @@ impl Table {
     /// (over a pair table, only its input noted: the row is copied when first read); false
     /// as [`Table::look_up`].
     fn fill_row(&mut self, kernel: &RecursiveArd, lag: usize, x: &[f64]) -> bool {
-        if self.pairs.is_some() {
+        if self.paired.is_some() {
             return self.look_up(lag, x);
         }
         self.compute_row(kernel, lag, x);
@@ -421,11 +419,31 @@ impl Table {
     /// Squared norm of slot `j`'s input (its distance to a padding lag).
     #[inline(always)]
     fn norm(&self, j: usize) -> f64 {
-        match &self.pairs {
-            Some(p) => p.norm(self.pid[j]),
+        match &self.paired {
+            Some(p) => p.pairs.norm(p.pid[j]),
             None => self.data.norm(0, j),
         }
     }
+}
+
+/// Row `r` of a table over `p` (its used slots, `row`) copied from the pair table's row of
+/// its input.
+fn copy_row(p: &mut Paired, r: usize, row: &mut [f64]) {
+    dispatch_wide!(["avx512f", "avx2"] copy_row_portable, (
+        p: &mut Paired = p,
+        r: usize = r,
+        row: &mut [f64] = row,
+    ))
+}
+
+#[inline(always)]
+fn copy_row_portable(p: &mut Paired, r: usize, row: &mut [f64]) {
+    let from = p.pairs.row(p.row_of[r]);
+    for (d, &j) in row.iter_mut().zip(&p.pid) {
+        // `get`: a gather (every slot's input is one of the pair table's).
+        *d = from.get(j as usize).copied().unwrap_or(f64::NAN);
+    }
+    p.rows_for[r] = p.row_of[r];
 }
 
 /// Input slots a model's own table starts with (it grows as it fills): its BVs could hold
@@ -491,11 +509,11 @@ impl Inputs {
             k = exp_nonpos(-0.5 * self.table.norm(j) + (k - 1.0) * inv_rho);
             self.prefix[lag * self.lanes + i] = k;
         }
-        if let Some(p) = &self.table.pairs {
-            for (lag, id) in self.table.ids.iter_mut().enumerate() {
-                *id = self.table.pid[self.index[lag * self.lanes + i] as usize];
+        if let Some(p) = self.table.paired.as_deref_mut() {
+            for (lag, id) in p.ids.iter_mut().enumerate() {
+                *id = p.pid[self.index[lag * self.lanes + i] as usize];
             }
-            self.window[i] = p.window(&self.table.ids, inv_rho);
+            self.window[i] = p.pairs.window(&p.ids, inv_rho);
         }
     }
 
@@ -532,7 +550,7 @@ impl Inputs {
 
     /// True while the inputs are those of a session's pair table.
     pub(crate) fn over_pairs(&self) -> bool {
-        self.table.pairs.is_some()
+        self.table.paired.is_some()
     }
 
     /// Distinct inputs held by BVs 0..n (with those of other models, in a shared table).
@@ -601,10 +619,12 @@ impl Inputs {
     /// over a pair table that holds the observed window and every BV's, read from its
     /// window kernel.
     pub(crate) fn unit_k(&mut self, inv_rho: f64, n: usize, out: &mut [f64]) {
-        if self.window_k(n, out) {
-            return;
+        if self.table.paired.is_some() {
+            if self.window_k(n, out) {
+                return;
+            }
+            self.table.ensure_rows();
         }
-        self.table.ensure_rows();
         self.unit_k_from_rows(inv_rho, n, out);
     }
 
@@ -620,12 +640,8 @@ impl Inputs {
 
     #[inline(always)]
     fn window_k_portable(&self, n: usize, out: &mut [f64]) -> bool {
-        let Some(row) = self
-            .table
-            .pairs
-            .as_ref()
-            .and_then(|p| p.window_row(self.table.window))
-        else {
+        let paired = self.table.paired.as_deref();
+        let Some(row) = paired.and_then(|p| p.pairs.window_row(p.window)) else {
             return false;
         };
         let m = n.div_ceil(LANES) * LANES;
