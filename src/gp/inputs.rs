@@ -14,6 +14,10 @@
 //! The models of a learner that observe one input stream with the same hyperparameters to
 //! the bit (no adaptation) can hold their distinct inputs in one [`SharedInputs`]: each
 //! new input's distances are then computed once per step for all of them.
+//!
+//! A model whose windows are all a known session's (a clustering sweep) can hold its
+//! inputs over the session's [`PairDistances`] instead: its rows are then copied from there
+//! when read, and its kernel vector read from the observed window's row of window kernels.
 
 use std::collections::HashMap;
 use std::hash::BuildHasherDefault;
@@ -26,7 +30,8 @@ use super::wide::dispatch_wide;
 use super::window::Stamp;
 
 /// The distinct inputs of BV windows and the distances of the observed window's lags to
-/// them: one model's own, or held once for the models of a learner ([`SharedInputs`]).
+/// them: one model's own (computed, or copied from a pair table), or held once for the
+/// models of a learner ([`SharedInputs`]).
 #[derive(Clone, Debug)]
 pub(crate) struct Table {
     dim: usize,
