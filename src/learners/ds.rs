@@ -139,9 +139,9 @@ impl Ds {
         })
     }
 
-    /// Read the experts' distances from `pairs` while their lengthscales are its own and
-    /// they observe its inputs (every value the same, see [`Sogp::use_pairs`]): the experts
-    /// there now and those added later.
+    /// Read the experts' distances and kernel vectors from `pairs` while their
+    /// hyperparameters are its own and they observe its windows (every value the same, see
+    /// [`Sogp::use_pairs`]): the experts there now and those added later.
     pub fn use_pairs(&mut self, pairs: Arc<PairDistances>) {
         for m in &mut self.models {
             m.use_pairs(&pairs);

@@ -1,12 +1,13 @@
-//! A model whose distance rows are read from a session's [`PairDistances`] instead of
-//! computed from the inputs of its own table.
+//! A model whose distance rows and kernel vectors are read from a session's
+//! [`PairDistances`] instead of computed.
 //!
-//! The model's BV lags then point at the pair table's inputs, and an observed window's
-//! rows are the pair table's rows of its inputs: the same numbers, so every kernel value is
-//! bit-identical. It holds while every window the model observes is made of the pair
-//! table's inputs and its lengthscales are the table's: at a window with another input,
-//! and before its hyperparameters change, the model goes on with a table of its own,
-//! rebuilt from its BVs.
+//! The model's BV lags then point at the pair table's inputs, an observed window's rows
+//! are the pair table's rows of its inputs, and its kernel vector the window's row of
+//! window kernels (when the table holds the window and every BV's, for the model's
+//! sigma_rho): the same numbers, so every kernel value is bit-identical. It holds while
+//! every window the model observes is made of the pair table's inputs and its lengthscales
+//! are the table's: at a window with another input, and before its hyperparameters change,
+//! the model goes on with a table of its own, rebuilt from its BVs.
 
 use std::sync::Arc;
 
