@@ -252,8 +252,8 @@ pub struct ClusteringResult {
 
 /// Every threshold's run on presentation order `rep` (in the thresholds' order), learned
 /// together and forked where their decisions part ([`forked`]): the runs each threshold
-/// learns alone, bit for bit. DU's experts read their distances from `pairs` when given
-/// (the same numbers).
+/// learns alone, bit for bit. DU's experts read their distances and kernel vectors from
+/// `pairs` when given (the same numbers).
 #[allow(clippy::too_many_arguments)]
 pub fn order_runs(
     params: &ClusteringParams,
@@ -433,10 +433,10 @@ pub struct ClusteringPrep {
     pub class_names: Vec<String>,
     pub feats: FeatureSequences,
     pub table: Option<Array2<f64>>,
-    /// The squared distances between the sequences' inputs under DU's initial
-    /// lengthscales: every order learns and re-assigns the same grasps, so the experts
-    /// read their distances here until they adapt (None for GU, or past
-    /// [`crate::gp::MAX_PAIR_INPUTS`] inputs).
+    /// The distances between the sequences' inputs and the kernel between their windows
+    /// under DU's initial hyperparameters: every order learns and re-assigns the same
+    /// grasps, so the experts read them here until they adapt (None for GU, or past
+    /// [`crate::gp::MAX_PAIR_INPUTS`] inputs or windows).
     pub pairs: Option<Arc<PairDistances>>,
 }
 
@@ -483,9 +483,9 @@ pub fn prepare_clustering(
     })
 }
 
-/// The pair table of the sequences' inputs under the lengthscales DU's experts start with
-/// (None past [`crate::gp::MAX_PAIR_INPUTS`] inputs).
-pub fn du_pairs(
+/// The pair table of the sequences' inputs and windows under the hyperparameters DU's
+/// experts start with (None past [`crate::gp::MAX_PAIR_INPUTS`] of either).
+fn du_pairs(
     feats: &FeatureSequences,
     ds: &DsParams,
 ) -> Result<Option<Arc<PairDistances>>, ExperimentError> {
