@@ -436,7 +436,7 @@ pub struct ClusteringPrep {
     /// The distances between the sequences' inputs and the kernel between their windows
     /// under DU's initial hyperparameters: every order learns and re-assigns the same
     /// grasps, so the experts read them here until they adapt (None for GU, or past
-    /// [`crate::gp::MAX_PAIR_INPUTS`] inputs or windows).
+    /// [`crate::gp::MAX_PAIR_INPUTS`] inputs; no window kernels past as many windows).
     pub pairs: Option<Arc<PairDistances>>,
 }
 
@@ -484,7 +484,8 @@ pub fn prepare_clustering(
 }
 
 /// The pair table of the sequences' inputs and windows under the hyperparameters DU's
-/// experts start with (None past [`crate::gp::MAX_PAIR_INPUTS`] of either).
+/// experts start with (None past [`crate::gp::MAX_PAIR_INPUTS`] inputs; no window kernels
+/// past as many windows).
 fn du_pairs(
     feats: &FeatureSequences,
     ds: &DsParams,
