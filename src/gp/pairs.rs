@@ -60,9 +60,9 @@ struct Windows {
     tau: usize,
     /// 1/sigma_rho of the recursion, to the bit.
     inv_rho: f64,
-    /// The inputs of window w at lag l (oldest first): `ids[l * stride + w]`.
-    ids: Vec<u32>,
-    /// Row length: the windows and one more, rounded up to whole vectors.
+    /// The inputs of window w, oldest first: `inputs[w * tau..(w + 1) * tau]`.
+    inputs: Vec<u32>,
+    /// Row length: the windows rounded up to whole vectors.
     stride: usize,
     /// K_tau of observed window a against BV window b at `k[a * stride + b]` (NaN past
     /// the windows).
@@ -248,41 +248,39 @@ impl Windows {
         let mut w = Windows {
             tau,
             inv_rho,
-            ids: Vec::new(),
+            inputs: Vec::new(),
             stride: 0,
             k: Vec::new(),
             lookup: HashMap::default(),
             next: Vec::new(),
             len: 0,
         };
-        // Window-major while collecting, lag-major once the count is known.
-        let mut found: Vec<u32> = Vec::new();
         for ids in padded {
             for win in ids.windows(tau) {
-                if w.find_in(&found, win).is_none() {
+                if w.find(win).is_none() {
                     if w.len == MAX_PAIR_INPUTS {
                         return None;
                     }
                     let h = hash_ids(win);
                     w.next.push(w.lookup.insert(h, w.len as u32).unwrap_or(END));
-                    found.extend_from_slice(win);
+                    w.inputs.extend_from_slice(win);
                     w.len += 1;
                 }
             }
         }
         w.stride = w.len.div_ceil(LANES) * LANES;
-        w.ids = vec![0; tau * w.stride];
-        for (b, win) in found.chunks_exact(tau).enumerate() {
+        // Lag-major for the rows' recursion over every window at once.
+        let mut lag_major = vec![0; tau * w.stride];
+        for (b, win) in w.inputs.chunks_exact(tau).enumerate() {
             for (l, &id) in win.iter().enumerate() {
-                w.ids[l * w.stride + b] = id;
+                lag_major[l * w.stride + b] = id;
             }
         }
         w.k = vec![f64::NAN; w.len * w.stride];
         let stride = w.stride;
-        let ids = &w.ids;
         w.k.par_chunks_mut(stride)
             .enumerate()
-            .for_each(|(a, row)| fill_window_row(p, ids, stride, tau, inv_rho, a, row));
+            .for_each(|(a, row)| fill_window_row(p, &lag_major, stride, tau, inv_rho, a, row));
         for row in w.k.chunks_exact_mut(stride) {
             row[w.len..].fill(f64::NAN);
         }
@@ -296,21 +294,8 @@ impl Windows {
     fn find(&self, win: &[u32]) -> Option<u32> {
         let mut j = *self.lookup.get(&hash_ids(win))?;
         while j != END {
-            let held = (0..self.tau).all(|l| self.ids[l * self.stride + j as usize] == win[l]);
-            if held {
-                return Some(j);
-            }
-            j = self.next[j as usize];
-        }
-        None
-    }
-
-    /// [`Windows::find`] while the windows are still window-major in `found`.
-    fn find_in(&self, found: &[u32], win: &[u32]) -> Option<u32> {
-        let mut j = *self.lookup.get(&hash_ids(win))?;
-        while j != END {
             let at = j as usize * self.tau;
-            if found[at..at + self.tau] == *win {
+            if self.inputs[at..at + self.tau] == *win {
                 return Some(j);
             }
             j = self.next[j as usize];
