@@ -21,7 +21,7 @@ pub mod sogp;
 mod wide;
 pub mod window;
 
-pub(crate) use inputs::SharedInputs;
+pub(crate) use inputs::shared::SharedInputs;
 pub use kernel::{KernelParams, LagMajor, RecursiveArd};
 pub use pairs::{MAX_PAIR_INPUTS, PairDistances};
 pub use sngd::{Sngd, SngdParams};

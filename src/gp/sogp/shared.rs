@@ -8,7 +8,8 @@
 //! other call first gives the model a table of its own again, rebuilt from its BVs (a
 //! copy of an expert taken out of its learner goes on as it would have).
 
-use super::super::inputs::{SharedInputs, Table, own_table_start};
+use super::super::inputs::shared::SharedInputs;
+use super::super::inputs::{Table, own_table_start};
 use super::super::window::Stamp;
 use super::Sogp;
 

@@ -12,7 +12,7 @@
 //! are bit-identical to [`super::RecursiveArd::unit_many`].
 //!
 //! The models of a learner that observe one input stream with the same hyperparameters to
-//! the bit (no adaptation) can hold their distinct inputs in one [`SharedInputs`]: each
+//! the bit (no adaptation) can hold their distinct inputs in one [`SharedInputs`](shared::SharedInputs): each
 //! new input's distances are then computed once per step for all of them.
 //!
 //! A model whose windows are all a known session's (a clustering sweep) can hold its
@@ -27,11 +27,12 @@ use super::bits::{Prehashed, hash_bits, same_bits};
 use super::kernel::{LANES, LagMajor, RecursiveArd, exp_nonpos};
 use super::pairs::{NO_WINDOW, PairDistances};
 use super::wide::dispatch_wide;
-use super::window::Stamp;
+
+pub(crate) mod shared;
 
 /// The distinct inputs of BV windows and the distances of the observed window's lags to
 /// them: one model's own (computed, or copied from a pair table), or held once for the
-/// models of a learner ([`SharedInputs`]).
+/// models of a learner ([`SharedInputs`](shared::SharedInputs)).
 #[derive(Clone, Debug)]
 pub(crate) struct Table {
     dim: usize,
@@ -100,22 +101,9 @@ pub(crate) struct Inputs {
     /// Over a pair table, BV i's window there ([`NO_WINDOW`] if not held): `window[i]`.
     window: Vec<u32>,
     pub(super) table: Table,
-    /// The BVs' inputs are in a [`SharedInputs`]; `table` is an empty stand-in, swapped
+    /// The BVs' inputs are in a [`SharedInputs`](shared::SharedInputs); `table` is an empty stand-in, swapped
     /// with the shared table for the calls that read it.
     pub(super) shared: bool,
-}
-
-/// One [`Table`] for the models of a learner that observe one input stream with
-/// bit-identical kernel hyperparameters and no adaptation (so that they stay identical):
-/// the squared distances of an input to another are then the same number for every model,
-/// so each new input's distances are computed once per step instead of once per model.
-/// Each model keeps its own (BV, lag) → slot index and padding prefixes.
-#[derive(Clone, Debug)]
-pub(crate) struct SharedInputs {
-    kernel: RecursiveArd,
-    pub(super) table: Table,
-    /// The stamp of the window the rows are for.
-    pub(super) stamp: Option<Stamp>,
 }
 
 /// How an observed window stands to the one observed before it.
@@ -683,53 +671,5 @@ impl Inputs {
                 *k = exp_nonpos(-0.5 * r + (*k - 1.0) * inv_rho);
             }
         }
-    }
-}
-
-impl SharedInputs {
-    /// A table for models with `kernel`'s hyperparameters.
-    pub(crate) fn new(kernel: &RecursiveArd) -> SharedInputs {
-        SharedInputs {
-            kernel: kernel.clone(),
-            table: Table::new(kernel.dim(), kernel.tau(), 0),
-            stamp: None,
-        }
-    }
-
-    /// True if a model with `kernel` reads the same distances from this table as from its
-    /// own: the same dimensions, every hyperparameter equal to the bit, and (`adapts`
-    /// false) no adaptation that could change them.
-    pub(crate) fn fits(&self, kernel: &RecursiveArd, adapts: bool) -> bool {
-        let (a, b) = (self.kernel.params(), kernel.params());
-        let same = |x: f64, y: f64| x.to_bits() == y.to_bits();
-        !adapts
-            && self.kernel.dim() == kernel.dim()
-            && self.kernel.tau() == kernel.tau()
-            && a.lengthscales.len() == b.lengthscales.len()
-            && a.lengthscales
-                .iter()
-                .zip(&b.lengthscales)
-                .all(|(x, y)| same(*x, *y))
-            && same(a.sigma_rho, b.sigma_rho)
-            && same(a.sigma_f, b.sigma_f)
-            && same(a.sigma_n, b.sigma_n)
-    }
-
-    /// The rows made those of `window` stamped `stamp` (None: unknown, every row again).
-    pub(crate) fn observe(&mut self, window: &[f64], stamp: Option<Stamp>) {
-        let shift = match (self.stamp, stamp) {
-            (Some(a), Some(b)) if a == b => Shift::Same,
-            (Some(a), Some(b)) if b.follows(a) => Shift::ByOne,
-            _ => Shift::Other,
-        };
-        // A shared table holds its inputs itself, so every window is observed.
-        let held = self.table.observe(&self.kernel, shift, window);
-        debug_assert!(held);
-        self.stamp = stamp;
-    }
-
-    /// Distinct inputs held by the models' BVs.
-    pub(crate) fn distinct(&self) -> usize {
-        self.table.distinct()
     }
 }
