@@ -30,12 +30,7 @@ impl Sogp {
         }
         let tau = self.kernel.tau();
         let slots = own_table_start(self.stride, tau);
-        self.inputs
-            .set_table(Table::over(pairs.clone(), tau, slots));
-        self.add_every_bv();
-        // The new table has no rows yet: the next observation looks them all up.
-        self.x_stamp = None;
-        self.observed = None;
+        self.rebuild_inputs(Table::over(pairs.clone(), tau, slots));
         true
     }
 
@@ -49,12 +44,7 @@ impl Sogp {
         if !self.inputs.over_pairs() {
             return;
         }
-        let (dim, tau) = (self.kernel.dim(), self.kernel.tau());
-        self.inputs
-            .set_table(Table::new(dim, tau, own_table_start(self.stride, tau)));
-        self.add_every_bv();
-        self.x_stamp = None;
-        self.observed = None;
+        self.rebuild_inputs(self.own_table());
     }
 
     /// The distance rows made those of `window` (standing to the window observed last as

@@ -52,12 +52,21 @@ impl Sogp {
         if !self.inputs.shared {
             return;
         }
-        let (dim, tau) = (self.kernel.dim(), self.kernel.tau());
-        self.inputs
-            .set_table(Table::new(dim, tau, own_table_start(self.stride, tau)));
         self.inputs.shared = false;
+        self.rebuild_inputs(self.own_table());
+    }
+
+    /// An empty table of the model's own, sized as a new model's.
+    pub(super) fn own_table(&self) -> Table {
+        let tau = self.kernel.tau();
+        Table::new(self.kernel.dim(), tau, own_table_start(self.stride, tau))
+    }
+
+    /// Hold the BVs' inputs in `table` from now on, every BV stored there again. The table
+    /// has no rows yet: the next observation computes (or looks up) them all.
+    pub(super) fn rebuild_inputs(&mut self, table: Table) {
+        self.inputs.set_table(table);
         self.add_every_bv();
-        // The new table has no rows yet: the next observation computes them all.
         self.x_stamp = None;
         self.observed = None;
     }
