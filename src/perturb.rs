@@ -454,6 +454,68 @@ fn stick(out: &mut Session, ranges: &[RawRange], taxels: &[(usize, usize)], stuc
     }
 }
 
+/// One axis of the robustness sweep (its meaning for the experiment:
+/// `experiments::robustness::perturbations`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Perturbation {
+    /// Gaussian noise on the raw readings (variance, iCub 0–255 scale).
+    Noise,
+    /// A share of taxels stuck at zero pressure.
+    DeadTaxels,
+    /// A share of taxels stuck at full-scale pressure.
+    SaturatedTaxels,
+    /// Whole sensors (fingers) stuck at zero pressure (a count).
+    DeadSensor,
+    /// A linear offset over the session (share of full scale at the last grasp).
+    Drift,
+    /// Pressures multiplied by a factor (a new sensor).
+    Gain,
+    /// Share of each test grasp kept (its beginning).
+    Truncation,
+    /// Share of each test grasp's frames dropped at random.
+    MissingFrames,
+    /// Stability: failures' share of the training set; recognition: share of their
+    /// training grasps kept by half the classes (the minority).
+    Imbalance,
+    /// Training grasps per class.
+    FewExamples,
+    /// Share of the objects held out (never seen in training).
+    NewObjects,
+}
+
+impl Perturbation {
+    pub const ALL: [Perturbation; 11] = [
+        Perturbation::Noise,
+        Perturbation::DeadTaxels,
+        Perturbation::SaturatedTaxels,
+        Perturbation::DeadSensor,
+        Perturbation::Drift,
+        Perturbation::Gain,
+        Perturbation::Truncation,
+        Perturbation::MissingFrames,
+        Perturbation::Imbalance,
+        Perturbation::FewExamples,
+        Perturbation::NewObjects,
+    ];
+
+    pub fn key(self) -> &'static str {
+        match self {
+            Perturbation::Noise => "noise",
+            Perturbation::DeadTaxels => "dead-taxels",
+            Perturbation::SaturatedTaxels => "saturated-taxels",
+            Perturbation::DeadSensor => "dead-sensor",
+            Perturbation::Drift => "drift",
+            Perturbation::Gain => "gain",
+            Perturbation::Truncation => "truncation",
+            Perturbation::MissingFrames => "missing-frames",
+            Perturbation::Imbalance => "imbalance",
+            Perturbation::FewExamples => "few-examples",
+            Perturbation::NewObjects => "new-objects",
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -165,6 +165,7 @@ fn older_methods(r: &AnalysisResult) -> Vec<MethodId> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::experiments::figure_id::FigureId;
     use crate::experiments::result::tests::result;
     use crate::experiments::result::{FigureDetails, GraspLinks, LinkedItem, figure_set};
     use crate::figures::{Axis, Figure, Series};
@@ -190,7 +191,7 @@ mod tests {
         let e = Project::load(&p).unwrap_err().to_string();
         assert!(e.contains("unsupported project version 9"), "{e}");
         let set = figure_set(&back.results);
-        assert_eq!(set.entries[0].name, "01-ds-all-features-accuracy");
+        assert_eq!(set.entries[0].name, "01-ds-all-features-accuracy-by-trials");
         let _ = std::fs::remove_dir_all(dir);
     }
 
@@ -271,7 +272,7 @@ mod tests {
             )
         };
         let d = FigureDetails {
-            figure: "accuracy".into(),
+            figure: FigureId::ScoresVsThreshold,
             selector: "novelty threshold".into(),
             items: vec![(0.1, fig("a")), (0.2, fig("b")), (0.4, fig("c"))],
         };
@@ -280,8 +281,8 @@ mod tests {
         assert_eq!(d.nearest(0.31), Some(2));
         let mut r = result();
         r.details.push(d);
-        assert!(r.details_of("accuracy").is_some());
-        assert!(r.details_of("other").is_none());
+        assert!(r.details_of(FigureId::ScoresVsThreshold).is_some());
+        assert!(r.details_of(FigureId::BasesRaw).is_none());
         let mut json = serde_json::to_value(result()).unwrap();
         json.as_object_mut().unwrap().remove("details");
         let back: AnalysisResult = serde_json::from_value(json).unwrap();
@@ -302,7 +303,7 @@ mod tests {
             unit: String::new(),
         };
         r.figures.push((
-            "confusion".into(),
+            FigureId::Confusion,
             Figure::new(
                 "Confusion",
                 FigureKind::Heatmap(Heatmap {
@@ -317,8 +318,8 @@ mod tests {
                 }),
             ),
         ));
-        let link = |figure: &str, at: [usize; 2]| GraspLinks {
-            figure: figure.into(),
+        let link = |figure: FigureId, at: [usize; 2]| GraspLinks {
+            figure,
             detail: None,
             items: vec![LinkedItem {
                 at,
@@ -330,12 +331,12 @@ mod tests {
             let text = serde_json::to_string(&Project::new(Vec::new(), vec![r.clone()])).unwrap();
             Project::parse(&text, path)
         };
-        r.links = vec![link("confusion", [0, 2])];
+        r.links = vec![link(FigureId::Confusion, [0, 2])];
         let back = parse(&r).unwrap();
         assert_eq!(back.results[0].links, r.links);
         assert_eq!(
             back.results[0]
-                .links_of("confusion", None)
+                .links_of(FigureId::Confusion, None)
                 .unwrap()
                 .item([0, 2])
                 .unwrap()
@@ -343,10 +344,10 @@ mod tests {
             vec![3]
         );
         for (bad, why) in [
-            (link("confusion", [2, 0]), "no part [2, 0]"),
-            (link("confusion", [1, 3]), "no part [1, 3]"),
-            (link("accuracy", [0, 0]), "no part [0, 0]"),
-            (link("nothing", [0, 0]), "figure `nothing`"),
+            (link(FigureId::Confusion, [2, 0]), "no part [2, 0]"),
+            (link(FigureId::Confusion, [1, 3]), "no part [1, 3]"),
+            (link(FigureId::AccuracyByTrials, [0, 0]), "no part [0, 0]"),
+            (link(FigureId::BasesRaw, [0, 0]), "figure `bases-raw`"),
         ] {
             r.links = vec![bad];
             let e = parse(&r).unwrap_err().to_string();

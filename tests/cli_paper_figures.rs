@@ -4,6 +4,7 @@ mod common;
 
 use tactile_workbench::catalogue::MethodId;
 use tactile_workbench::cli::paper_figures::{Experiment, PaperFiguresArgs, run};
+use tactile_workbench::experiments::figure_id::FigureId;
 
 #[test]
 fn baselines_figures_are_written_with_an_index() {
@@ -70,7 +71,7 @@ fn stability_figures_and_project_regenerate_the_first_paper() {
     // The project re-opens with the figures and the per-basis details.
     let p = tactile_workbench::project::Project::load(&project).unwrap();
     let r = &p.results[0];
-    let bases = r.details_of("bases-raw").expect("basis details");
+    let bases = r.details_of(FigureId::BasesRaw).expect("basis details");
     assert_eq!(
         bases.items.len(),
         r.parameters["num_bases"].parse::<usize>().unwrap()

@@ -8,6 +8,7 @@ use tactile_workbench::experiments::clustering::report::clustering_report;
 use tactile_workbench::experiments::clustering::{
     ClusteringParams, ClusteringResult, UnsupervisedLearner, run_clustering,
 };
+use tactile_workbench::experiments::figure_id::FigureId;
 use tactile_workbench::figures::{FigureKind, Orientation};
 use tactile_workbench::jobs::Progress;
 use tactile_workbench::rng::Rng;
@@ -107,8 +108,8 @@ fn the_label_free_threshold_finds_the_objects_and_never_reads_the_labels() {
 
     // The choice is marked on both threshold charts.
     let report = clustering_report("sample", &r);
-    for name in ["scores-vs-threshold", "clusters-vs-threshold"] {
-        let f = &report.figures.iter().find(|(n, _)| n == name).unwrap().1;
+    for name in [FigureId::ScoresVsThreshold, FigureId::ClustersVsThreshold] {
+        let f = &report.figures.iter().find(|(n, _)| *n == name).unwrap().1;
         let FigureKind::Chart(chart) = &f.kind else {
             panic!("{name}: a chart");
         };

@@ -504,6 +504,48 @@ fn export_all_writes_every_figure_and_an_index() {
     fs::remove_dir_all(dir.parent().unwrap()).unwrap();
 }
 
+/// A figure that cannot be drawn at the export's size is named, and every other figure is
+/// written all the same, with the index.
+#[test]
+fn export_all_names_a_figure_it_cannot_draw_and_writes_the_others() {
+    let dir = temp_dir("export-all-not-drawn").join("out");
+    // 900 captioned images cannot share a 400 × 300 image.
+    let crowded = Figure::image_grid(
+        "Nine hundred bases",
+        (0..900)
+            .map(|k| GridImage {
+                caption: format!("basis {k}"),
+                values: vec![vec![k as f64; 4]; 7],
+            })
+            .collect(),
+        ColorScale::viridis("Basis weight", ""),
+    );
+    let set = FigureSet {
+        entries: vec![
+            entry("accuracy", accuracy_chart()),
+            entry("crowded", crowded),
+            entry("usage", usage_bars()),
+        ],
+    };
+    let opts = RenderOptions {
+        width: 400,
+        height: 300,
+        dpi: 96.0,
+    };
+    let index = export_all(&set, &dir, &[Format::Svg, Format::Png], &opts).unwrap();
+    let written: Vec<&str> = index.entries.iter().map(|e| e.name.as_str()).collect();
+    assert_eq!(written, ["accuracy", "usage"]);
+    assert_eq!(index.not_drawn.len(), 1);
+    assert_eq!(index.not_drawn[0].name, "crowded");
+    assert!(index.not_drawn_text().contains("Nine hundred bases"));
+    assert!(!dir.join("crowded.svg").exists() && !dir.join("crowded.png").exists());
+    assert!(dir.join("usage.png").exists());
+    let md = fs::read_to_string(dir.join("index.md")).unwrap();
+    assert!(md.contains("## Not drawn at this size"), "{md}");
+    assert!(md.contains("- crowded (Nine hundred bases): "), "{md}");
+    fs::remove_dir_all(dir.parent().unwrap()).unwrap();
+}
+
 #[test]
 fn render_figure_command_renders_a_json_figure() {
     let dir = temp_dir("cli");

@@ -11,6 +11,7 @@ use tactile_workbench::experiments::clustering::report::clustering_report;
 use tactile_workbench::experiments::clustering::{
     ClusteringParams, UnsupervisedLearner, run_clustering,
 };
+use tactile_workbench::experiments::figure_id::FigureId;
 use tactile_workbench::experiments::recognition::report::recognition_report;
 use tactile_workbench::experiments::recognition::{
     RecognitionParams, SupervisedLearner, run_recognition,
@@ -28,16 +29,16 @@ use tactile_workbench::session::Session;
 use tactile_workbench::sparse::DictionaryParams;
 use tactile_workbench::svm::CvResult;
 
-fn heatmap<'a>(r: &'a AnalysisResult, name: &str) -> &'a Heatmap {
-    let (_, f) = r.figures.iter().find(|(n, _)| n == name).unwrap();
+fn heatmap(r: &AnalysisResult, name: FigureId) -> &Heatmap {
+    let f = r.figure(name).unwrap();
     let FigureKind::Heatmap(h) = &f.kind else {
         panic!("{name} is a heatmap");
     };
     h
 }
 
-fn images<'a>(r: &'a AnalysisResult, name: &str) -> &'a ImageGrid {
-    let (_, f) = r.figures.iter().find(|(n, _)| n == name).unwrap();
+fn images(r: &AnalysisResult, name: FigureId) -> &ImageGrid {
+    let f = r.figure(name).unwrap();
     let FigureKind::ImageGrid(g) = &f.kind else {
         panic!("{name} is an image grid");
     };
@@ -95,7 +96,7 @@ fn stability_run() -> (Session, StabilityData, StabilityReport, AnalysisResult) 
 
 fn check_confusion(
     result: &AnalysisResult,
-    name: &str,
+    name: FigureId,
     cv: &CvResult,
     truth: &[String],
     ok: &str,
@@ -151,7 +152,7 @@ fn stability_numbers_lead_to_their_grasps() {
     let (ok, bad) = (r.success_class.as_str(), r.failure_class.as_str());
     check_confusion(
         &result,
-        "confusion-kfold",
+        FigureId::ConfusionKfold,
         &r.parsimonious.kfold,
         &truth,
         ok,
@@ -159,7 +160,7 @@ fn stability_numbers_lead_to_their_grasps() {
     );
     check_confusion(
         &result,
-        "confusion-objects",
+        FigureId::ConfusionObjects,
         &r.parsimonious.objects,
         &truth,
         ok,
@@ -177,7 +178,7 @@ fn stability_numbers_lead_to_their_grasps() {
             .map(|sn| codes[[g * s + sn, b]].abs())
             .fold(0.0, f64::max)
     };
-    for name in ["bases-raw", "bases-filtered"] {
+    for name in [FigureId::BasesRaw, FigureId::BasesFiltered] {
         let grid = images(&result, name);
         let links = result.links_of(name, None).unwrap();
         assert!(!links.items.is_empty());
@@ -271,8 +272,8 @@ fn recognition_confusion_cells_lead_to_their_grasps() {
     let r = run_recognition(&session, &params, &Progress::new()).unwrap();
     let result = recognition_report(&session.meta.name, &r);
     let truth = class_names(&session, &params.label_set);
-    let h = heatmap(&result, "confusion");
-    let links = result.links_of("confusion", None).unwrap();
+    let h = heatmap(&result, FigureId::Confusion);
+    let links = result.links_of(FigureId::Confusion, None).unwrap();
     listed_once_per_row(links);
     let mut cells = 0;
     for item in &links.items {
@@ -350,7 +351,7 @@ fn contingency_cells_partition_the_grasps() {
     let result = clustering_report(&session.meta.name, &r);
     let truth = class_names(&session, &params.label_set);
     let n = session.grasps.len();
-    let details = result.details_of("scores-vs-threshold").unwrap();
+    let details = result.details_of(FigureId::ScoresVsThreshold).unwrap();
     assert_eq!(details.items.len(), 2);
     for (i, (threshold, f)) in details.items.iter().enumerate() {
         let FigureKind::Heatmap(h) = &f.kind else {
@@ -362,7 +363,9 @@ fn contingency_cells_partition_the_grasps() {
             .find(|x| x.threshold == *threshold && x.rep == 0)
             .unwrap();
         let assignment = run.assignment.as_ref().unwrap();
-        let links = result.links_of("scores-vs-threshold", Some(i)).unwrap();
+        let links = result
+            .links_of(FigureId::ScoresVsThreshold, Some(i))
+            .unwrap();
         assert_eq!(
             listed_once(links),
             (0..n).collect::<Vec<_>>(),
@@ -381,5 +384,9 @@ fn contingency_cells_partition_the_grasps() {
             assert_eq!(item.grasps.len() as f64, h.values[row][col]);
         }
     }
-    assert!(result.links_of("scores-vs-threshold", Some(2)).is_none());
+    assert!(
+        result
+            .links_of(FigureId::ScoresVsThreshold, Some(2))
+            .is_none()
+    );
 }

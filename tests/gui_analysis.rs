@@ -12,6 +12,7 @@ use egui_kittest::kittest::Queryable;
 use tactile_workbench::app::views::number;
 use tactile_workbench::app::{View, WorkbenchApp};
 use tactile_workbench::catalogue::MethodId;
+use tactile_workbench::experiments::figure_id::FigureId;
 use tactile_workbench::figures::FigureKind;
 
 fn harness() -> Harness<'static, WorkbenchApp> {
@@ -283,7 +284,7 @@ fn recognition_and_clustering_views_show_the_papers_figures() {
         (cell_label(m, row, col), row, col)
     };
     let expected = r
-        .links_of("scores-vs-threshold", Some(item))
+        .links_of(FigureId::ScoresVsThreshold, Some(item))
         .and_then(|l| l.item([row, col]))
         .expect("the cell's grasps")
         .grasps
@@ -465,7 +466,7 @@ fn stability_view_shows_the_first_papers_figures() {
     let FigureKind::Heatmap(m) = &r
         .figures
         .iter()
-        .find(|(n, _)| n == "confusion-kfold")
+        .find(|(n, _)| *n == FigureId::ConfusionKfold)
         .unwrap()
         .1
         .kind
@@ -532,7 +533,7 @@ fn a_project_on_the_command_line_reopens_its_sessions_and_shows_its_results() {
         predict_seconds_per_sample: None,
         created: 0,
         figures: vec![(
-            "curve".into(),
+            FigureId::Reconstruction,
             Figure::chart(
                 "A saved curve",
                 Axis::new("x", ""),
@@ -657,8 +658,8 @@ fn robustness_view_sweeps_a_perturbation_and_charts_it() {
     h.step();
     h.drop_at(pos);
     h.run_ok();
-    let strength = h.state().selection.strength.clone();
-    assert_eq!(strength, Some((i, name.clone(), x)));
+    let strength = h.state().selection.strength;
+    assert_eq!(strength, Some((i, *name, x)));
     h.get_by_label(&heading);
     h.get_by_label(&format!("{} {}", chart.series[0].name, number(y)));
 }

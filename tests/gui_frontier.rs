@@ -234,7 +234,7 @@ fn clusterer_sizes_train_in_their_views() {
     );
     let marked = &h.state().analyses.selected;
     for d in &h.state().analyses.results[1].details {
-        assert_eq!(marked.get(&(1, d.figure.clone())), Some(&k), "{}", d.figure);
+        assert_eq!(marked.get(&(1, d.figure)), Some(&k), "{}", d.figure);
     }
 
     // k-means sizes: the Baselines view runs the one clicked (its SVM left out here).

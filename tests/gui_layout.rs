@@ -64,3 +64,60 @@ fn a_crowded_legend_goes_above_the_plot() {
     assert!(row_shown(200.0), "ten entries cover a 200 px plot");
     assert!(!row_shown(700.0), "a 700 px plot has room for them");
 }
+
+/// Figures are exported to the data folder's exports until the user chooses a folder (never
+/// the working folder); the folder and the preset come back after a restart, and an export
+/// names the files it wrote by their absolute paths.
+#[test]
+fn the_export_folder_and_preset_persist_and_exports_report_absolute_paths() {
+    use tactile_workbench::app::WorkbenchApp;
+    use tactile_workbench::figures::{Axis, Figure, Series};
+    let mut h = common::gui::workbench(1400.0, 900.0);
+    h.state_mut().view = View::Stability;
+    h.run_ok();
+    let cwd = std::env::current_dir().unwrap();
+    let default = h.state().analyses.export.folder();
+    assert!(default.is_absolute(), "{}", default.display());
+    assert!(
+        !default.starts_with(&cwd),
+        "{} is under {}",
+        default.display(),
+        cwd.display()
+    );
+
+    h.get_by_label("Export settings").click();
+    h.run_ok();
+    h.get_by_label("Page width (7 in, 300 DPI)").click();
+    h.run_ok();
+    let chosen = common::temp_dir("export-chosen");
+    // What the folder picker would give.
+    h.state_mut().analyses.export.dir = chosen.clone();
+    let settings = h.state().analyses.export.clone();
+    assert_eq!(
+        (settings.width, settings.dpi),
+        (2100, 300.0),
+        "the page preset"
+    );
+
+    let saved = serde_json::to_string(&h.state().persisted()).unwrap();
+    let app = WorkbenchApp::new(
+        &egui::Context::default(),
+        Some(serde_json::from_str(&saved).unwrap()),
+        Vec::new(),
+    );
+    assert_eq!(app.analyses.export, settings);
+
+    let fig = Figure::chart(
+        "A curve",
+        Axis::new("x", ""),
+        Axis::new("y", ""),
+        vec![Series::new("s", vec![1.0, 2.0, 3.0], vec![0.5, 0.7, 0.6])],
+    );
+    let mut notes = tactile_workbench::app::notify::Notifications::default();
+    app.analyses.export.write(&fig, "a-curve", &mut notes);
+    let said = notes.texts().join(" ");
+    let svg = chosen.join("a-curve.svg");
+    assert!(svg.is_file(), "{said}");
+    assert!(said.contains(&svg.display().to_string()), "{said}");
+    std::fs::remove_dir_all(&chosen).unwrap();
+}

@@ -12,6 +12,7 @@ use std::time::Duration;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use tactile_workbench::app::{Persisted, View, WorkbenchApp};
+use tactile_workbench::experiments::figure_id::FigureId;
 use tactile_workbench::figures::FigureKind;
 use tactile_workbench::session::{self, simulate};
 
@@ -107,7 +108,7 @@ fn a_model_evaluated_on_another_session_links_its_confusion_to_that_sessions_gra
     let FigureKind::Heatmap(m) = &r
         .figures
         .iter()
-        .find(|(n, _)| n == "confusion")
+        .find(|(n, _)| *n == FigureId::Confusion)
         .expect("a confusion map")
         .1
         .kind

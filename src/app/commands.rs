@@ -41,7 +41,9 @@ impl WorkbenchApp {
                 Command::OpenResult(i) => {
                     if let Some(kind) = self.analyses.results.get(i).map(|r| r.kind) {
                         self.analyses.shown.insert(kind, i);
-                        self.view = View::of(kind);
+                        if let Some(view) = View::showing(kind) {
+                            self.view = view;
+                        }
                         self.focus_results(kind);
                     }
                 }
@@ -93,7 +95,7 @@ impl WorkbenchApp {
                 // The clustering charts' markers go to the threshold clicked.
                 for d in &self.analyses.results[i].details {
                     if let Some(k) = d.at(threshold) {
-                        self.analyses.selected.insert((i, d.figure.clone()), k);
+                        self.analyses.selected.insert((i, d.figure), k);
                     }
                 }
             }

@@ -60,6 +60,9 @@ pub struct WorkbenchApp {
     loader: Loader,
     /// Sources in the order they were asked for, so sessions list in a stable order.
     requested: Vec<Source>,
+    /// Sessions the user opened (not those restored at start): each becomes the active
+    /// session when it has loaded.
+    activate: Vec<Source>,
     /// The system file dialog, while it is open (on its own thread).
     dialog: Option<(Purpose, Receiver<Vec<PathBuf>>)>,
     /// The in-app file picker, while it is open.
@@ -91,11 +94,12 @@ impl WorkbenchApp {
             dark: p.dark,
             recent: p.recent.clone(),
             analyses: Analyses::default(),
-            rooms: Rooms::with_forms(p.forms.clone()),
+            rooms: Rooms::with_forms(&p.forms),
             layouts: p.layouts.clone(),
             form_open: p.form_open,
             loader: Loader::default(),
             requested: Vec::new(),
+            activate: Vec::new(),
             dialog: None,
             picker: None,
             last_folder: p.last_folder.clone(),
@@ -105,6 +109,7 @@ impl WorkbenchApp {
             focus_pending: None,
         };
         app.analyses.timings = p.timings.clone();
+        app.analyses.export = p.export.clone();
         ctx.set_theme(if app.dark {
             egui::Theme::Dark
         } else {
@@ -139,6 +144,7 @@ impl WorkbenchApp {
         } else if crate::session::needs_spec(&path) {
             self.import.push(path);
         } else {
+            self.activate.push(Source::File(path.clone()));
             self.open(Source::File(path), ctx);
         }
     }
@@ -312,10 +318,25 @@ impl WorkbenchApp {
                     let at = self
                         .sessions
                         .partition_point(|x| rank(&x.source) < rank(&source));
+                    let opened = self.activate.contains(&source);
+                    self.activate.retain(|s| s != &source);
+                    let text = format!(
+                        "opened «{}»: {} grasps",
+                        loaded.session.meta.name,
+                        loaded.session.grasps.len()
+                    );
                     self.sessions.insert(at, loaded);
+                    if opened {
+                        self.browser.active = at;
+                        self.analyses.notes.info(text);
+                    } else if (at..self.sessions.len() - 1).contains(&self.browser.active) {
+                        // The active session moved up one place.
+                        self.browser.active += 1;
+                    }
                 }
                 Err(e) => {
                     self.requested.retain(|s| s != &source);
+                    self.activate.retain(|s| s != &source);
                     if let Source::File(p) = &source {
                         self.recent.retain(|r| r != p);
                     }

@@ -40,6 +40,9 @@ pub struct Persisted {
     /// Run times measured on this machine, which correct the expected times.
     #[serde(default)]
     pub timings: crate::jobs::estimate::Timings,
+    /// The export folder and size.
+    #[serde(default)]
+    pub export: super::results::ExportSettings,
 }
 
 fn yes() -> bool {
@@ -61,6 +64,7 @@ impl Default for Persisted {
             forms: views::Forms::default(),
             last_folder: None,
             timings: Default::default(),
+            export: Default::default(),
         }
     }
 }
@@ -80,6 +84,7 @@ impl WorkbenchApp {
             forms: self.rooms.forms(),
             last_folder: self.last_folder.clone(),
             timings: self.analyses.timings.clone(),
+            export: self.analyses.export.clone(),
         }
     }
 

@@ -5,6 +5,7 @@
 use super::View;
 use crate::catalogue::MethodId;
 use crate::experiments::clustering::UnsupervisedLearner;
+use crate::experiments::figure_id::FigureId;
 use crate::experiments::recognition::SupervisedLearner;
 use crate::experiments::stability::Config;
 use crate::features::FeatureSet;
@@ -26,7 +27,7 @@ pub struct Selection {
     /// A focused basis of a stability result: (result index, basis).
     pub basis: Option<(usize, usize)>,
     /// A perturbation strength chosen on a robustness chart: (result index, figure, strength).
-    pub strength: Option<(usize, String, f64)>,
+    pub strength: Option<(usize, FigureId, f64)>,
 }
 
 impl Selection {
@@ -94,7 +95,7 @@ pub enum Command {
     /// A perturbation strength on a robustness chart.
     Strength {
         result: usize,
-        figure: String,
+        figure: FigureId,
         strength: f64,
     },
     /// Clear the selected set (the focus stays).

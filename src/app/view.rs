@@ -1,4 +1,4 @@
-//! The views of the workbench: their titles and the analysis each shows.
+//! The views of the workbench: every view, and the view of an analysis.
 
 use super::View;
 use crate::experiments::result::AnalysisKind;
@@ -10,37 +10,36 @@ impl View {
         <View as clap::ValueEnum>::value_variants()
     }
 
-    pub fn title(self) -> &'static str {
-        match self {
-            View::Replay => "Replay",
-            View::Stability => "Grasp stability",
-            View::Recognition => "Recognition",
-            View::Clustering => "Clustering",
-            View::Baselines => "Baselines",
-            View::SpeedAccuracy => "Speed vs accuracy",
-            View::Robustness => "Where methods fail",
-        }
+    /// The view that shows results of `kind` (titles and kinds: the registry in `views`).
+    pub(super) fn showing(kind: AnalysisKind) -> Option<View> {
+        View::all().iter().copied().find(|v| v.kind() == Some(kind))
     }
+}
 
-    /// The analysis this view shows, if it shows one.
-    pub fn kind(self) -> Option<AnalysisKind> {
-        match self {
-            View::Stability => Some(AnalysisKind::Stability),
-            View::Recognition => Some(AnalysisKind::Recognition),
-            View::Clustering => Some(AnalysisKind::Clustering),
-            View::Baselines => Some(AnalysisKind::Baselines),
-            View::Robustness => Some(AnalysisKind::Robustness),
-            View::Replay | View::SpeedAccuracy => None,
-        }
-    }
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-    pub(super) fn of(kind: AnalysisKind) -> View {
-        match kind {
-            AnalysisKind::Baselines => View::Baselines,
-            AnalysisKind::Recognition => View::Recognition,
-            AnalysisKind::Clustering => View::Clustering,
-            AnalysisKind::Stability => View::Stability,
-            AnalysisKind::Robustness => View::Robustness,
+    #[test]
+    fn every_analysis_has_one_view_and_every_view_a_title_of_its_own() {
+        for kind in [
+            AnalysisKind::Stability,
+            AnalysisKind::Recognition,
+            AnalysisKind::Clustering,
+            AnalysisKind::Baselines,
+            AnalysisKind::Robustness,
+        ] {
+            let views: Vec<View> = View::all()
+                .iter()
+                .copied()
+                .filter(|v| v.kind() == Some(kind))
+                .collect();
+            assert_eq!(views.len(), 1, "{kind:?} is shown by {views:?}");
+            assert_eq!(View::showing(kind), Some(views[0]));
         }
+        let mut titles: Vec<&str> = View::all().iter().map(|v| v.title()).collect();
+        titles.sort_unstable();
+        titles.dedup();
+        assert_eq!(titles.len(), View::all().len());
     }
 }

@@ -468,6 +468,9 @@ pub fn evaluate(a: EvaluateArgs) -> anyhow::Result<()> {
             )?)
         })?;
         println!("wrote {} figures to {}", index.entries.len(), dir.display());
+        if !index.not_drawn.is_empty() {
+            anyhow::bail!("not drawn at this size: {}", index.not_drawn_text());
+        }
     }
     Ok(())
 }

@@ -115,6 +115,14 @@ pub fn run(a: PaperFiguresArgs) -> anyhow::Result<()> {
         a.out_dir.display(),
         t0.elapsed().as_secs_f64()
     );
+    if !index.not_drawn.is_empty() {
+        anyhow::bail!(
+            "{} figure{} could not be drawn at this size (the others are written, see index.md): {}",
+            index.not_drawn.len(),
+            if index.not_drawn.len() == 1 { "" } else { "s" },
+            index.not_drawn_text()
+        );
+    }
     Ok(())
 }
 

@@ -4,6 +4,7 @@
 
 use crate::catalogue::MethodId;
 use crate::cluster::{KMEANS_NAME, SOM_NAME};
+use crate::experiments::figure_id::FigureId;
 use std::collections::BTreeMap;
 
 use super::result::{AnalysisKind, AnalysisResult, distinct_sorted, now_unix};
@@ -39,7 +40,7 @@ pub fn baselines_report(session: &str, r: &BaselinesResult, train_seconds: f64) 
             r.sweep.iter().map(|p| (p.k as f64, &p.kmeans)).collect();
         let som: Vec<(f64, &ScoreSummary)> = r.sweep.iter().map(|p| (p.k as f64, &p.som)).collect();
         figures.push((
-            "nmi-vs-clusters".to_string(),
+            FigureId::NmiVsClusters,
             Figure::chart(
                 "NMI against effective clusters",
                 Axis::new("effective clusters", ""),
@@ -60,7 +61,7 @@ pub fn baselines_report(session: &str, r: &BaselinesResult, train_seconds: f64) 
         ])
     };
     figures.push((
-        "scores".to_string(),
+        FigureId::Scores,
         Figure::bars(
             format!("Clustering scores at k = {k}"),
             AxisTitle {
@@ -117,7 +118,7 @@ pub fn baselines_report(session: &str, r: &BaselinesResult, train_seconds: f64) 
         };
         heat.colors.limits = None;
         figures.push((
-            "svm-grid".to_string(),
+            FigureId::SvmGrid,
             Figure::new("RBF SVM accuracy over C × γ", FigureKind::Heatmap(heat)).subtitle(
                 format!(
                     "{}-fold CV × {} repeats; best marked (chosen on the same folds: optimistic)",

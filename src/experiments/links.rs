@@ -8,14 +8,15 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+use super::figure_id::FigureId;
 use crate::figures::{Figure, FigureKind};
 
 /// Which of the session's grasps stand behind the parts of one figure of a result.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GraspLinks {
-    /// The figure's name in `AnalysisResult::figures` (or, with `detail`, the figure whose
+    /// The figure in `AnalysisResult::figures` (or, with `detail`, the figure whose
     /// `FigureDetails` item this is).
-    pub figure: String,
+    pub figure: FigureId,
     /// For a detail figure: the index of the item in `FigureDetails::items`; None for the
     /// figure itself.
     pub detail: Option<usize>,
@@ -46,7 +47,7 @@ impl GraspLinks {
     /// parts in row-major order. `text` describes a part from its distinct grasps and
     /// its observations.
     pub fn from_observations(
-        figure: &str,
+        figure: FigureId,
         detail: Option<usize>,
         observations: impl IntoIterator<Item = ([usize; 2], usize)>,
         text: impl Fn([usize; 2], usize, usize) -> String,
@@ -69,7 +70,7 @@ impl GraspLinks {
             })
             .collect();
         GraspLinks {
-            figure: figure.into(),
+            figure,
             detail,
             items,
         }
@@ -145,7 +146,7 @@ impl GraspCode {
 /// Links of a basis-image grid: image i (showing basis `bases[i]`) → the grasps whose codes
 /// use that basis, by their largest |coefficient| on it over their patches, descending
 /// (ties: lower grasp index first).
-pub fn basis_links(figure: &str, bases: &[usize], codes: &[GraspCode]) -> GraspLinks {
+pub fn basis_links(figure: FigureId, bases: &[usize], codes: &[GraspCode]) -> GraspLinks {
     let items = bases
         .iter()
         .enumerate()
@@ -172,7 +173,7 @@ pub fn basis_links(figure: &str, bases: &[usize], codes: &[GraspCode]) -> GraspL
         })
         .collect();
     GraspLinks {
-        figure: figure.into(),
+        figure,
         detail: None,
         items,
     }
@@ -196,7 +197,7 @@ mod tests {
             ([1, 0], 2),
             ([1, 0], 9),
         ];
-        let l = GraspLinks::from_observations("confusion", None, obs, |at, n, total| {
+        let l = GraspLinks::from_observations(FigureId::Confusion, None, obs, |at, n, total| {
             format!("{at:?} {n} {total}")
         });
         assert_eq!(l.items.len(), 2);
@@ -227,7 +228,7 @@ mod tests {
             code(7, vec![vec![(1, 1.0), (0, -0.9)], vec![]]),
             code(8, vec![vec![], vec![(2, 0.1)]]),
         ];
-        let l = basis_links("bases-raw", &[0, 1, 3], &codes);
+        let l = basis_links(FigureId::BasesRaw, &[0, 1, 3], &codes);
         assert_eq!(l.items.len(), 2, "basis 3 has no users");
         assert_eq!(l.items[0].grasps, vec![7, 4]);
         assert_eq!(l.items[0].text, "basis 1: 2 grasps use it");

@@ -4,6 +4,7 @@
 pub mod baselines;
 pub mod clustering;
 pub mod experiment;
+pub mod figure_id;
 pub mod frontier;
 pub mod labels;
 pub mod links;

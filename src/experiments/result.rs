@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+use super::figure_id::FigureId;
 pub use super::links::{GraspCode, GraspLinks, LinkedItem, PatchCode};
 use crate::features::sequence::FeatureSet;
 use crate::figures::{
@@ -59,7 +60,7 @@ pub struct AnalysisResult {
     pub predict_seconds_per_sample: Option<f64>,
     /// Seconds since the Unix epoch when it was computed.
     pub created: u64,
-    pub figures: Vec<(String, Figure)>,
+    pub figures: Vec<(FigureId, Figure)>,
     /// Figures a view shows on demand when the user selects part of a figure.
     #[serde(default)]
     pub details: Vec<FigureDetails>,
@@ -163,8 +164,8 @@ impl ModelSize {
 /// chart's x axis (key = the x value; the nearest key is shown).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FigureDetails {
-    /// Name of the figure (in `AnalysisResult::figures`) whose interaction selects.
-    pub figure: String,
+    /// The figure (in `AnalysisResult::figures`) whose interaction selects.
+    pub figure: FigureId,
     /// What is selected, in words, e.g. "basis" or "novelty threshold".
     pub selector: String,
     pub items: Vec<(f64, Figure)>,
@@ -191,16 +192,21 @@ impl AnalysisResult {
         self.scores.iter().find(|(n, _)| n == name).map(|(_, v)| *v)
     }
 
-    /// The detail figures selected through figure `name`, if it has any.
-    pub fn details_of(&self, name: &str) -> Option<&FigureDetails> {
-        self.details.iter().find(|d| d.figure == name)
+    /// The figure `id` of this result, if it has it.
+    pub fn figure(&self, id: FigureId) -> Option<&Figure> {
+        self.figures.iter().find(|(n, _)| *n == id).map(|(_, f)| f)
     }
 
-    /// The links of figure `name` (`detail`: of that item of its detail figures).
-    pub fn links_of(&self, name: &str, detail: Option<usize>) -> Option<&GraspLinks> {
+    /// The detail figures selected through figure `id`, if it has any.
+    pub fn details_of(&self, id: FigureId) -> Option<&FigureDetails> {
+        self.details.iter().find(|d| d.figure == id)
+    }
+
+    /// The links of figure `id` (`detail`: of that item of its detail figures).
+    pub fn links_of(&self, id: FigureId, detail: Option<usize>) -> Option<&GraspLinks> {
         self.links
             .iter()
-            .find(|l| l.figure == name && l.detail == detail)
+            .find(|l| l.figure == id && l.detail == detail)
     }
 
     /// The grasp-stability model's view of session grasp `grasp`.
@@ -212,13 +218,9 @@ impl AnalysisResult {
     pub(crate) fn check_links(&self) -> Result<(), String> {
         for l in &self.links {
             let figure = match l.detail {
-                None => self
-                    .figures
-                    .iter()
-                    .find(|(n, _)| *n == l.figure)
-                    .map(|(_, f)| f),
+                None => self.figure(l.figure),
                 Some(i) => self
-                    .details_of(&l.figure)
+                    .details_of(l.figure)
                     .and_then(|d| d.items.get(i))
                     .map(|(_, f)| f),
             };
@@ -291,7 +293,7 @@ pub fn slug(s: &str) -> String {
 /// The file name (without extension) of figure `figure` of result `r`, the `i`-th result:
 /// `<number>-<label>[-<size>]-<figure>`. One name whether the figure is exported alone or
 /// with every other, and two results of one method that differ only in size say so.
-pub fn export_name(i: usize, r: &AnalysisResult, figure: &str) -> String {
+pub fn export_name(i: usize, r: &AnalysisResult, figure: FigureId) -> String {
     let label = slug(&r.label);
     let size = r
         .model_size
@@ -299,7 +301,7 @@ pub fn export_name(i: usize, r: &AnalysisResult, figure: &str) -> String {
         .map(|m| slug(&m.knobs))
         .filter(|k| !k.is_empty() && !label.contains(k.as_str()))
         .map_or(String::new(), |k| format!("-{k}"));
-    format!("{:02}-{label}{size}-{}", i + 1, slug(figure))
+    format!("{:02}-{label}{size}-{}", i + 1, slug(figure.key()))
 }
 
 /// Every figure of `results`, named for export by [`export_name`].
@@ -310,7 +312,7 @@ pub fn figure_set(results: &[AnalysisResult]) -> FigureSet {
             let mut parameters = r.parameters.clone();
             parameters.insert("method".into(), r.label.clone());
             entries.push(FigureEntry {
-                name: export_name(i, r, name),
+                name: export_name(i, r, *name),
                 figure: figure.clone(),
                 parameters,
                 session: r.session.clone(),
@@ -620,7 +622,7 @@ pub(crate) mod tests {
             predict_seconds_per_sample: Some(1e-4),
             created: 1_795_000_000,
             figures: vec![(
-                "accuracy".into(),
+                FigureId::AccuracyByTrials,
                 Figure::chart(
                     "Accuracy as trials progress",
                     Axis::new("trial", ""),
@@ -654,15 +656,21 @@ pub(crate) mod tests {
         assert_eq!(
             names,
             [
-                "01-ds-all-features-capacity-5-tau-1-accuracy",
-                "02-ds-all-features-capacity-50-tau-15-accuracy"
+                "01-ds-all-features-capacity-5-tau-1-accuracy-by-trials",
+                "02-ds-all-features-capacity-50-tau-15-accuracy-by-trials"
             ]
         );
-        assert_eq!(export_name(1, &results[1], "accuracy"), names[1]);
+        assert_eq!(
+            export_name(1, &results[1], FigureId::AccuracyByTrials),
+            names[1]
+        );
         // A size the label already gives is not said twice.
         let mut k = sized("k 10");
         k.label = "baselines, k 10".into();
-        assert_eq!(export_name(0, &k, "scores"), "01-baselines-k-10-scores");
+        assert_eq!(
+            export_name(0, &k, FigureId::Scores),
+            "01-baselines-k-10-scores"
+        );
     }
 
     #[test]

@@ -271,6 +271,18 @@ pub struct IndexEntry {
 pub struct Index {
     pub dir: PathBuf,
     pub entries: Vec<IndexEntry>,
+    /// Figures that could not be drawn at the export's size and DPI, with why; every
+    /// other figure is written all the same.
+    #[serde(default)]
+    pub not_drawn: Vec<NotDrawn>,
+}
+
+/// A figure an "export all" could not draw.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NotDrawn {
+    pub name: String,
+    pub title: String,
+    pub reason: String,
 }
 
 fn md_cell(s: &str) -> String {
@@ -278,6 +290,15 @@ fn md_cell(s: &str) -> String {
 }
 
 impl Index {
+    /// "name (title): reason; …" of the figures not drawn, for a message.
+    pub fn not_drawn_text(&self) -> String {
+        self.not_drawn
+            .iter()
+            .map(|n| format!("{} («{}»): {}", n.name, n.title, n.reason))
+            .collect::<Vec<_>>()
+            .join("; ")
+    }
+
     pub fn to_markdown(&self) -> String {
         let mut out = String::from(
             "# Figures\n\n| Figure | Files | Parameters | Session | Date |\n|---|---|---|---|---|\n",
@@ -298,12 +319,25 @@ impl Index {
                 md_cell(&e.date)
             ));
         }
+        if !self.not_drawn.is_empty() {
+            out.push_str("\n## Not drawn at this size\n\n");
+            for n in &self.not_drawn {
+                out.push_str(&format!(
+                    "- {} ({}): {}\n",
+                    md_cell(&n.name),
+                    md_cell(&n.title),
+                    md_cell(&n.reason)
+                ));
+            }
+        }
         out
     }
 }
 
 /// Write every figure of `set` to `dir` (created if missing) in each of `formats`, plus
-/// `index.md`. All figures and names are checked before the first file is written.
+/// `index.md`. All figures and names are checked before the first file is written. A figure
+/// that cannot be drawn at `opts` is listed in the index's `not_drawn` and the others are
+/// still written; a file that cannot be written stops the export.
 pub fn export_all(
     set: &FigureSet,
     dir: &Path,
@@ -341,12 +375,33 @@ pub fn export_all(
     let mut index = Index {
         dir: dir.to_path_buf(),
         entries: Vec::new(),
+        not_drawn: Vec::new(),
     };
     for e in &set.entries {
+        // Every format is drawn before any is written: a figure is exported whole or not.
+        let drawn: Result<Vec<(String, Vec<u8>)>, FigureError> = formats
+            .iter()
+            .map(|&format| {
+                let file = format!("{}.{}", e.name, format.extension());
+                render(&e.figure, format, opts).map(|bytes| (file, bytes))
+            })
+            .collect();
+        let drawn = match drawn {
+            Ok(d) => d,
+            Err(io @ FigureError::Io { .. }) => return Err(io),
+            // Too small at this size and DPI, or not drawable: this figure only.
+            Err(why) => {
+                index.not_drawn.push(NotDrawn {
+                    name: e.name.clone(),
+                    title: e.figure.title.clone(),
+                    reason: why.to_string(),
+                });
+                continue;
+            }
+        };
         let mut files = Vec::new();
-        for &format in formats {
-            let file = format!("{}.{}", e.name, format.extension());
-            write_atomic(&dir.join(&file), &render(&e.figure, format, opts)?)?;
+        for (file, bytes) in drawn {
+            write_atomic(&dir.join(&file), &bytes)?;
             files.push(file);
         }
         index.entries.push(IndexEntry {

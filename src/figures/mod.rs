@@ -49,8 +49,8 @@ pub use colormap::Rgb;
 pub use colormap::{ColorMap, series_color};
 pub use csv::{row as csv_row, to_csv};
 pub use export::{
-    Format, Index, IndexEntry, RenderOptions, export_all, layout_of, render_pdf, render_png,
-    render_svg, write_figure,
+    Format, Index, IndexEntry, NotDrawn, RenderOptions, export_all, layout_of, render_pdf,
+    render_png, render_svg, write_figure,
 };
 pub use layout::{AxisLabels, Bounds, FigureLayout, PlacedText};
 pub use model::{

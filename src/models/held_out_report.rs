@@ -2,6 +2,7 @@
 //! contingency map of a clustering) linked to the tested session's grasps, and per task the
 //! share correct per object, the accuracy of early decisions or the grasps per cluster.
 
+use crate::experiments::figure_id::FigureId;
 use std::collections::BTreeMap;
 
 use super::held_out::{HeldOutResult, HeldOutScores};
@@ -53,10 +54,7 @@ pub fn held_out_report(r: &HeldOutResult) -> AnalysisResult {
         created: std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .map_or(0, |d| d.as_secs()),
-        figures: vec![
-            ("confusion".into(), confusion_fig),
-            (second.0.into(), second.1),
-        ],
+        figures: vec![(FigureId::Confusion, confusion_fig), second],
         details: Vec::new(),
         links: vec![confusion_links(r)],
         grasp_codes: Vec::new(),
@@ -76,7 +74,7 @@ fn confusion_links(r: &HeldOutResult) -> GraspLinks {
     };
     let row_of = |name: &str| rows.iter().position(|c| c == name);
     GraspLinks::from_observations(
-        "confusion",
+        FigureId::Confusion,
         None,
         r.predictions.iter().filter_map(|p| {
             let t = row_of(p.truth.as_deref()?)?;
@@ -98,7 +96,7 @@ fn confusion_links(r: &HeldOutResult) -> GraspLinks {
 fn scores_and_figures(
     r: &HeldOutResult,
     held_out: &HeldOut,
-) -> (Vec<(String, f64)>, Figure, (&'static str, Figure)) {
+) -> (Vec<(String, f64)>, Figure, (FigureId, Figure)) {
     let title = format!("Confusion map, held out on {}", r.tested_on.name);
     match &r.scores {
         HeldOutScores::Stability {
@@ -119,7 +117,7 @@ fn scores_and_figures(
                 ("failure recall".into(), *failure_recall),
                 ("success recall".into(), *success_recall),
             ];
-            (scores, fig, ("objects", per_object(r, held_out)))
+            (scores, fig, (FigureId::Objects, per_object(r, held_out)))
         }
         HeldOutScores::Recognition {
             accuracy,
@@ -132,9 +130,9 @@ fn scores_and_figures(
                 r.calibration
             ));
             let second = if early.is_empty() {
-                ("objects", per_object(r, held_out))
+                (FigureId::Objects, per_object(r, held_out))
             } else {
-                ("early", early_classification(r, early, held_out))
+                (FigureId::Early, early_classification(r, early, held_out))
             };
             (vec![("accuracy".into(), *accuracy)], fig, second)
         }
@@ -164,7 +162,7 @@ fn scores_and_figures(
                     ("NMI".into(), *nmi),
                 ],
                 fig,
-                ("clusters", sizes),
+                (FigureId::Clusters, sizes),
             )
         }
     }

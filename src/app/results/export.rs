@@ -2,14 +2,17 @@
 
 use super::*;
 
-/// Export settings shared by every view.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+/// Export settings shared by every view; they persist between runs.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ExportSettings {
     pub dir: PathBuf,
     pub width: u32,
     pub height: u32,
     pub dpi: f64,
 }
+
+/// The export folder's name in the data folder, the default until the user chooses one.
+pub const EXPORTS: &str = "exports";
 
 /// The formats every export writes: vector (SVG, PDF), raster (PNG) and the numbers (CSV).
 const FORMATS: [Format; 4] = [Format::Svg, Format::Pdf, Format::Png, Format::Csv];
@@ -28,8 +31,10 @@ impl Default for ExportSettings {
     /// A journal column: what a figure exported from the workbench is most often for.
     fn default() -> Self {
         let o = RenderOptions::column();
+        // The data folder's exports, never the working folder (often a source checkout).
+        let data = eframe::storage_dir("Tactile Workbench").unwrap_or_else(std::env::temp_dir);
         ExportSettings {
-            dir: PathBuf::from("figures-export"),
+            dir: data.join(EXPORTS),
             width: o.width,
             height: o.height,
             dpi: o.dpi,
@@ -38,6 +43,16 @@ impl Default for ExportSettings {
 }
 
 impl ExportSettings {
+    /// The export folder as an absolute path (a relative one typed in the form is taken
+    /// from the data folder's exports, not from wherever the workbench was started).
+    pub fn folder(&self) -> PathBuf {
+        if self.dir.is_absolute() {
+            self.dir.clone()
+        } else {
+            ExportSettings::default().dir.join(&self.dir)
+        }
+    }
+
     fn options(&self) -> RenderOptions {
         RenderOptions {
             width: self.width,
@@ -86,12 +101,13 @@ impl ExportSettings {
     /// Write `figure` as SVG, PDF, PNG and CSV named `name`, and say so in `notes`.
     pub fn write(&self, figure: &figures::Figure, name: &str, notes: &mut Notifications) {
         let opts = self.options();
+        let dir = self.folder();
         let mut written = Vec::new();
-        let result = std::fs::create_dir_all(&self.dir)
-            .map_err(|e| format!("{}: {e}", self.dir.display()))
+        let result = std::fs::create_dir_all(&dir)
+            .map_err(|e| format!("{}: {e}", dir.display()))
             .and_then(|_| {
                 for f in FORMATS {
-                    let path = self.dir.join(format!("{name}.{}", f.extension()));
+                    let path = dir.join(format!("{name}.{}", f.extension()));
                     figures::write_figure(figure, &path, &opts).map_err(|e| e.to_string())?;
                     written.push(path.display().to_string());
                 }
@@ -99,7 +115,7 @@ impl ExportSettings {
             });
         match result {
             Ok(()) => notes.info(format!("exported {}", written.join(", "))),
-            Err(e) => notes.error(format!("export failed: {e}")),
+            Err(e) => notes.error(format!("export of {name} failed: {e}")),
         }
     }
 }
@@ -141,19 +157,27 @@ impl Analyses {
                 });
             }
         }
-        let dir = self.export.dir.clone();
+        let dir = self.export.folder();
         let opts = self.export.options();
         self.spawn(ctx, None, "Export all figures".into(), move |p| {
             p.set(0.0, format!("writing {} figures", set_all.entries.len()));
             let t0 = std::time::Instant::now();
             let index =
                 figures::export_all(&set_all, &dir, &FORMATS, &opts).map_err(JobError::failed)?;
-            Ok(JobOutput::Message(format!(
+            let written = format!(
                 "exported {} figures to {} in {:.2} s",
                 index.entries.len(),
                 dir.display(),
                 t0.elapsed().as_secs_f64()
-            )))
+            );
+            if index.not_drawn.is_empty() {
+                Ok(JobOutput::Message(written))
+            } else {
+                Err(JobError::failed(format!(
+                    "{written}; not drawn at this size (the index lists them): {}",
+                    index.not_drawn_text()
+                )))
+            }
         });
     }
 }

@@ -15,6 +15,7 @@ use super::models::{KEPT_MODELS, Models};
 use super::notify::Notifications;
 use crate::catalogue::MethodId;
 use crate::experiments::ExperimentError;
+use crate::experiments::figure_id::FigureId;
 use crate::experiments::frontier::Frontier;
 use crate::experiments::frontier::report::frontier_figures;
 use crate::experiments::recognition::report::comparison_figures;
@@ -98,10 +99,10 @@ pub struct Analyses {
     /// The result shown in each analysis view (index into `results`).
     pub shown: std::collections::HashMap<AnalysisKind, usize>,
     /// The detail item selected through a figure: (result index, figure name) -> item.
-    pub selected: std::collections::HashMap<(usize, String), usize>,
+    pub selected: std::collections::HashMap<(usize, FigureId), usize>,
     /// The heatmap cell last clicked in a figure: (result index, figure name, detail item)
     /// -> [row, column].
-    pub cells: std::collections::HashMap<(usize, String, Option<usize>), [usize; 2]>,
+    pub cells: std::collections::HashMap<(usize, FigureId, Option<usize>), [usize; 2]>,
     pub export: ExportSettings,
     /// What finished, failed or was exported (toasts and the log).
     pub notes: Notifications,

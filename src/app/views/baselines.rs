@@ -9,6 +9,7 @@ use crate::app::results::{JobOutput, recognition_ready};
 use crate::catalogue::Input;
 use crate::cluster::baselines::{BaselinesParams, run_baselines};
 use crate::experiments::baselines::baselines_report;
+use crate::experiments::figure_id::FigureId;
 use crate::experiments::result::AnalysisKind;
 use crate::features::table_one::session_features;
 use crate::jobs::JobError;
@@ -64,11 +65,11 @@ impl Room for BaselinesRoom {
     }
 
     fn default_groups(&self) -> Vec<Vec<Pane>> {
-        let f = |n: &str| Pane::Figure(n.to_string());
+        let f = Pane::Figure;
         vec![
-            vec![f("nmi-vs-clusters")],
-            vec![f("scores"), Pane::Scores],
-            vec![f("svm-grid")],
+            vec![f(FigureId::NmiVsClusters)],
+            vec![f(FigureId::Scores), Pane::Scores],
+            vec![f(FigureId::SvmGrid)],
         ]
     }
 

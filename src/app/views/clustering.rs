@@ -11,6 +11,7 @@ use crate::app::results::{JobOutput, experiment_error, recognition_ready};
 use crate::catalogue::Task;
 use crate::experiments::clustering::report::clustering_report;
 use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_clustering};
+use crate::experiments::figure_id::FigureId;
 use crate::experiments::result::AnalysisKind;
 use crate::jobs::JobError;
 use crate::sweep::Experiment;
@@ -118,11 +119,11 @@ impl Room for ClusteringRoom {
     }
 
     fn default_groups(&self) -> Vec<Vec<Pane>> {
-        let f = |n: &str| Pane::Figure(n.to_string());
+        let f = Pane::Figure;
         vec![
-            vec![f("scores-vs-threshold"), f("nmi-vs-effective")],
-            vec![f("clusters-vs-threshold"), f("scores-at-10")],
-            vec![Pane::Detail("scores-vs-threshold".into()), Pane::Scores],
+            vec![f(FigureId::ScoresVsThreshold), f(FigureId::NmiVsEffective)],
+            vec![f(FigureId::ClustersVsThreshold), f(FigureId::ScoresAt10)],
+            vec![Pane::Detail(FigureId::ScoresVsThreshold), Pane::Scores],
             vec![Pane::Replay],
         ]
     }

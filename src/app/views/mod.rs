@@ -120,63 +120,80 @@ pub trait Room {
     }
 }
 
-/// Every room, each owning its form state.
-#[derive(Default)]
-pub struct Rooms {
-    pub replay: replay::ReplayRoom,
-    pub stability: stability::StabilityRoom,
-    pub recognition: recognition::RecognitionRoom,
-    pub clustering: clustering::ClusteringRoom,
-    pub baselines: baselines::BaselinesRoom,
-    pub speed: speed::SpeedRoom,
-    pub robustness: robustness::RobustnessRoom,
-}
-
-/// Each room's form settings, as they persist between runs.
-#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
-pub struct Forms {
-    pub stability: stability::StabilityForm,
-    pub recognition: recognition::RecognitionForm,
-    pub clustering: clustering::ClusteringForm,
-    pub baselines: baselines::BaselinesForm,
-    pub robustness: robustness::RobustnessForm,
-}
-
-impl Rooms {
-    /// The rooms with their forms as they were left.
-    pub fn with_forms(f: Forms) -> Rooms {
-        let mut rooms = Rooms::default();
-        rooms.stability.form = f.stability;
-        rooms.recognition.form = f.recognition;
-        rooms.clustering.form = f.clustering;
-        rooms.baselines.form = f.baselines;
-        rooms.robustness.form = f.robustness;
-        rooms
-    }
-
-    pub fn forms(&self) -> Forms {
-        Forms {
-            stability: self.stability.form.clone(),
-            recognition: self.recognition.form.clone(),
-            clustering: self.clustering.form.clone(),
-            baselines: self.baselines.form.clone(),
-            robustness: self.robustness.form.clone(),
+/// Every view in one place, a line each: the field of [`Rooms`] that owns its room and the
+/// room's type, the view, its title, the analysis whose results it shows, and for a room
+/// with a form, the form's field (it persists between runs under the room's field name).
+/// A view missing here is a compile error (the matches below are exhaustive).
+macro_rules! views {
+    ($( $field:ident: $room:ty => $view:ident, $title:literal, $kind:expr $(, $form:ident)?; )*) => {
+        /// Every room, each owning its form state.
+        #[derive(Default)]
+        pub struct Rooms {
+            $( pub $field: $room, )*
         }
-    }
 
-    pub fn get(&mut self, view: View) -> &mut dyn Room {
-        match view {
-            View::Replay => &mut self.replay,
-            View::Stability => &mut self.stability,
-            View::Recognition => &mut self.recognition,
-            View::Clustering => &mut self.clustering,
-            View::Baselines => &mut self.baselines,
-            View::SpeedAccuracy => &mut self.speed,
-            View::Robustness => &mut self.robustness,
+        impl Rooms {
+            /// The rooms with their forms as they were left (a form that no longer reads
+            /// starts from its defaults).
+            pub fn with_forms(forms: &Forms) -> Rooms {
+                let mut rooms = Rooms::default();
+                $($(
+                    if let Some(f) = forms
+                        .get(stringify!($field))
+                        .and_then(|v| serde_json::from_value(v.clone()).ok())
+                    {
+                        rooms.$field.$form = f;
+                    }
+                )?)*
+                rooms
+            }
+
+            pub fn forms(&self) -> Forms {
+                let mut forms = Forms::new();
+                $($(
+                    if let Ok(v) = serde_json::to_value(&self.$field.$form) {
+                        forms.insert(stringify!($field).to_string(), v);
+                    }
+                )?)*
+                forms
+            }
+
+            pub fn get(&mut self, view: View) -> &mut dyn Room {
+                match view {
+                    $( View::$view => &mut self.$field, )*
+                }
+            }
         }
-    }
+
+        impl View {
+            pub fn title(self) -> &'static str {
+                match self {
+                    $( View::$view => $title, )*
+                }
+            }
+
+            /// The analysis this view shows, if it shows one.
+            pub fn kind(self) -> Option<AnalysisKind> {
+                match self {
+                    $( View::$view => $kind, )*
+                }
+            }
+        }
+    };
 }
+
+views! {
+    replay: replay::ReplayRoom => Replay, "Replay", None;
+    stability: stability::StabilityRoom => Stability, "Grasp stability", Some(AnalysisKind::Stability), form;
+    recognition: recognition::RecognitionRoom => Recognition, "Recognition", Some(AnalysisKind::Recognition), form;
+    clustering: clustering::ClusteringRoom => Clustering, "Clustering", Some(AnalysisKind::Clustering), form;
+    baselines: baselines::BaselinesRoom => Baselines, "Baselines", Some(AnalysisKind::Baselines), form;
+    speed: speed::SpeedRoom => SpeedAccuracy, "Speed vs accuracy", None;
+    robustness: robustness::RobustnessRoom => Robustness, "Where methods fail", Some(AnalysisKind::Robustness), form;
+}
+
+/// Each room's form settings as they persist between runs, by the room's field name.
+pub type Forms = std::collections::BTreeMap<String, serde_json::Value>;
 
 /// The form's Run button: enabled while no `kind` job runs and the active session can run it
 /// (`ready`); otherwise `needs` says what the session lacks. Returns whether it was clicked.
@@ -281,6 +298,12 @@ pub fn central_ui(
     panes::card(ui, cx, i, &mut reset);
     ui.separator();
     let result = &cx.analyses.results[i];
+    // A held-out result has figures of its own: its tiles are laid out and kept apart.
+    let key = if result.held_out.is_some() {
+        format!("{key} (held out)")
+    } else {
+        key
+    };
     let layout = layouts
         .entry(key.clone())
         .or_insert_with(|| Layout::build(&key, room.default_groups(), Some(result), Some(i)));

@@ -5,22 +5,23 @@
 use egui_tiles::TileId;
 use serde::{Deserialize, Serialize};
 
+use crate::experiments::figure_id::FigureId;
 use crate::experiments::result::AnalysisResult;
 
 /// What a tile shows.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Pane {
-    /// A figure of the result the view shows, by name.
-    Figure(String),
+    /// A figure of the result the view shows.
+    Figure(FigureId),
     /// A figure of one chosen result, kept beside the shown one for comparison.
     Pinned {
-        figure: String,
+        figure: FigureId,
         /// The result's creation time and label (together they name it).
         created: u64,
         label: String,
     },
     /// The detail figure selected through figure `0` (a basis, a threshold).
-    Detail(String),
+    Detail(FigureId),
     /// Every number of the shown result.
     Scores,
     /// The replay of the focused grasp.
@@ -43,12 +44,12 @@ impl Pane {
     /// inside the tile).
     pub fn title(&self, result: Option<&AnalysisResult>) -> String {
         match self {
-            Pane::Figure(name) => words(name),
-            Pane::Pinned { figure, label, .. } => format!("{} · {label}", words(figure)),
-            Pane::Detail(name) => result
-                .and_then(|r| r.details_of(name))
+            Pane::Figure(id) => words(id.key()),
+            Pane::Pinned { figure, label, .. } => format!("{} · {label}", words(figure.key())),
+            Pane::Detail(id) => result
+                .and_then(|r| r.details_of(*id))
                 .map(|d| format!("Selected {}", d.selector))
-                .unwrap_or_else(|| format!("{} detail", words(name))),
+                .unwrap_or_else(|| format!("{} detail", words(id.key()))),
             Pane::Scores => "All numbers".into(),
             Pane::Replay => "Replay".into(),
             Pane::Grasp => "Focused grasp".into(),

@@ -11,6 +11,7 @@ use crate::app::figure_view::{self, Selection as FigureSelection};
 use crate::app::heatmap;
 use crate::app::replay::ReplayAction;
 use crate::app::selection::Command;
+use crate::experiments::figure_id::FigureId;
 use crate::experiments::result::{AnalysisKind, AnalysisResult, date_text};
 use crate::figures::{self, ColorMap, Figure, FigureKind};
 
@@ -25,7 +26,7 @@ pub fn pane_ui(
 ) {
     match pane {
         Pane::Figure(name) => match room.kind().and_then(|k| cx.shown(k)) {
-            Some(i) => figure_pane(ui, cx, i, name, Some((tile, requests))),
+            Some(i) => figure_pane(ui, cx, i, *name, Some((tile, requests))),
             None => {
                 ui.label("No result yet.");
             }
@@ -47,7 +48,7 @@ pub fn pane_ui(
                         cx.analyses.results[i].session,
                         date_text(*created)
                     ));
-                    figure_pane(ui, cx, i, figure, None);
+                    figure_pane(ui, cx, i, *figure, None);
                 }
                 None => {
                     ui.label(format!(
@@ -57,7 +58,7 @@ pub fn pane_ui(
             }
         }
         Pane::Detail(name) => match room.kind().and_then(|k| cx.shown(k)) {
-            Some(i) => detail_pane(ui, cx, i, name),
+            Some(i) => detail_pane(ui, cx, i, *name),
             None => {
                 ui.label("No result yet.");
             }
@@ -87,11 +88,11 @@ fn figure_pane(
     ui: &mut egui::Ui,
     cx: &mut Cx,
     i: usize,
-    name: &str,
+    name: FigureId,
     layout: Option<(TileId, &mut Vec<TileRequest>)>,
 ) {
     let r = &cx.analyses.results[i];
-    let Some((_, fig)) = r.figures.iter().find(|(n, _)| n == name) else {
+    let Some(fig) = r.figure(name) else {
         ui.label(format!(
             "«{}» has no figure «{name}» (Reset layout fits the tiles to it).",
             r.label
@@ -122,7 +123,7 @@ fn figure_pane(
         {
             requests.push(TileRequest::AddBeside(
                 Pane::Pinned {
-                    figure: name.to_string(),
+                    figure: name,
                     created: r.created,
                     label: r.label.clone(),
                 },
@@ -142,12 +143,12 @@ fn figure_pane(
     let linked_cells =
         r.links_of(name, None).is_some() && matches!(fig.kind, FigureKind::Heatmap(_));
     let Some(details) = r.details_of(name).filter(|d| !d.items.is_empty()) else {
-        let key = (i, name.to_string(), None);
+        let key = (i, name, None);
         let selection = if linked_cells {
             FigureSelection::Cell(cx.analyses.cells.get(&key).copied())
         } else if r.kind == AnalysisKind::Robustness && matches!(fig.kind, FigureKind::Chart(_)) {
             match &cx.selection.strength {
-                Some((ri, f, x)) if *ri == i && f == name => FigureSelection::Marker(*x),
+                Some((ri, f, x)) if *ri == i && *f == name => FigureSelection::Marker(*x),
                 _ => FigureSelection::Marker(f64::NAN),
             }
         } else {
@@ -174,7 +175,7 @@ fn figure_pane(
         }
         return;
     };
-    let key = (i, name.to_string());
+    let key = (i, name);
     let chart = matches!(fig.kind, figures::FigureKind::Chart(_));
     let mut sel = cx.analyses.selected.get(&key).copied();
     if chart {
@@ -225,7 +226,7 @@ fn figure_pane(
     if (act.clicked_image.is_some() || act.marker_x.is_some())
         && let Some(requests) = requests
     {
-        requests.push(TileRequest::Activate(Pane::Detail(name.to_string())));
+        requests.push(TileRequest::Activate(Pane::Detail(name)));
     }
     if let Some(k) = sel {
         cx.analyses.selected.insert(key, k);
@@ -233,18 +234,18 @@ fn figure_pane(
 }
 
 /// The detail figure selected through figure `name` of result `i`.
-fn detail_pane(ui: &mut egui::Ui, cx: &mut Cx, i: usize, name: &str) {
+fn detail_pane(ui: &mut egui::Ui, cx: &mut Cx, i: usize, name: FigureId) {
     let r = &cx.analyses.results[i];
     let Some(details) = r.details_of(name).filter(|d| !d.items.is_empty()) else {
         ui.label("Nothing to select in this result.");
         return;
     };
-    let sel = cx.analyses.selected.get(&(i, name.to_string())).copied();
+    let sel = cx.analyses.selected.get(&(i, name)).copied();
     let Some((_, detail)) = sel.and_then(|k| details.items.get(k)) else {
         ui.label(format!(
             "Click a {} in «{}» to see it here.",
             details.selector,
-            name.replace('-', " ")
+            name.key().replace('-', " ")
         ));
         return;
     };
@@ -267,7 +268,7 @@ fn detail_pane(ui: &mut egui::Ui, cx: &mut Cx, i: usize, name: &str) {
     let detail: &Figure = &r.details_of(name).expect("checked above").items[k].1;
     let id = format!("{i}-{name}-detail");
     let height = (ui.available_height() - 30.0).max(120.0);
-    let key = (i, name.to_string(), Some(k));
+    let key = (i, name, Some(k));
     let selection = if r.links_of(name, Some(k)).is_some() {
         FigureSelection::Cell(cx.analyses.cells.get(&key).copied())
     } else {
@@ -290,7 +291,7 @@ fn detail_pane(ui: &mut egui::Ui, cx: &mut Cx, i: usize, name: &str) {
 fn select_linked(
     cx: &mut Cx,
     i: usize,
-    name: &str,
+    name: FigureId,
     detail: Option<usize>,
     at: [usize; 2],
     pinned: bool,
@@ -325,9 +326,9 @@ fn select_linked(
 }
 
 /// A click on a robustness chart chooses the strength nearest to `x` among its points.
-fn strength_chosen(cx: &mut Cx, i: usize, name: &str, x: f64) {
+fn strength_chosen(cx: &mut Cx, i: usize, name: FigureId, x: f64) {
     let r = &cx.analyses.results[i];
-    let Some((_, fig)) = r.figures.iter().find(|(n, _)| n == name) else {
+    let Some(fig) = r.figure(name) else {
         return;
     };
     let FigureKind::Chart(c) = &fig.kind else {
@@ -342,15 +343,15 @@ fn strength_chosen(cx: &mut Cx, i: usize, name: &str, x: f64) {
     if let Some(strength) = nearest {
         cx.commands.push(Command::Strength {
             result: i,
-            figure: name.to_string(),
+            figure: name,
             strength,
         });
     }
 }
 
 /// Each method's score at the chosen strength, under its chart.
-fn strength_values(ui: &mut egui::Ui, r: &AnalysisResult, name: &str, x: f64) {
-    let Some((_, fig)) = r.figures.iter().find(|(n, _)| n == name) else {
+fn strength_values(ui: &mut egui::Ui, r: &AnalysisResult, name: FigureId, x: f64) {
+    let Some(fig) = r.figure(name) else {
         return;
     };
     let FigureKind::Chart(c) = &fig.kind else {

@@ -9,6 +9,7 @@ use crate::app::figure_view::{self, Selection as FigureSelection};
 use crate::app::loader::LoadedSession;
 use crate::app::results::{Analyses, JobOutput, experiment_error, sequences_ready};
 use crate::catalogue::{MethodId, Task};
+use crate::experiments::figure_id::FigureId;
 use crate::experiments::recognition::report::{accuracy_comparison, recognition_report};
 use crate::experiments::recognition::{RecognitionParams, SupervisedLearner, run_recognition};
 use crate::experiments::result::features_text;
@@ -127,11 +128,11 @@ impl Room for RecognitionRoom {
     }
 
     fn default_groups(&self) -> Vec<Vec<Pane>> {
-        let f = |n: &str| Pane::Figure(n.to_string());
+        let f = Pane::Figure;
         vec![
-            vec![f("accuracy-by-trials"), Pane::Comparison],
-            vec![f("confusion"), Pane::Scores],
-            vec![f("early-classification"), f("lengthscales")],
+            vec![f(FigureId::AccuracyByTrials), Pane::Comparison],
+            vec![f(FigureId::Confusion), Pane::Scores],
+            vec![f(FigureId::EarlyClassification), f(FigureId::Lengthscales)],
             vec![Pane::Replay],
         ]
     }

@@ -9,6 +9,7 @@ use crate::app::loader::LoadedSession;
 use crate::app::results::Analyses;
 use crate::app::results::JobOutput;
 use crate::catalogue::{MethodId, Task};
+use crate::experiments::figure_id::FigureId;
 use crate::experiments::result::{AnalysisKind, SizeReason};
 use crate::experiments::stability::report::stability_report;
 use crate::experiments::stability::{
@@ -134,22 +135,30 @@ impl Room for StabilityRoom {
     }
 
     fn default_groups(&self) -> Vec<Vec<Pane>> {
-        let f = |n: &str| Pane::Figure(n.to_string());
+        let f = Pane::Figure;
         vec![
-            vec![f("bases-raw"), f("bases-filtered"), f("reconstruction")],
             vec![
-                f("score-vs-bases"),
-                f("beta-gamma"),
-                f("coefficient-differential"),
+                f(FigureId::BasesRaw),
+                f(FigureId::BasesFiltered),
+                f(FigureId::Reconstruction),
+            ],
+            vec![
+                f(FigureId::ScoreVsBases),
+                f(FigureId::BetaGamma),
+                f(FigureId::CoefficientDifferential),
                 Pane::Scores,
             ],
             vec![
-                f("usage-differential"),
+                f(FigureId::UsageDifferential),
                 Pane::Grasp,
-                Pane::Detail("bases-raw".into()),
-                f("basis-usage"),
+                Pane::Detail(FigureId::BasesRaw),
+                f(FigureId::BasisUsage),
             ],
-            vec![f("confusion-kfold"), f("confusion-objects"), Pane::Replay],
+            vec![
+                f(FigureId::ConfusionKfold),
+                f(FigureId::ConfusionObjects),
+                Pane::Replay,
+            ],
         ]
     }
 

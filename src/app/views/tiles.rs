@@ -11,6 +11,7 @@ use super::pane::TileRequest;
 // The rooms name their default panes through here.
 pub use super::pane::Pane;
 use super::{Cx, Room, panes};
+use crate::experiments::figure_id::FigureId;
 use crate::experiments::result::AnalysisResult;
 
 /// The smallest side of a tile (points).
@@ -40,32 +41,22 @@ impl Layout {
         result: Option<&AnalysisResult>,
         result_index: Option<usize>,
     ) -> Layout {
-        let has = |p: &Pane| match (p, result) {
-            (Pane::Figure(name) | Pane::Detail(name), Some(r)) => {
-                r.figures.iter().any(|(n, _)| n == name)
-                    && (matches!(p, Pane::Figure(_)) || r.details_of(name).is_some())
-            }
-            (Pane::Figure(_) | Pane::Detail(_), None) => false,
-            (Pane::Grasp, _) => result.is_some_and(|r| !r.grasp_codes.is_empty()),
-            _ => true,
-        };
         let mut groups: Vec<Vec<Pane>> = groups
             .into_iter()
-            .map(|g| g.into_iter().filter(|p| has(p)).collect::<Vec<_>>())
+            .map(|g| {
+                g.into_iter()
+                    .filter(|p| shows(p, result))
+                    .collect::<Vec<_>>()
+            })
             .filter(|g| !g.is_empty())
             .collect();
         if let Some(r) = result {
-            let named = |name: &str| {
-                groups
-                    .iter()
-                    .flatten()
-                    .any(|p| matches!(p, Pane::Figure(n) if n == name))
-            };
+            let named = |id: FigureId| groups.iter().flatten().any(|p| *p == Pane::Figure(id));
             let extra: Vec<Pane> = r
                 .figures
                 .iter()
-                .filter(|(n, _)| !named(n))
-                .map(|(n, _)| Pane::Figure(n.clone()))
+                .filter(|(n, _)| !named(*n))
+                .map(|(n, _)| Pane::Figure(*n))
                 .collect();
             if groups.len() < 4 {
                 // Fill the grid first: each extra figure its own cell while there is room.
@@ -139,6 +130,44 @@ impl Layout {
             }
         }
         self.edited = true;
+    }
+
+    /// Fit the layout to the result it shows: a pane with nothing to show for it is hidden
+    /// (it comes back for a result that has its figure), and a figure of the result that no
+    /// tile shows gets a tab of the first group. The user's arrangement is otherwise kept.
+    pub fn fit_to(&mut self, result: Option<&AnalysisResult>) {
+        let panes: Vec<(TileId, bool)> = self
+            .tree
+            .tiles
+            .iter()
+            .filter_map(|(id, t)| match t {
+                Tile::Pane(p) => Some((*id, shows(p, result))),
+                Tile::Container(_) => None,
+            })
+            .collect();
+        for (id, visible) in panes {
+            self.tree.tiles.set_visible(id, visible);
+        }
+        let Some(r) = result else { return };
+        let first_tabs =
+            self.tree.tiles.iter().find_map(|(id, t)| {
+                matches!(t, Tile::Container(Container::Tabs(_))).then_some(*id)
+            });
+        for (id, _) in &r.figures {
+            let pane = Pane::Figure(*id);
+            if self.tree.tiles.find_pane(&pane).is_some() {
+                continue;
+            }
+            let new = self.tree.tiles.insert_pane(pane);
+            match first_tabs.and_then(|t| self.tree.tiles.get_mut(t)) {
+                Some(Tile::Container(Container::Tabs(t))) => t.add_child(new),
+                _ => {
+                    let children: Vec<TileId> = self.tree.root().into_iter().chain([new]).collect();
+                    let tabs = self.tree.tiles.insert_tab_tile(children);
+                    self.tree.root = Some(tabs);
+                }
+            }
+        }
     }
 
     /// Make the tab holding `pane` the active one of its group.
@@ -223,8 +252,22 @@ impl Behavior<Pane> for RoomTiles<'_, '_, '_> {
     }
 }
 
+/// Whether `pane` has something to show for `result`, the shown result of its room (None:
+/// the room shows none, or has none yet).
+fn shows(pane: &Pane, result: Option<&AnalysisResult>) -> bool {
+    match (pane, result) {
+        (Pane::Figure(id), Some(r)) => r.figure(*id).is_some(),
+        (Pane::Detail(id), Some(r)) => r.figure(*id).is_some() && r.details_of(*id).is_some(),
+        (Pane::Figure(_) | Pane::Detail(_), None) => false,
+        (Pane::Grasp, _) => result.is_some_and(|r| !r.grasp_codes.is_empty()),
+        _ => true,
+    }
+}
+
 /// Draw `layout` for `room` in the rest of `ui`.
 pub fn show(ui: &mut egui::Ui, layout: &mut Layout, room: &mut dyn Room, cx: &mut Cx) {
+    let shown = room.kind().and_then(|k| cx.shown(k));
+    layout.fit_to(shown.map(|i| &cx.analyses.results[i]));
     let mut behavior = RoomTiles {
         room,
         cx,
@@ -232,7 +275,9 @@ pub fn show(ui: &mut egui::Ui, layout: &mut Layout, room: &mut dyn Room, cx: &mu
         edited: false,
     };
     match layout.maximised {
-        Some(id) if layout.tree.tiles.get_pane(&id).is_some() => {
+        Some(id)
+            if layout.tree.tiles.get_pane(&id).is_some() && layout.tree.tiles.is_visible(id) =>
+        {
             ui.horizontal(|ui| {
                 if ui.button("Restore layout").clicked() {
                     layout.maximised = None;
@@ -260,5 +305,47 @@ pub fn show(ui: &mut egui::Ui, layout: &mut Layout, room: &mut dyn Room, cx: &mu
             TileRequest::AddBeside(pane, id) => layout.add_beside(pane, Some(id)),
             TileRequest::Activate(pane) => layout.activate(&pane),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::experiments::result::tests::result;
+
+    fn pane_visible(layout: &Layout, pane: &Pane) -> Option<bool> {
+        let id = layout.tree.tiles.find_pane(pane)?;
+        Some(layout.tree.tiles.is_visible(id))
+    }
+
+    /// A layout the user arranged for one result hides the tiles whose figures the next
+    /// result lacks, gives that result's own figures tabs, and shows the hidden ones again
+    /// for a result that has them.
+    #[test]
+    fn a_layout_fits_each_result_it_shows() {
+        let first = result();
+        let (first_id, _) = first.figures[0];
+        let mut other = result();
+        other.figures[0].0 = FigureId::Confusion;
+        let mut layout = Layout::build(
+            "test",
+            vec![vec![Pane::Figure(first_id), Pane::Scores]],
+            Some(&first),
+            Some(0),
+        );
+        layout.edited = true;
+        layout.fit_to(Some(&other));
+        assert_eq!(pane_visible(&layout, &Pane::Figure(first_id)), Some(false));
+        assert_eq!(
+            pane_visible(&layout, &Pane::Figure(FigureId::Confusion)),
+            Some(true)
+        );
+        assert_eq!(pane_visible(&layout, &Pane::Scores), Some(true));
+        layout.fit_to(Some(&first));
+        assert_eq!(pane_visible(&layout, &Pane::Figure(first_id)), Some(true));
+        assert_eq!(
+            pane_visible(&layout, &Pane::Figure(FigureId::Confusion)),
+            Some(false)
+        );
     }
 }

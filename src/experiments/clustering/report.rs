@@ -6,6 +6,7 @@
 use super::{ClusteringResult, ClusteringRun, EffectivePoint, UnsupervisedLearner};
 use crate::cluster::order_agreement::CHOSEN_THRESHOLD;
 use crate::cluster::{KMEANS_NAME, SOM_NAME};
+use crate::experiments::figure_id::FigureId;
 use crate::experiments::links::{GraspLinks, grasps_text};
 use crate::experiments::result::{
     AnalysisKind, AnalysisResult, FigureDetails, MeanSd, common_parameters, features_text,
@@ -37,20 +38,20 @@ pub fn clustering_report(session: &str, r: &ClusteringResult) -> AnalysisResult 
     let reps = p.reps;
     let mut figures = vec![
         (
-            "scores-vs-threshold".to_string(),
+            FigureId::ScoresVsThreshold,
             scores_vs_threshold(r, &th, &label),
         ),
         (
-            "clusters-vs-threshold".to_string(),
+            FigureId::ClustersVsThreshold,
             clusters_vs_threshold(r, &th, &label),
         ),
         (
-            "nmi-vs-effective".to_string(),
+            FigureId::NmiVsEffective,
             nmi_vs_effective(r, learner, &label),
         ),
     ];
     let (at_10, mut scores) = scores_at_10(r, learner);
-    figures.extend(at_10.map(|f| ("scores-at-10".to_string(), f)));
+    figures.extend(at_10.map(|f| (FigureId::ScoresAt10, f)));
     let headline = r
         .at_10
         .as_ref()
@@ -267,7 +268,7 @@ fn chosen_threshold(f: Figure, r: &ClusteringResult) -> Figure {
 /// on Fig. 11: true classes against clusters, counted in grasps; with the grasps behind
 /// each cell.
 fn clustering_details(r: &ClusteringResult) -> (Vec<FigureDetails>, Vec<GraspLinks>) {
-    let figure = "scores-vs-threshold";
+    let figure = FigureId::ScoresVsThreshold;
     let (items, links): (Vec<(f64, Figure)>, Vec<GraspLinks>) = r
         .runs
         .iter()
@@ -285,7 +286,7 @@ fn clustering_details(r: &ClusteringResult) -> (Vec<FigureDetails>, Vec<GraspLin
         return (Vec::new(), Vec::new());
     }
     let details = vec![FigureDetails {
-        figure: figure.into(),
+        figure,
         selector: "novelty threshold".into(),
         items,
     }];
@@ -306,7 +307,7 @@ fn contingency(
     r: &ClusteringResult,
     run: &ClusteringRun,
     assignment: &[usize],
-    name: &str,
+    name: FigureId,
     detail: usize,
 ) -> (Figure, GraspLinks) {
     let classes = r
@@ -431,10 +432,7 @@ mod tests {
         };
         assert_eq!(h.columns, ["3", "1", "2"]);
         let l = &links[0];
-        assert_eq!(
-            (l.figure.as_str(), l.detail),
-            ("scores-vs-threshold", Some(0))
-        );
+        assert_eq!((l.figure, l.detail), (FigureId::ScoresVsThreshold, Some(0)));
         let mut all: Vec<usize> = Vec::new();
         for item in &l.items {
             let [row, col] = item.at;

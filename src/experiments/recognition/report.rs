@@ -3,6 +3,7 @@
 //! lengthscale relevance; and the comparison of a session's models on one accuracy chart.
 
 use super::{RecognitionResult, SupervisedLearner};
+use crate::experiments::figure_id::FigureId;
 use crate::experiments::links::{GraspLinks, grasps_text};
 use crate::experiments::result::{
     AnalysisKind, AnalysisResult, MeanSd, ModelSize, common_parameters, features_text, now_unix,
@@ -27,19 +28,19 @@ pub fn recognition_report(session: &str, r: &RecognitionResult) -> AnalysisResul
     let reps = r.repetitions.len();
     let mut figures = vec![
         (
-            "accuracy-by-trials".to_string(),
+            FigureId::AccuracyByTrials,
             accuracy_by_trials(r, learner, &label),
         ),
-        ("confusion".to_string(), confusion_matrix(r, &label)),
+        (FigureId::Confusion, confusion_matrix(r, &label)),
     ];
     if !s.early.is_empty() {
         figures.push((
-            "early-classification".to_string(),
+            FigureId::EarlyClassification,
             early_classification(r, learner, &label),
         ));
     }
     if !s.lengthscales.is_empty() && !r.feature_names.is_empty() {
-        figures.push(("lengthscales".to_string(), lengthscale_relevance(r, &label)));
+        figures.push((FigureId::Lengthscales, lengthscale_relevance(r, &label)));
     }
 
     let mean_train: f64 =
@@ -212,7 +213,7 @@ fn confusion_links(r: &RecognitionResult) -> GraspLinks {
     let n = r.classes.len();
     let class = |c: usize| r.classes.get(c).map_or("?", String::as_str);
     GraspLinks::from_observations(
-        "confusion",
+        FigureId::Confusion,
         None,
         r.repetitions
             .iter()
@@ -241,7 +242,7 @@ pub fn accuracy_comparison(results: &[AnalysisResult], session: &str) -> Option<
     let mut test_from = None;
     let mut series = Vec::new();
     for r in mine().filter(|r| r.kind == AnalysisKind::Recognition) {
-        let Some((_, f)) = r.figures.iter().find(|(n, _)| n == "accuracy-by-trials") else {
+        let Some(f) = r.figure(FigureId::AccuracyByTrials) else {
             continue;
         };
         let FigureKind::Chart(c) = &f.kind else {
@@ -347,7 +348,7 @@ mod tests {
             train_seconds: 1.0,
             predict_seconds_per_sample: None,
             created: 0,
-            figures: vec![("accuracy-by-trials".into(), curve)],
+            figures: vec![(FigureId::AccuracyByTrials, curve)],
             details: Vec::new(),
             links: Vec::new(),
             grasp_codes: Vec::new(),

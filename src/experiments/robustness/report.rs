@@ -6,6 +6,7 @@
 use std::collections::BTreeMap;
 
 use super::{Family, RobustnessResult, Scope, Sweep};
+use crate::experiments::figure_id::FigureId;
 use crate::experiments::result::{AnalysisKind, AnalysisResult, now_unix};
 use crate::figures::{Axis, Figure, Orientation, Series, SeriesStyle};
 
@@ -109,7 +110,7 @@ pub fn robustness_report(session: &str, r: &RobustnessResult) -> AnalysisResult 
         .params
         .sweeps
         .iter()
-        .filter_map(|sw| sweep_figure(r, sw).map(|f| (sw.perturbation.key().to_string(), f)))
+        .filter_map(|sw| sweep_figure(r, sw).map(|f| (FigureId::Robustness(sw.perturbation), f)))
         .collect();
     let mut parameters = BTreeMap::new();
     parameters.insert("reps".to_string(), r.params.reps.to_string());

@@ -5,6 +5,7 @@
 //! (Fig. 11) and a patch's reconstruction (Fig. 2).
 
 use crate::catalogue::MethodId;
+use crate::experiments::figure_id::FigureId;
 use std::collections::BTreeMap;
 
 use super::{
@@ -133,7 +134,7 @@ fn basis_detail(u: &BasisUsage, b: usize, ok: &str, bad: &str) -> Figure {
 /// Confusion cell [true class, predicted class] (0 = success, 1 = failure, as the map's
 /// rows and columns) → the session grasps in it. None for a report without its grasps.
 fn confusion_links(
-    figure: &str,
+    figure: FigureId,
     r: &StabilityReport,
     cv: &CvResult,
     ok: &str,
@@ -229,21 +230,21 @@ pub fn stability_report(r: &StabilityReport) -> AnalysisResult {
 
 /// Every figure of the report, in the order shown: the grid's (when there is one), the
 /// basis images, the confusion maps, the usage bars and a patch's reconstruction.
-fn figures(r: &StabilityReport) -> Vec<(String, Figure)> {
+fn figures(r: &StabilityReport) -> Vec<(FigureId, Figure)> {
     let p = &r.parsimonious;
     let (ok, bad) = (r.success_class.as_str(), r.failure_class.as_str());
     let mut figures = Vec::new();
     if let Some(g) = &r.grid {
-        figures.push(("score-vs-bases".to_string(), score_vs_bases(r, g)));
-        figures.push(("beta-gamma".to_string(), beta_gamma_map(g)));
+        figures.push((FigureId::ScoreVsBases, score_vs_bases(r, g)));
+        figures.push((FigureId::BetaGamma, beta_gamma_map(g)));
     }
     figures.extend(basis_images(r));
     figures.push((
-        "confusion-kfold".to_string(),
+        FigureId::ConfusionKfold,
         confusion(&format!("Confusion map, {}", r.kfold_cv), &p.kfold, ok, bad),
     ));
     figures.push((
-        "confusion-objects".to_string(),
+        FigureId::ConfusionObjects,
         confusion(
             &format!("Confusion map, {} (new objects)", r.objects_cv),
             &p.objects,
@@ -253,7 +254,7 @@ fn figures(r: &StabilityReport) -> Vec<(String, Figure)> {
     ));
     figures.extend(usage_figures(r));
     if let Some(f) = reconstruction(r) {
-        figures.push(("reconstruction".to_string(), f));
+        figures.push((FigureId::Reconstruction, f));
     }
     figures
 }
@@ -355,7 +356,7 @@ fn beta_gamma_map(g: &GridResult) -> Figure {
 
 /// The basis images raw and, when there are raw ones, filtered (Fig. 6); none for a sensor
 /// without a layout.
-fn basis_images(r: &StabilityReport) -> Vec<(String, Figure)> {
+fn basis_images(r: &StabilityReport) -> Vec<(FigureId, Figure)> {
     let mut figures = Vec::new();
     let raw: Vec<GridImage> = r
         .analyses
@@ -371,7 +372,7 @@ fn basis_images(r: &StabilityReport) -> Vec<(String, Figure)> {
         return figures;
     }
     figures.push((
-        "bases-raw".to_string(),
+        FigureId::BasesRaw,
         Figure::new(
             "Basis images",
             FigureKind::ImageGrid(ImageGrid {
@@ -397,7 +398,7 @@ fn basis_images(r: &StabilityReport) -> Vec<(String, Figure)> {
         .collect();
     if !filtered.is_empty() {
         figures.push((
-            "bases-filtered".to_string(),
+            FigureId::BasesFiltered,
             Figure::new(
                 "Basis images, filtered",
                 FigureKind::ImageGrid(ImageGrid {
@@ -414,13 +415,13 @@ fn basis_images(r: &StabilityReport) -> Vec<(String, Figure)> {
 
 /// Basis usage per label (Figs. 8–9), the usage differential (Fig. 10) and the
 /// coefficient differential (Fig. 11).
-fn usage_figures(r: &StabilityReport) -> [(String, Figure); 3] {
+fn usage_figures(r: &StabilityReport) -> [(FigureId, Figure); 3] {
     let (ok, bad) = (r.success_class.as_str(), r.failure_class.as_str());
     let u = &r.analyses.usage;
     let k = u.grasp_usage_success.len();
     [
         (
-            "basis-usage".to_string(),
+            FigureId::BasisUsage,
             Figure::bars(
                 "Basis usage per label",
                 AxisTitle {
@@ -436,7 +437,7 @@ fn usage_figures(r: &StabilityReport) -> [(String, Figure); 3] {
             ),
         ),
         (
-            "usage-differential".to_string(),
+            FigureId::UsageDifferential,
             signed_bars(
                 "Basis usage differential",
                 &format!("usage ({ok}) − usage ({bad})"),
@@ -445,7 +446,7 @@ fn usage_figures(r: &StabilityReport) -> [(String, Figure); 3] {
             ),
         ),
         (
-            "coefficient-differential".to_string(),
+            FigureId::CoefficientDifferential,
             signed_bars(
                 "Coefficient differential",
                 &format!("mean |coefficient| ({ok}) − ({bad})"),
@@ -515,7 +516,7 @@ fn reconstruction(r: &StabilityReport) -> Option<Figure> {
 }
 
 /// A click on a basis image (raw or filtered) shows that basis's usage.
-fn basis_usage_details(r: &StabilityReport, figures: &[(String, Figure)]) -> Vec<FigureDetails> {
+fn basis_usage_details(r: &StabilityReport, figures: &[(FigureId, Figure)]) -> Vec<FigureDetails> {
     let (ok, bad) = (r.success_class.as_str(), r.failure_class.as_str());
     let usage_items: Vec<(f64, Figure)> = r
         .analyses
@@ -525,11 +526,11 @@ fn basis_usage_details(r: &StabilityReport, figures: &[(String, Figure)]) -> Vec
         .enumerate()
         .map(|(i, b)| (i as f64, basis_detail(&r.analyses.usage, b.basis, ok, bad)))
         .collect();
-    ["bases-raw", "bases-filtered"]
+    [FigureId::BasesRaw, FigureId::BasesFiltered]
         .into_iter()
-        .filter(|name| figures.iter().any(|(n, _)| n == name))
+        .filter(|id| figures.iter().any(|(n, _)| n == id))
         .map(|name| FigureDetails {
-            figure: name.into(),
+            figure: name,
             selector: "basis".into(),
             items: usage_items.clone(),
         })
@@ -537,12 +538,12 @@ fn basis_usage_details(r: &StabilityReport, figures: &[(String, Figure)]) -> Vec
 }
 
 /// The grasps behind the confusion maps' cells and the basis images.
-fn links(r: &StabilityReport, figures: &[(String, Figure)]) -> Vec<GraspLinks> {
+fn links(r: &StabilityReport, figures: &[(FigureId, Figure)]) -> Vec<GraspLinks> {
     let p = &r.parsimonious;
     let (ok, bad) = (r.success_class.as_str(), r.failure_class.as_str());
     let mut links: Vec<GraspLinks> = [
-        ("confusion-kfold", &p.kfold),
-        ("confusion-objects", &p.objects),
+        (FigureId::ConfusionKfold, &p.kfold),
+        (FigureId::ConfusionObjects, &p.objects),
     ]
     .into_iter()
     .filter_map(|(name, cv)| confusion_links(name, r, cv, ok, bad))
@@ -563,10 +564,10 @@ fn links(r: &StabilityReport, figures: &[(String, Figure)]) -> Vec<GraspLinks> {
         .map(|b| b.basis)
         .collect();
     for (name, bases) in [
-        ("bases-raw", &raw_bases),
-        ("bases-filtered", &filtered_bases),
+        (FigureId::BasesRaw, &raw_bases),
+        (FigureId::BasesFiltered, &filtered_bases),
     ] {
-        if figures.iter().any(|(n, _)| n == name) {
+        if figures.iter().any(|(n, _)| *n == name) {
             links.push(basis_links(name, bases, &r.grasp_codes));
         }
     }
