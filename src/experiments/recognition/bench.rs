@@ -260,6 +260,12 @@ pub fn bench_session_steps(
     })
 }
 
+/// Where and when [`LIBOTL_US`] were measured: a benchmark prints this beside them and
+/// shows no ratio to them (a ratio across machines and loads says little).
+pub const LIBOTL_MEASURED: &str = "the authors' C++ library built -O3, measured on another \
+     machine (a 2-core Intel Xeon with AVX-512, load under 1), recorded 2026-11-25 in \
+     docs/recognition-speed.md; not comparable as a ratio";
+
 /// libOTL's figures at the anchor's settings (the authors' C++ library built `-O3`, on the
 /// machine of docs/recognition-speed.md: iCub features, 10 classes, capacity 50, tau 15, no
 /// adaptation, medians once every expert holds 50 BVs), µs.
