@@ -84,7 +84,10 @@ fn gs_frontier_on_the_recognition_sample_recommends_by_the_one_se_rule() {
     let f = run_frontier(&s, &params, &Progress::new()).unwrap();
     assert_eq!(f.points.len(), 6);
     assert_eq!(f.unit, "step");
-    assert_eq!(f.points[f.paper_default.unwrap()].label, "50·15");
+    assert_eq!(
+        f.points[f.paper_default.unwrap()].label,
+        "capacity 50 · τ 15"
+    );
     check_rule(&f);
     // Chance on the sample's classes is far below what any size reaches.
     assert!(f.points[f.best].score > 0.5, "{}", f.points[f.best].score);

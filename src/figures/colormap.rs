@@ -76,10 +76,12 @@ impl ColorMap {
     }
 }
 
-/// The default colour of the `i`-th series or bar group (Okabe–Ito: distinguishable with
-/// the common colour-vision deficiencies), shared by the export and the views.
+/// The default colour of the `i`-th series or bar group, shared by the export and the views:
+/// Okabe–Ito's seven (distinguishable with the common colour-vision deficiencies), then five
+/// of Paul Tol's muted scheme, so that the iCub's nine joints (and up to twelve series) each
+/// get a colour of their own before any repeats.
 pub fn series_color(i: usize) -> Rgb {
-    const PALETTE: [Rgb; 7] = [
+    const PALETTE: [Rgb; 12] = [
         Rgb(0x00, 0x72, 0xb2),
         Rgb(0xd5, 0x5e, 0x00),
         Rgb(0x00, 0x9e, 0x73),
@@ -87,6 +89,11 @@ pub fn series_color(i: usize) -> Rgb {
         Rgb(0xe6, 0x9f, 0x00),
         Rgb(0x56, 0xb4, 0xe9),
         Rgb(0x00, 0x00, 0x00),
+        Rgb(0x88, 0x22, 0x55),
+        Rgb(0x99, 0x99, 0x33),
+        Rgb(0x33, 0x22, 0x88),
+        Rgb(0xcc, 0x66, 0x77),
+        Rgb(0x44, 0xaa, 0x99),
     ];
     PALETTE[i % PALETTE.len()]
 }
@@ -190,6 +197,15 @@ const VIRIDIS: [[f64; 3]; 256] = [
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn twelve_series_get_twelve_colours() {
+        let mut seen: Vec<Rgb> = (0..12).map(series_color).collect();
+        seen.sort_by_key(|c| (c.0, c.1, c.2));
+        seen.dedup();
+        assert_eq!(seen.len(), 12);
+        assert_eq!(series_color(12), series_color(0));
+    }
+
     use super::*;
 
     #[test]

@@ -106,10 +106,11 @@ fn row(ui: &mut egui::Ui, cx: &mut Cx, i: usize) {
             .clicked()
         {
             let trained = &cx.analyses.models.list[i].file.provenance.session.name;
-            let session = cx
-                .sessions
-                .iter()
-                .position(|s| &s.session.meta.name != trained)
+            // The active session, unless the model trained on it: then another open one.
+            let other = |k: &usize| &cx.sessions[*k].session.meta.name != trained;
+            let session = Some(cx.active)
+                .filter(|k| *k < cx.sessions.len() && other(k))
+                .or_else(|| (0..cx.sessions.len()).find(other))
                 .unwrap_or(cx.active);
             cx.analyses.models.evaluate = Some(EvaluateForm::new(i, session));
         }

@@ -250,7 +250,7 @@ fn positive(name: &'static str, v: &[f64]) -> Result<(), ExperimentError> {
 /// One model size on the frontier.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FrontierPoint {
-    /// A short label for the chart, e.g. "5·1" (capacity·tau), "K 29", "θ 0.3", "k 10" or
+    /// A short label for the chart, e.g. "capacity 5 · τ 1", "K 29", "θ 0.3", "k 10" or
     /// "C 10 γ 0.01".
     pub label: String,
     /// The whole configuration in words, for a tooltip.

@@ -66,7 +66,7 @@ pub(super) fn recognition_points(
                 }
             }
             point(
-                format!("{capacity}·{tau}"),
+                format!("capacity {capacity} · τ {tau}"),
                 format!(
                     "{}, {} features: capacity {capacity}, tau {tau}",
                     params.method.title(),

@@ -65,7 +65,7 @@ fn clusters_chart(frontiers: &[Frontier]) -> Option<Figure> {
         );
         rx.push(eff[f.recommended]);
         ry.push(f.points[f.recommended].score);
-        rl.push(format!("{name} {}", f.points[f.recommended].label));
+        rl.push(format!("{name} · {}", f.points[f.recommended].label));
         names.push(name);
     }
     if series.is_empty() {
@@ -151,11 +151,13 @@ fn frontier_chart(frontiers: &[Frontier], axis: CostAxis) -> Figure {
         let rec = f.recommended;
         marked[0].0.push(x_of(rec));
         marked[0].1.push(y_of(rec));
-        marked[0].2.push(format!("{name} {}", f.points[rec].label));
+        marked[0]
+            .2
+            .push(format!("{name} · {}", f.points[rec].label));
         if let Some(d) = f.paper_default.filter(|&d| d != rec) {
             marked[1].0.push(x_of(d));
             marked[1].1.push(y_of(d));
-            marked[1].2.push(format!("paper {}", f.points[d].label));
+            marked[1].2.push(format!("paper · {}", f.points[d].label));
         }
     }
     let [(rx, ry, rl), (px, py, pl)] = marked;
