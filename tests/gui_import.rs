@@ -164,3 +164,31 @@ fn cancel_drops_the_recording_and_opens_nothing() {
     assert_eq!(h.state().sessions.len(), 2);
     assert!(!h.state().is_loading());
 }
+
+/// A session the user opens becomes the active one once it has loaded, with a toast; the
+/// sessions restored at start leave the active one where it was.
+#[test]
+fn a_session_the_user_opens_becomes_active_with_a_toast() {
+    let mut h = common::gui::workbench(1400.0, 900.0);
+    h.run_ok();
+    assert_eq!(h.state().sessions.len(), 2);
+    let mut copy =
+        tactile_workbench::session::open(&common::sample("grasp-stability.json")).unwrap();
+    copy.meta.name = "A copy of the stability sample".into();
+    let dir = common::temp_dir("gui-open-active");
+    let path = dir.join("copy.json");
+    tactile_workbench::session::native::save(&copy, &path).unwrap();
+    let ctx = h.ctx.clone();
+    h.state_mut().open_path(path, &ctx);
+    let t0 = Instant::now();
+    while h.state().sessions.len() < 3 && t0.elapsed() < Duration::from_secs(60) {
+        h.step();
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    h.run_ok();
+    let state = h.state();
+    let active = &state.sessions[state.browser.active].session.meta.name;
+    assert_eq!(active, "A copy of the stability sample");
+    h.get_by_label_contains("opened «A copy of the stability sample»");
+    let _ = std::fs::remove_dir_all(dir);
+}
