@@ -121,3 +121,41 @@ fn the_export_folder_and_preset_persist_and_exports_report_absolute_paths() {
     assert!(said.contains(&svg.display().to_string()), "{said}");
     std::fs::remove_dir_all(&chosen).unwrap();
 }
+
+/// Keeping results and models in the data folder shows no bar in the jobs strip; a run does.
+#[test]
+fn bookkeeping_jobs_have_no_progress_bar() {
+    use tactile_workbench::app::results::JobOutput;
+    let mut h = common::gui::workbench(1000.0, 700.0);
+    h.run_ok();
+    let (release, wait) = std::sync::mpsc::channel::<()>();
+    let (release_run, wait_run) = std::sync::mpsc::channel::<()>();
+    let ctx = h.ctx.clone();
+    h.state_mut()
+        .analyses
+        .spawn_bookkeeping(&ctx, "Keeping the results".into(), move |_| {
+            let _ = wait.recv();
+            Ok(JobOutput::Kept)
+        });
+    for _ in 0..3 {
+        h.step();
+    }
+    assert!(h.query_by_label_contains("Keeping the results").is_none());
+    assert!(
+        h.query_by_label("Cancel").is_none(),
+        "no jobs strip for bookkeeping"
+    );
+    h.state_mut()
+        .analyses
+        .spawn(&ctx, None, "A visible run".into(), move |_| {
+            let _ = wait_run.recv();
+            Ok(JobOutput::Kept)
+        });
+    for _ in 0..3 {
+        h.step();
+    }
+    h.get_by_label("A visible run");
+    release.send(()).unwrap();
+    release_run.send(()).unwrap();
+    common::gui::wait_for_jobs(&mut h, std::time::Duration::from_secs(30));
+}

@@ -519,7 +519,7 @@ impl WorkbenchApp {
     /// Draw the whole workbench into `ui`.
     pub fn show(&mut self, ui: &mut egui::Ui) {
         egui::Panel::top("menu").show(ui, |ui| self.menu(ui));
-        if self.analyses.busy() {
+        if self.analyses.shows_jobs() {
             egui::Panel::bottom("jobs").show(ui, |ui| self.analyses.jobs_ui(ui));
         }
         // Side panels keep to a share of the window, whatever a section opened in them

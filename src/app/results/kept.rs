@@ -29,7 +29,7 @@ impl Analyses {
             }
         }
         for (path, file) in writes {
-            self.spawn(ctx, None, "Keeping a model".into(), move |_| {
+            self.spawn_bookkeeping(ctx, "Keeping a model".into(), move |_| {
                 if let Some(dir) = path.parent() {
                     std::fs::create_dir_all(dir)
                         .map_err(|e| JobError::failed(format!("{}: {e}", dir.display())))?;
@@ -188,7 +188,7 @@ impl Analyses {
         self.keep_pending = false;
         let project = crate::project::Project::new(sessions, self.results.clone())
             .with_frontiers(self.frontiers.clone());
-        self.spawn(ctx, None, KEEP_JOB.into(), move |_| {
+        self.spawn_bookkeeping(ctx, KEEP_JOB.into(), move |_| {
             if let Some(dir) = path.parent() {
                 std::fs::create_dir_all(dir)
                     .map_err(|e| JobError::failed(format!("{}: {e}", dir.display())))?;

@@ -40,6 +40,9 @@ pub struct RunningJob {
     /// The kind of run for the timings and the seconds its model expected (a run that
     /// finishes corrects the expectation of the next).
     pub timing: Option<(String, f64)>,
+    /// Keeping results and models in the data folder: no bar in the jobs strip (a failure
+    /// still shows as a notification).
+    pub bookkeeping: bool,
 }
 
 pub enum JobOutput {
@@ -131,6 +134,11 @@ const KEEP_JOB: &str = "Keeping the results";
 impl Analyses {
     pub fn busy(&self) -> bool {
         !self.jobs.is_empty()
+    }
+
+    /// A job the jobs strip shows is running (bookkeeping has no bar).
+    pub fn shows_jobs(&self) -> bool {
+        self.jobs.iter().any(|j| !j.bookkeeping)
     }
 
     /// A job of this analysis is running (one at a time per analysis).
@@ -309,7 +317,21 @@ impl Analyses {
             title,
             job,
             timing: None,
+            bookkeeping: false,
         });
+    }
+
+    /// Spawn a job that keeps something in the data folder, out of the jobs strip.
+    pub fn spawn_bookkeeping(
+        &mut self,
+        ctx: &egui::Context,
+        title: String,
+        work: impl FnOnce(&crate::jobs::Progress) -> Result<JobOutput, JobError> + Send + 'static,
+    ) {
+        self.spawn(ctx, None, title, work);
+        if let Some(rj) = self.jobs.last_mut() {
+            rj.bookkeeping = true;
+        }
     }
 
     /// Spawn a run of the timed kind `timing` whose model expects `modelled` seconds: its
@@ -334,7 +356,7 @@ impl Analyses {
 
     /// The jobs strip: what runs, how far, time left, Cancel.
     pub fn jobs_ui(&mut self, ui: &mut egui::Ui) {
-        for rj in &mut self.jobs {
+        for rj in self.jobs.iter_mut().filter(|j| !j.bookkeeping) {
             ui.horizontal(|ui| {
                 ui.label(&rj.title);
                 let p = &rj.job.progress;
