@@ -1,6 +1,6 @@
 //! The adversarial pass of issue 44, through the command line: outputs that are devices,
 //! folders or inside an input; trial ranges, wide CSVs, many sensors and junk files that
-//! must cost neither time nor memory; model files and specs that must not be
+//! must cost neither time nor memory; model files, specs and sweep plans that must not be
 //! trusted blindly. Each case and what it gets is listed in docs/testing.md.
 
 mod common;
@@ -416,6 +416,81 @@ fn model_fields_that_decide_a_prediction_are_checked() {
         let m = dir.join("rbf-edited.json");
         fs::write(&m, v.to_string()).unwrap();
         fails_with(&run(&["evaluate", s(&m), s(&recognition)]), &[s(&m), field]);
+    }
+}
+
+/// A grasp-stability plan of a tiny grid in `dir` (with `extra` options).
+fn plan(dir: &Path, extra: &[&str]) -> Output {
+    let sample = common::sample("grasp-stability.json");
+    let mut args = vec![
+        "sweep",
+        "plan",
+        "stability",
+        s(&sample),
+        "--num-bases",
+        "2,4",
+        "--beta",
+        "1",
+        "--gamma",
+        "1",
+        "--cv",
+        "3",
+        "--shards",
+        "1",
+        "-o",
+        s(dir),
+    ];
+    args.extend(extra);
+    run(&args)
+}
+
+/// Defect 7: nothing that enters the Slurm script can add a line to it, and a plan's
+/// session is its own copy beside it, never a path elsewhere.
+#[test]
+fn sweep_plans_neither_inject_lines_nor_follow_paths_out() {
+    let dir = common::temp_dir("adv-sweep");
+    let injected = "gpu\n#SBATCH --wrap=\"rm -rf ~\"";
+    fails_with(
+        &plan(&dir.join("p1"), &["--partition", injected]),
+        &["--partition", "control character"],
+    );
+    assert!(!dir.join("p1").exists(), "nothing written");
+    fails_with(
+        &plan(&dir.join("p2\ntouch x"), &[]),
+        &["plan folder", "control character"],
+    );
+    fails_with(
+        &plan(&dir.join("p3"), &["--program", "tw\nrm -rf ~"]),
+        &["--program", "control character"],
+    );
+
+    // A value with spaces and `#` stays one quoted value of its line.
+    let p = dir.join("with space #x");
+    ok(&plan(&p, &["--partition", "gpu #short"]));
+    let script = fs::read_to_string(p.join("sweep.sbatch")).unwrap();
+    assert!(
+        script.contains("#SBATCH --partition=\"gpu #short\"\n"),
+        "{script}"
+    );
+    let chdir = format!(
+        "#SBATCH --chdir=\"{}\"\n",
+        fs::canonicalize(&p).unwrap().display()
+    );
+    assert!(script.contains(&chdir), "{script}");
+
+    let plan_file = p.join("plan.json");
+    let good = fs::read_to_string(&plan_file).unwrap();
+    for elsewhere in ["/etc/passwd", "../../etc/passwd", "shards/../session.json"] {
+        let mut v: Value = serde_json::from_str(&good).unwrap();
+        v["session"]["file"] = elsewhere.into();
+        fs::write(&plan_file, v.to_string()).unwrap();
+        for command in ["status", "run"] {
+            let mut args = vec!["sweep", command, s(&p)];
+            if command == "run" {
+                args.extend(["--shard", "0"]);
+            }
+            fails_with(&run(&args), &["session.file", elsewhere]);
+        }
     }
 }
 
