@@ -149,6 +149,9 @@ pub struct ImportSpec {
     /// Folders of trial files: where a file's object, classes and trial number are in its
     /// path (default: see [`ImportSpec::trial_pattern`]).
     pub trials: Option<TrialPattern>,
+    /// Each label set's classes by name: a recording's rows are labelled in one look-up
+    /// each, however many classes the spec declares.
+    class_indices: HashMap<String, HashMap<String, usize>>,
 }
 
 /// A built-in layout by name: `icub-fingertip`, `biotac-sp`, `grid RxC`.
@@ -417,6 +420,14 @@ impl ImportSpec {
                     .map_err(|m| err("trials.pattern".into(), m))?,
             ),
         };
+        let class_indices = file
+            .label_sets
+            .iter()
+            .map(|set| {
+                let classes = set.classes.iter().cloned().zip(0..).collect();
+                (set.name.clone(), classes)
+            })
+            .collect();
         Ok(ImportSpec {
             path: path.to_path_buf(),
             name: file.name,
@@ -427,6 +438,7 @@ impl ImportSpec {
             label_sets: file.label_sets,
             cut,
             trials,
+            class_indices,
         })
     }
 
@@ -462,7 +474,8 @@ impl ImportSpec {
     /// Index of `class` in recorded label set `set` (of [`Self::recorded_label_sets`]), or
     /// a message naming the classes.
     pub fn class_index(&self, set: &LabelSet, class: &str) -> Result<usize, String> {
-        set.classes.iter().position(|c| c == class).ok_or_else(|| {
+        let found = self.class_indices.get(&set.name).and_then(|c| c.get(class));
+        found.copied().ok_or_else(|| {
             format!(
                 "`{}` is not a class of label set `{}` ({})",
                 super::error::shorten(class),
@@ -477,8 +490,13 @@ impl ImportSpec {
         if object.trim().is_empty() {
             return Err("an empty object name".into());
         }
+        let known = |set: &LabelSet| {
+            self.class_indices
+                .get(&set.name)
+                .is_some_and(|c| c.contains_key(object))
+        };
         match self.label_sets.iter().find(|l| l.name == OBJECT) {
-            Some(set) if !set.classes.iter().any(|c| c == object) => Err(format!(
+            Some(set) if !known(set) => Err(format!(
                 "object `{}` is not a class of label set `object` ({})",
                 super::error::shorten(object),
                 set.classes.join(", ")
