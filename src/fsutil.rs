@@ -1,8 +1,11 @@
 //! Writing files safely: to a temporary file beside the target, then an atomic rename,
 //! so a crash or a full disk never leaves a half-written file in place of a good one.
+//! Only a regular file (or none) is replaced so: a device, FIFO or socket is written to
+//! directly (`-o /dev/null` discards, `/dev/full` reports a full disk), and a folder or
+//! anything else is refused by name.
 
 use std::fs::{self, File};
-use std::io::{self, Write};
+use std::io::{self, BufRead, Write};
 use std::path::{Path, PathBuf};
 
 use sha2::Digest;
@@ -64,17 +67,64 @@ fn remove_stale_temps(path: &Path) {
     }
 }
 
+/// What an output path holds, as far as writing it goes.
+enum Target {
+    /// A regular file, or nothing yet: replaced atomically.
+    File,
+    /// A character or block device, a FIFO or a socket: written in place.
+    Stream,
+}
+
+/// What `path` is (links followed); a folder or any other kind is refused by name.
+fn target(path: &Path) -> io::Result<Target> {
+    let meta = match fs::metadata(path) {
+        Ok(m) => m,
+        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(Target::File),
+        Err(e) => return Err(e),
+    };
+    let kind = meta.file_type();
+    if kind.is_file() {
+        return Ok(Target::File);
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if kind.is_char_device() || kind.is_block_device() || kind.is_fifo() || kind.is_socket() {
+            return Ok(Target::Stream);
+        }
+    }
+    let what = if kind.is_dir() {
+        "a folder"
+    } else {
+        "neither a file nor a device"
+    };
+    Err(io::Error::new(
+        io::ErrorKind::InvalidInput,
+        format!(
+            "{} is {what}: refusing to write over it; choose a file",
+            path.display()
+        ),
+    ))
+}
+
 /// Write `bytes` to `path` atomically (temporary file + fsync + rename).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
     write_atomic_with(path, |w| w.write_all(bytes))
 }
 
 /// Write through `fill` into a temporary file, then rename it over `path`. On any error
-/// the temporary file is removed and `path` is left as it was.
+/// the temporary file is removed and `path` is left as it was. A device, FIFO or socket
+/// at `path` is written directly (a rename would replace the node itself).
 pub fn write_atomic_with(
     path: &Path,
     fill: impl FnOnce(&mut io::BufWriter<&File>) -> io::Result<()>,
 ) -> io::Result<()> {
+    if let Target::Stream = target(path)? {
+        let file = fs::OpenOptions::new().write(true).open(path)?;
+        let mut w = io::BufWriter::new(&file);
+        fill(&mut w)?;
+        return w.flush();
+    }
     remove_stale_temps(path);
     let tmp = temp_path(path);
     let result = (|| {
@@ -167,6 +217,70 @@ pub fn refuse_input_as_output(output: &Path, inputs: &[&Path]) -> io::Result<()>
     }
 }
 
+/// Refuse to write `output` inside `folder`, an input folder that is read as a whole (a
+/// bag folder, a dataset, a folder of trial files): the output would change what the input
+/// holds, or replace one of its files. A `folder` that is not a folder covers nothing.
+pub fn refuse_output_inside(output: &Path, folder: &Path) -> io::Result<()> {
+    let Ok(dir) = fs::canonicalize(folder) else {
+        return Ok(());
+    };
+    if !dir.is_dir() || !resolved(output).starts_with(&dir) {
+        return Ok(());
+    }
+    Err(io::Error::new(
+        io::ErrorKind::InvalidInput,
+        format!(
+            "the output {} is inside the input folder {}: writing it would change the input; \
+             choose an output outside it",
+            output.display(),
+            folder.display()
+        ),
+    ))
+}
+
+/// The most bytes a JSON file of each kind may hold. A file past its bound is refused
+/// before a byte of it is read: junk costs no memory and no time. Far above any real file
+/// (the samples' sessions are 1–2 MB, a 2 GB bag's tactile topics import to 13 MB, models
+/// and specs are kilobytes to a few megabytes).
+pub mod max_bytes {
+    pub const SESSION: u64 = 4 << 30;
+    pub const PROJECT: u64 = 1 << 30;
+    pub const MODEL: u64 = 256 << 20;
+    pub const SPEC: u64 = 64 << 20;
+    /// A plan folder holds a copy of its session.
+    pub const SWEEP: u64 = SESSION;
+}
+
+/// Open a JSON file to be parsed as it is read (`serde_json::from_reader`): refused when
+/// longer than `max_bytes` (`what` names the kind of file in the error), buffered, and
+/// past a UTF-8 byte-order mark, which some editors write and JSON parsers refuse.
+pub fn open_json(path: &Path, max_bytes: u64, what: &str) -> io::Result<io::BufReader<File>> {
+    let file = File::open(path)?;
+    let len = file.metadata()?.len();
+    if len > max_bytes {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidData,
+            format!(
+                "{len} bytes, more than the {} MiB a {what} may hold: not a {what}",
+                max_bytes >> 20
+            ),
+        ));
+    }
+    let mut r = io::BufReader::with_capacity(1 << 16, file);
+    if r.fill_buf()?.starts_with(BOM) {
+        r.consume(BOM.len());
+    }
+    Ok(r)
+}
+
+/// The UTF-8 byte-order mark.
+pub const BOM: &[u8] = b"\xEF\xBB\xBF";
+
+/// `text` past a UTF-8 byte-order mark.
+pub fn without_bom(text: &str) -> &str {
+    text.strip_prefix('\u{feff}').unwrap_or(text)
+}
+
 /// `sha256:` and the hex digest of `bytes`.
 pub fn content_hash(bytes: &[u8]) -> String {
     let digest = sha2::Sha256::digest(bytes);
@@ -221,6 +335,62 @@ mod tests {
             other_target.exists(),
             "another target's file is not touched"
         );
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_folder_is_refused_and_a_fifo_written_in_place() {
+        let dir = std::env::temp_dir().join(format!("tw-fsutil-kinds-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(dir.join("out")).unwrap();
+        let e = write_atomic(&dir.join("out"), b"x")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("out") && e.contains("a folder"), "{e}");
+        assert!(dir.join("out").is_dir());
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::FileTypeExt;
+            let fifo = dir.join("fifo");
+            let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+            if made.is_ok_and(|s| s.success()) {
+                let reader = {
+                    let fifo = fifo.clone();
+                    std::thread::spawn(move || fs::read(fifo))
+                };
+                write_atomic(&fifo, b"through").unwrap();
+                assert_eq!(reader.join().unwrap().unwrap(), b"through");
+                let kind = fs::metadata(&fifo).unwrap().file_type();
+                assert!(kind.is_fifo(), "the FIFO is still a FIFO");
+            }
+        }
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_skipped_and_a_file_past_its_bound_refused() {
+        let dir = std::env::temp_dir().join(format!("tw-fsutil-json-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("a.json");
+        fs::write(&p, b"\xEF\xBB\xBF{\"a\": 1}").unwrap();
+        let v: serde_json::Value =
+            serde_json::from_reader(open_json(&p, 100, "test").unwrap()).unwrap();
+        assert_eq!(v["a"], 1);
+        let e = open_json(&p, 5, "test file").unwrap_err().to_string();
+        assert!(e.contains("more than") && e.contains("test file"), "{e}");
+        assert_eq!(without_bom("\u{feff}{}"), "{}");
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn an_output_inside_an_input_folder_is_refused() {
+        let dir = std::env::temp_dir().join(format!("tw-fsutil-inside-{}", std::process::id()));
+        fs::create_dir_all(dir.join("bag")).unwrap();
+        let bag = dir.join("bag");
+        assert!(refuse_output_inside(&bag.join("metadata.yaml"), &bag).is_err());
+        assert!(refuse_output_inside(&bag.join("sub").join("..").join("x.json"), &bag).is_err());
+        assert!(refuse_output_inside(&dir.join("session.json"), &bag).is_ok());
+        assert!(refuse_output_inside(&dir.join("bag.json"), &bag).is_ok());
         fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -88,37 +88,47 @@ impl Project {
         })
     }
 
+    /// Read a project file as it is parsed (at most [`fsutil::max_bytes::PROJECT`]): the
+    /// header first, then the whole, checked as [`Project::parse`] checks it.
     pub fn load(path: &Path) -> Result<Project, ProjectError> {
-        let text = std::fs::read_to_string(path).map_err(|e| ProjectError::Read {
+        let read = |message: String| ProjectError::Read {
             path: path.display().to_string(),
-            message: e.to_string(),
-        })?;
-        Project::parse(&text, path)
+            message,
+        };
+        let open = || {
+            fsutil::open_json(path, fsutil::max_bytes::PROJECT, "project file")
+                .map_err(|e| read(e.to_string()))
+        };
+        check_header(
+            serde_json::from_reader(open()?).map_err(|e| read(e.to_string()))?,
+            path,
+        )?;
+        let project = serde_json::from_reader(open()?).map_err(|e| read(e.to_string()))?;
+        Project::checked(project, path)
     }
 
     /// Read a project from the text of the file `path`. Every figure must be drawable, so a
     /// damaged file is an error here and never a broken view later.
     pub fn parse(text: &str, path: &Path) -> Result<Project, ProjectError> {
-        let p = path.display().to_string();
+        let text = fsutil::without_bom(text);
         let read = |message: String| ProjectError::Read {
-            path: p.clone(),
+            path: path.display().to_string(),
             message,
         };
-        #[derive(Deserialize)]
-        struct Header {
-            format: Option<String>,
-            version: Option<u64>,
-        }
-        let h: Header = serde_json::from_str(text).map_err(|e| read(e.to_string()))?;
-        if h.format.as_deref() != Some(PROJECT_TAG) {
-            return Err(read("not a tactile-workbench project file".into()));
-        }
-        match h.version {
-            Some(v) if v == PROJECT_VERSION as u64 => {}
-            Some(found) => return Err(ProjectError::Version { path: p, found }),
-            None => return Err(read("`version`: missing".into())),
-        }
-        let mut project: Project = serde_json::from_str(text).map_err(|e| read(e.to_string()))?;
+        check_header(
+            serde_json::from_str(text).map_err(|e| read(e.to_string()))?,
+            path,
+        )?;
+        let project = serde_json::from_str(text).map_err(|e| read(e.to_string()))?;
+        Project::checked(project, path)
+    }
+
+    /// Older results given their methods, every figure, link and model checked.
+    fn checked(mut project: Project, path: &Path) -> Result<Project, ProjectError> {
+        let read = |message: String| ProjectError::Read {
+            path: path.display().to_string(),
+            message,
+        };
         for r in &mut project.results {
             if r.methods.is_empty() {
                 r.methods = older_methods(r);
@@ -142,6 +152,92 @@ impl Project {
         }
         Ok(project)
     }
+}
+
+#[derive(Deserialize)]
+struct Header {
+    format: Option<String>,
+    version: Option<u64>,
+}
+
+/// The format tag and version, before anything else.
+fn check_header(h: Header, path: &Path) -> Result<(), ProjectError> {
+    let p = path.display().to_string();
+    if h.format.as_deref() != Some(PROJECT_TAG) {
+        return Err(ProjectError::Read {
+            path: p,
+            message: "not a tactile-workbench project file".into(),
+        });
+    }
+    match h.version {
+        Some(v) if v == PROJECT_VERSION as u64 => Ok(()),
+        Some(found) => Err(ProjectError::Version { path: p, found }),
+        None => Err(ProjectError::Read {
+            path: p,
+            message: "`version`: missing".into(),
+        }),
+    }
+}
+
+/// Folders of the operating system: no session lives there, and a project naming a path
+/// into one (`/etc/passwd`, `/proc/self/mem`) is refused rather than followed.
+const SYSTEM_FOLDERS: [&str; 10] = [
+    "/bin", "/boot", "/dev", "/etc", "/lib", "/lib64", "/proc", "/run", "/sbin", "/sys",
+];
+
+/// Why a project may not open `path` as a session, if it may not: it must be a session
+/// file (native JSON, a CSV, an MCAP bag) or a dataset folder (the iCub dataset, a ROS 2
+/// bag, a folder of trial files), and lie outside the system's folders (links resolved).
+/// A missing path is left to the loader, which names it.
+pub fn session_path_refusal(path: &Path) -> Option<String> {
+    let Ok(real) = std::fs::canonicalize(path) else {
+        return None;
+    };
+    if let Some(dir) = SYSTEM_FOLDERS.iter().find(|d| real.starts_with(d)) {
+        return Some(format!(
+            "{} is in the system folder {dir}: not a session, not opened",
+            path.display()
+        ));
+    }
+    if real.is_dir() {
+        if crate::session::icub::is_dataset(&real) || crate::session::needs_spec(&real) {
+            return None;
+        }
+        return Some(format!(
+            "{} is a folder but neither the iCub dataset, a ROS 2 bag nor a folder of trial \
+             files: not opened",
+            path.display()
+        ));
+    }
+    if !real.is_file() {
+        return Some(format!(
+            "{} is not a file: not a session, not opened",
+            path.display()
+        ));
+    }
+    let ext = real
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("csv" | "mcap") => None,
+        Some("json") if starts_as_session(&real) => None,
+        _ => Some(format!(
+            "{} is not a session file (a native .json session, a .csv or an .mcap bag): not \
+             opened",
+            path.display()
+        )),
+    }
+}
+
+/// Whether the file's first bytes name the native session format.
+fn starts_as_session(path: &Path) -> bool {
+    use std::io::Read;
+    let mut head = [0u8; 256];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| f.read(&mut head))
+        .unwrap_or(0);
+    String::from_utf8_lossy(&head[..n]).contains(crate::session::native::FORMAT_TAG)
 }
 
 /// The methods of a result saved before results named them, read from its kind and its

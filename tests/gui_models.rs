@@ -302,7 +302,7 @@ fn recognition_and_clustering_runs_leave_models_that_test_on_another_session() {
     let sample = session::open(&common::sample("object-recognition.json")).unwrap();
     let split = |trials: std::ops::RangeInclusive<u32>, name: &str| {
         let spec = session::subset::SubsetSpec {
-            trials: trials.collect(),
+            trials: trials.into(),
             ..Default::default()
         };
         let s = session::subset::subset(&sample, &spec, name).unwrap();

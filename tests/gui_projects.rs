@@ -168,3 +168,98 @@ fn save_and_open_a_project_through_the_path_field_and_keep_results_across_a_rest
     let _ = std::fs::remove_dir_all(data);
     let _ = std::fs::remove_dir_all(folder);
 }
+
+/// The workbench opening `files` (as `tactile-workbench FILES…` does), stepped until its
+/// opening has an outcome (bounded: a guard against hangs).
+fn opening(files: Vec<std::path::PathBuf>) -> (Harness<'static, WorkbenchApp>, Result<(), String>) {
+    let app = WorkbenchApp::new(&egui::Context::default(), None, files);
+    let mut h = common::gui::harness_now(app, 1400.0, 900.0);
+    let start = std::time::Instant::now();
+    loop {
+        h.step();
+        if let Some(outcome) = h.state().startup_outcome() {
+            return (h, outcome);
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "the opening never ended: {:?}",
+            h.state().analyses.notes.texts()
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// `--measure-startup` ends on what the opening gives: a JSON that is not a session, a
+/// project of another version or one naming unreadable sessions ends it with their errors
+/// (it used to wait for sessions that never came).
+#[test]
+fn an_opening_that_fails_ends_with_its_errors() {
+    let dir = common::temp_dir("gui-opening-fails");
+    let not_session = dir.join("settings.json");
+    std::fs::write(&not_session, r#"{"theme": "dark"}"#).unwrap();
+    let (_, outcome) = opening(vec![not_session.clone()]);
+    let e = outcome.expect_err("not a session");
+    assert!(e.contains("settings.json") && e.contains("format"), "{e}");
+
+    let future = dir.join("future.project.json");
+    std::fs::write(
+        &future,
+        r#"{"format": "tactile-workbench-project", "version": 99, "sessions": [], "results": []}"#,
+    )
+    .unwrap();
+    let (_, outcome) = opening(vec![future]);
+    let e = outcome.expect_err("a project of another version");
+    assert!(e.contains("version 99"), "{e}");
+
+    let gone = dir.join("gone.project.json");
+    let missing = dir.join("missing.json");
+    tactile_workbench::project::Project::new(vec![missing.display().to_string()], Vec::new())
+        .save(&gone)
+        .unwrap();
+    let (_, outcome) = opening(vec![gone]);
+    let e = outcome.expect_err("its session is missing");
+    assert!(e.contains("missing.json"), "{e}");
+
+    let (_, outcome) = opening(vec![common::sample("grasp-stability.json")]);
+    assert_eq!(outcome, Ok(()));
+}
+
+/// A project opens only sessions: a path into a system folder or to a file that is not a
+/// session is refused by name and not opened; the notification lists what it opens.
+#[test]
+fn a_project_opens_only_sessions_and_says_which() {
+    let dir = common::temp_dir("gui-project-paths");
+    let notes = dir.join("notes.txt");
+    std::fs::write(&notes, "not a session").unwrap();
+    let sample = common::sample("object-recognition.json");
+    let labels = vec![
+        "/etc/passwd".to_string(),
+        "/proc/self/environ".to_string(),
+        notes.display().to_string(),
+        sample.display().to_string(),
+    ];
+    let project = dir.join("p.project.json");
+    tactile_workbench::project::Project::new(labels, Vec::new())
+        .save(&project)
+        .unwrap();
+    let (h, outcome) = opening(vec![project]);
+    let e = outcome.expect_err("three sessions refused");
+    for refused in ["/etc/passwd", "/proc/self/environ", "notes.txt"] {
+        assert!(e.contains(refused), "{refused} named in: {e}");
+    }
+    assert!(e.contains("system folder /etc"), "{e}");
+    let texts = h.state().analyses.notes.texts();
+    assert!(
+        texts
+            .iter()
+            .any(|t| t.contains("it opens the sessions") && t.contains("object-recognition.json")),
+        "{texts:?}"
+    );
+    let opened: Vec<String> = h
+        .state()
+        .sessions
+        .iter()
+        .map(|s| s.source.label())
+        .collect();
+    assert_eq!(opened, vec![sample.display().to_string()]);
+}

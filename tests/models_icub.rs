@@ -15,7 +15,7 @@ use tactile_workbench::session::{Session, SubsetSpec, import_bts3, import_icub, 
 
 fn trials(s: &Session, t: std::ops::RangeInclusive<u32>) -> Session {
     let spec = SubsetSpec {
-        trials: t.collect(),
+        trials: t.into(),
         ..Default::default()
     };
     subset(s, &spec, "part").unwrap()

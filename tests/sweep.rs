@@ -422,6 +422,9 @@ fn a_shard_output_of_the_wrong_shape_is_failed_naming_the_file() {
     let path = sweep::shard_path(&dir, 1);
     let mut shard: Value = serde_json::from_str(&fs::read_to_string(&path).unwrap()).unwrap();
     shard["outputs"][0] = Value::String("not an output".into());
+    // As a writer of the wrong shape would leave it: its checksum agrees with its outputs.
+    let outputs = serde_json::to_vec(&shard["outputs"]).unwrap();
+    shard["outputs_checksum"] = tactile_workbench::fsutil::content_hash(&outputs).into();
     fs::write(&path, serde_json::to_string(&shard).unwrap()).unwrap();
     let file = path.display().to_string();
     match &states(&dir)[1] {
@@ -491,4 +494,53 @@ fn absurd_sizes_are_refused_naming_the_parameter_and_its_limit() {
         err.contains("--num-bases 50000 is above its limit of 4096"),
         "{err}"
     );
+}
+
+/// The first number in `v` (depth first), changed by one.
+fn nudge_a_number(v: &mut Value) -> bool {
+    match v {
+        Value::Number(n) => {
+            *v = (n.as_f64().unwrap_or(0.0) + 1.0).into();
+            true
+        }
+        Value::Array(items) => items.iter_mut().any(nudge_a_number),
+        Value::Object(fields) => fields.values_mut().any(nudge_a_number),
+        _ => false,
+    }
+}
+
+/// A shard's outputs carry their checksum: a number edited by hand is caught by `sweep
+/// merge` and `sweep status`, naming the file, and never merged.
+#[test]
+fn a_shard_edited_by_hand_is_caught_by_its_checksum() {
+    let (dir, _, _) = planned("sweep-edited", 2);
+    for i in 0..2 {
+        sweep::run_shard(&dir, i, &Progress::new()).unwrap();
+    }
+    let path = sweep::shard_path(&dir, 1);
+    let mut shard: Value = serde_json::from_str(&fs::read_to_string(&path).unwrap()).unwrap();
+    assert!(nudge_a_number(&mut shard["outputs"]));
+    fs::write(&path, serde_json::to_string_pretty(&shard).unwrap()).unwrap();
+    let file = path.display().to_string();
+    match &states(&dir)[1] {
+        ShardState::Failed { reason } => {
+            assert!(
+                reason.contains(&file) && reason.contains("checksum"),
+                "{reason}"
+            )
+        }
+        other => panic!("expected failed, got {other:?}"),
+    }
+    let merged = dir.join("merged.json");
+    let r = std::process::Command::new(env!("CARGO_BIN_EXE_tactile-workbench"))
+        .args(["sweep", "merge", "--quiet"])
+        .arg(&dir)
+        .arg("-o")
+        .arg(&merged)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success(), "{err}");
+    assert!(err.contains(&file) && err.contains("checksum"), "{err}");
+    assert!(!merged.exists());
 }

@@ -1,6 +1,7 @@
 //! The import spec reader on arbitrary bytes; a spec it accepts drives the long-format CSV
 //! importer over the fixture CSV without panicking (the spec's layouts, slices, ranges and
-//! label sets reach the importer's indexing and the session's validation).
+//! label sets reach the importer's indexing and the session's validation). The file reader,
+//! which parses as it reads, gives what the text reader gives.
 #![no_main]
 
 use std::path::Path;
@@ -17,7 +18,14 @@ fuzz_target!(|data: &[u8]| {
     match std::str::from_utf8(data) {
         Ok(text) => {
             let path = Path::new("fuzz.spec.json");
-            match ImportSpec::from_str(text, path) {
+            let parsed = ImportSpec::from_str(text, path);
+            let file = common::scratch_file(data, "json");
+            match (&parsed, ImportSpec::load(&file)) {
+                (Ok(a), Ok(b)) => assert_eq!(a.sensors, b.sensors, "the file reader differs"),
+                (Err(_), Err(e)) => common::assert_names_file(&e, &file),
+                (a, b) => panic!("the text reader gave {a:?}, the file reader {b:?}"),
+            }
+            match parsed {
                 Ok(spec) => {
                     let csv = Path::new("grasps.csv");
                     if let Err(e) = long_csv::parse_long_csv(CSV, csv, &spec) {

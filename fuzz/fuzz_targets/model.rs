@@ -1,6 +1,6 @@
 //! The model-file reader on arbitrary bytes: errors name the file, and a model it accepts
 //! predicts on the sample session or refuses it by name, and survives a save and a reload
-//! unchanged.
+//! unchanged; the file reader, which parses as it reads, gives what the text reader gives.
 #![no_main]
 
 use std::path::Path;
@@ -15,7 +15,14 @@ fuzz_target!(|data: &[u8]| {
     match std::str::from_utf8(data) {
         Ok(text) => {
             let path = "fuzz-model.json";
-            match ModelFile::from_json(text, path) {
+            let parsed = ModelFile::from_json(text, path);
+            let file = common::scratch_file(data, "json");
+            match (&parsed, models::load(&file)) {
+                (Ok(a), Ok(b)) => assert_eq!(a.to_json(), b.to_json(), "the file reader differs"),
+                (Err(_), Err(e)) => common::assert_names_file(&e, &file),
+                (a, b) => panic!("the text reader gave {a:?}, the file reader {b:?}"),
+            }
+            match parsed {
                 Ok(m) => {
                     let saved = m.to_json();
                     let reloaded = ModelFile::from_json(&saved, path)

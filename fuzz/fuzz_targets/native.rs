@@ -1,5 +1,6 @@
 //! The native session reader on arbitrary bytes; a session it accepts must survive a
-//! save and a reload unchanged (the workbench must never lose data).
+//! save and a reload unchanged (the workbench must never lose data), and the file reader,
+//! which parses as it reads, must give what the text reader gives.
 #![no_main]
 
 use std::path::Path;
@@ -12,10 +13,16 @@ mod common;
 
 fuzz_target!(|data: &[u8]| {
     match std::str::from_utf8(data) {
-        // `session::load` reads the file and runs this same UTF-8 check before `from_str`.
         Ok(text) => {
             let path = Path::new("fuzz.json");
-            match native::from_str(text, path) {
+            let parsed = native::from_str(text, path);
+            let file = common::scratch_file(data, "json");
+            match (&parsed, session::load(&file)) {
+                (Ok(a), Ok(b)) => assert_eq!(a, &b, "the file reader read another session"),
+                (Err(_), Err(e)) => common::assert_names_file(&e, &file),
+                (a, b) => panic!("the text reader gave {a:?}, the file reader {b:?}"),
+            }
+            match parsed {
                 Ok(s) => {
                     let saved = native::to_string(&s);
                     let reloaded = native::from_str(&saved, path)

@@ -1,5 +1,6 @@
 //! The project reader on arbitrary bytes: errors name the file, and a project it accepts has
-//! only drawable figures and survives a save and a reload unchanged.
+//! only drawable figures and survives a save and a reload unchanged; the file reader, which
+//! parses as it reads, gives what the text reader gives.
 #![no_main]
 
 use std::path::Path;
@@ -12,10 +13,20 @@ mod common;
 
 fuzz_target!(|data: &[u8]| {
     match std::str::from_utf8(data) {
-        // `Project::load` reads the file as UTF-8 and hands the text to `parse`.
         Ok(text) => {
             let path = Path::new("fuzz-project.json");
-            match Project::parse(text, path) {
+            let parsed = Project::parse(text, path);
+            let file = common::scratch_file(data, "json");
+            match (&parsed, Project::load(&file)) {
+                (Ok(_), Ok(_)) => {}
+                (Err(_), Err(e)) => common::assert_names_file(&e, &file),
+                (a, b) => panic!(
+                    "the text reader gave {:?}, the file reader {:?}",
+                    a.as_ref().map(|_| ()),
+                    b.map(|_| ())
+                ),
+            }
+            match parsed {
                 Ok(p) => {
                     for r in &p.results {
                         for (_, f) in &r.figures {

@@ -53,6 +53,21 @@ impl Source {
         }
     }
 
+    /// Why a project may not open this source, if it may not (see
+    /// [`crate::project::session_path_refusal`]); an import spec must not lie in a system
+    /// folder either.
+    pub fn refusal(&self) -> Option<String> {
+        match self {
+            Source::Bundled(_) => None,
+            Source::File(p) => crate::project::session_path_refusal(p),
+            Source::Imported { recording, spec } => crate::project::session_path_refusal(recording)
+                .or_else(|| {
+                    crate::project::session_path_refusal(spec)
+                        .filter(|why| why.contains("system folder"))
+                }),
+        }
+    }
+
     pub fn label(&self) -> String {
         match self {
             Source::Bundled(name) => format!("sample: {name}"),

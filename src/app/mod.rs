@@ -184,6 +184,21 @@ impl WorkbenchApp {
         !self.loader.pending.is_empty()
     }
 
+    /// How the opening of the workbench ended, once nothing is loading or opening: the
+    /// sessions shown, or the errors of what failed to open (a file that is not a session,
+    /// a project of another version, a project's unreadable sessions). None while opening.
+    pub fn startup_outcome(&self) -> Option<Result<(), String>> {
+        if self.is_loading() || self.analyses.busy() || !self.analyses.opened_projects.is_empty() {
+            return None;
+        }
+        let errors = self.analyses.notes.errors();
+        Some(match (errors.is_empty(), self.sessions.is_empty()) {
+            (false, _) => Err(errors.join("\n")),
+            (true, true) => Err("no session was opened".into()),
+            (true, false) => Ok(()),
+        })
+    }
+
     fn close(&mut self, i: usize) {
         let source = self.sessions.remove(i).source;
         self.requested.retain(|s| s != &source);

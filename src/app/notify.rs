@@ -50,6 +50,21 @@ impl Notifications {
             .collect()
     }
 
+    /// The errors so far, oldest first (those not yet stamped included).
+    pub fn errors(&self) -> Vec<String> {
+        self.log
+            .iter()
+            .filter(|e| e.level == Level::Error)
+            .map(|e| e.text.clone())
+            .chain(
+                self.pending
+                    .iter()
+                    .filter(|(l, _)| *l == Level::Error)
+                    .map(|(_, t)| t.clone()),
+            )
+            .collect()
+    }
+
     /// The toasts on screen now.
     pub fn toasts(&self) -> impl Iterator<Item = &Entry> {
         self.log.iter().filter(|e| e.toast)

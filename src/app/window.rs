@@ -1,6 +1,7 @@
 //! The native window around the workbench, and the measurements it makes of itself.
 
 use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use super::persisted::Persisted;
@@ -23,6 +24,8 @@ struct EframeApp {
     /// UI times (ms) of the frames drawn while the measured grid search ran.
     frame_ms: Vec<f64>,
     measuring_since: Option<Instant>,
+    /// Why the startup measurement failed (what it opened did not load), for `run` to return.
+    failed: Arc<Mutex<Option<String>>>,
 }
 
 impl EframeApp {
@@ -86,11 +89,24 @@ impl eframe::App for EframeApp {
             Some(Measure::Startup(t0)) => {
                 let ms = t0.elapsed().as_secs_f64() * 1e3;
                 let first = *self.first_frame.get_or_insert(ms);
-                if !self.app.is_loading() && !self.app.sessions.is_empty() {
-                    println!("first frame: {first:.0} ms; sessions shown: {ms:.0} ms");
-                    ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
-                    // Report once: frames may still be drawn while the window closes.
-                    self.measure = None;
+                match self.app.startup_outcome() {
+                    // Keep drawing: a failed load may bring no event to wake the window.
+                    None => ui.ctx().request_repaint(),
+                    Some(outcome) => {
+                        match outcome {
+                            Ok(()) => {
+                                println!("first frame: {first:.0} ms; sessions shown: {ms:.0} ms")
+                            }
+                            Err(e) => {
+                                if let Ok(mut failed) = self.failed.lock() {
+                                    *failed = Some(e);
+                                }
+                            }
+                        }
+                        ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+                        // Report once: frames may still be drawn while the window closes.
+                        self.measure = None;
+                    }
                 }
             }
             Some(Measure::Frames { seconds }) => self.measure_frames(ui, seconds, frame_ms),
@@ -119,6 +135,8 @@ pub fn run(
             .with_drag_and_drop(true),
         ..Default::default()
     };
+    let failed = Arc::new(Mutex::new(None));
+    let failed_in_app = Arc::clone(&failed);
     eframe::run_native(
         "Tactile Workbench",
         options,
@@ -144,8 +162,13 @@ pub fn run(
                 first_frame: None,
                 frame_ms: Vec::new(),
                 measuring_since: None,
+                failed: failed_in_app,
             }))
         }),
     )
-    .map_err(|e| anyhow::anyhow!("could not open the window: {e}"))
+    .map_err(|e| anyhow::anyhow!("could not open the window: {e}"))?;
+    match failed.lock().ok().and_then(|mut f| f.take()) {
+        Some(e) => anyhow::bail!("--measure-startup: nothing to measure, the opening failed:\n{e}"),
+        None => Ok(()),
+    }
 }

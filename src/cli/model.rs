@@ -14,7 +14,7 @@ use crate::experiments::result::figure_set;
 use crate::experiments::stability::{PipelineInputs, StabilityData};
 use crate::figures::{Format, RenderOptions, export_all};
 use crate::models::{self, Calibration, HeldOutScores, ModelFile};
-use crate::session::{self, Session, SubsetSpec};
+use crate::session::{self, Session, SubsetSpec, Trials};
 
 #[derive(Args, Debug)]
 pub struct FitArgs {
@@ -505,26 +505,36 @@ pub fn predict(a: PredictArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Parse `1,2,5` / `1..10` (inclusive) trial numbers.
-fn parse_trials(s: &str) -> anyhow::Result<Vec<u32>> {
-    let mut out = Vec::new();
-    for item in s.split(',').map(str::trim).filter(|i| !i.is_empty()) {
-        let bad = || format!("--trials: bad item {item:?} (expected N or A..B)");
+/// Parse `1,2,5` / `1..10` (inclusive) trial numbers; a range stays a range. An empty
+/// list or item (`''`, `1,,2`) is refused: it would keep every trial or hide a typo.
+fn parse_trials(s: &str) -> anyhow::Result<Trials> {
+    if s.trim().is_empty() {
+        bail!("--trials: empty; give trial numbers (`1,2,5`, `1..10`) or leave the option out");
+    }
+    let mut ranges = Vec::new();
+    for item in s.split(',').map(str::trim) {
+        let bad = || format!("--trials: bad item {item:?} in {s:?} (expected N or A..B)");
+        if item.is_empty() {
+            bail!(bad());
+        }
         match item.split_once("..") {
             Some((a, b)) => {
                 let (a, b): (u32, u32) = (
-                    a.parse().with_context(bad)?,
-                    b.trim_start_matches('=').parse().with_context(bad)?,
+                    a.trim().parse().with_context(bad)?,
+                    b.trim_start_matches('=').trim().parse().with_context(bad)?,
                 );
                 if a > b {
                     bail!(bad());
                 }
-                out.extend(a..=b);
+                ranges.push(a..=b);
             }
-            None => out.push(item.parse().with_context(bad)?),
+            None => {
+                let n: u32 = item.parse().with_context(bad)?;
+                ranges.push(n..=n);
+            }
         }
     }
-    Ok(out)
+    Ok(Trials::new(ranges))
 }
 
 pub fn subset(a: SubsetArgs) -> anyhow::Result<()> {

@@ -166,21 +166,28 @@ fn write(s: &Session, output: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Refuse an output that is one of `inputs`, or inside `folder` (an input folder the import
+/// reads as a whole).
+fn refuse(output: &Path, inputs: &[&Path], folder: &Path) -> anyhow::Result<()> {
+    crate::fsutil::refuse_input_as_output(output, inputs)?;
+    crate::fsutil::refuse_output_inside(output, folder)?;
+    Ok(())
+}
+
 pub fn import(args: ImportArgs) -> anyhow::Result<()> {
-    use crate::fsutil::refuse_input_as_output as refuse;
     match args.source {
         ImportSource::Icub {
             dir,
             output,
             include_full_coke,
         } => {
-            refuse(&output, &[&dir])?;
+            refuse(&output, &[&dir], &dir)?;
             let s = session::import_icub_with(&dir, &IcubOptions { include_full_coke })
                 .with_context(|| format!("importing the iCub dataset from {}", dir.display()))?;
             write(&s, &output)
         }
         ImportSource::Bts3 { csv, output } => {
-            refuse(&output, &[&csv])?;
+            refuse(&output, &[&csv], &csv)?;
             let s = session::import_bts3(&csv)
                 .with_context(|| format!("importing BTS3 grasps from {}", csv.display()))?;
             write(&s, &output)
@@ -198,7 +205,7 @@ pub fn import(args: ImportArgs) -> anyhow::Result<()> {
             if let Some(session::spec::GraspCut::Windows(csv)) = &spec.cut {
                 inputs.push(csv);
             }
-            refuse(&output, &inputs)?;
+            refuse(&output, &inputs, &bag)?;
             let s = session::ros2::import_bag(&bag, &spec)
                 .with_context(|| format!("importing the ROS 2 bag {}", bag.display()))?;
             write(&s, &output)
@@ -213,13 +220,13 @@ pub fn import(args: ImportArgs) -> anyhow::Result<()> {
                 let files = session::trial_folder::trial_files(&file).unwrap_or_default();
                 let mut inputs: Vec<&Path> = vec![&file, &spec_path];
                 inputs.extend(files.iter().map(|f| f.path.as_path()));
-                refuse(&output, &inputs)?;
+                refuse(&output, &inputs, &file)?;
                 let spec = session::ImportSpec::load(&spec_path)?;
                 let s = session::trial_folder::import_trial_folder(&file, &spec)
                     .with_context(|| format!("importing the trial folder {}", file.display()))?;
                 return write(&s, &output);
             }
-            refuse(&output, &[&file, &spec_path])?;
+            refuse(&output, &[&file, &spec_path], &file)?;
             let spec = session::ImportSpec::load(&spec_path)?;
             let s = session::long_csv::import_long_csv(&file, &spec)
                 .with_context(|| format!("importing the long-format CSV {}", file.display()))?;

@@ -301,11 +301,12 @@ fn plan(a: PlanArgs) -> anyhow::Result<()> {
 /// plan is a file anyone can edit).
 fn check_plan_sizes(dir: &Path) -> anyhow::Result<()> {
     let path = dir.join(sweep::PLAN_FILE);
-    let Ok(text) = std::fs::read_to_string(&path) else {
+    let max = crate::fsutil::max_bytes::SWEEP;
+    let Ok(reader) = crate::fsutil::open_json(&path, max, "sweep plan") else {
         // Reading the plan reports its own errors.
         return Ok(());
     };
-    if let Ok(plan) = serde_json::from_str::<serde_json::Value>(&text) {
+    if let Ok(plan) = serde_json::from_reader::<_, serde_json::Value>(reader) {
         super::bounds::check_plan_sizes(&plan, sweep::PLAN_FILE)
             .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?;
     }

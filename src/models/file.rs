@@ -207,6 +207,19 @@ impl ModelFile {
                 format!("{:?} is not an RFC 3339 time", p.trained_at),
             ));
         }
+        if p.classes.is_empty() {
+            return Err(ModelError::field(
+                "provenance.classes",
+                "no classes: a model names what it predicts",
+            ));
+        }
+        let mut seen = std::collections::HashSet::new();
+        if let Some(c) = p.classes.iter().find(|c| !seen.insert(c.as_str())) {
+            return Err(ModelError::field(
+                "provenance.classes",
+                format!("{c:?} is listed twice"),
+            ));
+        }
         if let Some(s) = p.selection.iter().find(|s| !s.value.is_finite()) {
             return Err(ModelError::field(
                 "provenance.selection",
@@ -218,32 +231,13 @@ impl ModelFile {
 
     /// Parse and check a model file's text (`path` names it in errors).
     pub fn from_json(text: &str, path: &str) -> Result<ModelFile, ModelError> {
+        let text = crate::fsutil::without_bom(text);
         let file_err = |message: String| ModelError::File {
             path: path.into(),
             message,
         };
-        // Format and version first, so that a newer or foreign file says so rather than
-        // failing on whichever field changed.
-        let value: serde_json::Value =
-            serde_json::from_str(text).map_err(|e| file_err(format!("not JSON: {e}")))?;
-        match value.get("format").and_then(|v| v.as_str()) {
-            Some(FORMAT) => {}
-            Some(other) => {
-                return Err(file_err(format!(
-                    "format {other:?}: not a model file ({FORMAT:?})"
-                )));
-            }
-            None => return Err(file_err(format!("no \"format\": {FORMAT:?} field"))),
-        }
-        match value.get("version").and_then(|v| v.as_u64()) {
-            Some(v) if v == u64::from(VERSION) => {}
-            Some(v) => {
-                return Err(file_err(format!(
-                    "model file version {v}; this build reads version {VERSION}"
-                )));
-            }
-            None => return Err(file_err("no numeric \"version\" field".into())),
-        }
+        check_head(serde_json::from_str(text).map_err(|e| file_err(not_a_model(e)))?)
+            .map_err(file_err)?;
         let file: ModelFile = serde_json::from_str(text).map_err(|e| file_err(format!("{e}")))?;
         file.validate().map_err(|e| file_err(e.to_string()))?;
         Ok(file)
@@ -254,13 +248,55 @@ impl ModelFile {
     }
 }
 
-/// Read and check a model file.
+/// A model file's format and version, read before the rest.
+#[derive(Deserialize)]
+struct Head {
+    format: Option<serde_json::Value>,
+    version: Option<serde_json::Value>,
+}
+
+fn not_a_model(e: serde_json::Error) -> String {
+    match e.classify() {
+        serde_json::error::Category::Syntax | serde_json::error::Category::Eof => {
+            format!("not JSON: {e}")
+        }
+        _ => format!("not a model file: {e}"),
+    }
+}
+
+/// Format and version first, so that a newer or foreign file says so rather than failing
+/// on whichever field changed.
+fn check_head(head: Head) -> Result<(), String> {
+    match head.format.as_ref().and_then(|v| v.as_str()) {
+        Some(FORMAT) => {}
+        Some(other) => return Err(format!("format {other:?}: not a model file ({FORMAT:?})")),
+        None => return Err(format!("no \"format\": {FORMAT:?} field")),
+    }
+    match head.version.as_ref().and_then(|v| v.as_u64()) {
+        Some(v) if v == u64::from(VERSION) => Ok(()),
+        Some(v) => Err(format!(
+            "model file version {v}; this build reads version {VERSION}"
+        )),
+        None => Err("no numeric \"version\" field".into()),
+    }
+}
+
+/// Read and check a model file, parsed as it is read (at most
+/// [`crate::fsutil::max_bytes::MODEL`]; the head first, then the whole).
 pub fn load(path: &Path) -> Result<ModelFile, ModelError> {
-    let text = std::fs::read_to_string(path).map_err(|e| ModelError::File {
+    let file_err = |message: String| ModelError::File {
         path: path.display().to_string(),
-        message: e.to_string(),
-    })?;
-    ModelFile::from_json(&text, &path.display().to_string())
+        message,
+    };
+    let open = || {
+        crate::fsutil::open_json(path, crate::fsutil::max_bytes::MODEL, "model file")
+            .map_err(|e| file_err(e.to_string()))
+    };
+    check_head(serde_json::from_reader(open()?).map_err(|e| file_err(not_a_model(e)))?)
+        .map_err(file_err)?;
+    let file: ModelFile = serde_json::from_reader(open()?).map_err(|e| file_err(format!("{e}")))?;
+    file.validate().map_err(|e| file_err(e.to_string()))?;
+    Ok(file)
 }
 
 /// Write a model file atomically (a killed write leaves the old file or none).

@@ -100,9 +100,33 @@ fn outputs(
     session: &Session,
     calibration: Calibration,
 ) -> Result<Outputs, ModelError> {
+    // A decision past f64's range (weights a file made huge) or a NaN is no class.
+    let not_finite = |g: usize, what: &str| {
+        ModelError::NotFinite(format!(
+            "the model's {what} for grasp {} ({}) is not a finite number: the model's values \
+             overflow on this session; it cannot predict it",
+            g + 1,
+            session.grasps[g].object
+        ))
+    };
     Ok(match model {
-        Model::Stability(c) => Outputs::Decisions(c.decisions(session, calibration)?),
-        Model::Sequences(m) => Outputs::Steps(m.predict(session, calibration)?),
+        Model::Stability(c) => {
+            let decisions = c.decisions(session, calibration)?;
+            if let Some(g) = decisions.iter().position(|v| !v.is_finite()) {
+                return Err(not_finite(g, "decision value"));
+            }
+            Outputs::Decisions(decisions)
+        }
+        Model::Sequences(m) => {
+            let steps = m.predict(session, calibration)?;
+            if let Some(g) = steps
+                .iter()
+                .position(|p| p.distributions.iter().any(|v| !v.is_finite()))
+            {
+                return Err(not_finite(g, "class distribution"));
+            }
+            Outputs::Steps(steps)
+        }
         Model::Clusters(m) => Outputs::Ids(m.assign(session, calibration)?),
         Model::TableOne(m) => Outputs::Ids(m.assign(session, calibration)?),
     })

@@ -61,6 +61,9 @@ pub enum ModelError {
     Mismatch(String),
     #[error("{0}")]
     Param(String),
+    /// A prediction that came out infinite or NaN: never reported as a class.
+    #[error("{0}")]
+    NotFinite(String),
     #[error(transparent)]
     Stability(#[from] StabilityError),
     #[error(transparent)]

@@ -132,6 +132,9 @@ impl TableOneModel {
                 format!("{} offsets for {n} features", self.normaliser.offset.len()),
             ));
         }
+        if !matches!(self.learner, TableOneLearner::RbfSvm(_)) {
+            check_scaler(&self.normaliser, &f("normaliser"))?;
+        }
         let width = |w: usize, field: &str| {
             if w == n {
                 Ok(())
@@ -147,6 +150,12 @@ impl TableOneModel {
                 if k.centres.nrows() == 0 {
                     return Err(ModelError::field(f("learner.centres"), "no centres"));
                 }
+                if k.centres.iter().any(|v| !v.is_finite()) {
+                    return Err(ModelError::field(
+                        f("learner.centres"),
+                        "values must be finite",
+                    ));
+                }
                 width(k.centres.ncols(), "learner.centres")
             }
             TableOneLearner::Som(m) => {
@@ -161,25 +170,61 @@ impl TableOneModel {
                         ),
                     ));
                 }
+                if m.weights.iter().any(|v| !v.is_finite()) {
+                    return Err(ModelError::field(
+                        f("learner.weights"),
+                        "values must be finite",
+                    ));
+                }
                 width(m.weights.ncols(), "learner.weights")
             }
             TableOneLearner::RbfSvm(svm) => {
-                for m in &svm.machines {
+                if !(svm.gamma.is_finite() && svm.gamma > 0.0) {
+                    return Err(ModelError::field(
+                        f("learner.gamma"),
+                        format!("{} is not a finite kernel width > 0", svm.gamma),
+                    ));
+                }
+                if svm.classes.is_empty() || svm.classes.windows(2).any(|w| w[0] >= w[1]) {
+                    return Err(ModelError::field(
+                        f("learner.classes"),
+                        "class ids must be listed once each, ascending",
+                    ));
+                }
+                for (i, m) in svm.machines.iter().enumerate() {
+                    let at = |field: &str| f(&format!("learner.machines[{i}].{field}"));
                     width(
                         m.support_vectors.ncols(),
                         "learner.machines.support_vectors",
                     )?;
                     if m.coef.len() != m.support_vectors.nrows() {
                         return Err(ModelError::field(
-                            f("learner.machines.coef"),
+                            at("coef"),
                             "one coefficient per support vector",
                         ));
                     }
+                    let (a, b) = m.classes;
+                    let known = |c: usize| svm.classes.binary_search(&c).is_ok();
+                    if a == b || !known(a) || !known(b) {
+                        return Err(ModelError::field(
+                            at("classes"),
+                            format!(
+                                "({a}, {b}) is not a pair of the model's classes {:?}",
+                                svm.classes
+                            ),
+                        ));
+                    }
+                    let values = m.support_vectors.iter().chain(&m.coef);
+                    if !m.rho.is_finite() || values.clone().any(|v| !v.is_finite()) {
+                        return Err(ModelError::field(
+                            at("coef"),
+                            "support vectors, coefficients and rho must be finite",
+                        ));
+                    }
                 }
-                if let Some(s) = &svm.scaler
-                    && s.offset.len() != n
-                {
+                if let Some(s) = &svm.scaler {
                     width(s.offset.len(), "learner.scaler")?;
+                    check_scaler(s, &f("learner.scaler"))?;
                 }
                 if svm.classes.iter().any(|&c| c >= self.classes.len()) {
                     return Err(ModelError::field(
@@ -195,6 +240,34 @@ impl TableOneModel {
             }
         }
     }
+}
+
+/// A feature map read from a file: as many scales as offsets, every value finite, scales
+/// ≥ 0 (0: a feature constant in training), and not every scale 0 (the model would read
+/// one constant point for every grasp).
+fn check_scaler(s: &Normaliser, field: &str) -> Result<(), ModelError> {
+    if s.scale.len() != s.offset.len() {
+        return Err(ModelError::field(
+            field,
+            format!("{} scales for {} offsets", s.scale.len(), s.offset.len()),
+        ));
+    }
+    if s.offset.iter().any(|v| !v.is_finite())
+        || s.scale.iter().any(|v| !(v.is_finite() && *v >= 0.0))
+    {
+        return Err(ModelError::field(
+            field,
+            "offsets must be finite, scales finite and ≥ 0",
+        ));
+    }
+    if s.scale.iter().all(|v| *v == 0.0) {
+        return Err(ModelError::field(
+            field,
+            "every scale is 0 (a deviation of 0 for every feature): the model would see \
+             every grasp alike",
+        ));
+    }
+    Ok(())
 }
 
 /// What fitting leaves besides the model.

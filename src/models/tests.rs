@@ -263,7 +263,7 @@ mod sequences {
     ) -> Session {
         let spec = SubsetSpec {
             objects: objects.to_vec(),
-            trials: trials.collect(),
+            trials: trials.into(),
             labels: Vec::new(),
         };
         subset(session, &spec, "part").unwrap()
@@ -427,7 +427,7 @@ mod clusters {
         let part = |objects: &[String]| {
             let spec = SubsetSpec {
                 objects: objects.to_vec(),
-                trials: (1..=5).collect(),
+                trials: (1..=5).into(),
                 labels: Vec::new(),
             };
             subset(&session, &spec, "part").unwrap()
@@ -484,7 +484,7 @@ mod table_one {
         let session = simulate::object_recognition(1);
         let part = |trials: std::ops::RangeInclusive<u32>| {
             let spec = SubsetSpec {
-                trials: trials.collect(),
+                trials: trials.into(),
                 ..Default::default()
             };
             subset(&session, &spec, "part").unwrap()

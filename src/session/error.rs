@@ -163,6 +163,37 @@ pub(crate) fn read_text(path: &Path) -> Result<String, SessionError> {
     })
 }
 
+/// A JSON file of the session layer opened to be parsed as it is read
+/// ([`crate::fsutil::open_json`]: at most `max_bytes`, past a byte-order mark). Its first
+/// block is looked at as [`read_text`] would: an empty file, or bytes that are not UTF-8,
+/// are named so rather than as a JSON syntax error.
+pub(crate) fn open_json(
+    path: &Path,
+    max_bytes: u64,
+    what: &str,
+) -> Result<std::io::BufReader<std::fs::File>, SessionError> {
+    use std::io::BufRead;
+    let io = |e: std::io::Error| SessionError::io(path, &e);
+    let mut r = crate::fsutil::open_json(path, max_bytes, what).map_err(io)?;
+    let block = r.capacity();
+    let head = r.fill_buf().map_err(io)?;
+    if head.len() < block && head.iter().all(u8::is_ascii_whitespace) {
+        return Err(SessionError::file(path, "the file is empty"));
+    }
+    if let Err(e) = std::str::from_utf8(head)
+        && e.error_len().is_some()
+    {
+        let valid = &head[..e.valid_up_to()];
+        let line = valid.iter().filter(|&&c| c == b'\n').count() + 1;
+        return Err(SessionError::line(
+            path,
+            line,
+            "the file is not valid UTF-8 text",
+        ));
+    }
+    Ok(r)
+}
+
 /// Keep messages readable when a field holds a long run of garbage.
 pub(crate) fn shorten(s: &str) -> String {
     const MAX: usize = 40;

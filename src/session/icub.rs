@@ -191,6 +191,13 @@ fn readme_notice(dir: &Path, data: &Path) -> Option<String> {
 }
 
 /// Import the dataset from its folder: the paper's 10 classes × trials 1–20.
+/// Whether `dir` looks like the iCub grasp dataset (it holds the first class's first trial).
+pub fn is_dataset(dir: &Path) -> bool {
+    data_dir(dir)
+        .join(format!("{}_1.txt", CLASSES[0]))
+        .is_file()
+}
+
 pub fn import_icub(dir: &Path) -> Result<Session, SessionError> {
     import_icub_with(dir, &IcubOptions::default())
 }

@@ -11,18 +11,29 @@
 //! file of a folder of trial files (`trial_folder`), one grasp per file.
 
 use std::borrow::Cow;
+use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 use super::error::{parse_number, read_text, shorten};
 use super::spec::{ImportSpec, RawGrasp, assemble};
 use super::{Frame, Session, SessionError};
 
+/// The most columns a CSV line may hold: room for the largest sensor's taxels
+/// ([`super::validate::MAX_TAXELS`]) and as many other columns again. A longer line is
+/// refused before its fields are kept.
+pub const MAX_COLUMNS: usize = 2 * super::validate::MAX_TAXELS;
+
 /// Split one CSV line into fields: commas separate, a field in double quotes may hold
-/// commas and doubled quotes (`""`).
+/// commas and doubled quotes (`""`). More than [`MAX_COLUMNS`] fields are an error.
 pub fn split_line(line: &str) -> Result<Vec<Cow<'_, str>>, String> {
     let mut fields = Vec::new();
     let mut rest = line;
     loop {
+        if fields.len() == MAX_COLUMNS {
+            return Err(format!(
+                "more than {MAX_COLUMNS} columns, the most a CSV line may hold"
+            ));
+        }
         let trimmed = rest.trim_start();
         if let Some(quoted) = trimmed.strip_prefix('"') {
             let mut value = String::new();
@@ -63,15 +74,32 @@ pub fn split_line(line: &str) -> Result<Vec<Cow<'_, str>>, String> {
     }
 }
 
-/// A header naming one column twice: found by name, the second would be silently ignored.
-/// Names both columns (1-based) of the first repeated name; empty names are not compared.
-pub fn duplicate_column<S: AsRef<str>>(names: &[S]) -> Result<(), String> {
+/// The columns of a header by name (trimmed), each found in one look-up.
+pub(crate) struct ColumnIndex<'a>(HashMap<&'a str, usize>);
+
+impl ColumnIndex<'_> {
+    /// The column index of `name`.
+    pub(crate) fn find(&self, name: &str) -> Option<usize> {
+        self.0.get(name).copied()
+    }
+
+    /// The column index of `name`, or an error saying it is missing.
+    pub(crate) fn need(&self, name: &str) -> Result<usize, String> {
+        self.find(name).ok_or_else(|| format!("no `{name}` column"))
+    }
+}
+
+/// Index a header's columns by name. A header naming one column twice is an error (found
+/// by name, the second would be silently ignored): it names both columns (1-based) of the
+/// first repeated name; empty names are not compared.
+pub(crate) fn column_index<S: AsRef<str>>(names: &[S]) -> Result<ColumnIndex<'_>, String> {
+    let mut index = HashMap::with_capacity(names.len());
     for (j, b) in names.iter().enumerate() {
         let b = b.as_ref().trim();
         if b.is_empty() {
             continue;
         }
-        if let Some(i) = names[..j].iter().position(|a| a.as_ref().trim() == b) {
+        if let Some(i) = index.insert(b, j) {
             return Err(format!(
                 "columns {} and {} are both named `{}`",
                 i + 1,
@@ -80,7 +108,7 @@ pub fn duplicate_column<S: AsRef<str>>(names: &[S]) -> Result<(), String> {
             ));
         }
     }
-    Ok(())
+    Ok(ColumnIndex(index))
 }
 
 /// The non-empty lines of a text, numbered from 1.
@@ -156,31 +184,25 @@ pub(crate) struct Row {
     pub key: bool,
 }
 
-/// The column index of `name`.
-pub(crate) fn find_column(names: &[Cow<'_, str>], name: &str) -> Option<usize> {
-    names.iter().position(|n| n.trim() == name)
-}
-
-/// The column index of `name`, or an error saying it is missing.
-pub(crate) fn need_column(names: &[Cow<'_, str>], name: &str) -> Result<usize, String> {
-    find_column(names, name).ok_or_else(|| format!("no `{name}` column"))
-}
-
 impl FrameColumns {
     /// Find the spec's columns. A column named like a taxel of a spec sensor that the
     /// layout does not have (`ff_7` for six taxels) is an error: a recording with more
     /// taxels than the spec says would otherwise lose them silently.
     pub(crate) fn find(names: &[Cow<'_, str>], spec: &ImportSpec) -> Result<Self, String> {
-        duplicate_column(names)?;
+        let index = column_index(names)?;
+        let taxel_counts: HashMap<&str, usize> = spec
+            .sensors
+            .iter()
+            .map(|s| (s.sensor.name.as_str(), s.sensor.layout.taxel_count()))
+            .collect();
         for name in names {
             let name = name.trim();
             let Some((sensor, k)) = name.rsplit_once('_') else {
                 continue;
             };
-            let Some(s) = spec.sensors.iter().find(|s| s.sensor.name == sensor) else {
+            let Some(&n) = taxel_counts.get(sensor) else {
                 continue;
             };
-            let n = s.sensor.layout.taxel_count();
             let is_taxel = k.parse::<usize>().is_ok_and(|k| (1..=n).contains(&k))
                 && !k.starts_with(['0', '+']);
             if !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()) && !is_taxel {
@@ -191,9 +213,9 @@ impl FrameColumns {
                 ));
             }
         }
-        let need = |name: &str| need_column(names, name);
+        let need = |name: &str| index.need(name);
         Ok(FrameColumns {
-            time: find_column(names, "time"),
+            time: index.find("time"),
             taxels: spec
                 .sensors
                 .iter()
@@ -208,7 +230,7 @@ impl FrameColumns {
                 .iter()
                 .map(|j| need(j))
                 .collect::<Result<_, _>>()?,
-            key: find_column(names, "key"),
+            key: index.find("key"),
         })
     }
 
@@ -367,18 +389,19 @@ pub fn parse_long_csv(text: &str, path: &Path, spec: &ImportSpec) -> Result<Sess
     } = table(text, path)?;
     let sets = spec.recorded_label_sets();
     let (grasp_col, object_col, label_cols, cols) = (|| {
-        let grasp = need_column(&names, "grasp")?;
-        need_column(&names, "time")?;
-        let object = need_column(&names, "object")?;
+        let index = column_index(&names)?;
+        let grasp = index.need("grasp")?;
+        index.need("time")?;
+        let object = index.need("object")?;
         let labels = sets
             .iter()
-            .map(|l| need_column(&names, &l.name))
+            .map(|l| index.need(&l.name))
             .collect::<Result<Vec<_>, _>>()?;
         Ok((grasp, object, labels, FrameColumns::find(&names, spec)?))
     })()
     .map_err(|m: String| SessionError::line(path, header_no, m))?;
     let mut done: Vec<RawGrasp> = Vec::new();
-    let mut done_ids: Vec<String> = Vec::new();
+    let mut done_ids: HashSet<String> = HashSet::new();
     let mut open: Option<Open> = None;
     for (no, line) in lines {
         let fields = row_fields(path, no, line, names.len())?;
@@ -403,7 +426,7 @@ pub fn parse_long_csv(text: &str, path: &Path, spec: &ImportSpec) -> Result<Sess
             .collect::<Result<Vec<_>, _>>()?;
         let row = cols.read(path, no, &names, &fields, spec)?;
         if open.as_ref().is_none_or(|o| o.id != id) {
-            if done_ids.iter().any(|d| d == id) {
+            if done_ids.contains(id) {
                 return Err(SessionError::line_field(
                     path,
                     no,
@@ -418,7 +441,7 @@ pub fn parse_long_csv(text: &str, path: &Path, spec: &ImportSpec) -> Result<Sess
             spec.check_object(object)
                 .map_err(|m| SessionError::line_field(path, no, "object", m))?;
             if let Some(o) = open.take() {
-                done_ids.push(o.id.clone());
+                done_ids.insert(o.id.clone());
                 done.push(o.close());
             }
             open = Some(Open {

@@ -25,7 +25,7 @@ pub use icub::{import_icub, import_icub_with};
 pub use model::*;
 pub use native::{load, save};
 pub use spec::ImportSpec;
-pub use subset::{SubsetError, SubsetSpec, subset, subset_grasps};
+pub use subset::{SubsetError, SubsetSpec, Trials, subset, subset_grasps};
 pub use validate::validate;
 
 /// Import a researcher's own recording as its import spec describes: a `.mcap` file or a

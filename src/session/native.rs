@@ -27,8 +27,9 @@ use std::io::Write;
 use std::path::Path;
 
 use serde::Deserialize;
+use serde::de::DeserializeOwned;
 
-use super::error::read_text;
+use super::error::open_json;
 use super::{FORMAT_VERSION, Location, Session, SessionError, validate};
 use crate::fsutil;
 
@@ -71,10 +72,32 @@ pub(crate) fn json_error(path: &Path, e: &serde_json::Error) -> SessionError {
 
 /// Parse a native session from text (`path` names it in errors).
 pub fn from_str(text: &str, path: &Path) -> Result<Session, SessionError> {
+    let text = crate::fsutil::without_bom(text);
     if text.trim().is_empty() {
         return Err(SessionError::file(path, "the file is empty"));
     }
-    let header: Header = serde_json::from_str(text).map_err(|e| json_error(path, &e))?;
+    let json = |e: serde_json::Error| json_error(path, &e);
+    check_header(serde_json::from_str(text).map_err(json)?, path)?;
+    let file: File = serde_json::from_str(text).map_err(json)?;
+    validate(&file.session, path)?;
+    Ok(file.session)
+}
+
+/// Read a native session file as it is parsed: the header first (one pass that keeps
+/// nothing of the session), then the session. At most [`crate::fsutil::max_bytes::SESSION`].
+pub fn load(path: &Path) -> Result<Session, SessionError> {
+    fn parse<T: DeserializeOwned>(path: &Path) -> Result<T, SessionError> {
+        let reader = open_json(path, crate::fsutil::max_bytes::SESSION, "session file")?;
+        serde_json::from_reader(reader).map_err(|e| json_error(path, &e))
+    }
+    check_header(parse(path)?, path)?;
+    let file: File = parse(path)?;
+    validate(&file.session, path)?;
+    Ok(file.session)
+}
+
+/// The format tag and version, before anything else.
+fn check_header(header: Header, path: &Path) -> Result<(), SessionError> {
     match header.format.as_deref() {
         Some(FORMAT_TAG) => {}
         Some(other) => {
@@ -105,14 +128,7 @@ pub fn from_str(text: &str, path: &Path) -> Result<Session, SessionError> {
         }
         None => return Err(SessionError::field(path, "version", "missing")),
     }
-    let file: File = serde_json::from_str(text).map_err(|e| json_error(path, &e))?;
-    validate(&file.session, path)?;
-    Ok(file.session)
-}
-
-/// Read a native session file.
-pub fn load(path: &Path) -> Result<Session, SessionError> {
-    from_str(&read_text(path)?, path)
+    Ok(())
 }
 
 /// Serialise a session in the native format.

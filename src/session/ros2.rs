@@ -132,9 +132,9 @@ fn read_windows(csv: &Path, spec: &ImportSpec) -> Result<Vec<Window>, SessionErr
     let header_line = text.lines().position(|l| !l.trim().is_empty()).unwrap_or(0) + 1;
     let names = split_line(header.trim_start_matches('\u{feff}'))
         .map_err(|m| SessionError::line(csv, header_line, m))?;
-    super::long_csv::duplicate_column(&names)
+    let index = super::long_csv::column_index(&names)
         .map_err(|m| SessionError::line(csv, header_line, m))?;
-    let col = |name: &str| names.iter().position(|n| n.trim() == name);
+    let col = |name: &str| index.find(name);
     let need = |name: &str| {
         col(name).ok_or_else(|| {
             SessionError::line(

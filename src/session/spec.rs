@@ -21,14 +21,15 @@
 //! Reading checks every field and names it in errors (`sensors[1].layout`); what the spec
 //! says about the recording (topics, lengths, times) is checked by the readers.
 
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use super::error::read_text;
+use super::error::open_json;
 use super::native::json_error;
 use super::trial_pattern::{TRIAL, TrialPattern};
-use super::validate::MAX_GRID_CELLS;
+use super::validate::{MAX_SENSORS, check_layout};
 use super::{
     Frame, Grasp, LabelSet, Layout, Sensor, Session, SessionError, SessionMeta, ValueTransform,
     bts3, file_name, file_stem, icub, key_frame_by_pressure, validate,
@@ -148,6 +149,9 @@ pub struct ImportSpec {
     /// Folders of trial files: where a file's object, classes and trial number are in its
     /// path (default: see [`ImportSpec::trial_pattern`]).
     pub trials: Option<TrialPattern>,
+    /// Each label set's classes by name: a recording's rows are labelled in one look-up
+    /// each, however many classes the spec declares.
+    class_indices: HashMap<String, HashMap<String, usize>>,
 }
 
 /// A built-in layout by name: `icub-fingertip`, `biotac-sp`, `grid RxC`.
@@ -181,15 +185,10 @@ fn layout_of(value: &serde_json::Value) -> Result<Layout, String> {
     }
 }
 
+/// The first name given twice (one pass, whatever the count).
 fn duplicate<'a>(names: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
-    let mut seen: Vec<&str> = Vec::new();
-    for n in names {
-        if seen.contains(&n) {
-            return Some(n);
-        }
-        seen.push(n);
-    }
-    None
+    let mut seen = HashSet::new();
+    names.into_iter().find(|n| !seen.insert(*n))
 }
 
 /// The spec's name, frame rate and sync tolerance checked; the tolerance in ns.
@@ -228,18 +227,9 @@ fn sensor_spec(s: usize, f: SensorFile, path: &Path) -> Result<SensorSpec, Sessi
         return Err(err(at(".name"), "an empty sensor name".into()));
     }
     let layout = layout_of(&f.layout).map_err(|m| err(at(".layout"), m))?;
-    if let Some((rows, cols)) = layout.grid_shape()
-        && (rows == 0 || cols == 0 || rows.checked_mul(cols).is_none_or(|a| a > MAX_GRID_CELLS))
-    {
-        return Err(err(
-            at(".layout"),
-            format!("a {rows} × {cols} grid is empty or too large"),
-        ));
-    }
+    // The spec is where a layout is wrong: its errors name the spec, not the recording.
+    check_layout(s, &f.name, &layout, path)?;
     let n = layout.taxel_count();
-    if n == 0 {
-        return Err(err(at(".layout"), "the layout has no taxels".into()));
-    }
     if let Some([a, b]) = f.slice
         && b.checked_sub(a) != Some(n)
     {
@@ -370,21 +360,38 @@ fn grasp_cut(grasps: GraspsFile, path: &Path) -> Result<GraspCut, SessionError> 
 }
 
 impl ImportSpec {
-    /// Read a spec file.
+    /// Read a spec file as it is parsed (at most [`crate::fsutil::max_bytes::SPEC`]).
     pub fn load(path: &Path) -> Result<ImportSpec, SessionError> {
-        Self::from_str(&read_text(path)?, path)
+        let reader = open_json(path, crate::fsutil::max_bytes::SPEC, "spec")?;
+        let file = serde_json::from_reader(reader).map_err(|e| json_error(path, &e))?;
+        Self::from_file(file, path)
     }
 
     /// Parse spec text (`path` names it in errors and anchors the windows CSV).
     pub fn from_str(text: &str, path: &Path) -> Result<ImportSpec, SessionError> {
+        let text = crate::fsutil::without_bom(text);
         if text.trim().is_empty() {
             return Err(SessionError::file(path, "the spec is empty"));
         }
-        let file: SpecFile = serde_json::from_str(text).map_err(|e| json_error(path, &e))?;
+        let file = serde_json::from_str(text).map_err(|e| json_error(path, &e))?;
+        Self::from_file(file, path)
+    }
+
+    /// Check every field of a parsed spec file.
+    fn from_file(file: SpecFile, path: &Path) -> Result<ImportSpec, SessionError> {
         let err = |field: String, msg: String| SessionError::field(path, field, msg);
         let sync_tolerance_ns = check_scalars(&file, path)?;
         if file.sensors.is_empty() {
             return Err(err("sensors".into(), "the spec has no sensors".into()));
+        }
+        if file.sensors.len() > MAX_SENSORS {
+            return Err(err(
+                "sensors".into(),
+                format!(
+                    "{} sensors, more than the {MAX_SENSORS} a spec may declare",
+                    file.sensors.len()
+                ),
+            ));
         }
         let sensors = file
             .sensors
@@ -413,6 +420,14 @@ impl ImportSpec {
                     .map_err(|m| err("trials.pattern".into(), m))?,
             ),
         };
+        let class_indices = file
+            .label_sets
+            .iter()
+            .map(|set| {
+                let classes = set.classes.iter().cloned().zip(0..).collect();
+                (set.name.clone(), classes)
+            })
+            .collect();
         Ok(ImportSpec {
             path: path.to_path_buf(),
             name: file.name,
@@ -423,6 +438,7 @@ impl ImportSpec {
             label_sets: file.label_sets,
             cut,
             trials,
+            class_indices,
         })
     }
 
@@ -458,7 +474,8 @@ impl ImportSpec {
     /// Index of `class` in recorded label set `set` (of [`Self::recorded_label_sets`]), or
     /// a message naming the classes.
     pub fn class_index(&self, set: &LabelSet, class: &str) -> Result<usize, String> {
-        set.classes.iter().position(|c| c == class).ok_or_else(|| {
+        let found = self.class_indices.get(&set.name).and_then(|c| c.get(class));
+        found.copied().ok_or_else(|| {
             format!(
                 "`{}` is not a class of label set `{}` ({})",
                 super::error::shorten(class),
@@ -473,8 +490,13 @@ impl ImportSpec {
         if object.trim().is_empty() {
             return Err("an empty object name".into());
         }
+        let known = |set: &LabelSet| {
+            self.class_indices
+                .get(&set.name)
+                .is_some_and(|c| c.contains_key(object))
+        };
         match self.label_sets.iter().find(|l| l.name == OBJECT) {
-            Some(set) if !set.classes.iter().any(|c| c == object) => Err(format!(
+            Some(set) if !known(set) => Err(format!(
                 "object `{}` is not a class of label set `object` ({})",
                 super::error::shorten(object),
                 set.classes.join(", ")
@@ -576,12 +598,12 @@ pub fn assemble(
     let object_set = match label_sets.iter().position(|l| l.name == OBJECT) {
         Some(i) => i,
         None => {
-            let mut objects: Vec<String> = Vec::new();
-            for g in &grasps {
-                if !objects.contains(&g.object) {
-                    objects.push(g.object.clone());
-                }
-            }
+            let mut seen = HashSet::new();
+            let objects: Vec<String> = grasps
+                .iter()
+                .filter(|g| seen.insert(g.object.as_str()))
+                .map(|g| g.object.clone())
+                .collect();
             label_sets.insert(
                 0,
                 LabelSet {
@@ -593,30 +615,32 @@ pub fn assemble(
         }
     };
     let rate = spec.frame_rate_hz.or_else(|| measured_rate(&grasps));
+    let object_class: HashMap<&str, usize> = label_sets[object_set]
+        .classes
+        .iter()
+        .enumerate()
+        .map(|(i, c)| (c.as_str(), i))
+        .collect();
     let mut out = Vec::with_capacity(grasps.len());
-    let mut trials: Vec<(String, u32)> = Vec::new();
+    // The last trial number of each object whose grasps the recording does not number.
+    let mut trials: HashMap<String, u32> = HashMap::new();
     for g in grasps {
         let mut recorded = g.classes.into_iter();
-        let labels = label_sets
-            .iter()
-            .enumerate()
-            .map(|(i, set)| {
+        let labels = (0..label_sets.len())
+            .map(|i| {
                 if i == object_set {
-                    set.classes.iter().position(|c| *c == g.object).unwrap_or(0)
+                    object_class.get(g.object.as_str()).copied().unwrap_or(0)
                 } else {
                     recorded.next().unwrap_or(0)
                 }
             })
             .collect();
-        let trial = match (g.trial, trials.iter_mut().find(|(o, _)| *o == g.object)) {
-            (Some(given), _) => given,
-            (None, Some((_, n))) => {
+        let trial = match g.trial {
+            Some(given) => given,
+            None => {
+                let n = trials.entry(g.object.clone()).or_insert(0);
                 *n += 1;
                 *n
-            }
-            (None, None) => {
-                trials.push((g.object.clone(), 1));
-                1
             }
         };
         let key_frame = g

@@ -2,13 +2,66 @@
 //! trials or labels, and for researchers building their own test sets. Sensors, encoders,
 //! label sets and every kept grasp are copied unchanged; the notes say what was kept.
 
+use std::ops::RangeInclusive;
+
 use super::Session;
+
+/// Trial numbers as sorted, disjoint ranges: `1..100000000` is one range, never a list of
+/// its numbers, and a trial is looked up by bisection.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Trials(Vec<RangeInclusive<u32>>);
+
+impl Trials {
+    /// The union of `ranges` (in any order, overlapping or not).
+    pub fn new(ranges: impl IntoIterator<Item = RangeInclusive<u32>>) -> Trials {
+        let mut ranges: Vec<_> = ranges.into_iter().filter(|r| !r.is_empty()).collect();
+        ranges.sort_by_key(|r| *r.start());
+        let mut merged: Vec<RangeInclusive<u32>> = Vec::with_capacity(ranges.len());
+        for r in ranges {
+            match merged.last_mut() {
+                Some(last) if *r.start() <= last.end().saturating_add(1) => {
+                    *last = *last.start()..=(*last.end()).max(*r.end());
+                }
+                _ => merged.push(r),
+            }
+        }
+        Trials(merged)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    pub fn contains(&self, trial: u32) -> bool {
+        let i = self.0.partition_point(|r| *r.end() < trial);
+        self.0.get(i).is_some_and(|r| r.contains(&trial))
+    }
+
+    /// `1..10, 12` as the command line writes them.
+    fn describe(&self) -> String {
+        let parts: Vec<String> = self
+            .0
+            .iter()
+            .map(|r| match r.start() == r.end() {
+                true => r.start().to_string(),
+                false => format!("{}..{}", r.start(), r.end()),
+            })
+            .collect();
+        parts.join(", ")
+    }
+}
+
+impl From<RangeInclusive<u32>> for Trials {
+    fn from(r: RangeInclusive<u32>) -> Trials {
+        Trials::new([r])
+    }
+}
 
 /// Which grasps to keep: all conditions must hold (an empty list does not filter).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SubsetSpec {
     pub objects: Vec<String>,
-    pub trials: Vec<u32>,
+    pub trials: Trials,
     /// (label set, class): within one label set a grasp may have any of the classes
     /// listed for it.
     pub labels: Vec<(String, String)>,
@@ -26,8 +79,7 @@ impl SubsetSpec {
             parts.push(format!("objects {}", self.objects.join(", ")));
         }
         if !self.trials.is_empty() {
-            let t: Vec<String> = self.trials.iter().map(u32::to_string).collect();
-            parts.push(format!("trials {}", t.join(", ")));
+            parts.push(format!("trials {}", self.trials.describe()));
         }
         for (set, class) in &self.labels {
             parts.push(format!("{set} = {class}"));
@@ -86,7 +138,7 @@ pub fn subset(session: &Session, spec: &SubsetSpec, name: &str) -> Result<Sessio
         .grasps
         .iter()
         .filter(|g| spec.objects.is_empty() || spec.objects.contains(&g.object))
-        .filter(|g| spec.trials.is_empty() || g.trial.is_some_and(|t| spec.trials.contains(&t)))
+        .filter(|g| spec.trials.is_empty() || g.trial.is_some_and(|t| spec.trials.contains(t)))
         .filter(|g| {
             allowed
                 .iter()
@@ -172,7 +224,7 @@ mod tests {
         let objects = s.objects();
         let spec = SubsetSpec {
             objects: vec![objects[0].clone(), objects[2].clone()],
-            trials: vec![1, 2],
+            trials: Trials::new([1..=2]),
             labels: Vec::new(),
         };
         let sub = subset(&s, &spec, "part")?;
@@ -193,6 +245,15 @@ mod tests {
         assert_eq!(sub.sensors, s.sensors);
         assert_eq!(sub.label_sets, s.label_sets);
         Ok(())
+    }
+
+    #[test]
+    fn trial_ranges_stay_ranges() {
+        let t = Trials::new([5..=9, 1..=1, 2..=3, 8..=u32::MAX]);
+        assert_eq!(t, Trials::new([1..=3, 5..=u32::MAX]));
+        assert!(t.contains(1) && t.contains(3) && !t.contains(4) && t.contains(u32::MAX));
+        assert_eq!(t.describe(), format!("1..3, 5..{}", u32::MAX));
+        assert!(!Trials::new([1..=100_000_000]).contains(0));
     }
 
     #[test]
@@ -232,7 +293,7 @@ mod tests {
         );
         assert!(
             err(SubsetSpec {
-                trials: vec![99],
+                trials: Trials::from(99..=99),
                 ..Default::default()
             })
             .contains("no grasp")

@@ -10,11 +10,27 @@ use super::{Frame, Grasp, Layout, Sensor, Session, SessionError, ValueTransform}
 /// cells), small enough that drawing the grid's image is cheap.
 pub const MAX_GRID_CELLS: usize = 65_536;
 
+/// The most taxels one sensor may have, whatever its layout (a full grid's bound).
+pub const MAX_TAXELS: usize = MAX_GRID_CELLS;
+
+/// The most sensors a session or a spec may declare: a whole hand of tactile skin patches
+/// has tens to hundreds.
+pub const MAX_SENSORS: usize = 1_024;
+
 /// Check `session`; errors name `path` and the field.
 pub fn validate(session: &Session, path: &Path) -> Result<(), SessionError> {
     let err = |field: String, msg: String| SessionError::field(path, field, msg);
     if session.sensors.is_empty() {
         return Err(err("sensors".into(), "the session has no sensors".into()));
+    }
+    if session.sensors.len() > MAX_SENSORS {
+        return Err(err(
+            "sensors".into(),
+            format!(
+                "{} sensors, more than the {MAX_SENSORS} a session may have",
+                session.sensors.len()
+            ),
+        ));
     }
     for (s, sensor) in session.sensors.iter().enumerate() {
         check_sensor(s, sensor, path)?;
@@ -39,27 +55,8 @@ pub fn validate(session: &Session, path: &Path) -> Result<(), SessionError> {
 /// Sensor `s`: its layout, range and value transform.
 fn check_sensor(s: usize, sensor: &Sensor, path: &Path) -> Result<(), SessionError> {
     let err = |field: String, msg: String| SessionError::field(path, field, msg);
-    // The grid size comes from the file: rows × cols must not overflow before
-    // `taxel_count` multiplies them (found by fuzzing, tests/fuzz_regressions.rs), and
-    // images of the grid are drawn cell by cell, so its area is bounded too.
-    if let Some((rows, cols)) = sensor.layout.grid_shape()
-        && rows
-            .checked_mul(cols)
-            .is_none_or(|area| area > MAX_GRID_CELLS)
-    {
-        return Err(err(
-            format!("sensors[{s}].layout"),
-            format!("a {rows} × {cols} grid is too large"),
-        ));
-    }
+    check_layout(s, &sensor.name, &sensor.layout, path)?;
     let n = sensor.layout.taxel_count();
-    if n == 0 {
-        return Err(err(
-            format!("sensors[{s}].layout"),
-            format!("sensor `{}` has no taxels", sensor.name),
-        ));
-    }
-    check_layout(s, &sensor.layout, path)?;
     if let Some([lo, hi]) = sensor.range
         && !(lo.is_finite() && hi.is_finite() && lo <= hi)
     {
@@ -94,24 +91,58 @@ fn check_sensor(s: usize, sensor: &Sensor, path: &Path) -> Result<(), SessionErr
     Ok(())
 }
 
-/// The layout of sensor `s`: a grid not empty, a sparse grid's cells inside it, points
-/// with a positive radius and finite positions.
-fn check_layout(s: usize, layout: &Layout, path: &Path) -> Result<(), SessionError> {
+/// The layout of sensor `s` (named `name`), as a session or an import spec (`path`)
+/// declares it: a grid neither empty nor past [`MAX_GRID_CELLS`], at most [`MAX_TAXELS`]
+/// taxels and at least one, a sparse grid's cells inside it and each once, points with a
+/// positive radius and finite positions.
+pub(crate) fn check_layout(
+    s: usize,
+    name: &str,
+    layout: &Layout,
+    path: &Path,
+) -> Result<(), SessionError> {
     let err = |field: String, msg: String| SessionError::field(path, field, msg);
+    let at = |rest: &str| format!("sensors[{s}].layout{rest}");
+    // The grid size comes from the file: rows × cols must not overflow before
+    // `taxel_count` multiplies them (found by fuzzing, tests/fuzz_regressions.rs), and
+    // images of the grid are drawn cell by cell, so its area is bounded too.
+    if let Some((rows, cols)) = layout.grid_shape()
+        && rows
+            .checked_mul(cols)
+            .is_none_or(|area| area > MAX_GRID_CELLS)
+    {
+        return Err(err(at(""), format!("a {rows} × {cols} grid is too large")));
+    }
+    let n = layout.taxel_count();
+    if n == 0 {
+        return Err(err(at(""), format!("sensor `{name}` has no taxels")));
+    }
+    if n > MAX_TAXELS {
+        return Err(err(
+            at(""),
+            format!("{n} taxels, more than the {MAX_TAXELS} a sensor may have"),
+        ));
+    }
     match layout {
-        Layout::Grid { rows, cols } if rows * cols == 0 => {
-            return Err(err(
-                format!("sensors[{s}].layout"),
-                "a grid needs at least one row and one column".into(),
-            ));
-        }
+        Layout::Grid { .. } => {}
         Layout::SparseGrid { rows, cols, cells } => {
+            // One flag per cell of the grid (bounded above), so repeats are found in one pass.
+            let mut taken = vec![false; rows * cols];
             for (i, c) in cells.iter().enumerate() {
                 if c[0] >= *rows || c[1] >= *cols {
                     return Err(err(
-                        format!("sensors[{s}].layout.cells[{i}]"),
+                        at(&format!(".cells[{i}]")),
                         format!(
                             "cell ({}, {}) is outside the {rows} × {cols} grid",
+                            c[0], c[1]
+                        ),
+                    ));
+                }
+                if std::mem::replace(&mut taken[c[0] * cols + c[1]], true) {
+                    return Err(err(
+                        at(&format!(".cells[{i}]")),
+                        format!(
+                            "cell ({}, {}) is listed twice: two taxels cannot share a cell",
                             c[0], c[1]
                         ),
                     ));
@@ -123,7 +154,7 @@ fn check_layout(s: usize, layout: &Layout, path: &Path) -> Result<(), SessionErr
         } => {
             if !(radius.is_finite() && *radius > 0.0) {
                 return Err(err(
-                    format!("sensors[{s}].layout.radius"),
+                    at(".radius"),
                     format!("taxel radius must be positive, found {radius}"),
                 ));
             }
@@ -132,12 +163,11 @@ fn check_layout(s: usize, layout: &Layout, path: &Path) -> Result<(), SessionErr
                 .any(|p| !p.x.is_finite() || !p.y.is_finite())
             {
                 return Err(err(
-                    format!("sensors[{s}].layout.positions"),
+                    at(".positions"),
                     "taxel positions must be finite".into(),
                 ));
             }
         }
-        _ => {}
     }
     Ok(())
 }

@@ -176,6 +176,8 @@ pub struct ShardFile {
     pub session_hash: String,
     /// Item indices (as in the plan) and their outputs, in the same order.
     pub items: Vec<usize>,
+    /// Content hash of `outputs` as JSON, so that a hand edit or damage is caught.
+    pub outputs_checksum: String,
     pub outputs: Vec<Value>,
     pub seconds: f64,
     pub threads: usize,
@@ -196,6 +198,23 @@ fn host() -> String {
         .ok()
         .or_else(|| std::env::var("HOSTNAME").ok())
         .unwrap_or_else(|| "unknown".into())
+}
+
+/// The bytes of a plan folder's file (hashed whole, so read whole), refused unread past
+/// [`fsutil::max_bytes::SWEEP`].
+fn read_bounded(path: &Path) -> std::io::Result<Vec<u8>> {
+    let len = fs::metadata(path)?.len();
+    let max = fsutil::max_bytes::SWEEP;
+    if len > max {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "{len} bytes, more than the {} MiB a file of a sweep may hold",
+                max >> 20
+            ),
+        ));
+    }
+    fs::read(path)
 }
 
 fn to_value<T: Serialize>(v: &T) -> Result<Value, SweepError> {

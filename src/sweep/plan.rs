@@ -7,11 +7,11 @@ use std::path::Path;
 use serde::Deserialize;
 use serde_json::Value;
 
-use super::sbatch::{Resources, sbatch_script};
+use super::sbatch::{Resources, check_script_text, sbatch_script};
 use super::{
     Experiment, PLAN_FILE, PLAN_TAG, Plan, PlanRequest, SBATCH_FILE, SESSION_FILE, SHARDS_DIR,
-    SWEEP_VERSION, SessionRef, SweepError, format_err, io_err, to_value, with_experiment,
-    write_json,
+    SWEEP_VERSION, SessionRef, SweepError, format_err, io_err, read_bounded, to_value,
+    with_experiment, write_json,
 };
 use crate::experiments::experiment::Experiment as Sweepable;
 use crate::fsutil;
@@ -79,6 +79,13 @@ pub fn write_plan(
     if request.shards == 0 {
         return Err(SweepError::Param("--shards must be at least 1".into()));
     }
+    // What enters the Slurm script, checked before anything is written.
+    if let Some(p) = &request.partition {
+        check_script_text("--partition", p)?;
+    }
+    check_script_text("--program", &request.program)?;
+    let abs = std::path::absolute(dir).map_err(|e| io_err(dir, e))?;
+    check_script_text("the plan folder", &abs.display().to_string())?;
     let plan_path = dir.join(PLAN_FILE);
     if plan_path.exists() {
         return Err(SweepError::Param(format!(
@@ -114,6 +121,7 @@ pub fn write_plan(
     };
     write_json(&plan_path, &plan)?;
     let abs = fs::canonicalize(dir).map_err(|e| io_err(dir, e))?;
+    check_script_text("the plan folder", &abs.display().to_string())?;
     let script = sbatch_script(&plan, &abs);
     let sbatch_path = dir.join(SBATCH_FILE);
     fsutil::write_atomic(&sbatch_path, script.as_bytes()).map_err(|e| io_err(&sbatch_path, e))?;
@@ -123,7 +131,7 @@ pub fn write_plan(
 /// Read and check a plan; returns it with the content hash of plan.json.
 pub fn read_plan(dir: &Path) -> Result<(Plan, String), SweepError> {
     let path = dir.join(PLAN_FILE);
-    let bytes = fs::read(&path).map_err(|e| io_err(&path, e))?;
+    let bytes = read_bounded(&path).map_err(|e| io_err(&path, e))?;
     #[derive(Deserialize)]
     struct Header {
         format: Option<String>,
@@ -158,13 +166,42 @@ pub fn read_plan(dir: &Path) -> Result<(Plan, String), SweepError> {
     if let Some(i) = seen.iter().position(|s| !s) {
         return Err(format_err(&path, format!("item {i} is in no shard")));
     }
+    // The session is the plan's own copy beside it: a file name, never a path elsewhere.
+    let mut parts = Path::new(&plan.session.file).components();
+    if !matches!(
+        (parts.next(), parts.next()),
+        (Some(std::path::Component::Normal(_)), None)
+    ) {
+        return Err(format_err(
+            &path,
+            format!(
+                "`session.file`: {:?} is not a file name in the plan folder (the plan's copy \
+                 of its session, {SESSION_FILE})",
+                plan.session.file
+            ),
+        ));
+    }
     Ok((plan, fsutil::content_hash(&bytes)))
+}
+
+/// The plan's copy of its session: a regular file in the plan folder (not a link out of
+/// it, not a device).
+pub(super) fn session_copy(dir: &Path, plan: &Plan) -> Result<std::path::PathBuf, SweepError> {
+    let path = dir.join(&plan.session.file);
+    let meta = fs::symlink_metadata(&path).map_err(|e| io_err(&path, e))?;
+    if !meta.is_file() {
+        return Err(format_err(
+            &path,
+            "not a session file (a plan's session is a regular file beside it)",
+        ));
+    }
+    Ok(path)
 }
 
 /// The plan's copy of the session, refused when its content hash is not the plan's.
 pub fn read_session(dir: &Path, plan: &Plan) -> Result<Session, SweepError> {
-    let path = dir.join(&plan.session.file);
-    let bytes = fs::read(&path).map_err(|e| io_err(&path, e))?;
+    let path = session_copy(dir, plan)?;
+    let bytes = read_bounded(&path).map_err(|e| io_err(&path, e))?;
     let hash = fsutil::content_hash(&bytes);
     if hash != plan.session.hash {
         return Err(SweepError::Mismatch(format!(

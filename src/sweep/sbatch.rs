@@ -4,7 +4,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use super::{Plan, PlanRequest, SBATCH_FILE};
+use super::{Plan, PlanRequest, SBATCH_FILE, SweepError};
 
 /// What each array task asks Slurm for.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -51,8 +51,28 @@ impl Resources {
     }
 }
 
+/// `s` as one word of the shell.
 fn quote(s: &str) -> String {
     format!("'{}'", s.replace('\'', r"'\''"))
+}
+
+/// `s` as one value of an `#SBATCH` line: sbatch reads double quotes and backslash escapes
+/// there, and an unquoted `#` or space would end the value.
+fn directive_value(s: &str) -> String {
+    format!("\"{}\"", s.replace('\\', r"\\").replace('"', r#"\""#))
+}
+
+/// Refuse a value bound for the script that holds a control character: a newline would
+/// end its line and start another `#SBATCH` line or a command of the job. `field` names
+/// the option in the error.
+pub(super) fn check_script_text(field: &str, value: &str) -> Result<(), SweepError> {
+    match value.chars().find(|c| c.is_control()) {
+        Some(c) => Err(SweepError::Param(format!(
+            "{field}: {value:?} holds the control character {c:?}, which would change the \
+             Slurm script: refused"
+        ))),
+        None => Ok(()),
+    }
 }
 
 /// The job-array script: one array task per shard, each running `sweep run` on its shard;
@@ -84,9 +104,9 @@ pub fn sbatch_script(plan: &Plan, dir: &Path) -> String {
     s.push_str(&format!("#SBATCH --cpus-per-task={}\n", r.cpus));
     s.push_str(&format!("#SBATCH --mem={}M\n", r.mem_mb));
     if let Some(p) = &r.partition {
-        s.push_str(&format!("#SBATCH --partition={p}\n"));
+        s.push_str(&format!("#SBATCH --partition={}\n", directive_value(p)));
     }
-    s.push_str(&format!("#SBATCH --chdir={dir_text}\n"));
+    s.push_str(&format!("#SBATCH --chdir={}\n", directive_value(&dir_text)));
     s.push_str("#SBATCH --output=logs/%A_%a.out\n");
     s.push_str("set -euo pipefail\n");
     s.push_str(&format!(

@@ -7,10 +7,10 @@ use std::time::Instant;
 
 use serde_json::Value;
 
-use super::plan::{read_plan, read_session};
+use super::plan::{read_plan, read_session, session_copy};
 use super::{
     Plan, SHARD_TAG, SHARDS_DIR, SWEEP_VERSION, ShardFailure, ShardFile, SweepError, failure_path,
-    format_err, host, io_err, shard_path, to_value, with_experiment, write_json,
+    format_err, host, io_err, read_bounded, shard_path, to_value, with_experiment, write_json,
 };
 use crate::experiments::experiment::Experiment as Sweepable;
 use crate::experiments::parallel::compute_items;
@@ -37,7 +37,7 @@ pub(super) fn read_shard(
     plan_hash: &str,
 ) -> Result<Option<ShardFile>, SweepError> {
     let path = shard_path(dir, shard);
-    let bytes = match fs::read(&path) {
+    let bytes = match read_bounded(&path) {
         Ok(b) => b,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         Err(e) => return Err(io_err(&path, e)),
@@ -53,6 +53,13 @@ pub(super) fn read_shard(
             path.display()
         )));
     }
+    if outputs_checksum(&f.outputs)? != f.outputs_checksum {
+        return Err(SweepError::Mismatch(format!(
+            "{}: its outputs do not match their checksum: the file was edited or damaged; run \
+             shard {shard} again",
+            path.display()
+        )));
+    }
     if f.shard != shard || f.items != plan.shards[shard] || f.outputs.len() != f.items.len() {
         return Err(SweepError::Mismatch(format!(
             "{}: its items are not shard {shard}'s",
@@ -62,6 +69,14 @@ pub(super) fn read_shard(
     with_experiment!(&plan.experiment, e => outputs_fit(e, &f))
         .map_err(|m| format_err(&path, m))?;
     Ok(Some(f))
+}
+
+/// The content hash of a shard's outputs as JSON: the same for the outputs as computed and
+/// as read back (a number reads back to the same value and prints the same), different
+/// once one is edited.
+fn outputs_checksum(outputs: &[Value]) -> Result<String, SweepError> {
+    let bytes = serde_json::to_vec(outputs).map_err(|e| SweepError::Experiment(e.to_string()))?;
+    Ok(fsutil::content_hash(&bytes))
 }
 
 /// Checks that every output of a shard has the experiment's output shape, so that a shard
@@ -77,8 +92,8 @@ fn outputs_fit<E: Sweepable>(_: &E, f: &ShardFile) -> Result<(), String> {
 /// Checks the plan's copy of the session against the plan's content hash, without parsing
 /// it.
 pub(super) fn check_session_copy(dir: &Path, plan: &Plan) -> Result<(), SweepError> {
-    let path = dir.join(&plan.session.file);
-    let bytes = fs::read(&path).map_err(|e| io_err(&path, e))?;
+    let path = session_copy(dir, plan)?;
+    let bytes = read_bounded(&path).map_err(|e| io_err(&path, e))?;
     let hash = fsutil::content_hash(&bytes);
     if hash != plan.session.hash {
         return Err(SweepError::Mismatch(format!(
@@ -184,6 +199,7 @@ pub fn run_shard(dir: &Path, shard: usize, progress: &Progress) -> Result<ShardR
         plan_hash,
         session_hash: plan.session.hash.clone(),
         items: plan.shards[shard].clone(),
+        outputs_checksum: outputs_checksum(&outputs)?,
         outputs,
         seconds,
         threads: rayon::current_num_threads(),

@@ -1,6 +1,5 @@
 //! The state of every shard of a plan, and the commands that rerun those not done.
 
-use std::fs;
 use std::path::Path;
 
 use super::plan::read_plan;
@@ -58,7 +57,7 @@ pub fn status(dir: &Path) -> Result<Status, SweepError> {
                 reason: e.to_string(),
             },
             Ok(None) => {
-                let failure = fs::read(failure_path(dir, i))
+                let failure = super::read_bounded(&failure_path(dir, i))
                     .ok()
                     .and_then(|b| serde_json::from_slice::<ShardFailure>(&b).ok());
                 match failure {

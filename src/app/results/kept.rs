@@ -226,8 +226,20 @@ impl Analyses {
             None,
             format!("Open project {}", path.display()),
             move |_| {
-                let project = crate::project::Project::load(&path).map_err(JobError::failed)?;
-                Ok(JobOutput::Project(project))
+                let mut project = crate::project::Project::load(&path).map_err(JobError::failed)?;
+                // Only sessions: a path into a system folder or to some other file is
+                // refused by name, never opened.
+                let mut refused = Vec::new();
+                project.sessions.retain(|label| {
+                    match crate::app::loader::Source::from_label(label).refusal() {
+                        Some(why) => {
+                            refused.push(why);
+                            false
+                        }
+                        None => true,
+                    }
+                });
+                Ok(JobOutput::Project(project, refused))
             },
         );
     }

@@ -49,7 +49,8 @@ pub enum JobOutput {
     Result(Box<AnalysisResult>),
     Frontier(Box<Frontier>),
     Message(String),
-    Project(crate::project::Project),
+    /// A project, its sessions narrowed to those it may open, and why the others may not.
+    Project(crate::project::Project, Vec<String>),
     /// The results kept by an earlier run, back.
     Restored(crate::project::Project),
     /// The results were written to the data folder.
@@ -236,15 +237,19 @@ impl Analyses {
                 }
                 Some(Outcome::Done(JobOutput::Message(m))) => self.notes.info(m),
                 Some(Outcome::Done(JobOutput::Trace(t))) => self.trace = Some(*t),
-                Some(Outcome::Done(JobOutput::Project(p))) => {
+                Some(Outcome::Done(JobOutput::Project(p, refused))) => {
                     let n = p.results.len();
                     let models = p.models.len();
                     self.notes.info(format!(
-                        "opened a project with {n} result{} and {models} model{} (sessions: {})",
+                        "opened a project with {n} result{} and {models} model{}; it opens the \
+                         sessions {}",
                         if n == 1 { "" } else { "s" },
                         if models == 1 { "" } else { "s" },
                         p.sessions.join(", ")
                     ));
+                    for why in refused {
+                        self.notes.error(format!("{}: {why}", rj.title));
+                    }
                     let first = p.results.first().map(|r| r.session.clone());
                     self.results.extend(p.results);
                     for f in p.frontiers {
