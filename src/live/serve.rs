@@ -30,6 +30,8 @@ pub struct Server {
     handle: Option<foxglove::WebSocketServerHandle>,
     channels: Vec<Arc<RawChannel>>,
     subscriptions: Arc<Subscriptions>,
+    /// The channels' context: the channels and the server hold it weakly only.
+    _context: Arc<Context>,
     /// The wall clock (ns) of the stream's start; set when playing starts.
     origin: u64,
 }
@@ -65,6 +67,7 @@ impl Server {
             handle: Some(handle),
             channels,
             subscriptions,
+            _context: ctx,
             origin: 0,
         })
     }
