@@ -398,7 +398,9 @@ fn old_server(frames: Vec<Vec<u8>>) -> (u16, std::thread::JoinHandle<Vec<String>
         let (stream, _) = listener.accept().unwrap();
         let offered = Arc::new(std::sync::Mutex::new(Vec::new()));
         let seen = offered.clone();
-        let mut ws = tungstenite::accept_hdr(stream, move |req: &Request, mut res: Response| {
+        // The handshake's error response is tungstenite's type, large by design.
+        #[allow(clippy::result_large_err)]
+        let answer = move |req: &Request, mut res: Response| {
             for v in req.headers().get_all("sec-websocket-protocol") {
                 seen.lock()
                     .unwrap()
@@ -409,8 +411,8 @@ fn old_server(frames: Vec<Vec<u8>>) -> (u16, std::thread::JoinHandle<Vec<String>
                 "foxglove.websocket.v1".parse().unwrap(),
             );
             Ok(res)
-        })
-        .unwrap();
+        };
+        let mut ws = tungstenite::accept_hdr(stream, answer).unwrap();
         let channel = |id: u64, topic: &str, name: &str, schema: &str| {
             serde_json::json!({"id": id, "topic": topic, "encoding": "cdr", "schemaName": name,
                                "schemaEncoding": "ros2msg", "schema": schema})
@@ -459,8 +461,7 @@ fn old_server(frames: Vec<Vec<u8>>) -> (u16, std::thread::JoinHandle<Vec<String>
         }
         // Hold the connection until the client goes.
         while ws.read().is_ok() {}
-        let offered = offered.lock().unwrap().clone();
-        offered
+        offered.lock().unwrap().clone()
     });
     (port, thread)
 }

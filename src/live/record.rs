@@ -144,7 +144,9 @@ mod tests {
         let back = native::load(&path).unwrap();
         let objects = &back.label_sets[back.label_set(OBJECT).unwrap()].classes;
         assert_eq!(objects, &["mug", "cup"]);
-        let rows: Vec<(String, Option<u32>, Vec<usize>, usize, usize)> = back
+        // Object, trial, labels, frames, key frame.
+        type Row = (String, Option<u32>, Vec<usize>, usize, usize);
+        let rows: Vec<Row> = back
             .grasps
             .iter()
             .map(|g| {
