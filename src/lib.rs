@@ -15,6 +15,7 @@ pub mod gp;
 pub mod jobs;
 pub mod learners;
 pub mod linalg;
+pub mod live;
 pub mod models;
 pub mod perturb;
 pub mod project;

@@ -5,6 +5,7 @@ pub mod baselines;
 pub mod bounds;
 pub mod figures;
 pub mod frontier;
+pub mod live;
 pub mod model;
 pub mod paper_figures;
 mod progress;
@@ -113,6 +114,11 @@ pub enum Command {
     /// Fit the grasp-stability methods on a training session and evaluate them on held-out
     /// sessions under each calibration: scores and times (default: BTS3 v2 palm-45).
     BenchHeldOut(model::BenchHeldOutArgs),
+    /// Read a robot's live stream (Foxglove WebSocket protocol): a line per grasp with the
+    /// model's verdict, the grasps recorded as a session.
+    Live(live::LiveArgs),
+    /// Publish a recorded session as a live stream on the Foxglove SDK's server.
+    Serve(live::ServeArgs),
     /// Sharded sweeps for a cluster: plan the shards and a Slurm job array, run a shard,
     /// show their status, merge them into the single-machine result.
     Sweep(sweep::SweepArgs),
@@ -153,5 +159,7 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Predict(a) => model::predict(a),
         Command::Subset(a) => model::subset(a),
         Command::BenchHeldOut(a) => model::bench_held_out(a),
+        Command::Live(a) => live::live(a),
+        Command::Serve(a) => live::serve(a),
     }
 }

@@ -21,6 +21,7 @@ mod validate;
 
 pub use bts3::import_bts3;
 pub use error::{Location, SessionError};
+pub(crate) use error::{bag_time, shorten};
 pub use icub::{import_icub, import_icub_with};
 pub use model::*;
 pub use native::{load, save};

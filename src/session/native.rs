@@ -133,6 +133,33 @@ fn check_header(header: Header, path: &Path) -> Result<(), SessionError> {
 
 /// Serialise a session in the native format.
 pub fn to_writer(session: &Session, w: &mut impl Write) -> std::io::Result<()> {
+    head(session, w)?;
+    list(w, &session.grasps)?;
+    tail(w)
+}
+
+/// A grasp as its line of the native format.
+pub fn grasp_line(grasp: &super::Grasp) -> String {
+    // Serialising plain data to a String cannot fail.
+    serde_json::to_string(grasp).unwrap_or_default()
+}
+
+/// Serialise `session`'s header with `lines` (each from [`grasp_line`]) as its grasps, the
+/// session's own grasps left out: a recording that grows writes each grasp's line once.
+pub fn with_grasp_lines(
+    session: &Session,
+    lines: &[String],
+    w: &mut impl Write,
+) -> std::io::Result<()> {
+    head(session, w)?;
+    for (i, line) in lines.iter().enumerate() {
+        writeln!(w, "  {line}{}", if i + 1 < lines.len() { "," } else { "" })?;
+    }
+    tail(w)
+}
+
+/// Everything before the grasps.
+fn head(session: &Session, w: &mut impl Write) -> std::io::Result<()> {
     writeln!(w, "{{")?;
     writeln!(w, "\"format\": \"{FORMAT_TAG}\",")?;
     writeln!(w, "\"version\": {FORMAT_VERSION},")?;
@@ -149,8 +176,11 @@ pub fn to_writer(session: &Session, w: &mut impl Write) -> std::io::Result<()> {
     write!(w, " \"label_sets\": ")?;
     json(w, &session.label_sets)?;
     writeln!(w, ",")?;
-    writeln!(w, " \"grasps\": [")?;
-    list(w, &session.grasps)?;
+    writeln!(w, " \"grasps\": [")
+}
+
+/// Everything after the grasps.
+fn tail(w: &mut impl Write) -> std::io::Result<()> {
     writeln!(w, " ]")?;
     writeln!(w, "}}")?;
     writeln!(w, "}}")

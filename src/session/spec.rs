@@ -59,6 +59,8 @@ struct SpecFile {
     grasps: Option<GraspsFile>,
     #[serde(default)]
     trials: Option<TrialsFile>,
+    #[serde(default)]
+    live: Option<LiveSpec>,
 }
 
 #[derive(Deserialize)]
@@ -90,6 +92,83 @@ struct GraspsFile {
     windows: Option<String>,
     #[serde(default)]
     events: Option<String>,
+}
+
+/// How a live stream is read where the spec's `grasps` do not say: `contact` cuts grasps by
+/// the total pressure when the stream has no events topic (see `live::cut`).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LiveSpec {
+    #[serde(default)]
+    pub contact: ContactParams,
+}
+
+/// Cutting by contact: the total pressure (every taxel after its transform) over a baseline
+/// that follows it while the hand is idle. A grasp begins when the total rises above the
+/// baseline by `onset`, ends when it falls back below `offset`, and is kept when it lasted
+/// at least `min_duration_s`. The thresholds are the larger of a multiple of the idle
+/// total's standard deviation and a floor in pressure units, so that a quiet sensor and a
+/// noisy one both need a real touch.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ContactParams {
+    /// Onset: this many standard deviations of the idle total above the baseline (default 6).
+    pub onset_sigma: f64,
+    /// Offset: back below this many standard deviations (default 3).
+    pub offset_sigma: f64,
+    /// The onset's floor in pressure units (default 20); the offset's is half of it.
+    pub min_rise: f64,
+    /// Shorter contacts are taps, not grasps (default 0.3 s).
+    pub min_duration_s: f64,
+    /// The baseline's time constant while idle (default 2 s): slow enough to ignore a touch
+    /// that is about to start, fast enough to follow a BioTac's drift.
+    pub baseline_s: f64,
+}
+
+impl Default for ContactParams {
+    fn default() -> Self {
+        ContactParams {
+            onset_sigma: 6.0,
+            offset_sigma: 3.0,
+            min_rise: 20.0,
+            min_duration_s: 0.3,
+            baseline_s: 2.0,
+        }
+    }
+}
+
+impl ContactParams {
+    /// Each parameter finite and of its sign, the offset below the onset.
+    pub fn check(&self) -> Result<(), (&'static str, String)> {
+        let fields = [
+            ("live.contact.onset_sigma", self.onset_sigma),
+            ("live.contact.offset_sigma", self.offset_sigma),
+            ("live.contact.min_rise", self.min_rise),
+            ("live.contact.min_duration_s", self.min_duration_s),
+            ("live.contact.baseline_s", self.baseline_s),
+        ];
+        for (field, v) in fields {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err((field, format!("{v} is not a finite number ≥ 0")));
+            }
+        }
+        if self.baseline_s == 0.0 {
+            return Err((
+                "live.contact.baseline_s",
+                "the time constant must be > 0".into(),
+            ));
+        }
+        if self.offset_sigma > self.onset_sigma {
+            return Err((
+                "live.contact.offset_sigma",
+                format!(
+                    "{} is above the onset's {}: the offset must be the lower threshold",
+                    self.offset_sigma, self.onset_sigma
+                ),
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// One sensor of the spec: the session's sensor, and where its values are in a bag.
@@ -152,6 +231,8 @@ pub struct ImportSpec {
     /// Each label set's classes by name: a recording's rows are labelled in one look-up
     /// each, however many classes the spec declares.
     class_indices: HashMap<String, HashMap<String, usize>>,
+    /// Live streams: how grasps are cut by contact (defaults when the spec has no `live`).
+    pub live: LiveSpec,
 }
 
 /// A built-in layout by name: `icub-fingertip`, `biotac-sp`, `grid RxC`.
@@ -428,6 +509,10 @@ impl ImportSpec {
                 (set.name.clone(), classes)
             })
             .collect();
+        let live = file.live.unwrap_or_default();
+        live.contact
+            .check()
+            .map_err(|(field, m)| err(field.into(), m))?;
         Ok(ImportSpec {
             path: path.to_path_buf(),
             name: file.name,
@@ -439,6 +524,7 @@ impl ImportSpec {
             cut,
             trials,
             class_indices,
+            live,
         })
     }
 
@@ -551,6 +637,7 @@ fn trial_pattern(text: &str, label_sets: &[LabelSet]) -> Result<TrialPattern, St
 }
 
 /// A grasp as a reader found it, before the session's label indices are known.
+#[derive(Clone, Debug, PartialEq)]
 pub struct RawGrasp {
     pub object: String,
     /// One class index per recorded label set, in their order.

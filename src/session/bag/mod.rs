@@ -22,7 +22,7 @@ use super::SessionError;
 use super::spec::ImportSpec;
 use file::read_file;
 pub use metadata::bag_files;
-use topics::{Role, roles};
+pub(crate) use topics::{Role, allowed, roles, type_fits};
 
 /// The messages of one tactile topic: one row of `width` values per stamp.
 #[derive(Debug, Default)]

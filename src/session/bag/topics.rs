@@ -10,7 +10,7 @@ use crate::session::spec::ImportSpec;
 
 /// What the importer does with a topic.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Role {
+pub(crate) enum Role {
     /// Index into `Bag::tactile`.
     Tactile(usize),
     Joints,
@@ -19,7 +19,7 @@ pub(super) enum Role {
 
 impl Role {
     /// The spec's topic of this role, in words.
-    pub(super) fn what(self) -> &'static str {
+    pub(crate) fn what(self) -> &'static str {
         match self {
             Role::Tactile(_) => "tactile topic",
             Role::Joints => "joint topic",
@@ -29,7 +29,7 @@ impl Role {
 }
 
 /// The topics the spec reads, with the role of each.
-pub(super) fn roles(
+pub(crate) fn roles(
     spec: &ImportSpec,
     events: Option<&str>,
 ) -> Result<Vec<(String, Role)>, SessionError> {
@@ -79,7 +79,7 @@ pub(super) fn roles(
 }
 
 /// The spec's topic of each role, and the types it may have.
-fn allowed(role: Role) -> &'static str {
+pub(crate) fn allowed(role: Role) -> &'static str {
     match role {
         Role::Tactile(_) => TACTILE_TYPES,
         Role::Joints => "sensor_msgs/msg/JointState",
@@ -87,7 +87,7 @@ fn allowed(role: Role) -> &'static str {
     }
 }
 
-fn type_fits(role: Role, ty: MsgType) -> bool {
+pub(crate) fn type_fits(role: Role, ty: MsgType) -> bool {
     matches!(
         (role, ty),
         (Role::Tactile(_), MsgType::MultiArray(_))

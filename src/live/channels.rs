@@ -1,0 +1,363 @@
+//! Which advertised channels the spec reads, and their messages decoded into samples: the
+//! same topics, roles, types and definition checks as a bag's (`session::bag`), and the
+//! same CDR decoder; `json` channels carry the same messages as ROS 2's JSON form
+//! (`{"data": [...]}`, `{"name": [...], "position": [...]}`, `{"data": "text"}`).
+
+use crate::session::bag::{Role, allowed, roles, type_fits};
+use crate::session::cdr::{self, ArrayKind, MsgType};
+use crate::session::shorten;
+use crate::session::spec::{GraspCut, ImportSpec};
+use crate::session::{Sensor, SessionError};
+
+use super::protocol::Channel;
+
+/// The spec's topics and what each message of them must hold.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    pub(crate) roles: Vec<(String, Role)>,
+    /// Per tactile topic (in role order): the spec's sensors read from it and the values a
+    /// message holds (the end of the last sensor's slice).
+    pub tactile: Vec<TactileTopic>,
+    pub joint_names: Vec<String>,
+    pub sensors: Vec<Sensor>,
+}
+
+#[derive(Clone, Debug)]
+pub struct TactileTopic {
+    pub topic: String,
+    pub sensors: Vec<(usize, std::ops::Range<usize>)>,
+    pub width: usize,
+}
+
+impl Plan {
+    pub fn of(spec: &ImportSpec) -> Result<Plan, SessionError> {
+        let events = match &spec.cut {
+            Some(GraspCut::Events(t)) => Some(t.as_str()),
+            _ => None,
+        };
+        let roles = roles(spec, events)?;
+        let tactile = roles
+            .iter()
+            .filter(|(_, r)| matches!(r, Role::Tactile(_)))
+            .map(|(topic, _)| {
+                let sensors: Vec<(usize, std::ops::Range<usize>)> = spec
+                    .sensors
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, s)| s.topic.as_deref() == Some(topic))
+                    .map(|(i, s)| (i, s.range_in_message()))
+                    .collect();
+                let width = sensors.iter().map(|(_, r)| r.end).max().unwrap_or(0);
+                TactileTopic {
+                    topic: topic.clone(),
+                    sensors,
+                    width,
+                }
+            })
+            .collect();
+        Ok(Plan {
+            roles,
+            tactile,
+            joint_names: spec.encoder_names(),
+            sensors: spec.sensors.iter().map(|s| s.sensor.clone()).collect(),
+        })
+    }
+
+    /// How a channel's messages are read: `Ok(None)` when the spec does not read its topic,
+    /// an error naming the topic when its type or definition does not fit.
+    pub fn route(&self, channel: &Channel) -> Result<Option<Route>, String> {
+        let Some(&(_, role)) = self.roles.iter().find(|(t, _)| *t == channel.topic) else {
+            return Ok(None);
+        };
+        let at = |m: String| format!("channel `{}`: {m}", channel.topic);
+        let ty = MsgType::from_name(&channel.schema_name).filter(|&ty| type_fits(role, ty));
+        let Some(ty) = ty else {
+            return Err(at(format!(
+                "its schema is `{}`; the spec reads it as {}",
+                shorten(&channel.schema_name),
+                allowed(role)
+            )));
+        };
+        let json = match channel.encoding.as_str() {
+            "cdr" => {
+                let encoding = channel.schema_encoding.as_deref().unwrap_or("");
+                cdr::check_schema(ty, encoding, channel.schema.as_bytes()).map_err(at)?;
+                false
+            }
+            "json" => true,
+            other => {
+                return Err(at(format!(
+                    "messages are encoded as `{}`, not cdr or json",
+                    shorten(other)
+                )));
+            }
+        };
+        Ok(Some(Route { role, ty, json }))
+    }
+
+    /// A message of a routed channel, checked as a bag's: a tactile row of the topic's
+    /// width with every value finite and in its sensor's range, the named joints' finite
+    /// positions, or an event's text.
+    pub fn decode(&self, route: &Route, payload: &[u8]) -> Result<Sample, String> {
+        match (route.role, route.ty) {
+            (Role::Tactile(i), MsgType::MultiArray(kind)) => {
+                let mut values = Vec::new();
+                if route.json {
+                    values = json_numbers(payload, "data")?;
+                } else {
+                    cdr::decode_multiarray(payload, kind, &mut values)?;
+                }
+                self.check_row(i, &values, kind)?;
+                Ok(Sample::Tactile { topic: i, values })
+            }
+            (Role::Joints, MsgType::JointState) => {
+                let (names, positions) = if route.json {
+                    let v = json_value(payload)?;
+                    let names: Vec<String> = v
+                        .get("name")
+                        .and_then(|n| serde_json::from_value(n.clone()).ok())
+                        .ok_or("`name` is not a list of strings")?;
+                    (names, json_numbers(payload, "position")?)
+                } else {
+                    let js = cdr::decode_joint_state(payload)?;
+                    let names = js.names.iter().map(|n| n.to_string()).collect();
+                    (names, js.positions)
+                };
+                if names.len() != positions.len() {
+                    return Err(format!(
+                        "{} joint names but {} positions",
+                        names.len(),
+                        positions.len()
+                    ));
+                }
+                let mut out = Vec::with_capacity(self.joint_names.len());
+                for name in &self.joint_names {
+                    let Some(k) = names.iter().position(|n| n == name) else {
+                        return Err(format!(
+                            "joint `{name}` is not in the message (it has: {})",
+                            names.join(", ")
+                        ));
+                    };
+                    let v = positions[k];
+                    if !v.is_finite() {
+                        return Err(format!("joint `{name}` is at {v}, not a finite number"));
+                    }
+                    out.push(v);
+                }
+                Ok(Sample::Joints(out))
+            }
+            (Role::Events, MsgType::String) => {
+                let text = if route.json {
+                    json_value(payload)?
+                        .get("data")
+                        .and_then(|d| d.as_str())
+                        .map(str::to_string)
+                        .ok_or("`data` is not a string")?
+                } else {
+                    cdr::decode_string(payload)?.to_string()
+                };
+                Ok(Sample::Event(text))
+            }
+            _ => Err("the channel's type does not fit its role".into()),
+        }
+    }
+
+    fn check_row(&self, topic: usize, values: &[f64], kind: ArrayKind) -> Result<(), String> {
+        let tt = &self.tactile[topic];
+        if values.len() != tt.width {
+            let parts: Vec<String> = tt
+                .sensors
+                .iter()
+                .map(|(s, r)| format!("`{}` at {}..{}", self.sensors[*s].name, r.start, r.end))
+                .collect();
+            return Err(format!(
+                "the {kind:?} array holds {} values, but the spec's layouts ({}) read {}",
+                values.len(),
+                parts.join(", "),
+                tt.width
+            ));
+        }
+        if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+            return Err(format!("value {k} is {}, not a finite number", values[k]));
+        }
+        for (s, range) in &tt.sensors {
+            let sensor = &self.sensors[*s];
+            if let Some(k) = values[range.clone()]
+                .iter()
+                .position(|&v| !sensor.in_range(v))
+            {
+                return Err(format!(
+                    "sensor `{}` taxel {k} reads {}, outside its range {}",
+                    sensor.name,
+                    values[range.start + k],
+                    sensor.range_text()
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A routed channel: its role, its type and whether it is JSON (else CDR).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Route {
+    pub(crate) role: Role,
+    pub ty: MsgType,
+    pub json: bool,
+}
+
+/// A decoded message.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Sample {
+    /// A row of tactile topic `topic` (index into [`Plan::tactile`]).
+    Tactile {
+        topic: usize,
+        values: Vec<f64>,
+    },
+    /// The spec's joints, in its order.
+    Joints(Vec<f64>),
+    Event(String),
+}
+
+fn json_value(payload: &[u8]) -> Result<serde_json::Value, String> {
+    serde_json::from_slice(payload).map_err(|e| format!("the JSON message does not parse: {e}"))
+}
+
+fn json_numbers(payload: &[u8], field: &str) -> Result<Vec<f64>, String> {
+    let v = json_value(payload)?;
+    let list = v
+        .get(field)
+        .and_then(|d| d.as_array())
+        .ok_or_else(|| format!("`{field}` is not a list"))?;
+    list.iter()
+        .enumerate()
+        .map(|(k, x)| {
+            x.as_f64()
+                .ok_or_else(|| format!("`{field}[{k}]` is not a number"))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::live::publish::{FLOAT64_MULTIARRAY, JOINT_STATE, joint_state, multiarray};
+    use std::path::Path;
+
+    fn plan() -> Plan {
+        let spec = ImportSpec::from_str(
+            r#"{"sensors": [{"name": "a", "topic": "/a", "layout": "grid 1x2", "unit": "raw",
+                             "range": [0, 255]},
+                            {"name": "b", "topic": "/a", "slice": [2, 4], "layout": "grid 1x2",
+                             "unit": "raw"}],
+               "joints": {"topic": "/js", "names": ["j2", "j1"]},
+               "grasps": {"events": "/ev"}}"#,
+            Path::new("spec.json"),
+        )
+        .unwrap();
+        Plan::of(&spec).unwrap()
+    }
+
+    fn channel(topic: &str, encoding: &str, schema_name: &str, schema: &str) -> Channel {
+        Channel {
+            id: 1,
+            topic: topic.into(),
+            encoding: encoding.into(),
+            schema_name: schema_name.into(),
+            schema_encoding: Some("ros2msg".into()),
+            schema: schema.into(),
+        }
+    }
+
+    #[test]
+    fn cdr_and_json_channels_decode_to_the_spec() {
+        let p = plan();
+        let arr = "std_msgs/msg/Float64MultiArray";
+        let r = p
+            .route(&channel("/a", "cdr", arr, FLOAT64_MULTIARRAY))
+            .unwrap()
+            .unwrap();
+        assert_eq!(
+            p.decode(&r, &multiarray(&[1.0, 2.0, 3.0, 4.0])).unwrap(),
+            Sample::Tactile {
+                topic: 0,
+                values: vec![1.0, 2.0, 3.0, 4.0]
+            }
+        );
+        let err = p.decode(&r, &multiarray(&[1.0, 2.0, 3.0])).unwrap_err();
+        assert!(
+            err.contains("3 values") && err.contains("`b` at 2..4"),
+            "{err}"
+        );
+        let err = p
+            .decode(&r, &multiarray(&[1.0, 300.0, 3.0, 4.0]))
+            .unwrap_err();
+        assert!(err.contains("sensor `a` taxel 1"), "{err}");
+        assert!(
+            p.decode(&r, &multiarray(&[1.0, 2.0, 3.0, 4.0])[..20])
+                .is_err()
+        );
+        let js = "sensor_msgs/msg/JointState";
+        let r = p
+            .route(&channel("/js", "cdr", js, JOINT_STATE))
+            .unwrap()
+            .unwrap();
+        let names = ["j1".to_string(), "j2".to_string()];
+        assert_eq!(
+            p.decode(&r, &joint_state(0, &names, &[1.0, 2.0])).unwrap(),
+            Sample::Joints(vec![2.0, 1.0])
+        );
+        let r = p.route(&channel("/a", "json", arr, "")).unwrap().unwrap();
+        assert_eq!(
+            p.decode(&r, br#"{"data": [0, 1, 2, 3]}"#).unwrap(),
+            Sample::Tactile {
+                topic: 0,
+                values: vec![0.0, 1.0, 2.0, 3.0]
+            }
+        );
+        assert!(p.decode(&r, b"{not json").is_err());
+        let r = p
+            .route(&channel("/ev", "json", "std_msgs/String", ""))
+            .unwrap()
+            .unwrap();
+        assert_eq!(
+            p.decode(&r, br#"{"data": "start:mug"}"#).unwrap(),
+            Sample::Event("start:mug".into())
+        );
+    }
+
+    #[test]
+    fn channels_that_do_not_fit_are_refused_by_topic() {
+        let p = plan();
+        assert_eq!(
+            p.route(&channel("/camera", "cdr", "x/Image", "")).unwrap(),
+            None
+        );
+        let err = p.route(&channel(
+            "/a",
+            "cdr",
+            "sensor_msgs/msg/JointState",
+            JOINT_STATE,
+        ));
+        assert!(err.unwrap_err().contains("channel `/a`"));
+        let custom = "std_msgs/MultiArrayLayout layout\nfloat64[] data\nint32 extra\n";
+        let err = p
+            .route(&channel(
+                "/a",
+                "cdr",
+                "std_msgs/msg/Float64MultiArray",
+                custom,
+            ))
+            .unwrap_err();
+        assert!(err.contains("not the standard"), "{err}");
+        let err = p
+            .route(&channel(
+                "/a",
+                "protobuf",
+                "std_msgs/msg/Float64MultiArray",
+                "",
+            ))
+            .unwrap_err();
+        assert!(err.contains("protobuf"), "{err}");
+    }
+}
