@@ -214,7 +214,7 @@ fn the_client_reconnects_after_a_server_restart_and_loses_no_completed_grasp() {
 
 fn trials(s: &Session, t: std::ops::RangeInclusive<u32>) -> Session {
     let spec = SubsetSpec {
-        trials: t.collect(),
+        trials: t.into(),
         ..Default::default()
     };
     subset(s, &spec, "part").unwrap()
