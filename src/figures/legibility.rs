@@ -15,7 +15,7 @@ pub struct Thinning {
 impl Thinning {
     /// Is category `i`'s label drawn?
     pub fn shows(&self, i: usize) -> bool {
-        i % self.step == 0
+        i.is_multiple_of(self.step)
     }
 }
 
