@@ -231,8 +231,9 @@ const BAR: f32 = 12.0;
 /// The width a colour bar takes: the gradient, its tick labels and its turned title.
 fn colour_bar_width(ui: &egui::Ui, scale: &ColorScale, limits: (f64, f64)) -> f32 {
     let font = label_font();
-    // The finest ticks a bar takes have the longest labels.
-    let widest = (figures::axis_ticks(limits.0, limits.1, Scale::Linear, 10).iter())
+    // Whatever its height, a bar takes 3 to 10 ticks: the widest label of any of them
+    // (a step of 0.25 writes longer labels than one of 0.2).
+    let widest = ((3..=10).flat_map(|n| figures::axis_ticks(limits.0, limits.1, Scale::Linear, n)))
         .map(|(_, t)| {
             (ui.painter())
                 .layout_no_wrap(t.clone(), font.clone(), Color32::WHITE)
