@@ -674,7 +674,7 @@ fn every_figure() -> Computed {
 /// The (figure, size) cases that still fail, asserted exactly: a case that starts to fail,
 /// and one that starts to pass, both fail the test (the second: remove it from the list).
 const STILL_FAILING: &[(&str, &str)] = &[
-    ("replay · class distribution", "520×360"),
+    ("replay · class distribution", "maximised in 1000×700"),
     (
         "sparse coding + SVM, held out (calibration none) · objects",
         "360×240",
@@ -682,6 +682,10 @@ const STILL_FAILING: &[(&str, &str)] = &[
     (
         "sparse coding + SVM, held out (calibration none) · objects",
         "520×360",
+    ),
+    (
+        "sparse coding + SVM, held out (calibration none) · objects",
+        "maximised in 1000×700",
     ),
     (
         "sparse coding + SVM, held out (calibration none) · objects",
@@ -852,7 +856,4 @@ const STILL_FAILING_IN_WINDOW: &[&str] = &[
     "DU, all features · Figure(\"scores-vs-threshold\") in 1000×700",
     "Robustness, object recognition (DS, GS, k-means, SOM, RBF SVM) · Figure(\"gain\") maximised in 1000×700",
     "Robustness, object recognition (DS, GS, k-means, SOM, RBF SVM) · Figure(\"noise\") maximised in 1000×700",
-    "sparse coding + SVM, K = 50, β = 0.5, γ = 0.5 · Figure(\"usage-differential\") in 1000×700",
-    "sparse coding + SVM, K = 50, β = 1, γ = 1 · Figure(\"coefficient-differential\") in 1000×700",
-    "sparse coding + SVM, K = 50, β = 1, γ = 1 · Figure(\"usage-differential\") in 1000×700",
 ];

@@ -29,7 +29,8 @@ pub(super) fn show_bars(ui: &mut egui::Ui, id: &str, bars: &figures::BarChart, s
     let x_title = bars.x.title.clone();
     let mut plot = Plot::new(id)
         .allow_scroll(false)
-        .width((size.x - TITLE_INSET).max(0.0))
+        // Room right of the frame for half the last category's name, centred on its bar.
+        .width((size.x - TITLE_INSET - widest / 2.0).max(0.0))
         .height(size.y)
         .custom_x_axes(vec![
             AxisHints::new_x()
