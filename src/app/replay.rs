@@ -2,11 +2,11 @@
 //! heatmaps in each sensor's layout, and encoder and per-finger feature traces with a
 //! cursor at the current frame.
 
-use egui::{Color32, ComboBox, Vec2};
-use egui_plot::{Bar, BarChart, Line, Plot, PlotPoints, VLine};
+use egui::{ComboBox, Vec2};
+use egui_plot::{Line, Plot, PlotPoints, VLine};
 
-use super::figure_view::{legend_row, series_rgb, tick_spacer};
-use crate::figures::Scale;
+use super::figure_view::{self, Selection, X_EDGE, Y_EDGE, legend_row, series_rgb, tick_spacer};
+use crate::figures::{Axis, AxisTitle, BarGroup, Figure, Scale};
 
 use super::heatmap::{colour_bar, sensor_heatmap};
 use super::loader::LoadedSession;
@@ -214,7 +214,7 @@ impl Replay {
             t.session == session.meta.name && t.grasp == grasp && t.learner == self.learner
         });
         if let Some(t) = trace {
-            class_distribution(ui, &t.trace, self.frame, 160.0);
+            class_distribution(ui, &t.trace, self.frame, 200.0);
         }
         if session.label_set("object").is_some() && !session.encoders.is_empty() {
             action = self.recognition_row(ui);
@@ -374,7 +374,14 @@ impl Replay {
     fn traces(&mut self, ui: &mut egui::Ui, session: &Session, g: &Grasp) -> Option<f64> {
         let t_now = g.frames[self.frame].t;
         let mut seek_to: Option<f64> = None;
-        let height = ((ui.available_height() - 60.0) / 2.0).max(120.0);
+        // The traces share what the tile has left (less their titles, legends and the
+        // feature's choice), and the last one ends at the tile's bottom edge.
+        let traces = if session.encoders.is_empty() {
+            1.0
+        } else {
+            2.0
+        };
+        let height = ((ui.available_height() - 90.0) / traces).max(60.0);
         if !session.encoders.is_empty() {
             ui.label("Joint encoders");
             let lines = (session.encoders.iter().enumerate())
@@ -438,6 +445,7 @@ impl Trace {
             .map(|(j, (name, _))| (name.clone(), color(j)))
             .collect();
         legend_row(ui, &entries);
+        let height = height.min(ui.available_height()).max(0.0);
         let cursor = ui.visuals().selection.bg_fill;
         let shown = Plot::new(self.id)
             .allow_scroll(false)
@@ -445,8 +453,8 @@ impl Trace {
             .height(height)
             .x_axis_label("time (s)")
             .y_axis_label(self.y_title)
-            .x_grid_spacer(tick_spacer(Scale::Linear, 70.0))
-            .y_grid_spacer(tick_spacer(Scale::Linear, 36.0))
+            .x_grid_spacer(tick_spacer(Scale::Linear, 70.0, X_EDGE))
+            .y_grid_spacer(tick_spacer(Scale::Linear, 36.0, Y_EDGE))
             .show(ui, |plot| {
                 for (j, (name, pts)) in self.lines.into_iter().enumerate() {
                     plot.line(Line::new(name, PlotPoints::new(pts)).color(color(j)));
@@ -469,55 +477,39 @@ fn trace_seek<R>(shown: &egui_plot::PlotResponse<R>, label: &str) -> Option<f64>
     Some(shown.transform.value_from_position(pos).x)
 }
 
-/// The learner's class distribution at the current step (bars), decided class marked.
-fn class_distribution(ui: &mut egui::Ui, t: &GraspTrace, frame: usize, height: f32) {
-    // A row of its own under the heatmaps: never wider than the page.
-    let width = ui.available_width().min(520.0);
-    ui.vertical(|ui| {
-        let step = frame.min(t.distribution.len().saturating_sub(1));
-        let p = t.distribution.get(step).cloned().unwrap_or_default();
-        let best = (0..p.len()).max_by(|&a, &b| p[a].total_cmp(&p[b]));
-        ui.label(format!(
+/// The learner's class distribution at step `step` of a grasp of class `true_class`, as
+/// a figure: the same bars, rules and hover as every figure of the workbench.
+pub fn class_distribution_figure(
+    classes: &[String],
+    p: &[f64],
+    true_class: usize,
+    step: usize,
+) -> Figure {
+    let best = (0..p.len()).max_by(|&a, &b| p[a].total_cmp(&p[b]));
+    let name = |c: Option<usize>| c.and_then(|c| classes.get(c)).map_or("?", String::as_str);
+    Figure::bars(
+        format!(
             "Class distribution at step {} (true: {}; now: {})",
             step + 1,
-            t.classes.get(t.true_class).map_or("?", String::as_str),
-            best.and_then(|b| t.classes.get(b))
-                .map_or("?", String::as_str)
-        ));
-        let classes = t.classes.clone();
-        let bars: Vec<Bar> = p
-            .iter()
-            .enumerate()
-            .map(|(c, &v)| {
-                let color = if c == t.true_class {
-                    Color32::from_rgb(0, 158, 115)
-                } else {
-                    Color32::from_rgb(0, 114, 178)
-                };
-                Bar::new(c as f64, v)
-                    .width(0.8)
-                    .fill(color)
-                    .name(classes.get(c).cloned().unwrap_or_default())
-            })
-            .collect();
-        Plot::new("class_distribution")
-            .allow_scroll(false)
-            .height(height)
-            .width(width)
-            .include_y(0.0)
-            .include_y(1.0)
-            .y_axis_label("probability")
-            .x_axis_formatter(move |m, _| {
-                let i = m.value.round();
-                if (m.value - i).abs() < 1e-6 && i >= 0.0 {
-                    classes.get(i as usize).cloned().unwrap_or_default()
-                } else {
-                    String::new()
-                }
-            })
-            .show(ui, |plot| {
-                plot.bar_chart(BarChart::new("p(class | observations)", bars))
-            });
+            name(Some(true_class)),
+            name(best)
+        ),
+        AxisTitle::new("class", ""),
+        Axis::new("probability", "").including(0.0, 1.0),
+        classes.to_vec(),
+        vec![BarGroup::new("p(class | observations)", p.to_vec())],
+    )
+}
+
+/// The learner's class distribution at the current step, in a row of its own under the
+/// heatmaps (never wider than the page).
+fn class_distribution(ui: &mut egui::Ui, t: &GraspTrace, frame: usize, height: f32) {
+    let step = frame.min(t.distribution.len().saturating_sub(1));
+    let p = t.distribution.get(step).cloned().unwrap_or_default();
+    let figure = class_distribution_figure(&t.classes, &p, t.true_class, step);
+    let width = ui.available_width().min(520.0);
+    ui.allocate_ui(Vec2::new(width, height), |ui| {
+        figure_view::show(ui, "class_distribution", &figure, height, Selection::None);
     });
 }
 

@@ -40,6 +40,7 @@ pub mod colormap;
 mod csv;
 mod export;
 pub mod layout;
+pub mod legibility;
 pub mod model;
 mod render;
 
@@ -58,7 +59,7 @@ pub use model::{
     FigureEntry, FigureKind, FigureSet, GridImage, Heatmap, ImageGrid, Orientation, RefLine, Scale,
     Series, SeriesStyle, pareto_front,
 };
-pub use render::{axis_ticks, tick_label};
+pub use render::{axis_limits, axis_ticks, bar_limits, chart_limits, tick_label};
 
 #[derive(Debug, thiserror::Error)]
 pub enum FigureError {

@@ -3,33 +3,66 @@
 
 use super::*;
 
+/// How far from a frame's ends the first and last tick stay: half a label along the x axis
+/// (clear of the value axis' labels), half a line along the y axis (clear of the header
+/// above and the x axis' labels below).
+pub(crate) const X_EDGE: f64 = 16.0;
+pub(crate) const Y_EDGE: f64 = 9.0;
+
+/// egui_plot puts the value axis' title this far left of the plot's rectangle.
+pub(super) const TITLE_INSET: f32 = 5.0;
+
+/// Show a plot `TITLE_INSET` in from the left, so that its value axis' title stays in.
+pub(super) fn inset<R>(ui: &mut egui::Ui, plot: impl FnOnce(&mut egui::Ui) -> R) -> R {
+    ui.horizontal_top(|ui| {
+        ui.spacing_mut().item_spacing.x = 0.0;
+        ui.add_space(TITLE_INSET);
+        plot(ui)
+    })
+    .inner
+}
+
 /// egui_plot's default minimum grid spacing, in points: its `GridInput::base_step_size` is
 /// this many points in plot units.
 const GRID_SPACING_MIN: f64 = 8.0;
 
 /// Grid marks at the export's ticks (1, 2, 5 × 10^k; round values on a log axis), about
 /// one per `px_per_label` points and never fewer than three, so that the screen shows the
-/// same ticks as the paper at any tile size.
-pub(crate) fn tick_spacer(scale: Scale, px_per_label: f64) -> impl Fn(GridInput) -> Vec<GridMark> {
+/// same ticks as the paper at any tile size. No mark lies within `edge` points of either
+/// end: its label, centred on it, would run past the frame into a neighbour's.
+pub(crate) fn tick_spacer(
+    scale: Scale,
+    px_per_label: f64,
+    edge: f64,
+) -> impl Fn(GridInput) -> Vec<GridMark> {
     move |input: GridInput| {
         let (lo, hi) = input.bounds;
-        let px = (hi - lo) * GRID_SPACING_MIN / input.base_step_size.max(f64::MIN_POSITIVE);
-        let max = (px / px_per_label).floor().clamp(3.0, 10.0) as usize;
+        let per_px = input.base_step_size.max(f64::MIN_POSITIVE) / GRID_SPACING_MIN;
+        let px = (hi - lo) / per_px;
+        let max = figures::legibility::tick_count(px - 2.0 * edge, px_per_label);
+        let (lo, hi) = if px > 4.0 * edge {
+            (lo + edge * per_px, hi - edge * per_px)
+        } else {
+            (lo, hi)
+        };
         let coords: Vec<f64> = figures::axis_ticks(value(scale, lo), value(scale, hi), scale, max)
             .into_iter()
             .filter_map(|(v, _)| coord(scale, v))
             .collect();
-        // Labels are drawn when marks are this far apart: the closest pair.
-        let step = coords
-            .windows(2)
-            .map(|w| w[1] - w[0])
-            .fold(f64::INFINITY, f64::min);
-        let step = if step.is_finite() { step } else { hi - lo };
-        coords
-            .into_iter()
-            .map(|value| GridMark {
-                value,
-                step_size: step,
+        // egui_plot draws a mark's label when its step leaves room for it: each mark's step
+        // is the gap to its nearest neighbour (log ticks are unevenly spaced).
+        (0..coords.len())
+            .map(|i| {
+                let before = i.checked_sub(1).map(|j| coords[i] - coords[j]);
+                let after = coords.get(i + 1).map(|c| c - coords[i]);
+                let step = before
+                    .into_iter()
+                    .chain(after)
+                    .fold(f64::INFINITY, f64::min);
+                GridMark {
+                    value: coords[i],
+                    step_size: if step.is_finite() { step } else { hi - lo },
+                }
             })
             .collect()
     }
@@ -40,8 +73,17 @@ pub(super) fn tick_text(scale: Scale, mark: GridMark) -> String {
 }
 
 /// An axis whose tick labels show even when a tile is small (egui_plot hides labels
-/// closer than 60 points by default).
-pub(super) fn axis_hints(x: bool, title: String, scale: Scale) -> AxisHints<'static> {
+/// closer than 60 points by default), its title at most `room` long.
+pub(super) fn axis_hints(
+    ui: &egui::Ui,
+    x: bool,
+    title: &str,
+    room: f32,
+    scale: Scale,
+) -> AxisHints<'static> {
+    // The title cut to the frame's length (the export shrinks, then cuts, the same way).
+    let font = egui::TextStyle::Body.resolve(ui.style());
+    let title = fit_text(ui, title, &font, room);
     let hints = if x {
         AxisHints::new_x().label_spacing(24.0..=32.0)
     } else {

@@ -1,6 +1,6 @@
 //! Line and marker charts on screen through egui_plot, with hover values and clickable markers.
 
-use super::axes::{axis_hints, emptiest_corner, legend, tick_spacer};
+use super::axes::{TITLE_INSET, axis_hints, emptiest_corner, inset, legend, tick_spacer};
 use super::*;
 
 /// The hover text of a chart point: series, point label, both values with units.
@@ -33,14 +33,13 @@ fn point_tooltip(chart: &figures::Chart, name: &str, at: PlotPoint) -> Option<St
     ))
 }
 
-#[allow(clippy::too_many_arguments)]
 pub(super) fn show_chart(
     ui: &mut egui::Ui,
     id: &str,
     chart: &figures::Chart,
-    height: f32,
+    size: Vec2,
     selection: Selection,
-    legend_shown: bool,
+    in_plot: bool,
     interaction: &mut Interaction,
 ) {
     let (xs, ys) = (chart.x.scale, chart.y.scale);
@@ -53,23 +52,29 @@ pub(super) fn show_chart(
                 .filter_map(|(&x, &y)| Some([coord(xs, x)?, coord(ys, y)?]))
         })
         .collect();
-    // A legend taller than a third of the plot would cover the data: it goes above the
-    // plot instead, as a row of names in the series' colours.
     let entries = legend_entries(ui.ctx(), chart);
-    let mut height = height;
-    let in_plot = legend_shown && (entries.len() as f32) * 18.0 <= height / 3.0;
-    if legend_shown && !in_plot {
-        let row = legend_row(ui, &entries);
-        height = (height - row.height()).max(80.0);
-    }
     // Views scroll as pages: the wheel scrolls the page, it does not pan the plot.
     let mut plot = Plot::new(id)
         .allow_scroll(false)
-        .height(height)
-        .custom_x_axes(vec![axis_hints(true, chart.x.text(), xs)])
-        .custom_y_axes(vec![axis_hints(false, chart.y.text(), ys)])
-        .x_grid_spacer(tick_spacer(xs, 70.0))
-        .y_grid_spacer(tick_spacer(ys, 36.0))
+        // Room right of the frame for half the last tick label, which centres on its edge.
+        .width((size.x - 20.0 - TITLE_INSET).max(0.0))
+        .height(size.y)
+        .custom_x_axes(vec![axis_hints(
+            ui,
+            true,
+            &chart.x.text(),
+            size.x - 80.0,
+            xs,
+        )])
+        .custom_y_axes(vec![axis_hints(
+            ui,
+            false,
+            &chart.y.text(),
+            size.y - 50.0,
+            ys,
+        )])
+        .x_grid_spacer(tick_spacer(xs, 70.0, X_EDGE))
+        .y_grid_spacer(tick_spacer(ys, 36.0, Y_EDGE))
         .label_formatter(move |pos| match pos {
             HoverPosition::NearDataPoint {
                 plot_name,
@@ -81,15 +86,21 @@ pub(super) fn show_chart(
     if in_plot {
         plot = plot.legend(legend(&all_points));
     }
-    if let Some([lo, hi]) = chart.x.include {
-        plot = plot
-            .include_x(coord(xs, lo).unwrap_or(lo))
-            .include_x(coord(xs, hi).unwrap_or(hi));
-    }
-    if let Some([lo, hi]) = chart.y.include {
-        plot = plot
-            .include_y(coord(ys, lo).unwrap_or(lo))
-            .include_y(coord(ys, hi).unwrap_or(hi));
+    // The export's limits: the data, its error bounds and reference lines, and the axes'
+    // natural bounds (a share stops at 1).
+    if let Ok([(xlo, xhi), (ylo, yhi)]) = figures::chart_limits(chart)
+        && let (Some(xlo), Some(xhi), Some(ylo), Some(yhi)) = (
+            coord(xs, xlo),
+            coord(xs, xhi),
+            coord(ys, ylo),
+            coord(ys, yhi),
+        )
+    {
+        plot = (plot.set_margin_fraction(Vec2::ZERO))
+            .include_x(xlo)
+            .include_x(xhi)
+            .include_y(ylo)
+            .include_y(yhi);
     }
     // A chart that carries a marker takes clicks as moving it, also before it has a
     // position (NaN: nothing chosen yet).
@@ -103,31 +114,34 @@ pub(super) fn show_chart(
         plot = plot.allow_drag(false);
     }
     let accent = ui.visuals().selection.bg_fill;
-    let shown = plot.show(ui, |p| {
-        if let Some(x) = marker {
-            p.vline(
-                VLine::new(format!("selected {}", chart.x.title), x)
-                    .color(accent)
-                    .width(2.5),
-            );
-        }
-        for (i, s) in chart.series.iter().enumerate() {
-            plot_series(p, chart, s, i);
-        }
-        for r in &chart.ref_lines {
-            match r.orientation {
-                Orientation::Vertical => {
-                    if let Some(v) = coord(xs, r.value) {
-                        p.vline(VLine::new(r.label.clone(), v).color(Color32::GRAY));
+    // egui_plot draws the value axis' title a little left of its rectangle: inset it.
+    let shown = inset(ui, |ui| {
+        plot.show(ui, |p| {
+            if let Some(x) = marker {
+                p.vline(
+                    VLine::new(format!("selected {}", chart.x.title), x)
+                        .color(accent)
+                        .width(2.5),
+                );
+            }
+            for (i, s) in chart.series.iter().enumerate() {
+                plot_series(p, chart, s, i);
+            }
+            for r in &chart.ref_lines {
+                match r.orientation {
+                    Orientation::Vertical => {
+                        if let Some(v) = coord(xs, r.value) {
+                            p.vline(VLine::new(r.label.clone(), v).color(Color32::GRAY));
+                        }
                     }
-                }
-                Orientation::Horizontal => {
-                    if let Some(v) = coord(ys, r.value) {
-                        p.hline(HLine::new(r.label.clone(), v).color(Color32::GRAY));
+                    Orientation::Horizontal => {
+                        if let Some(v) = coord(ys, r.value) {
+                            p.hline(HLine::new(r.label.clone(), v).color(Color32::GRAY));
+                        }
                     }
                 }
             }
-        }
+        })
     });
     let legend_box = in_plot.then(|| (emptiest_corner(&all_points), entries.as_slice()));
     paint_point_labels(ui, chart, &shown.transform, legend_box);
@@ -152,7 +166,10 @@ pub(super) fn show_chart(
 
 /// The chart's legend entries as the plot's legend shows them: one per series (a front
 /// joins its owner's) and one per reference line.
-fn legend_entries(ctx: &egui::Context, chart: &figures::Chart) -> Vec<(String, Color32)> {
+pub(super) fn legend_entries(
+    ctx: &egui::Context,
+    chart: &figures::Chart,
+) -> Vec<(String, Color32)> {
     let series = (chart.series.iter().enumerate())
         .filter(|(_, s)| s.part_of.is_none())
         .map(|(i, s)| (s.name.clone(), series_rgb(ctx, s.color, i)));

@@ -8,7 +8,7 @@ mod bars;
 mod chart;
 mod grid;
 
-use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Stroke, Vec2};
+use egui::{Color32, FontId, Pos2, Rect, Sense, Stroke, Vec2};
 use egui_plot::{
     AxisHints, Bar, BarChart, ColorConflictHandling, Corner, FilledArea, GridInput, GridMark,
     HLine, HoverPosition, Legend, Line, MarkerShape, Plot, PlotPoint, PlotPoints, Points, VLine,
@@ -19,7 +19,7 @@ use crate::figures::{
     self, ColorMap, ColorScale, ErrorDisplay, Figure, FigureKind, Orientation, Rgb, Scale,
     SeriesStyle, series_color,
 };
-pub(crate) use axes::tick_spacer;
+pub(crate) use axes::{X_EDGE, Y_EDGE, tick_spacer};
 use bars::show_bars;
 pub(crate) use chart::legend_row;
 pub use chart::marker_position;
@@ -55,30 +55,120 @@ fn value(scale: Scale, coord: f64) -> f64 {
     }
 }
 
-/// Title, subtitle and, for figures with a legend, a button that hides or shows it.
-/// Returns whether the legend is shown.
-fn header(ui: &mut egui::Ui, id: &str, figure: &Figure) -> bool {
-    let has_legend = match &figure.kind {
-        FigureKind::Chart(c) => c.series.len() > 1,
-        FigureKind::Bars(b) => b.groups.len() > 1,
-        _ => false,
-    };
+/// The smallest plot (or matrix, or grid of images) that still reads, in points: when a
+/// tile is short, the subtitle and then the legend fold away before the body gets less.
+const MIN_BODY: f32 = 120.0;
+
+/// Where a chart's legend goes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum LegendPlace {
+    /// No legend: one series, hidden by the user, or folded for want of room.
+    None,
+    /// Inside the plot, in its emptiest corner.
+    InPlot,
+    /// A row of names above the plot, this tall.
+    Row(f32),
+}
+
+/// The legend's entries: one per series (a front joins its owner's) and named reference
+/// line of a chart; one per group of a bar chart with several.
+fn legend_entries(ctx: &egui::Context, figure: &Figure) -> Vec<(String, Color32)> {
+    match &figure.kind {
+        FigureKind::Chart(c) if c.series.len() > 1 => chart::legend_entries(ctx, c),
+        FigureKind::Bars(b) if b.groups.len() > 1 => (b.groups.iter().enumerate())
+            .map(|(i, g)| (g.name.clone(), series_rgb(ctx, g.color, i)))
+            .collect(),
+        _ => Vec::new(),
+    }
+}
+
+/// How tall a row of legend entries is when wrapped into `width`.
+fn legend_row_height(ui: &egui::Ui, entries: &[(String, Color32)], width: f32) -> f32 {
+    let font = egui::TextStyle::Body.resolve(ui.style());
+    let gap = ui.spacing().item_spacing;
+    let (mut rows, mut x) = (1, 0.0);
+    for (name, _) in entries {
+        let w = (ui.painter())
+            .layout_no_wrap(format!("— {name}"), font.clone(), Color32::WHITE)
+            .size()
+            .x
+            .min(width);
+        if x > 0.0 && x + w > width {
+            rows += 1;
+            x = 0.0;
+        }
+        x += w + gap.x;
+    }
+    rows as f32 * (ui.text_style_height(&egui::TextStyle::Body) + gap.y)
+}
+
+/// Title (cut to one line, whole on hover), subtitle when there is room (else on the
+/// title's hover) and, for figures with a legend, a button that hides or shows it. Returns
+/// where the legend goes, given the `height` of the whole figure.
+fn header(ui: &mut egui::Ui, id: &str, figure: &Figure, height: f32) -> LegendPlace {
+    let entries = legend_entries(ui.ctx(), figure);
     let key = egui::Id::unique(("figure-legend-hidden", id));
     let mut hidden = ui.ctx().data(|d| d.get_temp::<bool>(key)).unwrap_or(false);
-    ui.horizontal_wrapped(|ui| {
-        ui.strong(&figure.title);
-        if has_legend {
-            let text = if hidden { "show legend" } else { "hide legend" };
-            if ui.small_button(text).clicked() {
-                hidden = !hidden;
-                ui.ctx().data_mut(|d| d.insert_temp(key, hidden));
-            }
+    let line = ui.text_style_height(&egui::TextStyle::Body) + ui.spacing().item_spacing.y;
+    let width = ui.available_width();
+    let body = height - line;
+    // A legend taller than a third of the plot would cover the data: a row above it instead.
+    let wanted = match &figure.kind {
+        _ if entries.is_empty() || hidden => LegendPlace::None,
+        FigureKind::Chart(_) if entries.len() as f32 * 18.0 <= (body - 40.0) / 3.0 => {
+            LegendPlace::InPlot
+        }
+        _ => LegendPlace::Row(legend_row_height(ui, &entries, width)),
+    };
+    let legend_h = match wanted {
+        LegendPlace::Row(h) => h,
+        _ => 0.0,
+    };
+    let subtitle = figure.subtitle.as_deref().filter(|s| !s.is_empty());
+    let show_subtitle = subtitle.is_some() && body - line - legend_h >= MIN_BODY;
+    let legend = match wanted {
+        LegendPlace::Row(h) if body - h < MIN_BODY => LegendPlace::None,
+        other => other,
+    };
+    ui.horizontal(|ui| {
+        if !entries.is_empty() {
+            let text = if legend == LegendPlace::None {
+                "show legend"
+            } else {
+                "hide legend"
+            };
+            ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+                if ui.small_button(text).clicked() {
+                    hidden = legend != LegendPlace::None;
+                    ui.ctx().data_mut(|d| d.insert_temp(key, hidden));
+                }
+                title(ui, figure, show_subtitle);
+            });
+        } else {
+            title(ui, figure, show_subtitle);
         }
     });
-    if let Some(sub) = &figure.subtitle {
-        ui.label(sub);
+    if let Some(sub) = subtitle.filter(|_| show_subtitle) {
+        ui.add(egui::Label::new(egui::RichText::new(sub).weak()).truncate());
     }
-    has_legend && !hidden
+    legend
+}
+
+/// The title on one line, cut with an ellipsis when long; the whole title, and the subtitle
+/// when it is not shown, on hover.
+fn title(ui: &mut egui::Ui, figure: &Figure, subtitle_shown: bool) {
+    let r = ui.add(
+        egui::Label::new(egui::RichText::new(&figure.title).strong())
+            .truncate()
+            .show_tooltip_when_elided(false),
+    );
+    let mut hover = figure.title.clone();
+    if let Some(sub) = figure.subtitle.as_deref().filter(|_| !subtitle_shown) {
+        hover = format!("{hover}\n{sub}");
+    }
+    if hover != figure.title || r.rect.width() + 1.0 < ui.available_width() {
+        r.on_hover_text(hover);
+    }
 }
 
 /// What a figure lets the user select, and what is selected now.
@@ -108,7 +198,8 @@ pub struct Interaction {
     pub clicked_cell: Option<[usize; 2]>,
 }
 
-/// Draw `figure` in the available width, `height` points tall.
+/// Draw `figure` in the available width, `height` points tall (at most what is left):
+/// header, legend and body all inside that rectangle, nothing scrolled or cut.
 pub fn show(
     ui: &mut egui::Ui,
     id: &str,
@@ -116,41 +207,39 @@ pub fn show(
     height: f32,
     selection: Selection,
 ) -> Interaction {
+    let height = height.min(ui.available_height()).max(0.0);
+    let rect = Rect::from_min_size(ui.cursor().min, Vec2::new(ui.available_width(), height));
     let mut interaction = Interaction::default();
-    let legend_shown = header(ui, id, figure);
-    match &figure.kind {
-        FigureKind::Chart(chart) => {
-            show_chart(
-                ui,
-                id,
-                chart,
-                height,
-                selection,
-                legend_shown,
-                &mut interaction,
-            );
+    let builder = egui::UiBuilder::new()
+        .max_rect(rect)
+        .layout(egui::Layout::top_down(egui::Align::Min));
+    ui.scope_builder(builder, |ui| {
+        ui.shrink_clip_rect(rect);
+        let legend = header(ui, id, figure, height);
+        if let LegendPlace::Row(_) = legend {
+            let entries = legend_entries(ui.ctx(), figure);
+            legend_row(ui, &entries);
         }
-        FigureKind::Bars(bars) => show_bars(ui, id, bars, height, legend_shown),
-        FigureKind::Heatmap(h) => show_heatmap(ui, id, h, height, selection, &mut interaction),
-        FigureKind::ImageGrid(g) => show_image_grid(ui, g, selection, &mut interaction),
-    }
+        let body = Vec2::new(ui.available_width(), ui.available_height().max(0.0));
+        match &figure.kind {
+            FigureKind::Chart(chart) => {
+                show_chart(
+                    ui,
+                    id,
+                    chart,
+                    body,
+                    selection,
+                    legend == LegendPlace::InPlot,
+                    &mut interaction,
+                );
+            }
+            FigureKind::Bars(bars) => show_bars(ui, id, bars, body),
+            FigureKind::Heatmap(h) => show_heatmap(ui, id, h, body, selection, &mut interaction),
+            FigureKind::ImageGrid(g) => show_image_grid(ui, g, body, selection, &mut interaction),
+        }
+    });
+    ui.advance_cursor_after_rect(rect);
     interaction
-}
-
-fn figures_axis_text(title: &str, unit: &str) -> String {
-    if unit.is_empty() {
-        title.to_string()
-    } else {
-        format!("{title} ({unit})")
-    }
-}
-
-fn short(v: f64) -> String {
-    if v.abs() >= 100.0 || v == v.round() {
-        format!("{v:.0}")
-    } else {
-        format!("{v:.2}")
-    }
 }
 
 /// A value with up to six significant digits.
@@ -165,6 +254,24 @@ fn exact(v: f64) -> String {
     } else {
         s
     }
+}
+
+/// `text` cut with an ellipsis to at most `max_w` points wide in `font` (whole when it fits).
+fn fit_text(ui: &egui::Ui, text: &str, font: &FontId, max_w: f32) -> String {
+    let width = |t: &str| {
+        (ui.painter())
+            .layout_no_wrap(t.to_string(), font.clone(), Color32::WHITE)
+            .size()
+            .x
+    };
+    if width(text) <= max_w {
+        return text.to_string();
+    }
+    (1..text.chars().count())
+        .rev()
+        .map(|k| abbreviated(text, k))
+        .find(|t| width(t) <= max_w)
+        .unwrap_or_else(|| "…".into())
 }
 
 /// A category name cut to `max` characters (the full name is in the bar's tooltip).

@@ -137,9 +137,6 @@ fn figure_pane(
     }
     let r = &cx.analyses.results[i];
     let id = format!("{i}-{name}");
-    // A solid scroll bar says there is more below (the floating one shows only on hover).
-    ui.spacing_mut().scroll = egui::style::ScrollStyle::solid();
-    let height = (ui.available_height() - 40.0).max(120.0);
     let linked_cells =
         r.links_of(name, None).is_some() && matches!(fig.kind, FigureKind::Heatmap(_));
     let Some(details) = r.details_of(name).filter(|d| !d.items.is_empty()) else {
@@ -154,10 +151,13 @@ fn figure_pane(
         } else {
             FigureSelection::None
         };
-        let act = egui::ScrollArea::vertical()
-            .id_salt(&id)
-            .show(ui, |ui| figure_view::show(ui, &id, fig, height, selection))
-            .inner;
+        // The chosen strength's scores above the chart, which takes the rest of the tile.
+        if let FigureSelection::Marker(x) = selection
+            && x.is_finite()
+        {
+            strength_values(ui, &cx.analyses.results[i], name, x);
+        }
+        let act = figure_view::show(ui, &id, fig, ui.available_height(), selection);
         if let Some(at) = act.clicked_cell {
             cx.analyses.cells.insert(key, at);
             select_linked(cx, i, name, None, at, pinned);
@@ -167,11 +167,6 @@ fn figure_pane(
         }
         if let Some(x) = act.marker_x {
             strength_chosen(cx, i, name, x);
-        }
-        if let FigureSelection::Marker(x) = selection
-            && x.is_finite()
-        {
-            strength_values(ui, &cx.analyses.results[i], name, x);
         }
         return;
     };
@@ -203,17 +198,12 @@ fn figure_pane(
         (true, Some(k)) => FigureSelection::Marker(details.items[k].0),
         _ => FigureSelection::Image(sel),
     };
-    let act = egui::ScrollArea::vertical()
-        .id_salt(&id)
-        .show(ui, |ui| {
-            figure_view::show(ui, &id, fig, height - 24.0, selection)
-        })
-        .inner;
-    if let Some(x) = act.marker_x {
-        sel = details.nearest(x);
-    }
     if sel.is_none() {
         ui.small(format!("Click a {} to see it in detail.", details.selector));
+    }
+    let act = figure_view::show(ui, &id, fig, ui.available_height(), selection);
+    if let Some(x) = act.marker_x {
+        sel = details.nearest(x);
     }
     if let Some(k) = act.clicked_image {
         sel = Some(k);
@@ -267,19 +257,13 @@ fn detail_pane(ui: &mut egui::Ui, cx: &mut Cx, i: usize, name: FigureId) {
     let r = &cx.analyses.results[i];
     let detail: &Figure = &r.details_of(name).expect("checked above").items[k].1;
     let id = format!("{i}-{name}-detail");
-    let height = (ui.available_height() - 30.0).max(120.0);
     let key = (i, name, Some(k));
     let selection = if r.links_of(name, Some(k)).is_some() {
         FigureSelection::Cell(cx.analyses.cells.get(&key).copied())
     } else {
         FigureSelection::None
     };
-    let act = egui::ScrollArea::vertical()
-        .id_salt(&id)
-        .show(ui, |ui| {
-            figure_view::show(ui, &id, detail, height, selection)
-        })
-        .inner;
+    let act = figure_view::show(ui, &id, detail, ui.available_height(), selection);
     if let Some(at) = act.clicked_cell {
         cx.analyses.cells.insert(key, at);
         select_linked(cx, i, name, Some(k), at, false);

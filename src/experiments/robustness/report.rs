@@ -8,6 +8,7 @@ use std::collections::BTreeMap;
 use super::{Family, RobustnessResult, Scope, Sweep};
 use crate::experiments::figure_id::FigureId;
 use crate::experiments::result::{AnalysisKind, AnalysisResult, now_unix};
+use crate::figures::legibility::{decimals_for, value_text};
 use crate::figures::{Axis, Figure, Orientation, Series, SeriesStyle};
 
 fn scope_text(scope: Scope) -> &'static str {
@@ -83,7 +84,7 @@ fn sweep_figure(r: &RobustnessResult, sweep: &Sweep) -> Option<Figure> {
     let mut fig = Figure::chart(
         format!("Robustness to {}", p.key().replace('-', " ")),
         Axis::new(title, unit),
-        Axis::new("score / clean score", "share").including(0.0, 1.05),
+        Axis::new("score / clean score", "share").including(0.0, 1.0),
         series,
     )
     .subtitle(subtitle)
@@ -92,8 +93,11 @@ fn sweep_figure(r: &RobustnessResult, sweep: &Sweep) -> Option<Figure> {
         r.params.fraction,
         format!("{:.0} % of clean", 100.0 * r.params.fraction),
     );
+    // Break points to the precision that tells them apart ("DS: 380", not "DS: 380.000").
+    let decimals = decimals_for(&breaks.iter().map(|(_, b)| *b).collect::<Vec<_>>());
     for (method, b) in breaks {
-        fig = fig.ref_line(Orientation::Vertical, b, format!("{method}: {b:.3}"));
+        let text = format!("{method}: {}", value_text(b, decimals));
+        fig = fig.ref_line(Orientation::Vertical, b, text);
     }
     Some(fig)
 }

@@ -13,12 +13,8 @@ use crate::figures::colormap::{ColorMap, Rgb, series_color};
 use crate::figures::layout::Bounds;
 use crate::figures::model::{BarChart, BarGroup};
 
-pub(super) fn draw_bars<DB: DrawingBackend>(
-    c: &Canvas<'_, DB>,
-    bars: &BarChart,
-    area: Rect,
-) -> Result<(), FigureError> {
-    let n = bars.categories.len();
+/// The value axis' limits: from 0 to every bar and error bound.
+pub fn bar_limits(bars: &BarChart) -> Result<(f64, f64), FigureError> {
     let mut values = vec![0.0];
     for g in &bars.groups {
         for (k, &v) in g.values.iter().enumerate() {
@@ -30,7 +26,16 @@ pub(super) fn draw_bars<DB: DrawingBackend>(
             }
         }
     }
-    let (ylo, yhi) = limits(&values, &bars.y, 0.05)?;
+    limits(&values, &bars.y, 0.05)
+}
+
+pub(super) fn draw_bars<DB: DrawingBackend>(
+    c: &Canvas<'_, DB>,
+    bars: &BarChart,
+    area: Rect,
+) -> Result<(), FigureError> {
+    let n = bars.categories.len();
+    let (ylo, yhi) = bar_limits(bars)?;
     let entries = legend_entries(bars);
     let colors: Vec<Rgb> = entries.iter().map(|e| e.color).collect();
     let show_legend =

@@ -8,6 +8,7 @@ use plotters::style::text_anchor::HPos;
 use super::truncated;
 use crate::figures::FigureError;
 use crate::figures::canvas::{Canvas, TEXT};
+use crate::figures::legibility::thin_categories;
 
 /// Which category labels to draw: every `step`-th, rotated or not, at size `em`, and the
 /// height taken.
@@ -40,15 +41,12 @@ impl CategoryLabels {
     /// The same layout for the final slot width: only how many labels are skipped (and
     /// their size) changes, so that the height already reserved stays right.
     pub(super) fn for_slot(self, slot: f64) -> Self {
-        let slot = slot.max(1e-9);
-        let mut step = (self.needed / slot).ceil().max(1.0) as usize;
-        let mut em = self.base_em;
-        if self.count >= 3 && self.count.div_ceil(step) < 3 {
-            // The first, middle and last, as large as their spacing allows.
-            step = (self.count - 1) / 2;
-            em = self.base_em * (slot * step as f64 / self.needed).clamp(0.6, 1.0);
+        let t = thin_categories(self.count, slot, self.needed);
+        CategoryLabels {
+            step: t.step,
+            em: self.base_em * t.scale,
+            ..self
         }
-        CategoryLabels { step, em, ..self }
     }
 
     /// The labels drawn.

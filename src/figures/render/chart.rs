@@ -68,7 +68,7 @@ pub(super) fn draw_chart<DB: DrawingBackend>(
 }
 
 /// The x and y limits: every drawable point, error bound and reference line.
-fn chart_limits(chart: &Chart) -> Result<[(f64, f64); 2], FigureError> {
+pub fn chart_limits(chart: &Chart) -> Result<[(f64, f64); 2], FigureError> {
     let (xs, ys) = (chart.x.scale, chart.y.scale);
     let mut all_x = Vec::new();
     let mut all_y = Vec::new();

@@ -18,7 +18,9 @@ mod image_grid;
 mod legend;
 mod scale;
 
-pub use scale::{axis_ticks, tick_label};
+pub use bars::bar_limits;
+pub use chart::chart_limits;
+pub use scale::{axis_limits, axis_ticks, tick_label};
 
 // Font sizes in CSS pixels at 96 DPI (a point is 4/3 px): 8–9 pt text and a 10-pt title,
 // the sizes journals ask for once a figure is printed at its exported width and DPI.

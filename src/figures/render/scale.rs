@@ -53,7 +53,12 @@ fn padded(values: &[f64], axis: &Axis, pad: f64) -> (f64, f64) {
         lo = lo.min(v);
         hi = hi.max(v);
     }
+    // An included end the data does not pass is a natural bound (a share's 0 and 1): the
+    // axis stops there, unpadded.
+    let (mut natural_lo, mut natural_hi) = (false, false);
     if let Some([a, b]) = axis.include {
+        natural_lo = a <= lo;
+        natural_hi = b >= hi;
         lo = lo.min(a);
         hi = hi.max(b);
     }
@@ -68,7 +73,8 @@ fn padded(values: &[f64], axis: &Axis, pad: f64) -> (f64, f64) {
                 (lo.log10() - 0.5, lo.log10() + 0.5)
             };
             let p = (h - l) * pad;
-            (10f64.powf(l - p), 10f64.powf(h + p))
+            let (pl, ph) = (p * f64::from(!natural_lo), p * f64::from(!natural_hi));
+            (10f64.powf(l - pl), 10f64.powf(h + ph))
         }
         Scale::Linear => {
             if !(lo.is_finite() && hi.is_finite()) {
@@ -80,8 +86,12 @@ fn padded(values: &[f64], axis: &Axis, pad: f64) -> (f64, f64) {
             }
             let p = (hi - lo) * pad;
             // Padding never pushes a non-negative range below 0 (counts, scores).
-            let l = if lo >= 0.0 { (lo - p).max(0.0) } else { lo - p };
-            (l, hi + p)
+            let l = match (natural_lo, lo >= 0.0) {
+                (true, _) => lo,
+                (false, true) => (lo - p).max(0.0),
+                (false, false) => lo - p,
+            };
+            (l, if natural_hi { hi } else { hi + p })
         }
     }
 }
@@ -214,14 +224,45 @@ pub(super) struct Ticks {
 /// into a corner of a narrow span, these spread across it.
 pub(super) fn linear_on_log(lo: f64, hi: f64, max: usize) -> Ticks {
     let values = linear_ticks(lo, hi, max).0;
-    let labels = values.iter().map(|&v| format_log_tick(v)).collect();
+    let labels = (values.iter().zip(log_gaps(&values)))
+        .map(|(&v, gap)| log_label(v, gap))
+        .collect();
     Ticks { values, labels }
+}
+
+/// A log tick's label when its nearest neighbour lies `gap` decades away: the round value
+/// as written, or, where neighbours are closer than its three significant digits tell
+/// apart (a narrow span of 1.14e-4 … 1.15e-4), the decimals their spacing needs.
+fn log_label(v: f64, gap: f64) -> String {
+    let ratio = 10f64.powf(gap.abs()) - 1.0;
+    if ratio.is_finite() && ratio > 0.0 && ratio < 0.05 {
+        tick_label(v, v.abs() * ratio, Scale::Linear)
+    } else {
+        format_log_tick(v)
+    }
+}
+
+/// Each tick's distance to its nearest neighbour, in decades.
+fn log_gaps(values: &[f64]) -> Vec<f64> {
+    let logs: Vec<f64> = values.iter().map(|v| v.log10()).collect();
+    (0..logs.len())
+        .map(|i| {
+            let before = i.checked_sub(1).map(|j| logs[i] - logs[j]);
+            let after = logs.get(i + 1).map(|l| l - logs[i]);
+            before
+                .into_iter()
+                .chain(after)
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect()
 }
 
 pub(super) fn ticks_for(lo: f64, hi: f64, log: bool, max: usize) -> Ticks {
     if log {
         let values = log_ticks(lo, hi);
-        let labels = values.iter().map(|&v| format_log_tick(v)).collect();
+        let labels = (values.iter().zip(log_gaps(&values)))
+            .map(|(&v, gap)| log_label(v, gap))
+            .collect();
         Ticks { values, labels }
     } else {
         let (values, decimals) = linear_ticks(lo, hi, max);
@@ -241,10 +282,18 @@ pub fn axis_ticks(lo: f64, hi: f64, scale: Scale, max: usize) -> Vec<(f64, Strin
     t.values.into_iter().zip(t.labels).collect()
 }
 
-/// The label of a linear tick at `value` among ticks `step` apart, or of a log tick.
+/// The limits the export gives an axis showing `values`: the data and the axis' included
+/// range, padded by `pad` of the span except at a natural bound. None when they cannot be
+/// drawn.
+pub fn axis_limits(values: &[f64], axis: &Axis, pad: f64) -> Option<(f64, f64)> {
+    limits(values, axis, pad).ok()
+}
+
+/// The label of a linear tick at `value` among ticks `step` apart, or of a log tick whose
+/// nearest neighbour lies `step` decades away.
 pub fn tick_label(value: f64, step: f64, scale: Scale) -> String {
     match scale {
-        Scale::Log => format_log_tick(value),
+        Scale::Log => log_label(value, step),
         Scale::Linear => {
             let step = step.abs();
             let decimals = if step > 0.0 && step.is_finite() {
@@ -311,7 +360,13 @@ mod tests {
         assert_eq!(tick_label(0.25, 0.05, Scale::Linear), "0.25");
         assert_eq!(tick_label(7.5, 2.5, Scale::Linear), "7.5");
         assert_eq!(tick_label(40.0, 20.0, Scale::Linear), "40");
-        assert_eq!(tick_label(200.0, 0.0, Scale::Log), "200");
+        assert_eq!(tick_label(200.0, 0.5, Scale::Log), "200");
+        // Neighbours 0.4 % apart: more digits than a round log label has.
+        let close = [1.142e-4, 1.146e-4, 1.150e-4];
+        let labels: Vec<String> = (close.iter().zip(log_gaps(&close)))
+            .map(|(&v, g)| log_label(v, g))
+            .collect();
+        assert_eq!(labels, ["1.142e-4", "1.146e-4", "1.15e-4"]);
     }
 
     #[test]
