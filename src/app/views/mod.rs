@@ -243,6 +243,18 @@ pub fn layout_key(view: View) -> String {
     view.title().to_string()
 }
 
+/// The key of the layout a room shows `result` in: a held-out result has figures of its
+/// own, so its tiles are laid out and kept apart.
+pub fn result_layout_key(
+    view: View,
+    result: &crate::experiments::result::AnalysisResult,
+) -> String {
+    match result.held_out {
+        Some(_) => format!("{} (held out)", layout_key(view)),
+        None => layout_key(view),
+    }
+}
+
 /// A room's central area: for an analysis room, the card and the shown result's tiles, or
 /// the room's default run when the active session has no result yet (nothing runs until
 /// asked); for the other rooms, their tiles.
@@ -298,12 +310,7 @@ pub fn central_ui(
     panes::card(ui, cx, i, &mut reset);
     ui.separator();
     let result = &cx.analyses.results[i];
-    // A held-out result has figures of its own: its tiles are laid out and kept apart.
-    let key = if result.held_out.is_some() {
-        format!("{key} (held out)")
-    } else {
-        key
-    };
+    let key = result_layout_key(room.view(), result);
     let layout = layouts
         .entry(key.clone())
         .or_insert_with(|| Layout::build(&key, room.default_groups(), Some(result), Some(i)));
