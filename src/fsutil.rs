@@ -249,6 +249,9 @@ pub mod max_bytes {
     pub const SPEC: u64 = 64 << 20;
     /// A plan folder holds a copy of its session.
     pub const SWEEP: u64 = SESSION;
+    /// A figure (`render-figure`), a frontier file or a result to compare with.
+    pub const FIGURE: u64 = 256 << 20;
+    pub const RESULT: u64 = PROJECT;
 }
 
 /// Open a JSON file to be parsed as it is read (`serde_json::from_reader`): refused when

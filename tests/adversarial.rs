@@ -385,6 +385,13 @@ fn junk_files_are_refused_without_being_read_whole() {
         &[s(&spec), "more than the 64 MiB"],
     );
     assert!(!out.exists());
+    let figure = junk(&dir, "figure.json", gib);
+    let svg = dir.join("out.svg");
+    fails_with(
+        &run_in_memory(400, &["render-figure", s(&figure), "-o", s(&svg)]),
+        &[s(&figure), "more than the 256 MiB"],
+    );
+    assert!(!svg.exists());
 }
 
 /// A change made to a model file's JSON.

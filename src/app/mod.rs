@@ -119,6 +119,8 @@ impl WorkbenchApp {
             for f in files {
                 app.open_path(f, ctx);
             }
+            // The files a run starts with list in order; the first stays active.
+            app.activate.clear();
         } else if !p.sources.is_empty() {
             app.restore = p.selected;
             for s in p.sources {
@@ -344,9 +346,6 @@ impl WorkbenchApp {
                     if opened {
                         self.browser.active = at;
                         self.analyses.notes.info(text);
-                    } else if (at..self.sessions.len() - 1).contains(&self.browser.active) {
-                        // The active session moved up one place.
-                        self.browser.active += 1;
                     }
                 }
                 Err(e) => {
@@ -497,6 +496,7 @@ impl WorkbenchApp {
                     }
                     for p in self.recent.clone() {
                         if ui.button(p.display().to_string()).clicked() {
+                            self.activate.push(Source::File(p.clone()));
                             self.open(Source::File(p), ui.ctx());
                         }
                     }

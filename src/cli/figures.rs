@@ -49,9 +49,9 @@ pub struct RenderFigureArgs {
 
 pub fn run(args: RenderFigureArgs) -> anyhow::Result<()> {
     super::refuse_input_as_output(Some(&args.output), &[&args.figure])?;
-    let text = std::fs::read_to_string(&args.figure)
+    let reader = crate::fsutil::open_json(&args.figure, crate::fsutil::max_bytes::FIGURE, "figure")
         .with_context(|| format!("cannot read {}", args.figure.display()))?;
-    let figure: Figure = serde_json::from_str(&text)
+    let figure: Figure = serde_json::from_reader(reader)
         .with_context(|| format!("{} is not a valid figure", args.figure.display()))?;
     let opts = args.preset.map_or(
         RenderOptions {

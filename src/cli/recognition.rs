@@ -129,9 +129,9 @@ fn recommended_size(
     learner: SupervisedLearner,
     features: FeatureSet,
 ) -> anyhow::Result<(usize, usize)> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let frontiers: Vec<Frontier> = serde_json::from_str(&text)
+    let reader = crate::fsutil::open_json(path, crate::fsutil::max_bytes::FIGURE, "frontier file")
+        .with_context(|| format!("reading {}", path.display()))?;
+    let frontiers: Vec<Frontier> = serde_json::from_reader(reader)
         .with_context(|| format!("{} is not a `frontier --json` file", path.display()))?;
     let method = learner.method();
     let f = frontiers

@@ -396,9 +396,9 @@ fn merge(a: MergeArgs) -> anyhow::Result<()> {
         a.out.display()
     );
     if let Some(path) = &a.expect {
-        let text =
-            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-        let local: serde_json::Value = serde_json::from_str(&text)
+        let reader = crate::fsutil::open_json(path, crate::fsutil::max_bytes::RESULT, "result")
+            .with_context(|| format!("reading {}", path.display()))?;
+        let local: serde_json::Value = serde_json::from_reader(reader)
             .with_context(|| format!("{}: not a JSON result", path.display()))?;
         match sweep::result_difference(&m.result, &local) {
             None => println!(
