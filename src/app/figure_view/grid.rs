@@ -183,7 +183,8 @@ pub(super) fn show_heatmap(
     }
     let col_font = FontId::new(font.size * col_thin.scale as f32, font.family.clone());
     for (c, name) in (h.columns.iter().enumerate()).filter(|(c, _)| col_thin.shows(*c)) {
-        let g = fitted(ui, name, &col_font, col_h);
+        // Standing names have their cell's width; turned ones the height below the grid.
+        let g = fitted(ui, name, &col_font, if rotated { col_h } else { cell });
         let centre = origin.x + (c as f32 + 0.5) * cell;
         let top = grid.bottom() + GAP;
         let size = g.size();
