@@ -12,6 +12,7 @@
 //! A bad event (an `end` without `start`, an unknown class) is refused with its reason; the
 //! grasp in progress is kept.
 
+use crate::session::ros2::event_classes;
 use crate::session::spec::{ContactParams, ImportSpec, RawGrasp};
 use crate::session::{Frame, Sensor, shorten};
 
@@ -160,27 +161,7 @@ impl Cutter {
     fn labels(&self, object: &str, labels: &str) -> Result<(String, Vec<usize>), String> {
         self.spec.check_object(object)?;
         let sets = self.spec.recorded_label_sets();
-        let values: Vec<&str> = if labels.trim().is_empty() {
-            Vec::new()
-        } else {
-            labels.split(',').map(str::trim).collect()
-        };
-        if values.len() != sets.len() {
-            return Err(format!(
-                "`{}` gives {} labels; the spec's label sets ({}) need one each",
-                shorten(labels),
-                values.len(),
-                sets.iter()
-                    .map(|l| l.name.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ));
-        }
-        let classes = sets
-            .iter()
-            .zip(&values)
-            .map(|(set, v)| self.spec.class_index(set, v))
-            .collect::<Result<Vec<_>, _>>()?;
+        let classes = event_classes(&self.spec, &sets, labels, labels)?;
         Ok((object.to_string(), classes))
     }
 

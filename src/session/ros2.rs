@@ -17,6 +17,7 @@
 
 use std::path::Path;
 
+use super::LabelSet;
 use super::align;
 use super::bag::{self, Bag};
 use super::error::{bag_time, read_text, shorten};
@@ -296,27 +297,7 @@ fn events_to_windows(
                 *key = Some(*t);
             }
             ("end", Some(_)) => {
-                let values: Vec<&str> = if arg.trim().is_empty() {
-                    Vec::new()
-                } else {
-                    arg.split(',').map(str::trim).collect()
-                };
-                if values.len() != sets.len() {
-                    return Err(at(format!(
-                        "`{}` gives {} labels; the spec's label sets ({}) need one each",
-                        shorten(text),
-                        values.len(),
-                        sets.iter()
-                            .map(|l| l.name.as_str())
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    )));
-                }
-                let classes = sets
-                    .iter()
-                    .zip(&values)
-                    .map(|(set, v)| spec.class_index(set, v).map_err(at))
-                    .collect::<Result<Vec<_>, _>>()?;
+                let classes = event_classes(spec, &sets, arg, text).map_err(at)?;
                 if let Some((start, object, key)) = open.take() {
                     windows.push(Window {
                         start,
@@ -535,6 +516,36 @@ fn cut_grasps(
         });
     }
     Ok(cut)
+}
+
+/// The classes of an `end` event's labels (comma-separated, one per recorded label set of
+/// `sets`); an error quotes `shown`. Bags and live streams read their events alike.
+pub(crate) fn event_classes(
+    spec: &ImportSpec,
+    sets: &[&LabelSet],
+    labels: &str,
+    shown: &str,
+) -> Result<Vec<usize>, String> {
+    let values: Vec<&str> = if labels.trim().is_empty() {
+        Vec::new()
+    } else {
+        labels.split(',').map(str::trim).collect()
+    };
+    if values.len() != sets.len() {
+        return Err(format!(
+            "`{}` gives {} labels; the spec's label sets ({}) need one each",
+            shorten(shown),
+            values.len(),
+            sets.iter()
+                .map(|l| l.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    sets.iter()
+        .zip(&values)
+        .map(|(set, v)| spec.class_index(set, v))
+        .collect()
 }
 
 #[cfg(test)]
