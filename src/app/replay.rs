@@ -5,7 +5,10 @@
 use egui::{ComboBox, Vec2};
 use egui_plot::{Line, Plot, PlotPoints, VLine};
 
-use super::figure_view::{self, Selection, X_EDGE, Y_EDGE, legend_row, series_rgb, tick_spacer};
+use super::figure_view::{
+    self, Selection, X_EDGE, Y_EDGE, legend_row, series_rgb, tick_spacer, x_label_room,
+    y_label_room,
+};
 use crate::figures::{Axis, AxisTitle, BarGroup, Figure, Scale};
 
 use super::heatmap::{colour_bar, sensor_heatmap};
@@ -453,8 +456,8 @@ impl Trace {
             .height(height)
             .x_axis_label("time (s)")
             .y_axis_label(self.y_title)
-            .x_grid_spacer(tick_spacer(Scale::Linear, 70.0, X_EDGE))
-            .y_grid_spacer(tick_spacer(Scale::Linear, 36.0, Y_EDGE))
+            .x_grid_spacer(tick_spacer(Scale::Linear, 70.0, X_EDGE, x_label_room(ui)))
+            .y_grid_spacer(tick_spacer(Scale::Linear, 36.0, Y_EDGE, y_label_room(ui)))
             .show(ui, |plot| {
                 for (j, (name, pts)) in self.lines.into_iter().enumerate() {
                     plot.line(Line::new(name, PlotPoints::new(pts)).color(color(j)));

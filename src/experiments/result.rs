@@ -439,6 +439,11 @@ fn speed_chart(
     }
     let sessions: std::collections::BTreeSet<&str> =
         groups.iter().map(|((s, _, _), _)| *s).collect();
+    // Times in the unit their longest reads best in (µs for a per-step prediction).
+    let longest = (groups.iter().flat_map(|(_, m)| m))
+        .filter_map(|&i| charted(&results[i], axis).map(|(t, _, _)| t))
+        .fold(0.0, f64::max);
+    let (unit, per_second) = crate::figures::legibility::time_unit(longest);
     let mut series = Vec::new();
     let mut sources = Vec::new();
     for (g, ((session, score, held_out), members)) in groups.iter().enumerate() {
@@ -453,7 +458,7 @@ fn speed_chart(
         let color = series_color(g);
         let points: Vec<(f64, f64)> = members
             .iter()
-            .filter_map(|&i| charted(&results[i], axis).map(|(t, v, _)| (t, v)))
+            .filter_map(|&i| charted(&results[i], axis).map(|(t, v, _)| (t * per_second, v)))
             .collect();
         let (x, y): (Vec<f64>, Vec<f64>) = points.iter().copied().unzip();
         if !held_out && members.len() > 1 {
@@ -496,12 +501,12 @@ fn speed_chart(
     let (title, x, subtitle) = match axis {
         TimeAxis::Training => (
             "Speed against accuracy",
-            Axis::new("training time", "s"),
+            Axis::new("training time", unit),
             "each model's headline score; a front per score and session, held-out scores apart",
         ),
         TimeAxis::Prediction => (
             "Prediction speed against accuracy",
-            Axis::new("prediction time per step or sample", "s"),
+            Axis::new("prediction time per step or sample", unit),
             "models that time their predictions; a front per score and session, held-out \
              scores apart",
         ),

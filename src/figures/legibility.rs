@@ -60,6 +60,16 @@ pub fn decimals_for(values: &[f64]) -> usize {
     (1.0 - spread.log10().floor()).clamp(0.0, 6.0) as usize
 }
 
+/// The unit a time axis reads best in, and its factor from seconds: the largest of whose
+/// multiples still leaves the longest time at 1 or more (0.000015 s reads "15 µs": five
+/// digits shorter, so that a narrow span's ticks fit side by side).
+pub fn time_unit(longest_seconds: f64) -> (&'static str, f64) {
+    [("s", 1.0), ("ms", 1e3), ("µs", 1e6)]
+        .into_iter()
+        .find(|(_, f)| longest_seconds * f >= 1.0)
+        .unwrap_or(("ns", 1e9))
+}
+
 /// `v` with `decimals` decimals, never "-0".
 pub fn value_text(v: f64, decimals: usize) -> String {
     let s = format!("{v:.decimals$}");
@@ -73,6 +83,15 @@ pub fn value_text(v: f64, decimals: usize) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn times_read_in_the_unit_that_leaves_them_at_one_or_more() {
+        assert_eq!(time_unit(42.0), ("s", 1.0));
+        assert_eq!(time_unit(1.0), ("s", 1.0));
+        assert_eq!(time_unit(0.25), ("ms", 1e3));
+        assert_eq!(time_unit(1.9e-5), ("µs", 1e6));
+        assert_eq!(time_unit(3e-10), ("ns", 1e9));
+    }
 
     #[test]
     fn categories_thin_to_what_fits_and_keep_three() {

@@ -59,7 +59,9 @@ pub use model::{
     FigureEntry, FigureKind, FigureSet, GridImage, Heatmap, ImageGrid, Orientation, RefLine, Scale,
     Series, SeriesStyle, pareto_front,
 };
-pub use render::{axis_limits, axis_ticks, bar_limits, chart_limits, tick_label};
+pub use render::{
+    axis_limits, axis_ticks, bar_limits, chart_limits, fitted_axis_ticks, tick_label,
+};
 
 #[derive(Debug, thiserror::Error)]
 pub enum FigureError {

@@ -27,13 +27,16 @@ pub(super) fn inset<R>(ui: &mut egui::Ui, plot: impl FnOnce(&mut egui::Ui) -> R)
 const GRID_SPACING_MIN: f64 = 8.0;
 
 /// Grid marks at the export's ticks (1, 2, 5 × 10^k; round values on a log axis), about
-/// one per `px_per_label` points and never fewer than three, so that the screen shows the
-/// same ticks as the paper at any tile size. No mark lies within `edge` points of either
-/// end: its label, centred on it, would run past the frame into a neighbour's.
+/// one per `px_per_label` points and never fewer than three, thinned by the export's rule so
+/// that no two labels touch (`room`: a label's extent along the axis, in points), so that the
+/// screen shows the same ticks as the paper at any tile size. No mark lies within `edge`
+/// points of either end: its label, centred on it, would run past the frame into a
+/// neighbour's.
 pub(crate) fn tick_spacer(
     scale: Scale,
     px_per_label: f64,
     edge: f64,
+    room: impl Fn(&str) -> f64 + 'static,
 ) -> impl Fn(GridInput) -> Vec<GridMark> {
     move |input: GridInput| {
         let (lo, hi) = input.bounds;
@@ -45,8 +48,16 @@ pub(crate) fn tick_spacer(
         } else {
             (lo, hi)
         };
-        let coords: Vec<f64> = figures::axis_ticks(value(scale, lo), value(scale, hi), scale, max)
-            .into_iter()
+        let length = (hi - lo) / per_px;
+        let ticks = figures::fitted_axis_ticks(
+            value(scale, lo),
+            value(scale, hi),
+            scale,
+            length,
+            max,
+            &room,
+        );
+        let coords: Vec<f64> = (ticks.into_iter())
             .filter_map(|(v, _)| coord(scale, v))
             .collect();
         // egui_plot draws a mark's label when its step leaves room for it: each mark's step
@@ -66,6 +77,25 @@ pub(crate) fn tick_spacer(
             })
             .collect()
     }
+}
+
+/// The room an x tick label needs along its axis: its width (digits at most, a little
+/// conservative for the narrower '.' and '-') and a gap, and never less than the spacing at
+/// which egui_plot draws a label at full strength ([`axis_hints`]' 32 points).
+pub(crate) fn x_label_room(ui: &egui::Ui) -> impl Fn(&str) -> f64 + 'static {
+    let font = egui::TextStyle::Body.resolve(ui.style());
+    let digit = (ui.painter())
+        .layout_no_wrap("0".into(), font, Color32::WHITE)
+        .size()
+        .x as f64;
+    move |label: &str| (label.chars().count() as f64 * digit + 10.0).max(32.0)
+}
+
+/// The room a y tick label needs along its axis: a line and a little, and never less than
+/// egui_plot's full-strength spacing there (16 points).
+pub(crate) fn y_label_room(ui: &egui::Ui) -> impl Fn(&str) -> f64 + 'static {
+    let line = f64::from(ui.text_style_height(&egui::TextStyle::Body));
+    move |_: &str| (line * 1.15).max(16.0)
 }
 
 pub(super) fn tick_text(scale: Scale, mark: GridMark) -> String {

@@ -1,6 +1,6 @@
 //! Bar charts on screen, with category names and hover values.
 
-use super::axes::{TITLE_INSET, axis_hints, inset, tick_spacer};
+use super::axes::{TITLE_INSET, axis_hints, inset, tick_spacer, y_label_room};
 use super::*;
 
 pub(super) fn show_bars(ui: &mut egui::Ui, id: &str, bars: &figures::BarChart, size: Vec2) {
@@ -65,7 +65,7 @@ pub(super) fn show_bars(ui: &mut egui::Ui, id: &str, bars: &figures::BarChart, s
                 })
                 .collect()
         })
-        .y_grid_spacer(tick_spacer(bars.y.scale, 36.0, Y_EDGE))
+        .y_grid_spacer(tick_spacer(bars.y.scale, 36.0, Y_EDGE, y_label_room(ui)))
         .set_margin_fraction(Vec2::ZERO)
         .include_x(-0.5)
         .include_x(n as f64 - 0.5);

@@ -1,6 +1,9 @@
 //! Line and marker charts on screen through egui_plot, with hover values and clickable markers.
 
-use super::axes::{TITLE_INSET, axis_hints, emptiest_corner, inset, legend, tick_spacer};
+use super::axes::{
+    TITLE_INSET, axis_hints, emptiest_corner, inset, legend, tick_spacer, x_label_room,
+    y_label_room,
+};
 use super::*;
 
 /// The hover text of a chart point: series, point label, both values with units.
@@ -73,8 +76,8 @@ pub(super) fn show_chart(
             size.y - 50.0,
             ys,
         )])
-        .x_grid_spacer(tick_spacer(xs, 70.0, X_EDGE))
-        .y_grid_spacer(tick_spacer(ys, 36.0, Y_EDGE))
+        .x_grid_spacer(tick_spacer(xs, 70.0, X_EDGE, x_label_room(ui)))
+        .y_grid_spacer(tick_spacer(ys, 36.0, Y_EDGE, y_label_room(ui)))
         .label_formatter(move |pos| match pos {
             HoverPosition::NearDataPoint {
                 plot_name,

@@ -19,7 +19,7 @@ use crate::figures::{
     self, ColorMap, ColorScale, ErrorDisplay, Figure, FigureKind, Orientation, Rgb, Scale,
     SeriesStyle, series_color,
 };
-pub(crate) use axes::{X_EDGE, Y_EDGE, tick_spacer};
+pub(crate) use axes::{X_EDGE, Y_EDGE, tick_spacer, x_label_room, y_label_room};
 use bars::show_bars;
 pub(crate) use chart::legend_row;
 pub use chart::marker_position;
@@ -208,7 +208,12 @@ pub fn show(
     selection: Selection,
 ) -> Interaction {
     let height = height.min(ui.available_height()).max(0.0);
-    let rect = Rect::from_min_size(ui.cursor().min, Vec2::new(ui.available_width(), height));
+    // Within what is visible too: a wide widget above (a slider, a row of buttons) can
+    // widen the tile's ui past its clip, and the figure would run out of its tile.
+    let width = (ui.available_width())
+        .min(ui.clip_rect().right() - ui.cursor().min.x)
+        .max(0.0);
+    let rect = Rect::from_min_size(ui.cursor().min, Vec2::new(width, height));
     let mut interaction = Interaction::default();
     let builder = egui::UiBuilder::new()
         .max_rect(rect)

@@ -186,12 +186,36 @@ fn figure_pane(
             .unwrap_or(0)
             .min(details.items.len() - 1);
         let keys: Vec<f64> = details.items.iter().map(|x| x.0).collect();
-        ui.add(
-            egui::Slider::new(&mut k, 0..=details.items.len() - 1)
-                .text(&details.selector)
+        // The slider fits the tile: its name beside it while a 60-point track stays, else
+        // on hover (a wider slider would widen the tile and push the figure out of it).
+        ui.scope(|ui| {
+            let font = egui::TextStyle::Body.resolve(ui.style());
+            let text_w = |t: &str| {
+                (ui.painter())
+                    .layout_no_wrap(t.to_string(), font.clone(), egui::Color32::WHITE)
+                    .size()
+                    .x
+            };
+            let value_w = keys
+                .iter()
+                .map(|v| text_w(&v.to_string()))
+                .fold(0.0, f32::max);
+            let gap = ui.spacing().item_spacing.x + ui.spacing().button_padding.x * 2.0;
+            let track = ui.available_width() - value_w - 2.0 * gap;
+            let named = track - text_w(&details.selector) - gap >= 60.0;
+            ui.spacing_mut().slider_width = match named {
+                true => track - text_w(&details.selector) - gap,
+                false => track,
+            }
+            .max(30.0);
+            let mut slider = egui::Slider::new(&mut k, 0..=details.items.len() - 1)
                 .custom_formatter(move |v, _| format!("{}", keys[v as usize]))
-                .custom_parser(|_| None),
-        );
+                .custom_parser(|_| None);
+            if named {
+                slider = slider.text(&details.selector);
+            }
+            ui.add(slider).on_hover_text(&details.selector);
+        });
         sel = Some(k);
     }
     let selection = match (chart, sel) {

@@ -73,15 +73,7 @@ pub(super) fn frame<DB: DrawingBackend>(
             let room = |l: &str| Ok(c.text_size(l, TICK_EM)?.0 + gap);
             // A label centred on its tick stays on the image (the plot reaches its edge).
             let image = Some((-gap / 2.0, c.size().0 + gap / 2.0));
-            let mut xt = thinned(ticks_for(lo, hi, x.log, max), &x, room, image)?;
-            if x.log && xt.values.len() < 3 {
-                // Round log values bunched in one corner of a narrow span (8e-6, 9e-6,
-                // 1e-5 on 7.5e-6 … 1.8e-5): round linear values spread across it.
-                let spread = thinned(linear_on_log(lo, hi, max), &x, room, image)?;
-                if spread.values.len() > xt.values.len() {
-                    xt = spread;
-                }
-            }
+            let xt = fitted_ticks(&x, max, room, image)?;
             (x, xt)
         }
         None => (
@@ -99,6 +91,59 @@ pub(super) fn frame<DB: DrawingBackend>(
         ),
     };
     Ok(Frame { plot, x, y, xt, yt })
+}
+
+/// The ticks of a numeric axis drawn along `span`: about `max` round values, thinned until
+/// no two labels touch (`room`: the extent a label needs along the axis). Where a log span's
+/// round values bunch in one corner and leave fewer than three labels (8e-6, 9e-6, 1e-5 on
+/// 7.5e-6 … 1.8e-5; 0.06 … 0.1 on 0.05 … 0.17), round linear values spread across it.
+fn fitted_ticks(
+    span: &Span,
+    max: usize,
+    room: impl Fn(&str) -> Result<f64, FigureError>,
+    within: Option<(f64, f64)>,
+) -> Result<Ticks, FigureError> {
+    let mut ticks = thinned(
+        ticks_for(span.lo, span.hi, span.log, max),
+        span,
+        &room,
+        within,
+    )?;
+    if span.log && ticks.values.len() < 3 {
+        let spread = thinned(linear_on_log(span.lo, span.hi, max), span, &room, within)?;
+        if spread.values.len() > ticks.values.len() {
+            ticks = spread;
+        }
+    }
+    Ok(ticks)
+}
+
+/// The ticks a screen axis from `lo` to `hi`, `length` pixels long, shows: the export's
+/// rule ([`fitted_ticks`]), so that a tile and the page show the same labels, none
+/// touching (`room`: a label's extent along the axis, in the same pixels).
+pub fn fitted_axis_ticks(
+    lo: f64,
+    hi: f64,
+    scale: Scale,
+    length: f64,
+    max: usize,
+    room: impl Fn(&str) -> f64,
+) -> Vec<(f64, String)> {
+    let log = scale == Scale::Log;
+    if !(lo.is_finite() && hi.is_finite() && hi > lo && length > 0.0) || (log && lo <= 0.0) {
+        return Vec::new();
+    }
+    let span = Span {
+        lo,
+        hi,
+        log,
+        p0: 0.0,
+        p1: length,
+    };
+    let Ok(ticks) = fitted_ticks(&span, max, |l: &str| Ok(room(l)), None) else {
+        return Vec::new();
+    };
+    ticks.values.into_iter().zip(ticks.labels).collect()
 }
 
 /// Drop tick labels that would touch their neighbour (`room` is the extent a label needs

@@ -20,6 +20,7 @@ mod scale;
 
 pub use bars::bar_limits;
 pub use chart::chart_limits;
+pub use frame::fitted_axis_ticks;
 pub use scale::{axis_limits, axis_ticks, tick_label};
 
 // Font sizes in CSS pixels at 96 DPI (a point is 4/3 px): 8–9 pt text and a 10-pt title,
