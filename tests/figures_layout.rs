@@ -6,65 +6,9 @@
 
 mod common;
 
+use common::legibility::{legibility_problems, sizes};
 use tactile_workbench::cli::paper_figures::{Experiment, PaperFiguresArgs, figures};
-use tactile_workbench::figures::{
-    Axis, Figure, FigureLayout, FigureSet, RenderOptions, Series, layout_of,
-};
-
-/// A workbench tile, and the export presets.
-fn sizes() -> Vec<(&'static str, RenderOptions)> {
-    vec![
-        (
-            "tile 300×200",
-            RenderOptions {
-                width: 300,
-                height: 200,
-                dpi: 96.0,
-            },
-        ),
-        ("column preset", RenderOptions::column()),
-        ("page preset", RenderOptions::page()),
-    ]
-}
-
-/// What is wrong with the layout of `fig` at this size (empty when nothing is).
-fn legibility_problems(fig: &Figure, opts: &RenderOptions) -> Vec<String> {
-    let layout: FigureLayout = match layout_of(fig, opts) {
-        Ok(l) => l,
-        Err(e) => return vec![format!("not drawn: {e}")],
-    };
-    let mut problems = Vec::new();
-    for (a, b) in layout.overlapping_texts() {
-        problems.push(format!("{:?} overprints {:?}", a.text, b.text));
-    }
-    for t in &layout.texts {
-        let b = t.bounds;
-        let slack = 1.0;
-        if b.left < -slack
-            || b.top < -slack
-            || b.right > layout.width + slack
-            || b.bottom > layout.height + slack
-        {
-            problems.push(format!("{:?} runs off the image", t.text));
-        }
-    }
-    for axis in &layout.axes {
-        let needed = axis.categories.map_or(3, |n| n.min(3));
-        if axis.labels.len() < needed {
-            problems.push(format!(
-                "axis {:?} shows {} tick labels {:?}",
-                axis.title,
-                axis.labels.len(),
-                axis.labels
-            ));
-        }
-    }
-    let hidden = layout.data_under_legend().len();
-    if hidden > 0 {
-        problems.push(format!("the legend covers {hidden} data marks"));
-    }
-    problems
-}
+use tactile_workbench::figures::{Axis, Figure, FigureSet, RenderOptions, Series, layout_of};
 
 fn check_all(set: &FigureSet) {
     assert!(!set.entries.is_empty());

@@ -3,6 +3,7 @@
 
 #[cfg(feature = "gui")]
 pub mod gui;
+pub mod legibility;
 
 use std::path::PathBuf;
 

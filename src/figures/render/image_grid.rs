@@ -30,26 +30,38 @@ pub(super) fn draw_image_grid<DB: DrawingBackend>(
         b: area.b,
     };
     let has_caption = g.images.iter().any(|im| !im.caption.is_empty());
-    let cap_h = if has_caption {
-        c.px(NOTE_EM * 1.8)
-    } else {
-        0.0
-    };
-    let gap = c.px(16.0);
-    let cell_for = |cols: usize| {
+    let cell_for = |cols: usize, gap: f64, cap_h: f64| {
         let rows = n.div_ceil(cols);
         let by_w = (avail.w() - gap * (cols - 1) as f64) / (cols * iw) as f64;
         let by_h = (avail.h() - gap * (rows - 1) as f64 - cap_h * rows as f64) / (rows * ih) as f64;
         by_w.min(by_h)
     };
-    let cols = if g.columns > 0 {
-        g.columns.min(n)
-    } else {
-        (1..=n)
-            .max_by(|&a, &b| cell_for(a).total_cmp(&cell_for(b)))
-            .unwrap_or(1)
+    let best_cols = |gap: f64, cap_h: f64| {
+        if g.columns > 0 {
+            g.columns.min(n)
+        } else {
+            (1..=n)
+                .max_by(|&a, &b| cell_for(a, gap, cap_h).total_cmp(&cell_for(b, gap, cap_h)))
+                .unwrap_or(1)
+        }
     };
-    let cs = cell_for(cols);
+    // Many images in a small figure (50 bases in a journal column): narrower gaps, then
+    // smaller captions, before a taxel gets smaller than a readable 4 px (about 1 mm).
+    let (gap, caption_em, cols) = [(16.0, 1.0), (8.0, 1.0), (4.0, 0.8), (3.0, 0.6)]
+        .into_iter()
+        .map(|(gap, scale)| {
+            let em = if has_caption { NOTE_EM * scale } else { 0.0 };
+            let (gap, cap_h) = (c.px(gap), c.px(em * 1.8));
+            (gap, em, best_cols(gap, cap_h))
+        })
+        .find(|&(gap, em, cols)| cell_for(cols, gap, c.px(em * 1.8)) >= c.px(4.0))
+        .unwrap_or_else(|| {
+            let gap = c.px(3.0);
+            let em = if has_caption { NOTE_EM * 0.6 } else { 0.0 };
+            (gap, em, best_cols(gap, c.px(em * 1.8)))
+        });
+    let cap_h = c.px(caption_em * 1.8);
+    let cs = cell_for(cols, gap, cap_h);
     if cs <= 0.0 {
         return Err(too_small());
     }
@@ -92,7 +104,7 @@ pub(super) fn draw_image_grid<DB: DrawingBackend>(
         if !im.caption.is_empty() {
             // Smaller to fit, then cut: a caption never runs into its neighbour's.
             let room = img_w + gap * 0.8;
-            let em = fitting_em(c, &im.caption, NOTE_EM, room)?;
+            let em = fitting_em(c, &im.caption, caption_em, room)?;
             let caption = truncated(c, &im.caption, em, room)?;
             c.text(
                 &caption,
