@@ -19,7 +19,7 @@ use egui::epaint::{ClippedShape, Shape};
 use egui::{Color32, Pos2, Rect, Vec2};
 use egui_kittest::Harness;
 use tactile_workbench::app::figure_view::{self, Selection};
-use tactile_workbench::app::replay::class_distribution_figure;
+use tactile_workbench::app::replay::{class_distribution_figure, finger_values_figure};
 use tactile_workbench::catalogue::MethodId;
 use tactile_workbench::experiments::baselines::baselines_report;
 use tactile_workbench::experiments::clustering::report::clustering_report;
@@ -665,6 +665,11 @@ fn every_figure() -> Computed {
     out.push((
         "replay · class distribution".into(),
         class_distribution_figure(&classes, &p, 0, 0),
+    ));
+    // A one-frame grasp's values, a bar per finger (BTS3's replay).
+    out.push((
+        "replay · one frame's values".into(),
+        finger_values_figure(&stab, &stab.grasps[0], 0),
     ));
     Computed {
         results,

@@ -240,3 +240,38 @@ fn a_click_on_a_trace_seeks() {
     );
     h.get_by_label_contains(&format!("Frame {} / {n}", late + 1));
 }
+
+/// A session of one frame per grasp (as BTS3 is) has no time axis: the replay shows its
+/// values, a bar per finger, instead of an empty trace.
+#[test]
+fn a_single_frame_grasp_shows_its_values_not_an_empty_trace() {
+    let mut s = tactile_workbench::session::load(&common::sample("grasp-stability.json"))
+        .expect("the sample loads");
+    for g in &mut s.grasps {
+        let key = g.frames[g.key_frame].clone();
+        g.frames = vec![key];
+        g.key_frame = 0;
+    }
+    s.meta.name = "one frame per grasp".into();
+    let dir = common::temp_dir("single-frame");
+    let path = dir.join("single.json");
+    tactile_workbench::session::save(&s, &path).expect("saved");
+    let mut h = common::gui::workbench_opening(
+        vec![path, common::sample("object-recognition.json")],
+        1400.0,
+        900.0,
+    );
+    h.run_ok();
+    let active = h.state().browser.active;
+    assert_eq!(
+        h.state().sessions[active].session.meta.name,
+        "one frame per grasp"
+    );
+    h.get_by_label_contains("Frame 1 / 1 ·");
+    h.get_by_label("Per-finger mean of pressure (the grasp's only frame)");
+    assert!(
+        h.query_by_label("Per-finger feature trace").is_none(),
+        "a one-frame grasp drew a trace over time"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

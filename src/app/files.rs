@@ -42,6 +42,28 @@ impl Purpose {
         )
     }
 
+    /// The files it lists, by name and extensions (folders are always listed; a folder
+    /// pick lists nothing else). The system dialog filters by the same.
+    pub fn file_types(self) -> (&'static str, &'static [&'static str]) {
+        match self {
+            Purpose::Sessions => (
+                "Sessions, datasets and recordings",
+                &["json", "csv", "mcap"],
+            ),
+            Purpose::Folder => ("Folders", &[]),
+            Purpose::OpenProject | Purpose::SaveProject => ("Projects", &["json"]),
+            Purpose::SaveModel(_) | Purpose::LoadModel => ("Models", &["json"]),
+            Purpose::SaveSelection => ("Sessions", &["json"]),
+        }
+    }
+
+    /// Whether a file named `name` is of the purpose's types.
+    fn lists(self, name: &str) -> bool {
+        let ext = Path::new(name).extension().and_then(|e| e.to_str());
+        let (_, types) = self.file_types();
+        ext.is_some_and(|e| types.iter().any(|t| e.eq_ignore_ascii_case(t)))
+    }
+
     fn action(self) -> &'static str {
         if self.saves() { "Save" } else { "Open" }
     }
@@ -71,6 +93,8 @@ pub struct FilePicker {
     listing: Option<(PathBuf, Result<Vec<Entry>, String>)>,
     /// The system dialog was tried and gave nothing back.
     pub system_gave_nothing: bool,
+    /// List every file, not only those of the purpose's types.
+    pub all_files: bool,
 }
 
 /// What the user did in the picker this frame.
@@ -91,6 +115,7 @@ impl FilePicker {
             path: start.display().to_string(),
             listing: None,
             system_gave_nothing: false,
+            all_files: false,
         }
     }
 
@@ -199,7 +224,20 @@ impl FilePicker {
                 }
                 ui.separator();
                 let folder = self.folder();
-                ui.small(format!("In {}:", folder.display()));
+                ui.horizontal_wrapped(|ui| {
+                    ui.small(format!("In {}:", folder.display()));
+                    let (name, types) = self.purpose.file_types();
+                    if !types.is_empty() {
+                        let types: Vec<String> = types.iter().map(|t| format!(".{t}")).collect();
+                        ui.checkbox(&mut self.all_files, "All files")
+                            .on_hover_text(format!(
+                                "Else only {} ({}) and folders",
+                                name.to_lowercase(),
+                                types.join(", ")
+                            ));
+                    }
+                });
+                let (purpose, all_files) = (self.purpose, self.all_files);
                 let mut go: Option<PathBuf> = None;
                 egui::ScrollArea::vertical()
                     .max_height(260.0)
@@ -212,7 +250,9 @@ impl FilePicker {
                             ui.small("(empty folder)");
                         }
                         Ok(entries) => {
-                            for e in entries {
+                            let shown = (entries.iter())
+                                .filter(|e| e.dir || all_files || purpose.lists(&e.name));
+                            for e in shown {
                                 let text = if e.dir {
                                     format!("{}/", e.name)
                                 } else {
@@ -266,6 +306,14 @@ fn list(folder: &Path) -> Result<Vec<Entry>, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn each_purpose_lists_its_own_file_types() {
+        assert!(Purpose::Sessions.lists("run.MCAP") && Purpose::Sessions.lists("bts3.csv"));
+        assert!(!Purpose::Sessions.lists("notes.txt") && !Purpose::Sessions.lists("csv"));
+        assert!(Purpose::LoadModel.lists("ds.json") && !Purpose::LoadModel.lists("a.csv"));
+        assert!(!Purpose::Folder.lists("a.json"));
+    }
 
     #[test]
     fn a_save_into_a_folder_names_the_project_file_and_a_missing_folder_is_an_error() {

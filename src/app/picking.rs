@@ -82,32 +82,24 @@ impl WorkbenchApp {
         self.dialog = Some((purpose, rx));
         // The portal dialog blocks its thread; keep it off the UI thread.
         std::thread::spawn(move || {
+            let (name, types) = purpose.file_types();
             let dialog = rfd::FileDialog::new();
+            let dialog = if types.is_empty() {
+                dialog
+            } else {
+                dialog.add_filter(name, types)
+            };
             let picked = match purpose {
                 Purpose::Folder => dialog.pick_folder().map(|p| vec![p]),
-                Purpose::Sessions => dialog
-                    .add_filter(
-                        "Sessions, datasets and recordings",
-                        &["json", "csv", "mcap"],
-                    )
-                    .pick_files(),
-                Purpose::OpenProject => dialog
-                    .add_filter("Projects", &["json"])
-                    .pick_file()
-                    .map(|p| vec![p]),
+                Purpose::Sessions => dialog.pick_files(),
+                Purpose::OpenProject | Purpose::LoadModel => dialog.pick_file().map(|p| vec![p]),
                 Purpose::SaveProject => dialog
-                    .add_filter("Projects", &["json"])
                     .set_file_name("project.json")
                     .save_file()
                     .map(|p| vec![p]),
-                Purpose::SaveModel(_) | Purpose::SaveSelection => dialog
-                    .add_filter("JSON", &["json"])
-                    .save_file()
-                    .map(|p| vec![p]),
-                Purpose::LoadModel => dialog
-                    .add_filter("Models", &["json"])
-                    .pick_file()
-                    .map(|p| vec![p]),
+                Purpose::SaveModel(_) | Purpose::SaveSelection => {
+                    dialog.save_file().map(|p| vec![p])
+                }
             };
             let _ = tx.send(picked.unwrap_or_default());
         });

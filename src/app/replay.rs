@@ -408,6 +408,13 @@ impl Replay {
                     ui.selectable_value(&mut self.stat, i, *name);
                 }
             });
+        if g.frames.len() == 1 {
+            // One frame has no time axis: its values, a bar per finger.
+            let figure = finger_values_figure(session, g, self.stat);
+            let height = ui.available_height().max(120.0);
+            figure_view::show(ui, "finger_values", &figure, height, Selection::None);
+            return seek_to;
+        }
         let lines = (session.sensors.iter().enumerate())
             .map(|(k, sensor)| {
                 let pts = (g.frames.iter())
@@ -501,6 +508,24 @@ pub fn class_distribution_figure(
         Axis::new("probability", "").including(0.0, 1.0),
         classes.to_vec(),
         vec![BarGroup::new("p(class | observations)", p.to_vec())],
+    )
+}
+
+/// A single-frame grasp's per-finger feature `stat`: a bar per sensor.
+pub fn finger_values_figure(session: &Session, g: &Grasp, stat: usize) -> Figure {
+    let name = FingerStats::NAMES[stat];
+    let values = (0..session.sensors.len())
+        .map(|k| {
+            let fr = &g.frames[0];
+            FingerStats::of(&session.frame_pressures(fr, k)).to_array()[stat]
+        })
+        .collect();
+    Figure::bars(
+        format!("Per-finger {name} of pressure (the grasp's only frame)"),
+        AxisTitle::new("sensor", ""),
+        Axis::new(format!("{name} of pressure"), ""),
+        session.sensors.iter().map(|x| x.name.clone()).collect(),
+        vec![BarGroup::new(name, values)],
     )
 }
 
