@@ -104,7 +104,14 @@ fn baselines_run_in_the_background_and_show_their_figures() {
     h.get_by_label("File").click();
     h.run_ok();
     h.get_by_label("Export all figures").click();
+    h.run_ok();
+    // The first export asks for the folder (the data folder's exports by default), then
+    // goes ahead; later exports do not ask again.
+    h.get_by_label("Export to which folder?");
+    assert!(h.state().analyses.jobs.is_empty(), "exported before asking");
+    h.get_by_label("Export here").click();
     h.step();
+    assert!(h.state().analyses.export.chosen);
     wait_for_jobs(&mut h, Duration::from_secs(60));
     let message = h
         .state()

@@ -534,6 +534,7 @@ impl WorkbenchApp {
     /// Draw the whole workbench into `ui`.
     pub fn show(&mut self, ui: &mut egui::Ui) {
         egui::Panel::top("menu").show(ui, |ui| self.menu(ui));
+        self.analyses.export_folder_ui(ui.ctx());
         if self.analyses.shows_jobs() {
             egui::Panel::bottom("jobs").show(ui, |ui| self.analyses.jobs_ui(ui));
         }

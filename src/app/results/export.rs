@@ -9,6 +9,18 @@ pub struct ExportSettings {
     pub width: u32,
     pub height: u32,
     pub dpi: f64,
+    /// The user has confirmed the folder once (the first export asks where to write).
+    #[serde(default)]
+    pub chosen: bool,
+}
+
+/// An export asked for before the export folder was confirmed.
+#[derive(Clone, Debug)]
+pub enum PendingExport {
+    /// One figure, by file name.
+    Figure(Box<figures::Figure>, String),
+    /// File > Export all figures.
+    All,
 }
 
 /// The export folder's name in the data folder, the default until the user chooses one.
@@ -38,6 +50,7 @@ impl Default for ExportSettings {
             width: o.width,
             height: o.height,
             dpi: o.dpi,
+            chosen: false,
         }
     }
 }
@@ -121,8 +134,58 @@ impl ExportSettings {
 }
 
 impl Analyses {
-    /// Export every figure of every result in the background.
+    /// Export `figure` as `name` into the export folder; the first export asks for the
+    /// folder first ([`Analyses::export_folder_ui`]).
+    pub fn export_figure(&mut self, figure: &figures::Figure, name: &str) {
+        if self.export.chosen {
+            self.export.write(figure, name, &mut self.notes);
+        } else {
+            let pending = PendingExport::Figure(Box::new(figure.clone()), name.to_string());
+            self.pending_export = Some(pending);
+        }
+    }
+
+    /// The first export's question: which folder, with the data folder's exports offered.
+    /// Once confirmed, the export waiting goes ahead and later ones do not ask again.
+    pub fn export_folder_ui(&mut self, ctx: &egui::Context) {
+        let Some(pending) = self.pending_export.clone() else {
+            return;
+        };
+        let (mut go, mut cancel) = (false, false);
+        egui::Window::new("Export to which folder?")
+            .collapsible(false)
+            .resizable(false)
+            .anchor(egui::Align2::CENTER_CENTER, egui::Vec2::ZERO)
+            .show(ctx, |ui| {
+                ui.label(
+                    "Figures are written as SVG, PDF, PNG and CSV into this folder (it is made \
+                     when missing). The folder and the size are kept under Export settings.",
+                );
+                self.export.ui(ui);
+                ui.horizontal(|ui| {
+                    go = ui.button("Export here").clicked();
+                    cancel = ui.button("Cancel").clicked();
+                });
+            });
+        if cancel {
+            self.pending_export = None;
+        } else if go {
+            self.pending_export = None;
+            self.export.chosen = true;
+            match pending {
+                PendingExport::Figure(figure, name) => self.export_figure(&figure, &name),
+                PendingExport::All => self.export_all(ctx),
+            }
+        }
+    }
+
+    /// Export every figure of every result in the background (the first export asks for
+    /// the folder first).
     pub fn export_all(&mut self, ctx: &egui::Context) {
+        if !self.export.chosen {
+            self.pending_export = Some(PendingExport::All);
+            return;
+        }
         let set = result::figure_set(&self.results);
         let mut set_all = set;
         let extra = result::speed_accuracy_figures(&self.results)

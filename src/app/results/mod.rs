@@ -4,7 +4,7 @@
 mod export;
 mod kept;
 
-pub use export::ExportSettings;
+pub use export::{ExportSettings, PendingExport};
 
 use std::path::PathBuf;
 
@@ -127,6 +127,8 @@ pub struct Analyses {
     pub models: Models,
     /// A result to show at once (a held-out result just computed): the app opens it.
     pub reveal: Option<usize>,
+    /// An export waiting for the user to confirm its folder (the first export asks).
+    pub pending_export: Option<PendingExport>,
 }
 
 /// The title of the job that keeps the results in the data folder.

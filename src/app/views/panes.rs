@@ -133,9 +133,13 @@ fn figure_pane(
     });
     if export {
         let file = crate::experiments::result::export_name(i, r, name);
-        cx.analyses.export.write(fig, &file, &mut cx.analyses.notes);
+        let owned = fig.clone();
+        cx.analyses.export_figure(&owned, &file);
     }
     let r = &cx.analyses.results[i];
+    let Some(fig) = r.figure(name) else {
+        return;
+    };
     let id = format!("{i}-{name}");
     let linked_cells =
         r.links_of(name, None).is_some() && matches!(fig.kind, FigureKind::Heatmap(_));

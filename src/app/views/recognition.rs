@@ -284,9 +284,7 @@ impl Room for RecognitionRoom {
                     .on_hover_text("SVG, PDF, PNG and CSV into the export folder")
                     .clicked()
                 {
-                    cx.analyses
-                        .export
-                        .write(&fig, "accuracy-compared", &mut cx.analyses.notes);
+                    cx.analyses.export_figure(&fig, "accuracy-compared");
                 }
                 let height = (ui.available_height() - 40.0).max(120.0);
                 figure_view::show(ui, "accuracy-compared", &fig, height, FigureSelection::None);

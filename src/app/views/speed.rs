@@ -391,9 +391,7 @@ impl SpeedRoom {
                 result::slug(&kind.session),
                 result::slug(&kind.score)
             );
-            cx.analyses
-                .export
-                .write(&chart.figure, &file, &mut cx.analyses.notes);
+            cx.analyses.export_figure(&chart.figure, &file);
         }
         let height = (ui.available_height() - 40.0).max(160.0);
         let act = figure_view::show(
@@ -473,9 +471,7 @@ impl SpeedRoom {
             .clicked()
         {
             let export = format!("{file}-{}", result::slug(&name));
-            cx.analyses
-                .export
-                .write(&fig, &export, &mut cx.analyses.notes);
+            cx.analyses.export_figure(&fig, &export);
         }
         let height = (ui.available_height() - 110.0).max(160.0);
         let act = figure_view::show(ui, "frontier", &fig, height, FigureSelection::None);
