@@ -434,8 +434,8 @@ impl Live {
     }
 }
 
-/// Latencies (ms) counted in 0.05 ms bins up to 100 ms (the last bin holds the longer
-/// ones): percentiles over a stream of any length in a fixed space.
+/// Latencies (ms) counted in 0.1 ms bins up to 2 s (the last bin holds the longer ones):
+/// percentiles over a stream of any length in a fixed space.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Latencies {
     bins: Vec<u64>,
@@ -443,8 +443,8 @@ pub struct Latencies {
 }
 
 impl Latencies {
-    const BIN_MS: f64 = 0.05;
-    const BINS: usize = 2001;
+    const BIN_MS: f64 = 0.1;
+    const BINS: usize = 20_001;
 
     pub fn add(&mut self, ms: f64) {
         if self.bins.is_empty() {

@@ -59,6 +59,9 @@ impl Default for LiveForm {
     }
 }
 
+/// Points a trace line draws at most, whatever the stream's rate.
+const TRACE_POINTS: usize = 1500;
+
 /// A stream the view is connected to.
 struct Connected {
     running: Running,
@@ -554,12 +557,14 @@ impl LiveRoom {
             return;
         };
         let names: Vec<String> = c.sensors.iter().map(|s| s.name.clone()).collect();
-        // Seconds before the latest frame, per sensor: a copy of the trace's points only.
+        // Seconds before the latest frame, per sensor: at most TRACE_POINTS of the trace's
+        // points (a 1 kHz stream holds ten thousand in ten seconds), copied under the lock.
         let lines = self
             .shown(|s| {
                 let last = s.trace.back().map_or(0, |(t, _)| *t);
-                let mut lines = vec![Vec::with_capacity(s.trace.len()); names.len()];
-                for (t, totals) in &s.trace {
+                let every = s.trace.len().div_ceil(TRACE_POINTS).max(1);
+                let mut lines = vec![Vec::with_capacity(TRACE_POINTS); names.len()];
+                for (t, totals) in s.trace.iter().step_by(every) {
                     let x = -(last.saturating_sub(*t) as f64) / 1e9;
                     for (line, v) in lines.iter_mut().zip(totals) {
                         line.push([x, *v]);
