@@ -2,8 +2,9 @@
 # Screenshots of every workbench view, in a real window under Xvfb, on results computed
 # from the bundled sample sessions (short runs: 2 repetitions).
 #
-#   scripts/screenshots.sh [OUT_DIR] [WIDTHxHEIGHT]   (default: docs/screenshots 1400x900)
+#   scripts/screenshots.sh [OUT_DIR] [WIDTHxHEIGHT] [live]   (default: docs/screenshots 1400x900)
 #
+# With `live`, only the Live view's screenshots (a served stream) are taken.
 # Run it at 1400x900 and at 1000x700 (into another folder) to check the layout holds.
 # The projects are kept in target/screenshot-projects and reused; delete it to recompute.
 # Needs Xvfb, xdotool and ImageMagick's `import`
@@ -18,7 +19,8 @@ work=target/screenshot-projects
 mkdir -p "$work"
 trap 'kill $(jobs -p) 2>/dev/null || true' EXIT
 
-cargo build
+# `serve` (the live view's stream) needs the Foxglove SDK's server.
+cargo build --features serve
 bin=target/debug/tactile-workbench
 
 # Results to show: one project per experiment.
@@ -63,6 +65,7 @@ shot() { # VIEW NAME [xdotool actions...]
     kill $pid
     wait $pid 2>/dev/null || true
 }
+if [ "${3:-}" != live ]; then
 shot stability stability
 shot recognition recognition
 shot clustering clustering
@@ -76,4 +79,52 @@ projects=("$work"/stability.json "$work"/recognition.json "$work"/clustering.jso
 shot robustness robustness
 # Replay: select the first grasp in the browser.
 shot replay replay mousemove 120 190 click 1
+fi
+
+# Live: a served iCub stream (trials 16–20) recognised by DS trained on trials 1–15, the
+# class distribution settling as the hand closes. Without the dataset, the simulated
+# recognition sample stands in.
+icub=../shared/datasets/icub-grasp
+if [ ! -f "$work/live-test.json" ]; then
+    if [ -d "$icub" ]; then
+        $bin import icub "$icub" -o "$work/icub.json"
+        src="$work/icub.json"
+    else
+        src=sample-sessions/object-recognition.json
+    fi
+    $bin subset "$src" --trials 1..15 -o "$work/live-train.json"
+    $bin subset "$src" --trials 16..20 -o "$work/live-test.json"
+    $bin fit ds "$work/live-train.json" -o "$work/live-ds.json"
+fi
+$bin serve "$work/live-test.json" --rate 1 --port 8799 --write-spec "$work/live.spec.json" \
+    >/dev/null 2>&1 &
+serve_pid=$!
+# The Live view's form: the fields typed, then Connect; two moments of the stream. The form
+# panel is min(250, 22 % of the width) wide at the right; its fields' heights do not move.
+w=${size%x*}
+panel=$((w * 22 / 100 < 250 ? w * 22 / 100 : 250))
+fx=$((w - panel / 2))
+live_form() {
+    local y=78
+    for text in "ws://127.0.0.1:8799" "$PWD/$work/live.spec.json" "$PWD/$work/live-ds.json"; do
+        xdotool mousemove $fx $y click 1 key ctrl+a type --delay 20 "$text"
+        sleep 1
+        y=$((y + 41))
+    done
+    xdotool mousemove $((w - panel + 41)) 294 click 1
+    sleep 8
+}
+$bin --view live >/dev/null 2>&1 &
+pid=$!
+sleep 6
+win=$(xdotool search --name "Tactile Workbench" | head -1)
+xdotool windowfocus --sync "$win" 2>/dev/null || true
+xdotool windowmove "$win" 0 0 windowsize "$win" "${size%x*}" "${size#*x}" 2>/dev/null || true
+sleep 2
+live_form
+import -window root "$out/live.png"
+sleep 3
+import -window root "$out/live-settled.png"
+kill $pid $serve_pid
+wait $pid $serve_pid 2>/dev/null || true
 echo "screenshots in $out"

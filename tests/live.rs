@@ -310,6 +310,7 @@ fn teaching_live_equals_fit_from_grasp_by_grasp() {
     };
     let (model, secs) = models::fit_sequences(&train, &opts).unwrap();
     let file = models::sequence_file(model, &train, secs, Default::default(), None);
+    let file_at_start = file.clone();
     let live_path = dir.join("live.json");
     models::save(&file, &live_path).unwrap();
 
@@ -328,6 +329,7 @@ fn teaching_live_equals_fit_from_grasp_by_grasp() {
 
     // `fit --from` once per grasp of the recording, on a session of that grasp.
     let recorded = session::load(&out).unwrap();
+    let out_rec = out.clone();
     let mut chained = file;
     for g in &recorded.grasps {
         let one = Session {
@@ -348,6 +350,116 @@ fn teaching_live_equals_fit_from_grasp_by_grasp() {
     }
     let live = models::load(&live_path).unwrap();
     assert_eq!(live.model, chained.model);
+
+    // `fit ds RECORDING --from MODEL --in-order` teaches the same chain; the default
+    // `--from` (the protocol's seeded shuffle) teaches another order, another model.
+    let start = dir.join("start.json");
+    models::save(&file_at_start, &start).unwrap();
+    let fit = |extra: &[&str], out: &Path| {
+        let status = std::process::Command::new(env!("CARGO_BIN_EXE_tactile-workbench"))
+            .arg("fit")
+            .arg("ds")
+            .arg(&out_rec)
+            .arg("--from")
+            .arg(&start)
+            .args(extra)
+            .arg("-o")
+            .arg(out)
+            .stdout(std::process::Stdio::null())
+            .status()
+            .unwrap();
+        assert!(status.success());
+        models::load(out).unwrap()
+    };
+    let in_order = fit(&["--in-order"], &dir.join("in-order.json"));
+    assert_eq!(in_order.model, live.model);
+    // The provenance too, but for its times and the hashes of the one-grasp sessions it
+    // names: a stream's grasp lists only its own object in its label set, the
+    // recording's grasp every object recorded.
+    let times = |f: &models::ModelFile| {
+        let mut p = f.provenance.clone();
+        p.trained_at.clear();
+        p.train_seconds = 0.0;
+        p.session.hash.clear();
+        for (_, v) in &mut p.parameters {
+            if let Some(at) = v.find(" [sha256:") {
+                v.truncate(at);
+            }
+        }
+        p
+    };
+    assert_eq!(
+        times(&in_order),
+        times(&live),
+        "provenance but times and hashes"
+    );
+    let shuffled = fit(&[], &dir.join("shuffled.json"));
+    assert_ne!(shuffled.model, live.model);
+}
+
+/// DS and GS follow a grasp while it is open, one step per frame; when it ends, those
+/// steps are the grasp's verdict (the models' own prediction of the whole grasp).
+#[test]
+fn early_classification_step_by_step_equals_the_grasps_verdict() {
+    let dir = common::temp_dir("live-early");
+    let s = sample(36);
+    let (train, shown) = {
+        let (mut a, mut b) = (s.clone(), s.clone());
+        a.grasps.truncate(30);
+        b.grasps.drain(..30);
+        (a, b)
+    };
+    let spec = spec_of(&shown, &dir);
+    for method in [MethodId::Ds, MethodId::Gs] {
+        let defaults = RecognitionParams::default();
+        let (mut ds, mut gs) = (defaults.ds, defaults.gs);
+        ds.gp.capacity = 20;
+        gs.gp.capacity = 20;
+        let opts = SequenceFitOptions {
+            method,
+            features: FeatureSet::ALL,
+            label_set: "object".into(),
+            seed: 1,
+            ds,
+            gs,
+        };
+        let (model, secs) = models::fit_sequences(&train, &opts).unwrap();
+        let file = models::sequence_file(model, &train, secs, Default::default(), None);
+        let path = dir.join(format!("{}.json", method.key()));
+        models::save(&file, &path).unwrap();
+        let n = shown.grasps.len();
+        let server = play(&shown, rate_for(&shown, 1.5), 0, 0..n);
+        let mut o = options(server.port, spec.clone(), None);
+        o.model = Some((path, false));
+        let (reports, snap) = run(Live::start(o).unwrap(), Duration::from_secs(30), |r, _| {
+            r.len() == n
+        });
+        server.done();
+        assert_eq!(reports.len(), n, "{snap:?}");
+        assert_eq!(snap.early_error, None);
+        for (i, r) in reports.iter().enumerate() {
+            let v = r.verdict.as_ref().unwrap().as_ref().unwrap();
+            let early = r.early.as_ref().expect("the model followed the grasp");
+            let bits = |steps: &[Vec<f64>]| -> Vec<Vec<u64>> {
+                steps
+                    .iter()
+                    .map(|row| row.iter().map(|x| x.to_bits()).collect())
+                    .collect()
+            };
+            assert_eq!(bits(&early.steps), bits(&v.steps), "{method:?} grasp {i}");
+            assert_eq!(
+                (&early.predicted, early.settled),
+                (&v.predicted, v.settled),
+                "{method:?} grasp {i}"
+            );
+        }
+        // The line printed per grasp says the early decisions.
+        assert!(
+            reports[0].line().contains("early 10%:"),
+            "{}",
+            reports[0].line()
+        );
+    }
 }
 
 #[test]

@@ -476,6 +476,9 @@ impl WorkbenchApp {
                 {
                     self.open_picker(Purpose::Folder);
                 }
+                if ui.button("Connect to a live stream…").clicked() {
+                    (self.view, self.form_open) = (View::Live, true);
+                }
                 ui.separator();
                 if ui.button("Open project…").clicked() {
                     self.open_picker(Purpose::OpenProject);

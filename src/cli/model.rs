@@ -86,6 +86,10 @@ pub struct FitClusterArgs {
     /// Learn this saved model further on SESSION.
     #[arg(long, value_name = "MODEL.json")]
     pub from: Option<PathBuf>,
+    /// With --from: teach the grasps one at a time in the session's order, as a live
+    /// stream teaches them (`live --teach`), instead of the protocol's seeded shuffle.
+    #[arg(long, requires = "from")]
+    pub in_order: bool,
     #[arg(short, long, value_name = "MODEL.json")]
     pub output: PathBuf,
 }
@@ -116,6 +120,10 @@ pub struct FitSequenceArgs {
     /// stay; a class it has not seen gets a new expert).
     #[arg(long, value_name = "MODEL.json")]
     pub from: Option<PathBuf>,
+    /// With --from: teach the grasps one at a time in the session's order, as a live
+    /// stream teaches them (`live --teach`), instead of the protocol's seeded shuffle.
+    #[arg(long, requires = "from")]
+    pub in_order: bool,
     /// The model file to write.
     #[arg(short, long, value_name = "MODEL.json")]
     pub output: PathBuf,
@@ -261,17 +269,21 @@ fn fit_sequences(method: MethodId, a: FitSequenceArgs) -> anyhow::Result<()> {
                 );
             }
             let old = saved_model_of(path, method)?;
-            let models::Model::Sequences(m) = &old.model else {
-                unreachable!("a {} model file holds DS or GS experts", method.key());
-            };
-            let (next, secs) = models::continue_sequences(m, &session)?;
-            models::sequence_file(
-                next,
-                &session,
-                secs,
-                old.provenance.size_reason,
-                Some(&old.provenance),
-            )
+            if a.in_order {
+                crate::live::model::teach_in_order(&old, &session)?
+            } else {
+                let models::Model::Sequences(m) = &old.model else {
+                    unreachable!("a {} model file holds DS or GS experts", method.key());
+                };
+                let (next, secs) = models::continue_sequences(m, &session)?;
+                models::sequence_file(
+                    next,
+                    &session,
+                    secs,
+                    old.provenance.size_reason,
+                    Some(&old.provenance),
+                )
+            }
         }
         None => {
             let defaults = crate::experiments::recognition::RecognitionParams::default();
@@ -326,11 +338,15 @@ fn fit_clusters(method: MethodId, a: FitClusterArgs) -> anyhow::Result<()> {
                 );
             }
             let old = saved_model_of(path, method)?;
-            let models::Model::Clusters(m) = &old.model else {
-                unreachable!("a {} model file holds DU or GU experts", method.key());
-            };
-            let (next, secs) = models::continue_clusters(m, &session)?;
-            models::cluster_file(next, &session, secs, Some(&old.provenance))
+            if a.in_order {
+                crate::live::model::teach_in_order(&old, &session)?
+            } else {
+                let models::Model::Clusters(m) = &old.model else {
+                    unreachable!("a {} model file holds DU or GU experts", method.key());
+                };
+                let (next, secs) = models::continue_clusters(m, &session)?;
+                models::cluster_file(next, &session, secs, Some(&old.provenance))
+            }
         }
         None => {
             let Some(threshold) = a.threshold else {

@@ -174,7 +174,7 @@ fn run(
 
 /// The handshake, both subprotocols offered; the socket then reads with a short timeout so
 /// that the thread sees its stop flag.
-fn connect(url: &str) -> Result<(WebSocket<TcpStream>, String), String> {
+pub(crate) fn connect(url: &str) -> Result<(WebSocket<TcpStream>, String), String> {
     let mut request = url
         .into_client_request()
         .map_err(|e| format!("`{url}` is not a WebSocket address: {e}"))?;

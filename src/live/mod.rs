@@ -8,6 +8,7 @@
 //! - [`client`]: the socket thread, its bounded queue, reconnect and status;
 //! - [`frames`]: samples into frames on the reference topic;
 //! - [`cut`]: grasps by events, by contact or by hand;
+//! - [`discover`]: a stream without a spec: its channels, and a spec proposed from them;
 //! - [`record`]: each completed grasp into a session file that is always valid;
 //! - [`model`]: a saved model's verdict on each grasp, and teaching it;
 //! - [`publish`]: a session as the messages of a stream (what `serve` publishes).
@@ -19,6 +20,7 @@
 pub mod channels;
 pub mod client;
 pub mod cut;
+pub mod discover;
 pub mod frames;
 pub mod model;
 pub mod protocol;
@@ -36,7 +38,7 @@ use channels::Plan;
 use client::{Client, ClientStatus, lock};
 use cut::{Completed, Cutter, Cutting};
 use frames::{Assembled, Assembler, StreamFrame};
-use model::{LiveModel, Verdict};
+use model::{Early, LiveModel, Verdict};
 use record::{Recorder, grasp_session};
 
 use crate::session::spec::{GraspCut, ImportSpec};
@@ -44,6 +46,8 @@ use crate::session::{Session, SessionError};
 
 /// Frames the trace keeps at most, whatever its span: a bound on memory at any rate.
 pub const TRACE_CAP: usize = 20_000;
+/// Lines of completed grasps the snapshot keeps.
+pub const RECENT_CAP: usize = 200;
 
 /// What to read, and what to do with the grasps.
 pub struct LiveOptions {
@@ -72,6 +76,8 @@ pub struct GraspReport {
     pub seconds: f64,
     /// The model's verdict, or why it could not give one.
     pub verdict: Option<Result<Verdict, String>>,
+    /// DS/GS's early classification as the grasp went on, frame by frame.
+    pub early: Option<Verdict>,
     /// Whether the grasp taught the model (and the file was saved), or why not.
     pub taught: Result<bool, String>,
     /// Whether the grasp is in the recording, or why not.
@@ -95,7 +101,12 @@ impl GraspReport {
             self.seconds
         );
         match &self.verdict {
-            Some(Ok(v)) => out += &format!("; {}", v.line()),
+            Some(Ok(v)) => {
+                out += &format!("; {}", v.line());
+                if let Some(e) = v.early_line() {
+                    out += &format!("; {e}");
+                }
+            }
             Some(Err(e)) => out += &format!("; model: {e}"),
             None => {}
         }
@@ -134,6 +145,20 @@ pub struct Snapshot {
     pub refused_events: u64,
     pub last_refused: Option<String>,
     pub last_verdict: Option<Verdict>,
+    /// DS/GS on the grasp still open: the distribution at every step so far.
+    pub open_verdict: Option<Verdict>,
+    /// Why the model could not follow the open grasp.
+    pub early_error: Option<String>,
+    /// The latest completed grasps' lines, oldest first.
+    pub recent: VecDeque<String>,
+    /// From a frame's log time to the model's step on it (DS/GS following an open grasp).
+    pub model_latency: Latencies,
+    /// How grasps are cut, in words.
+    pub cutting: String,
+    /// Why the stream could not start (a [`Running`] engine), and why the latest command
+    /// by hand was refused.
+    pub failed: Option<String>,
+    pub last_command: Option<String>,
 }
 
 /// The engine of a live stream: the socket thread's queue drained into frames, grasps, the
@@ -146,6 +171,10 @@ pub struct Live {
     cutter: Cutter,
     recorder: Option<Recorder>,
     model: Option<LiveModel>,
+    /// The model at work on the open grasp (None when idle, or the model has no early
+    /// classification).
+    early: Option<Early>,
+    early_failed: bool,
     /// Written in place, a short lock at a time: the trace is never copied.
     snapshot: Arc<Mutex<Snapshot>>,
     trace_ns: u64,
@@ -171,13 +200,22 @@ impl Live {
         };
         Ok(Live {
             assembler: Assembler::new(&plan, opts.spec.sync_tolerance_ns),
-            cutter: Cutter::new(&opts.spec, cutting),
+            cutter: Cutter::new(&opts.spec, cutting.clone()),
             client: Client::start(&opts.url, plan),
             source: PathBuf::from(&opts.url),
             recorder: opts.record.as_deref().map(Recorder::new),
             spec: opts.spec,
             model,
-            snapshot: Arc::new(Mutex::new(Snapshot::default())),
+            early: None,
+            early_failed: false,
+            snapshot: Arc::new(Mutex::new(Snapshot {
+                cutting: match &cutting {
+                    Cutting::Events => "by the stream's events".into(),
+                    Cutting::Contact(_) => "by contact".into(),
+                    Cutting::Hand => "by hand".into(),
+                },
+                ..Snapshot::default()
+            })),
             trace_ns: (opts.trace_seconds.max(0.0) * 1e9) as u64,
             grasps: 0,
             rate_window: (Instant::now(), 0),
@@ -235,8 +273,10 @@ impl Live {
         match self.assembler.push(m.t, m.sample) {
             Assembled::Frame(f) => {
                 self.trace(&f);
-                if let Some(c) = self.cutter.frame(f) {
-                    out.push(self.completed(c));
+                let t = f.t;
+                match self.cutter.frame(f) {
+                    Some(c) => out.push(self.completed(c)),
+                    None => self.follow_open(t),
                 }
             }
             Assembled::Event(t, text) => match self.cutter.event(t, &text) {
@@ -269,9 +309,55 @@ impl Live {
         }
     }
 
+    /// The model on the open grasp's new frames (the latest at log time `t`); the new
+    /// steps into the snapshot.
+    fn follow_open(&mut self, t: u64) {
+        let (Some(model), Some(frames)) = (&self.model, self.cutter.in_progress()) else {
+            return;
+        };
+        if self.early_failed {
+            return;
+        }
+        if self.early.is_none() {
+            self.early = model.early();
+            let mut view = lock(&self.snapshot);
+            view.open_verdict = None;
+            view.early_error = None;
+        }
+        let Some(early) = &mut self.early else { return };
+        let outcome = early.update(&self.spec, frames);
+        let mut view = lock(&self.snapshot);
+        match outcome {
+            Ok(()) => {
+                let v = &early.verdict;
+                let shown = view.open_verdict.get_or_insert_with(|| Verdict {
+                    steps: Vec::new(),
+                    ..v.clone()
+                });
+                let have = shown.steps.len().min(v.steps.len());
+                shown.steps.extend_from_slice(&v.steps[have..]);
+                shown.predicted.clone_from(&v.predicted);
+                shown.decision = v.decision;
+                shown.settled = v.settled;
+                if let Some(now) = now_ns() {
+                    view.model_latency.add((now as f64 - t as f64) / 1e6);
+                }
+            }
+            Err(e) => {
+                // Said once per grasp: the model is not asked again until it ends.
+                view.early_error = Some(e.to_string());
+                view.open_verdict = None;
+                self.early_failed = true;
+            }
+        }
+    }
+
     /// A grasp that ended: a session of one grasp, recorded, read by the model, taught.
     fn completed(&mut self, c: Completed) -> GraspReport {
         self.grasps += 1;
+        let early = self.early.take().map(|e| e.verdict);
+        self.early_failed = false;
+        lock(&self.snapshot).open_verdict = None;
         let sets = self.spec.recorded_label_sets();
         let labels = sets
             .iter()
@@ -291,6 +377,7 @@ impl Live {
             frames: c.grasp.frames.len(),
             seconds: (c.end - c.start) as f64 / 1e9,
             verdict: None,
+            early,
             taught: Ok(false),
             recorded: Ok(false),
             session: None,
@@ -299,6 +386,7 @@ impl Live {
             Ok(s) => s,
             Err(e) => {
                 report.recorded = Err(e.to_string());
+                self.remember(&report);
                 return report;
             }
         };
@@ -315,7 +403,17 @@ impl Live {
             }
         }
         report.session = Some(one);
+        self.remember(&report);
         report
+    }
+
+    /// The grasp's line into the snapshot's bounded list.
+    fn remember(&self, report: &GraspReport) {
+        let mut view = lock(&self.snapshot);
+        if view.recent.len() == RECENT_CAP {
+            view.recent.pop_front();
+        }
+        view.recent.push_back(report.line());
     }
 
     /// The counters into the snapshot.
@@ -336,9 +434,139 @@ impl Live {
     }
 }
 
+/// Latencies (ms) counted in 0.1 ms bins up to 2 s (the last bin holds the longer ones):
+/// percentiles over a stream of any length in a fixed space.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Latencies {
+    bins: Vec<u64>,
+    count: u64,
+}
+
+impl Latencies {
+    const BIN_MS: f64 = 0.1;
+    const BINS: usize = 20_001;
+
+    pub fn add(&mut self, ms: f64) {
+        if self.bins.is_empty() {
+            self.bins = vec![0; Self::BINS];
+        }
+        let k = ((ms.max(0.0) / Self::BIN_MS) as usize).min(Self::BINS - 1);
+        self.bins[k] += 1;
+        self.count += 1;
+    }
+
+    pub fn count(&self) -> u64 {
+        self.count
+    }
+
+    /// The `q` quantile (0–1), as its bin's upper edge; None before any latency.
+    pub fn quantile(&self, q: f64) -> Option<f64> {
+        if self.count == 0 {
+            return None;
+        }
+        let want = ((q.clamp(0.0, 1.0) * self.count as f64).ceil() as u64).max(1);
+        let mut seen = 0;
+        for (k, n) in self.bins.iter().enumerate() {
+            seen += n;
+            if seen >= want {
+                return Some((k + 1) as f64 * Self::BIN_MS);
+            }
+        }
+        None
+    }
+}
+
 fn now_ns() -> Option<u64> {
     std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .ok()
         .map(|d| d.as_nanos() as u64)
+}
+
+/// A live stream run on a thread of its own, for a window: it never blocks its caller.
+/// Commands by hand go through a bounded queue; what happens is read from the snapshot.
+pub struct Running {
+    pub snapshot: Arc<Mutex<Snapshot>>,
+    commands: std::sync::mpsc::SyncSender<String>,
+    stop: Arc<std::sync::atomic::AtomicBool>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+/// Commands by hand queued at most (a person cannot type faster than the engine reads).
+const COMMANDS: usize = 64;
+
+impl Running {
+    /// Start the engine on its thread: the spec and model are read there, and a failure to
+    /// start is the snapshot's `failed`.
+    pub fn start(opts: LiveOptions) -> Running {
+        let snapshot = Arc::new(Mutex::new(Snapshot::default()));
+        let (commands, rx) = std::sync::mpsc::sync_channel::<String>(COMMANDS);
+        let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let thread = {
+            let (snapshot, stop) = (snapshot.clone(), stop.clone());
+            std::thread::Builder::new()
+                .name("live-engine".into())
+                .spawn(move || {
+                    let mut live = match Live::start(opts) {
+                        Ok(l) => l,
+                        Err(e) => {
+                            lock(&snapshot).failed = Some(e.to_string());
+                            return;
+                        }
+                    };
+                    // The engine writes into the snapshot the caller holds.
+                    let first = lock(&live.snapshot).clone();
+                    *lock(&snapshot) = first;
+                    live.snapshot = snapshot;
+                    let stopping = || stop.load(std::sync::atomic::Ordering::Relaxed);
+                    while !stopping() {
+                        live.step(Duration::from_millis(20));
+                        while let Ok(text) = rx.try_recv() {
+                            if let Err(e) = live.by_hand(&text) {
+                                lock(&live.snapshot).last_command = Some(format!("`{text}`: {e}"));
+                            }
+                        }
+                    }
+                    live.finish();
+                })
+                .ok()
+        };
+        Running {
+            snapshot,
+            commands,
+            stop,
+            thread,
+        }
+    }
+
+    /// A command by hand (see [`Live::by_hand`]); false when the queue is full.
+    pub fn command(&self, text: &str) -> bool {
+        self.commands.try_send(text.to_string()).is_ok()
+    }
+
+    /// Ask the engine to stop, without waiting: it deals with the messages already
+    /// received, completes the recording, and its status turns to stopped.
+    pub fn stop(&self) {
+        self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// Whether the engine's thread has ended (stopped, or failed to start).
+    pub fn ended(&self) -> bool {
+        self.thread.as_ref().is_none_or(|t| t.is_finished())
+    }
+
+    /// Stop and wait until the recording is complete.
+    pub fn join(mut self) {
+        self.stop();
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+impl Drop for Running {
+    /// The engine ends on its own (a window closing the stream does not wait for it).
+    fn drop(&mut self) {
+        self.stop();
+    }
 }

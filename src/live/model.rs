@@ -4,18 +4,35 @@
 //! to calibrate on, and with `none` every grasp is read on the model's own scale, so the
 //! verdicts equal `evaluate --calibration none` on the recorded session bit for bit.
 //!
+//! While a grasp is still open, [`Early`] gives DS/GS's class distribution one step at a
+//! time from its first frame (the paper's early classification): each new frame's feature
+//! row through a copy of the saved experts' `predict_step`.
+//!
 //! Teaching: a labelled grasp teaches DS/GS (or DU/GU learn it) exactly as
 //! `fit --from MODEL` on that one grasp's session would, and the model file is then saved
-//! atomically, so a stream teaches as a chain of `fit --from` runs does.
+//! atomically, so a stream teaches as a chain of `fit --from` runs does
+//! ([`teach_in_order`], what `fit --from --in-order` runs).
 
 use std::path::{Path, PathBuf};
 
+use ndarray::ArrayView2;
+
 use crate::catalogue::MethodId;
+use crate::features::feature_sequences_in;
+use crate::features::sequence::{FeatureSequences, SequenceParams, SequenceRange};
+use crate::learners::{NoveltyLearner, SequenceClassifier};
+use crate::models::clustering::Clusterer;
+use crate::models::inputs::SequenceInputs;
+use crate::models::recognition::Experts;
 use crate::models::{
     self, Calibration, Model, ModelError, ModelFile, cluster_file, continue_clusters,
     continue_sequences, sequence_file,
 };
-use crate::session::Session;
+use crate::session::spec::{ImportSpec, RawGrasp};
+use crate::session::{Frame, Session};
+
+/// Steps of an open grasp the early view keeps (its decision reads them all).
+pub const EARLY_CAP: usize = 20_000;
 
 /// What the model says about one grasp.
 #[derive(Clone, Debug, PartialEq)]
@@ -31,6 +48,9 @@ pub struct Verdict {
     pub steps: Vec<Vec<f64>>,
     /// DS/GS: the step from which the running decision stays the final one.
     pub settled: Option<usize>,
+    /// DU/GU: the grasp's novelty against the clusters learned so far, and the threshold
+    /// above which learning it would open a new cluster.
+    pub novelty: Option<(f64, f64)>,
 }
 
 impl Verdict {
@@ -43,7 +63,31 @@ impl Verdict {
         if let Some(s) = self.settled {
             out += &format!(", settled at step {} of {}", s + 1, self.steps.len());
         }
+        if let Some((n, threshold)) = self.novelty {
+            out += &format!(", novelty {n:.3} (threshold {threshold:.3})");
+        }
         out
+    }
+
+    /// The early decisions: the running decision after 10 %, 20 %, … 100 % of the steps.
+    pub fn early_line(&self) -> Option<String> {
+        let n = self.steps.len();
+        if n == 0 {
+            return None;
+        }
+        let mean = self.method == MethodId::Ds;
+        let words: Vec<String> = (1..=10)
+            .map(|k| {
+                let upto = (n * k).div_ceil(10).max(1);
+                let best = running_best(&self.steps[..upto], mean);
+                format!(
+                    "{}%:{}",
+                    k * 10,
+                    self.classes.get(best).map_or("?", String::as_str)
+                )
+            })
+            .collect();
+        Some(format!("early {}", words.join(" ")))
     }
 }
 
@@ -79,7 +123,18 @@ impl LiveModel {
             classes: Vec::new(),
             steps: Vec::new(),
             settled: None,
+            novelty: None,
         };
+        if let Model::Clusters(m) = &self.file.model
+            && let Some(seq) = features(&m.inputs, one)?.sequences.first()
+        {
+            let mut c = m.clusterer.clone();
+            let novelty = match &mut c {
+                Clusterer::Du(l) => assess(l, seq.view()),
+                Clusterer::Gu(l) => assess(l, seq.view()),
+            };
+            verdict.novelty = novelty.map(|n| (n, m.threshold));
+        }
         if let Model::Sequences(m) = &self.file.model
             && let Some(p) = m.predict(one, Calibration::None)?.into_iter().next()
         {
@@ -101,23 +156,230 @@ impl LiveModel {
         if !self.teach {
             return Ok(false);
         }
-        let previous = &self.file.provenance;
-        let next = match &self.file.model {
-            Model::Sequences(m) => {
-                let (next, secs) = continue_sequences(m, one)?;
-                sequence_file(next, one, secs, previous.size_reason, Some(previous))
-            }
-            Model::Clusters(m) => {
-                let (next, secs) = continue_clusters(m, one)?;
-                cluster_file(next, one, secs, Some(previous))
-            }
-            _ => return Ok(false),
+        let Some(next) = taught(&self.file, one)? else {
+            return Ok(false);
         };
         models::save(&next, &self.path)?;
         self.file = next;
         self.taught += 1;
         Ok(true)
     }
+
+    /// The early classification of a grasp that starts now; None for a model that has
+    /// none (stability, clustering, baselines).
+    pub fn early(&self) -> Option<Early> {
+        let Model::Sequences(m) = &self.file.model else {
+            return None;
+        };
+        let mut experts = m.experts.clone();
+        learner(&mut experts).start_sequence();
+        Some(Early {
+            experts,
+            inputs: m.inputs.clone(),
+            verdict: Verdict {
+                method: self.file.provenance.method,
+                predicted: String::new(),
+                decision: f64::NAN,
+                classes: m.classes.clone(),
+                steps: Vec::new(),
+                settled: None,
+                novelty: None,
+            },
+            template: None,
+            sums: vec![0.0; m.classes.len()],
+            best: None,
+            seen: 0,
+        })
+    }
+}
+
+/// `file` taught one more session as `fit --from` teaches it; None for a model that is
+/// not taught (stability, baselines).
+fn taught(file: &ModelFile, session: &Session) -> Result<Option<ModelFile>, ModelError> {
+    let previous = &file.provenance;
+    Ok(Some(match &file.model {
+        Model::Sequences(m) => {
+            let (next, secs) = continue_sequences(m, session)?;
+            sequence_file(next, session, secs, previous.size_reason, Some(previous))
+        }
+        Model::Clusters(m) => {
+            let (next, secs) = continue_clusters(m, session)?;
+            cluster_file(next, session, secs, Some(previous))
+        }
+        _ => return Ok(None),
+    }))
+}
+
+/// Teach `file` the grasps of `session` one at a time in the session's order, each as a
+/// session of its own: what a stream that met them in that order taught (`live --teach`).
+/// A single `fit --from` on the whole session instead teaches in the protocol's seeded
+/// shuffle, as the paper's online protocol does.
+pub fn teach_in_order(file: &ModelFile, session: &Session) -> Result<ModelFile, ModelError> {
+    let mut current = file.clone();
+    let header = Session {
+        grasps: Vec::new(),
+        ..session.clone()
+    };
+    for g in &session.grasps {
+        let one = Session {
+            grasps: vec![g.clone()],
+            ..header.clone()
+        };
+        match taught(&current, &one)? {
+            Some(next) => current = next,
+            None => {
+                return Err(ModelError::Param(format!(
+                    "a {} model is not taught further",
+                    current.provenance.method.key()
+                )));
+            }
+        }
+    }
+    Ok(current)
+}
+
+/// The experts as the sequence methods' common trait.
+fn learner(experts: &mut Experts) -> &mut dyn SequenceClassifier {
+    match experts {
+        Experts::Ds(l) => l,
+        Experts::Gs(l) => l,
+    }
+}
+
+/// A one-grasp session's feature sequences on the model's own range: what
+/// `models::inputs` reads under calibration `none` (no noise), which the tests hold equal
+/// bit for bit to the models' own prediction.
+fn features(inputs: &SequenceInputs, one: &Session) -> Result<FeatureSequences, ModelError> {
+    let params = SequenceParams {
+        features: inputs.features,
+        taxel_noise_variance: 0.0,
+        seed: 0,
+    };
+    let range = SequenceRange::Given {
+        min: &inputs.min,
+        max: &inputs.max,
+    };
+    feature_sequences_in(one, &params, range, inputs.codes.as_ref())
+        .map_err(|e| ModelError::Mismatch(e.to_string()))
+}
+
+/// The novelty of `seq` against the clusters learned (None before the first).
+fn assess<L: NoveltyLearner>(l: &mut L, seq: ArrayView2<f64>) -> Option<f64> {
+    l.assess(seq).map(|a| L::novelty(&a))
+}
+
+/// DS/GS at work on a grasp still open: one step per frame.
+pub struct Early {
+    experts: Experts,
+    inputs: SequenceInputs,
+    /// The distribution so far, the running decision and when it settled.
+    pub verdict: Verdict,
+    /// A session of one two-frame grasp, [first, latest]: a step's features depend on its
+    /// frame and the grasp's first (`change`), so its second row is the latest step's.
+    template: Option<Session>,
+    sums: Vec<f64>,
+    /// The running decision and the step it has held since.
+    best: Option<(usize, usize)>,
+    /// Frames stepped.
+    seen: usize,
+}
+
+impl Early {
+    /// Step through the frames of the open grasp not seen yet (`frames` is the grasp so
+    /// far); `spec` builds the template session as a grasp of the stream is built.
+    pub fn update(&mut self, spec: &ImportSpec, frames: &[Frame]) -> Result<(), ModelError> {
+        let Some(first) = frames.first() else {
+            return Ok(());
+        };
+        while self.seen < frames.len() {
+            let row = self.row(spec, first, &frames[self.seen])?;
+            let mut dist = vec![0.0; self.verdict.classes.len()];
+            learner(&mut self.experts).predict_step(&row, &mut dist);
+            self.push(self.seen, dist);
+            self.seen += 1;
+        }
+        Ok(())
+    }
+
+    fn row(
+        &mut self,
+        spec: &ImportSpec,
+        first: &Frame,
+        latest: &Frame,
+    ) -> Result<Vec<f64>, ModelError> {
+        let mut second = latest.clone();
+        // The template's frames must be in time order even for the first step.
+        second.t = second.t.max(first.t + 1e-6);
+        let template = match &mut self.template {
+            Some(t) => t,
+            None => {
+                let raw = RawGrasp {
+                    object: super::cut::UNLABELLED.into(),
+                    classes: vec![0; spec.recorded_label_sets().len()],
+                    frames: vec![first.clone(), second.clone()],
+                    key_frame: Some(1),
+                    trial: None,
+                };
+                let s = super::record::grasp_session(spec, Path::new("live"), raw)
+                    .map_err(|e| ModelError::Mismatch(e.to_string()))?;
+                self.template.insert(s)
+            }
+        };
+        if let Some(g) = template.grasps.first_mut() {
+            g.frames = vec![first.clone(), second];
+        }
+        let feats = features(&self.inputs, template)?;
+        feats
+            .sequences
+            .first()
+            .filter(|s| s.nrows() == 2)
+            .map(|s| s.row(1).to_vec())
+            .ok_or_else(|| ModelError::Mismatch("a frame gave no feature row".into()))
+    }
+
+    fn push(&mut self, k: usize, dist: Vec<f64>) {
+        let mean = self.verdict.method == MethodId::Ds;
+        for (s, v) in self.sums.iter_mut().zip(&dist) {
+            *s += v;
+        }
+        let basis = if mean { &self.sums } else { &dist };
+        let best = argmax(basis);
+        match self.best {
+            Some((b, _)) if b == best => {}
+            _ => self.best = Some((best, k)),
+        }
+        let v = &mut self.verdict;
+        v.predicted = v.classes.get(best).cloned().unwrap_or_default();
+        v.decision = dist.get(best).copied().unwrap_or(f64::NAN);
+        v.settled = self.best.map(|(_, since)| since);
+        if v.steps.len() < EARLY_CAP {
+            v.steps.push(dist);
+        }
+    }
+}
+
+fn argmax(v: &[f64]) -> usize {
+    v.iter()
+        .enumerate()
+        .fold(
+            (0, f64::NEG_INFINITY),
+            |b, (i, &x)| if x > b.1 { (i, x) } else { b },
+        )
+        .0
+}
+
+/// The running decision after `steps` (DS: argmax of the mean; GS: of the last step).
+fn running_best(steps: &[Vec<f64>], mean: bool) -> usize {
+    if !mean {
+        return steps.last().map_or(0, |r| argmax(r));
+    }
+    let mut sums = vec![0.0; steps.first().map_or(0, Vec::len)];
+    for row in steps {
+        for (s, v) in sums.iter_mut().zip(row) {
+            *s += v;
+        }
+    }
+    argmax(&sums)
 }
 
 /// The first step from which the running decision (DS: the argmax of the mean so far; GS:
@@ -129,15 +391,7 @@ fn settled(steps: &[Vec<f64>], class: usize, mean: bool) -> Option<usize> {
         for (s, v) in sums.iter_mut().zip(row) {
             *s += v;
         }
-        let basis = if mean { &sums } else { row };
-        let best = basis
-            .iter()
-            .enumerate()
-            .fold(
-                (0, f64::NEG_INFINITY),
-                |b, (i, &v)| if v > b.1 { (i, v) } else { b },
-            )
-            .0;
+        let best = argmax(if mean { &sums } else { row });
         match (best == class, from) {
             (true, None) => from = Some(k),
             (false, _) => from = None,

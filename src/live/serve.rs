@@ -114,22 +114,46 @@ impl Server {
         stop: &AtomicBool,
         mut each: impl FnMut(usize),
     ) {
+        let mut at = 0;
+        // A grasp's messages are made when the previous grasp's are all published: that
+        // grasp is then done.
+        let mut done = None;
+        let messages = grasps.flat_map(|g| {
+            if let Some(d) = done.replace(g) {
+                each(d);
+            }
+            let (messages, next) = stream.grasp(g, at);
+            at = next;
+            messages
+        });
+        self.play_messages(messages, stop);
+        if let Some(d) = done
+            && !stop.load(Ordering::Relaxed)
+        {
+            each(d);
+        }
+    }
+
+    /// Publish `messages` (in time order, made as they are due) in real time from now, as
+    /// [`Server::play`] does; returns how many were published before `stop` was set.
+    pub fn play_messages(
+        &mut self,
+        messages: impl IntoIterator<Item = Message>,
+        stop: &AtomicBool,
+    ) -> usize {
         let started = Instant::now();
         self.origin = SystemTime::now()
             .duration_since(UNIX_EPOCH)
             .map_or(0, |d| d.as_nanos() as u64);
-        let mut at = 0;
-        for g in grasps {
+        let mut published = 0;
+        for m in messages {
             if stop.load(Ordering::Relaxed) {
-                return;
+                break;
             }
-            let (messages, next) = stream.grasp(g, at);
-            for m in &messages {
-                self.publish(m, started);
-            }
-            at = next;
-            each(g);
+            self.publish(&m, started);
+            published += 1;
         }
+        published
     }
 
     /// Stop the server and wait for it to close its connections.

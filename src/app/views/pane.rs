@@ -37,6 +37,28 @@ pub enum Pane {
     Models,
     /// The active session's speed–accuracy frontiers by model size.
     Frontier,
+    /// A tile of the live view.
+    Live(LivePane),
+}
+
+/// The live view's tiles.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum LivePane {
+    Touch,
+    Traces,
+    Model,
+    Status,
+}
+
+impl LivePane {
+    pub fn title(self) -> &'static str {
+        match self {
+            LivePane::Touch => "Latest frame",
+            LivePane::Traces => "Traces",
+            LivePane::Model => "Model at work",
+            LivePane::Status => "Connection",
+        }
+    }
 }
 
 impl Pane {
@@ -57,6 +79,7 @@ impl Pane {
             Pane::SpeedChart => "All trained models".into(),
             Pane::Models => "Models".into(),
             Pane::Frontier => "Frontier by model size".into(),
+            Pane::Live(p) => p.title().into(),
         }
     }
 }
