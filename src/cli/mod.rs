@@ -67,6 +67,7 @@ pub enum View {
     Baselines,
     SpeedAccuracy,
     Robustness,
+    Compare,
 }
 
 #[derive(Subcommand, Debug)]

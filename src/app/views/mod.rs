@@ -4,6 +4,7 @@
 
 pub mod baselines;
 pub mod clustering;
+pub mod compare;
 pub mod models;
 pub mod pane;
 pub mod panes;
@@ -190,6 +191,7 @@ views! {
     baselines: baselines::BaselinesRoom => Baselines, "Baselines", Some(AnalysisKind::Baselines), form;
     speed: speed::SpeedRoom => SpeedAccuracy, "Speed vs accuracy", None;
     robustness: robustness::RobustnessRoom => Robustness, "Where methods fail", Some(AnalysisKind::Robustness), form;
+    compare: compare::CompareRoom => Compare, "Compare", None, form;
 }
 
 /// Each room's form settings as they persist between runs, by the room's field name.

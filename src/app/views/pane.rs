@@ -37,6 +37,8 @@ pub enum Pane {
     Models,
     /// The active session's speed–accuracy frontiers by model size.
     Frontier,
+    /// A plot of the Compare view.
+    Compare(crate::compare::ComparePlot),
 }
 
 impl Pane {
@@ -57,6 +59,7 @@ impl Pane {
             Pane::SpeedChart => "All trained models".into(),
             Pane::Models => "Models".into(),
             Pane::Frontier => "Frontier by model size".into(),
+            Pane::Compare(plot) => plot.title().into(),
         }
     }
 }

@@ -76,7 +76,7 @@ pub fn pane_ui(
                 ui.label("No result yet.");
             }
         },
-        Pane::Comparison | Pane::SpeedChart | Pane::Models | Pane::Frontier => {
+        Pane::Comparison | Pane::SpeedChart | Pane::Models | Pane::Frontier | Pane::Compare(_) => {
             ui.label("This pane belongs to another view.");
         }
     }
