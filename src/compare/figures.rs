@@ -114,6 +114,11 @@ const JITTER: f64 = 0.25;
 /// Where each point of a strip chart stands for a grasp: `[series][point]`.
 pub type PointGrasps = Vec<Vec<usize>>;
 
+/// The most points a group's strip draws: past it, a seeded sample of its grasps stands for
+/// the rest (the median and quartiles are still of them all), so that a session of a
+/// hundred thousand grasps draws as fast as one of a thousand.
+pub const STRIP_POINTS: usize = 2000;
+
 /// One strip of points per group at positions 1, 2, … (seeded sideways jitter so that
 /// equal values stay apart), and each group's median with its quartiles as error bars.
 pub fn distributions(
@@ -125,12 +130,24 @@ pub fn distributions(
     let mut rng = Rng::new(seed);
     let mut series = Vec::new();
     let mut grasps = Vec::new();
+    let mut sampled = false;
     for (i, d) in dists.iter().enumerate() {
         let at = (i + 1) as f64;
-        let x = (d.values.iter())
+        let mut shown: Vec<usize> = (0..d.values.len()).collect();
+        if shown.len() > STRIP_POINTS {
+            // A partial Fisher–Yates shuffle: the first STRIP_POINTS are a uniform sample.
+            for k in 0..STRIP_POINTS {
+                let j = k + rng.below(shown.len() - k);
+                shown.swap(k, j);
+            }
+            shown.truncate(STRIP_POINTS);
+            shown.sort_unstable();
+            sampled = true;
+        }
+        let x = (shown.iter())
             .map(|_| at + rng.range(-JITTER, JITTER))
             .collect();
-        let y = d.values.iter().map(|p| p.1).collect();
+        let y = shown.iter().map(|&k| d.values[k].1).collect();
         series.push(
             Series::new(
                 format!("{} (n={})", groups.names[d.group], d.values.len()),
@@ -140,7 +157,7 @@ pub fn distributions(
             .style(SeriesStyle::Markers)
             .color(series_color(d.group)),
         );
-        grasps.push(d.values.iter().map(|p| p.0).collect());
+        grasps.push(shown.iter().map(|&k| d.values[k].0).collect());
     }
     if !dists.is_empty() {
         let at: Vec<f64> = (1..=dists.len()).map(|i| i as f64).collect();
@@ -170,7 +187,11 @@ pub fn distributions(
         Axis::new(&l.signal, &l.unit),
         series,
     )
-    .subtitle("one point per grasp; median and quartiles");
+    .subtitle(if sampled {
+        format!("at most {STRIP_POINTS} grasps per group drawn, a seeded sample; median and quartiles of all")
+    } else {
+        "one point per grasp; median and quartiles".to_string()
+    });
     (figure, grasps)
 }
 
@@ -236,4 +257,52 @@ pub fn heatmap(
         ColorScale::viridis(&l.signal, &l.unit),
     );
     (figure, order.iter().map(|tr| tr.grasp).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::compare::stats::Distribution;
+    use crate::figures::FigureKind;
+
+    #[test]
+    fn a_large_group_draws_a_sample_of_its_grasps_and_the_quartiles_of_all() {
+        // 5000 grasps of values 0..5000 in one group, 10 in another.
+        let big = Distribution {
+            group: 0,
+            values: (0..5000).map(|g| (g, g as f64)).collect(),
+            median: 2499.5,
+            q1: 1249.75,
+            q3: 3749.25,
+        };
+        let small = Distribution {
+            group: 1,
+            values: (0..10).map(|g| (5000 + g, 1.0)).collect(),
+            median: 1.0,
+            q1: 1.0,
+            q3: 1.0,
+        };
+        let groups = Groups::assigned("g", vec!["big".into(), "small".into()], &[]);
+        let labels = Labels {
+            signal: "s".into(),
+            unit: String::new(),
+            time: "t".into(),
+        };
+        let (f, grasps) = distributions(&groups, &[big, small], &labels, 3);
+        let FigureKind::Chart(c) = &f.kind else {
+            panic!("a chart")
+        };
+        assert_eq!(grasps[0].len(), STRIP_POINTS);
+        assert_eq!(c.series[0].y.len(), STRIP_POINTS);
+        // Distinct grasps, each drawn at its own value; the small group whole.
+        let mut seen = grasps[0].clone();
+        seen.dedup();
+        assert_eq!(seen.len(), STRIP_POINTS);
+        assert!((grasps[0].iter().zip(&c.series[0].y)).all(|(&g, &y)| g as f64 == y));
+        assert_eq!(grasps[1], (5000..5010).collect::<Vec<_>>());
+        // The name counts every grasp; the medians are those given, of all of them.
+        assert_eq!(c.series[0].name, "big (n=5000)");
+        assert_eq!(c.series[2].y, [2499.5, 1.0]);
+        assert!(f.subtitle.unwrap().contains("sample"));
+    }
 }
