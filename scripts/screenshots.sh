@@ -76,4 +76,6 @@ projects=("$work"/stability.json "$work"/recognition.json "$work"/clustering.jso
 shot robustness robustness
 # Replay: select the first grasp in the browser.
 shot replay replay mousemove 120 190 click 1
+# The Compare view on the real datasets (when they are beside the checkout).
+[ -d ../shared/datasets ] && scripts/screenshots-compare.sh "$out" "$size"
 echo "screenshots in $out"

@@ -40,9 +40,12 @@ pub enum Grouping {
 }
 
 impl Grouping {
-    fn text(&self) -> String {
+    fn text(&self, session: &Session) -> String {
         match self {
-            Grouping::FirstLabelSet => "first label set".into(),
+            Grouping::FirstLabelSet => match session.label_sets.first() {
+                Some(l) => format!("label: {} (the first)", l.name),
+                None => "all grasps (no labels)".into(),
+            },
             Grouping::LabelSet(name) => format!("label: {name}"),
             Grouping::Object => "object".into(),
             Grouping::CorrectWrong => "correct vs wrong (model)".into(),
@@ -61,7 +64,7 @@ impl Grouping {
             (Grouping::Object, _) => Groups::by_object(session),
             (Grouping::CorrectWrong, Some(r)) => {
                 let mut g = Groups::correct_vs_wrong(&r.truth, &r.predicted);
-                g.title = format!("{}, correct vs wrong", r.model);
+                g.title = format!("correct vs wrong ({})", r.model);
                 g
             }
             (Grouping::ConfusionCells, Some(r)) => {
@@ -138,11 +141,9 @@ impl Room for CompareRoom {
 
     fn default_groups(&self) -> Vec<Vec<Pane>> {
         vec![
-            vec![
-                Pane::Compare(ComparePlot::Groups),
-                Pane::Compare(ComparePlot::Heatmap),
-            ],
+            vec![Pane::Compare(ComparePlot::Groups)],
             vec![Pane::Compare(ComparePlot::Overlay)],
+            vec![Pane::Compare(ComparePlot::Heatmap)],
             vec![Pane::Replay],
         ]
     }
@@ -308,17 +309,17 @@ impl CompareRoom {
             .response
             .labelled_by(caption.id);
         let caption = ui.label("Groups");
-        let mut choices = vec![Grouping::FirstLabelSet];
+        let mut choices: Vec<Grouping> = Vec::new();
         choices.extend((session.label_sets.iter()).map(|l| Grouping::LabelSet(l.name.clone())));
         choices.push(Grouping::Object);
         if reading.is_some() {
             choices.extend([Grouping::CorrectWrong, Grouping::ConfusionCells]);
         }
         egui::ComboBox::from_id_salt("compare-groups")
-            .selected_text(self.form.grouping.text())
+            .selected_text(self.form.grouping.text(session))
             .show_ui(ui, |ui| {
                 for g in choices {
-                    let text = g.text();
+                    let text = g.text(session);
                     ui.selectable_value(&mut self.form.grouping, g, text);
                 }
             })
@@ -392,14 +393,21 @@ impl CompareRoom {
             return;
         };
         ui.label("Pick a taxel (the replay's frame):");
-        let range = cx.session().map_or((0.0, 1.0), |s| s.pressure_range);
+        let pressures: Vec<Vec<f64>> = (0..session.sensors.len())
+            .map(|k| session.frame_pressures(frame, k))
+            .collect();
+        // Coloured over the frame's own range, so that its contact shows.
+        let (lo, hi) = (pressures.iter().flatten().filter(|v| v.is_finite()))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+                (lo.min(v), hi.max(v))
+            });
+        let range = if hi > lo { (lo, hi) } else { (0.0, 1.0) };
         ui.horizontal_wrapped(|ui| {
-            for (k, sensor) in session.sensors.iter().enumerate() {
-                let p = session.frame_pressures(frame, k);
+            for (k, (sensor, p)) in session.sensors.iter().zip(&pressures).enumerate() {
                 let picked = crate::app::heatmap::taxel_picker(
                     ui,
                     sensor,
-                    &p,
+                    p,
                     range,
                     ColorMap::Viridis,
                     egui::Vec2::new(56.0, 56.0),
