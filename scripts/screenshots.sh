@@ -127,4 +127,6 @@ sleep 3
 import -window root "$out/live-settled.png"
 kill $pid $serve_pid
 wait $pid $serve_pid 2>/dev/null || true
+# The Compare view on the real datasets (when they are beside the checkout).
+[ -d ../shared/datasets ] && scripts/screenshots-compare.sh "$out" "$size"
 echo "screenshots in $out"

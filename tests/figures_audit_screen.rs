@@ -671,10 +671,43 @@ fn every_figure() -> Computed {
         "replay · one frame's values".into(),
         finger_values_figure(&stab, &stab.grasps[0], 0),
     ));
+    out.extend(compare_figures(&objects, &stab));
     Computed {
         results,
         figures: out,
     }
+}
+
+/// The Compare view's plots: the samples' total pressure, 40 grasps overlaid, bands by
+/// object and the grasps × time heatmap; for single frames, strips by outcome.
+fn compare_figures(objects: &Session, stab: &Session) -> Vec<(String, Figure)> {
+    use tactile_workbench::compare::{self, Event, Groups, Request, Signal, Spread};
+    let request = |s: &Session, groups: Groups| Request {
+        signal: Signal::HandTotal,
+        event: Event::ContactOnset,
+        spread: Spread::MeanSd,
+        overlaid: (0..s.grasps.len().min(40)).collect(),
+        groups,
+        seed: 1,
+    };
+    let c = compare::compare(objects, &[], &request(objects, Groups::by_object(objects)));
+    let mut single = stab.clone();
+    for g in &mut single.grasps {
+        g.frames.truncate(1);
+        g.key_frame = 0;
+    }
+    let d = compare::compare(
+        &single,
+        &[],
+        &request(&single, Groups::by_label_set(&single, 0)),
+    );
+    vec![
+        ("compare · overlay".into(), c.overlay),
+        ("compare · bands".into(), c.groups),
+        ("compare · heatmap".into(), c.heatmap),
+        ("compare · single-frame overlay".into(), d.overlay),
+        ("compare · distributions".into(), d.groups),
+    ]
 }
 
 #[test]

@@ -21,7 +21,34 @@ pub fn sensor_heatmap(
     map: ColorMap,
     size: Vec2,
 ) -> egui::Response {
-    let (rect, response) = ui.allocate_exact_size(size, Sense::hover());
+    draw_sensor(ui, sensor, pressures, range, map, size, Sense::hover()).0
+}
+
+/// A sensor's heatmap as [`sensor_heatmap`] draws it, that takes clicks: the taxel
+/// clicked this frame, if any.
+pub fn taxel_picker(
+    ui: &mut egui::Ui,
+    sensor: &Sensor,
+    pressures: &[f64],
+    range: (f64, f64),
+    map: ColorMap,
+    size: Vec2,
+) -> Option<usize> {
+    let (response, hovered) = draw_sensor(ui, sensor, pressures, range, map, size, Sense::click());
+    hovered.filter(|_| response.clicked())
+}
+
+/// The heatmap, sensing `sense`, and the taxel under the pointer.
+fn draw_sensor(
+    ui: &mut egui::Ui,
+    sensor: &Sensor,
+    pressures: &[f64],
+    range: (f64, f64),
+    map: ColorMap,
+    size: Vec2,
+    sense: Sense,
+) -> (egui::Response, Option<usize>) {
+    let (rect, response) = ui.allocate_exact_size(size, sense);
     let painter = ui.painter_at(rect);
     let colour = |v: f64| rgb(map.color(v, range));
     // Taxel index under the pointer, with the shape drawn for it.
@@ -100,14 +127,15 @@ pub fn sensor_heatmap(
             }
         }
     }
-    match hovered {
+    let response = match hovered {
         Some(i) => response.on_hover_text_at_pointer(format!(
             "{} taxel {i}: {:.1}",
             sensor.name,
             pressures.get(i).copied().unwrap_or(f64::NAN)
         )),
         None => response,
-    }
+    };
+    (response, hovered)
 }
 
 /// A vertical colour bar of `map` with its range, and its title and unit on two lines

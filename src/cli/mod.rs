@@ -68,6 +68,7 @@ pub enum View {
     SpeedAccuracy,
     Robustness,
     Live,
+    Compare,
 }
 
 #[derive(Subcommand, Debug)]

@@ -4,6 +4,7 @@
 
 pub mod baselines;
 pub mod clustering;
+pub mod compare;
 pub mod live;
 pub mod models;
 pub mod pane;
@@ -192,6 +193,7 @@ views! {
     speed: speed::SpeedRoom => SpeedAccuracy, "Speed vs accuracy", None;
     robustness: robustness::RobustnessRoom => Robustness, "Where methods fail", Some(AnalysisKind::Robustness), form;
     live: live::LiveRoom => Live, "Live", None, form;
+    compare: compare::CompareRoom => Compare, "Compare", None, form;
 }
 
 /// Each room's form settings as they persist between runs, by the room's field name.

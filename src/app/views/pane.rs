@@ -39,6 +39,8 @@ pub enum Pane {
     Frontier,
     /// A tile of the live view.
     Live(LivePane),
+    /// A plot of the Compare view.
+    Compare(crate::compare::ComparePlot),
 }
 
 /// The live view's tiles.
@@ -80,6 +82,7 @@ impl Pane {
             Pane::Models => "Models".into(),
             Pane::Frontier => "Frontier by model size".into(),
             Pane::Live(p) => p.title().into(),
+            Pane::Compare(plot) => plot.title().into(),
         }
     }
 }

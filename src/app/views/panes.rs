@@ -76,7 +76,12 @@ pub fn pane_ui(
                 ui.label("No result yet.");
             }
         },
-        Pane::Comparison | Pane::SpeedChart | Pane::Models | Pane::Frontier | Pane::Live(_) => {
+        Pane::Comparison
+        | Pane::SpeedChart
+        | Pane::Models
+        | Pane::Frontier
+        | Pane::Live(_)
+        | Pane::Compare(_) => {
             ui.label("This pane belongs to another view.");
         }
     }

@@ -1,0 +1,282 @@
+//! The Compare view driven as a user would, by accessible labels: a signal picked from the
+//! searched tree, grasps overlaid as the selection changes, a click that seeks the replay;
+//! on the real datasets (skipped when absent) one band per iCub object, BTS3 electrodes as
+//! distributions of successes and failures, and a DS model's true class probability for
+//! correct and wrong recognitions against time from contact.
+#![cfg(feature = "gui")]
+
+mod common;
+
+use std::time::{Duration, Instant};
+
+use egui::accesskit::Role;
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+use tactile_workbench::app::WorkbenchApp;
+use tactile_workbench::app::selection::Command;
+use tactile_workbench::catalogue::MethodId;
+use tactile_workbench::compare::{Event, Signal};
+use tactile_workbench::experiments::recognition::RecognitionParams;
+use tactile_workbench::features::FeatureSet;
+use tactile_workbench::figures::{Chart, Figure, FigureKind};
+use tactile_workbench::models::{self, SequenceFitOptions};
+use tactile_workbench::session::{SubsetSpec, import_icub, subset};
+
+/// Step until the Compare view has computed what it shows (bounded).
+fn settle(h: &mut Harness<'static, WorkbenchApp>) {
+    let t = Instant::now();
+    h.run_ok();
+    while (h.state().rooms.compare.computing() || h.state().rooms.compare.shown.is_none())
+        && t.elapsed() < Duration::from_secs(120)
+    {
+        h.step();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    h.run_ok();
+}
+
+fn chart(f: &Figure) -> &Chart {
+    match &f.kind {
+        FigureKind::Chart(c) => c,
+        other => panic!("a chart, not {other:?}"),
+    }
+}
+
+fn names(c: &Chart) -> Vec<String> {
+    c.series.iter().map(|s| s.name.clone()).collect()
+}
+
+fn open_compare(h: &mut Harness<'static, WorkbenchApp>) {
+    h.get_by_label("Compare").click();
+    settle(h);
+}
+
+fn choose(h: &mut Harness<'static, WorkbenchApp>, combo: &str, item: &str) {
+    h.get_by_role_and_label(Role::ComboBox, combo).click();
+    h.run_ok();
+    h.get_by_label(item).click();
+    settle(h);
+}
+
+#[test]
+fn a_searched_signal_is_plotted_and_overlays_follow_the_selection() {
+    let mut h = common::gui::workbench(1400.0, 900.0);
+    h.get_by_label("Simulated object recognition").click();
+    h.run_ok();
+    open_compare(&mut h);
+    let active = h.state().browser.active;
+    let n = h.state().sessions[active].session.grasps.len();
+    let c = h.state().rooms.compare.shown.clone().unwrap();
+    // Nothing selected: every grasp of the session overlaid, one line each.
+    assert_eq!(chart(&c.overlay).series.len(), n);
+
+    // The tree searched for one taxel: the only leaf left is clicked and plotted.
+    h.get_by_role_and_label(Role::TextInput, "Signals").click();
+    h.run_ok();
+    h.get_by_role_and_label(Role::TextInput, "Signals")
+        .type_text("thumb taxel 3");
+    h.run_ok();
+    h.get_by_label("taxel 3").click();
+    settle(&mut h);
+    assert_eq!(
+        h.state().rooms.compare.form.signal,
+        Signal::Taxel {
+            sensor: 0,
+            taxel: 2
+        }
+    );
+    let c = h.state().rooms.compare.shown.clone().unwrap();
+    assert!(chart(&c.overlay).y.title.contains("taxel 3"));
+
+    // A selection of three grasps: their three traces, named after them.
+    let grasps = vec![4, 1, 7];
+    h.state_mut().commands.push(Command::SelectGrasps {
+        session: active,
+        grasps: grasps.clone(),
+        origin: "test".into(),
+        result: None,
+    });
+    settle(&mut h);
+    let c = h.state().rooms.compare.shown.clone().unwrap();
+    assert_eq!(c.overlay_grasps, [vec![4], vec![1], vec![7]]);
+    let s = &h.state().sessions[active].session;
+    let expected: Vec<String> = grasps
+        .iter()
+        .map(|&g| tactile_workbench::compare::grasp_name(s, g))
+        .collect();
+    assert_eq!(names(chart(&c.overlay)), expected);
+    // The bands still sum up every grasp of the session by its class.
+    let groups = chart(&c.groups);
+    let total: usize = (groups.series.iter())
+        .map(|s| {
+            let n = s.name.rsplit("n=").next().unwrap().trim_end_matches(')');
+            n.parse::<usize>().unwrap()
+        })
+        .sum();
+    assert_eq!(total, n);
+}
+
+#[test]
+fn a_click_on_a_time_plot_seeks_the_replay() {
+    let mut h = common::gui::workbench(1400.0, 900.0);
+    h.get_by_label("Simulated object recognition").click();
+    h.run_ok();
+    open_compare(&mut h);
+    choose(&mut h, "Align at", "first frame");
+    let active = h.state().browser.active;
+    h.state_mut().commands.push(Command::Focus {
+        session: active,
+        grasp: 0,
+    });
+    settle(&mut h);
+    let start = h.state().replay.frame;
+    let (_, g) = h.state().selection.focus.unwrap();
+    let times = Event::FirstFrame.times(&h.state().sessions[active].session, g);
+    // Click the groups plot at the grasp's last frame's time, well away from the key frame.
+    let last = times.len() - 1;
+    assert_ne!(start, last);
+    let c = h.state().rooms.compare.shown.clone().unwrap();
+    let at = tactile_workbench::app::figure_view::marker_position(
+        &h.ctx,
+        "compare-compare-groups",
+        chart(&c.groups),
+        0,
+        chart(&c.groups).series[0]
+            .x
+            .iter()
+            .position(|&x| (x - times[last]).abs() < 1e-9)
+            .expect("the band reaches the last frame"),
+    )
+    .expect("the groups plot was drawn");
+    h.hover_at(at);
+    h.run_ok();
+    h.event(egui::Event::PointerButton {
+        pos: at,
+        button: egui::PointerButton::Primary,
+        pressed: true,
+        modifiers: Default::default(),
+    });
+    h.event(egui::Event::PointerButton {
+        pos: at,
+        button: egui::PointerButton::Primary,
+        pressed: false,
+        modifiers: Default::default(),
+    });
+    h.run_ok();
+    assert_eq!(h.state().replay.frame, last);
+}
+
+#[test]
+fn on_icub_mean_total_pressure_by_object_gives_one_band_per_object() {
+    let Some(dir) = common::dataset("icub-grasp") else {
+        return;
+    };
+    let mut h = common::gui::workbench_opening(
+        vec![dir, common::sample("grasp-stability.json")],
+        1400.0,
+        900.0,
+    );
+    h.get_by_label("iCub grasp dataset").click();
+    h.run_ok();
+    open_compare(&mut h);
+    choose(&mut h, "Groups", "object");
+    assert_eq!(h.state().rooms.compare.form.signal, Signal::HandTotal);
+    let c = h.state().rooms.compare.shown.clone().unwrap();
+    let bands = chart(&c.groups);
+    assert_eq!(bands.series.len(), 10, "{:?}", names(bands));
+    assert!(bands.series.iter().all(|s| s.name.ends_with("(n=20)")));
+    assert!(bands.series.iter().all(|s| s.error.is_some()));
+    assert_eq!(bands.x.title, "time from contact onset");
+    assert_eq!(chart(&c.overlay).series.len(), 200);
+}
+
+#[test]
+fn on_bts3_an_electrode_compares_successes_and_failures_as_distributions() {
+    let Some(csv) = common::dataset("bts3/biotac-palmdown-grasps.csv") else {
+        return;
+    };
+    let mut h = common::gui::workbench_opening(
+        vec![csv, common::sample("grasp-stability.json")],
+        1400.0,
+        900.0,
+    );
+    h.get_by_label_contains("BioTac SP grasp stability").click();
+    h.run_ok();
+    open_compare(&mut h);
+    h.get_by_role_and_label(Role::TextInput, "Signals").click();
+    h.run_ok();
+    h.get_by_role_and_label(Role::TextInput, "Signals")
+        .type_text("mf taxel 7");
+    h.run_ok();
+    h.get_by_label("taxel 7").click();
+    settle(&mut h);
+    let c = h.state().rooms.compare.shown.clone().unwrap();
+    assert!(c.single_frame);
+    let d = chart(&c.groups);
+    // A strip per outcome and the medians with quartiles; no time axis.
+    let n = names(d);
+    assert_eq!(n.len(), 3, "{n:?}");
+    assert!(n[0].starts_with("success (n=") && n[1].starts_with("failure (n="));
+    assert!(!d.x.title.contains("time"), "{}", d.x.title);
+    let points: usize = d.series[..2].iter().map(|s| s.y.len()).sum();
+    assert_eq!(points, 1276);
+    // Overlaid single frames are points too, every grasp's.
+    let o = chart(&c.overlay);
+    assert_eq!(o.series[..2].iter().map(|s| s.y.len()).sum::<usize>(), 1276);
+}
+
+#[test]
+fn on_icub_a_ds_models_true_class_probability_by_correct_and_wrong() {
+    let Some(dir) = common::dataset("icub-grasp") else {
+        return;
+    };
+    // DS taught trials 1–3 of each object: some of the other grasps it gets wrong.
+    let icub = import_icub(&dir).unwrap();
+    let spec = SubsetSpec {
+        trials: (1..=3).into(),
+        ..Default::default()
+    };
+    let part = subset(&icub, &spec, "iCub trials 1-3").unwrap();
+    let defaults = RecognitionParams::default();
+    let opts = SequenceFitOptions {
+        method: MethodId::Ds,
+        features: FeatureSet::ALL,
+        label_set: "object".into(),
+        seed: 0,
+        ds: defaults.ds.clone(),
+        gs: defaults.gs.clone(),
+    };
+    let (m, secs) = models::fit_sequences(&part, &opts).unwrap();
+    let file = models::sequence_file(m, &part, secs, Default::default(), None);
+    let mut h = common::gui::workbench_opening(
+        vec![dir, common::sample("grasp-stability.json")],
+        1400.0,
+        900.0,
+    );
+    h.state_mut().analyses.models.add(file);
+    h.get_by_label("iCub grasp dataset").click();
+    h.run_ok();
+    open_compare(&mut h);
+    choose(&mut h, "Model outputs", "DS, trained on iCub trials 1-3");
+    choose(&mut h, "Groups", "correct vs wrong (model)");
+    h.get_by_role_and_label(Role::TextInput, "Signals").click();
+    h.run_ok();
+    h.get_by_role_and_label(Role::TextInput, "Signals")
+        .type_text("true class");
+    h.run_ok();
+    h.get_by_label("DS · true class probability").click();
+    settle(&mut h);
+    let c = h.state().rooms.compare.shown.clone().unwrap();
+    let bands = chart(&c.groups);
+    let n = names(bands);
+    assert_eq!(n.len(), 2, "{n:?}");
+    assert!(n[0].starts_with("correct (n=") && n[1].starts_with("wrong (n="));
+    assert_eq!(bands.x.title, "time from contact onset");
+    assert_eq!(bands.y.title, "DS · true class probability");
+    // Probabilities, and the correct grasps end surer of their class than the wrong ones.
+    for s in &bands.series {
+        assert!(s.y.iter().all(|p| (0.0..=1.0).contains(p)), "{}", s.name);
+    }
+    let last = |k: usize| *bands.series[k].y.last().unwrap();
+    assert!(last(0) > last(1), "correct {} wrong {}", last(0), last(1));
+}
