@@ -216,7 +216,8 @@ pub(super) fn stability_task(
                 | MethodId::Gu
                 | MethodId::KMeans
                 | MethodId::Som
-                | MethodId::RbfSvm => {
+                | MethodId::RbfSvm
+                | MethodId::Classifier(_) => {
                     return Err(ExperimentError::param(
                         "methods",
                         format!("{} is not a grasp-stability method", m.key()),
