@@ -43,7 +43,9 @@ macro_rules! classifiers {
     };
 }
 
-classifiers! {}
+classifiers! {
+    TemporalSvm => temporal_svm::TemporalSvm,
+}
 
 /// A method of the catalogue. Saved as its key with `_` for `-` (`sparse_svm`, `kmeans`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
