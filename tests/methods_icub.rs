@@ -40,3 +40,11 @@ fn temporal_svm_ten_fold() {
     };
     assert!(acc >= 0.90, "temporal-feature SVM 10-fold accuracy {acc}");
 }
+
+#[test]
+fn dtw_knn_ten_fold() {
+    let Some(acc) = ten_fold("dtw-knn") else {
+        return;
+    };
+    assert!(acc >= 0.90, "DTW k-NN 10-fold accuracy {acc}");
+}

@@ -45,6 +45,7 @@ macro_rules! classifiers {
 
 classifiers! {
     TemporalSvm => temporal_svm::TemporalSvm,
+    DtwKnn => dtw_knn::DtwKnn,
 }
 
 /// A method of the catalogue. Saved as its key with `_` for `-` (`sparse_svm`, `kmeans`).
