@@ -18,11 +18,13 @@ use crate::features::FeatureSet;
 pub struct FrontierArgs {
     /// A native session file, a BTS3 CSV or the iCub dataset folder.
     pub session: PathBuf,
-    /// Methods, comma separated: ds, gs, sparse-svm, du, gu, kmeans, som, rbf-svm.
+    /// Methods, comma separated: ds, gs, sparse-svm, du, gu, kmeans, som, rbf-svm and the
+    /// registered methods.
     #[arg(long, value_delimiter = ',', default_value = "gs")]
     pub method: Vec<String>,
-    /// DS/GS/DU/GU feature sets, comma separated: all, tactile, encoder (one frontier each).
-    #[arg(long, value_delimiter = ',', default_value = "all")]
+    /// Feature sets of the sequence methods, comma separated: all, tactile, encoder, raw …
+    /// (one frontier each; default `all`, a registered method's own families).
+    #[arg(long, value_delimiter = ',')]
     pub features: Vec<String>,
     /// Seeded repetitions per size (at least 2).
     #[arg(long, default_value_t = 10)]
@@ -63,6 +65,10 @@ pub struct FrontierArgs {
     /// RBF SVM kernel widths gamma (default 0.001, 0.003, 0.01, 0.03, 0.1).
     #[arg(long, value_delimiter = ',')]
     pub svm_gamma: Vec<f64>,
+    /// A registered method's knob values, `NAME=V1,V2` (repeatable; every combination is
+    /// a size; a knob not given keeps the method's own list).
+    #[arg(long = "knob", value_name = "NAME=V1,V2")]
+    pub knobs: Vec<String>,
     /// DS/GS score: all (every predicted grasp) or final-20.
     #[arg(long, default_value = "all")]
     pub score: String,
@@ -120,10 +126,13 @@ impl FrontierArgs {
                         MethodId::keys(frontier::methods())
                     )
                 })?;
-            let sets = if method.uses_features() {
-                &features[..]
-            } else {
-                &features[..1]
+            let own = [method
+                .classifier()
+                .map_or(FeatureSet::ALL, |c| c.features())];
+            let sets = match (features.is_empty(), method.uses_features()) {
+                (true, _) => &own[..],
+                (false, true) => &features[..],
+                (false, false) => &features[..1],
             };
             for &features in sets {
                 let mut p = FrontierParams {
@@ -145,12 +154,46 @@ impl FrontierArgs {
                 p.expert_tau = self.expert_tau;
                 set_if(&mut p.svm_c, &self.svm_c);
                 set_if(&mut p.svm_gamma, &self.svm_gamma);
+                if let Some(c) = method.classifier() {
+                    p.sizes = knob_sizes(c, &self.knobs)?;
+                }
                 p.validate()?;
                 out.push(p);
             }
         }
         Ok(out)
     }
+}
+
+/// A registered method's sizes: its own values of each knob, those given by `--knob`
+/// replaced.
+fn knob_sizes(
+    c: &dyn crate::catalogue::Classifier,
+    given: &[String],
+) -> anyhow::Result<Vec<Vec<f64>>> {
+    let knobs = c.info().size_knobs;
+    let mut lists = FrontierParams::lists_of_sizes(&c.sizes());
+    for g in given {
+        let (name, values) = g
+            .split_once('=')
+            .ok_or_else(|| anyhow::anyhow!("--knob: `{g}` is not NAME=V1,V2"))?;
+        let k = knobs
+            .iter()
+            .position(|k| k.name == name.trim())
+            .ok_or_else(|| {
+                anyhow::anyhow!(
+                    "--knob: {} has no knob `{name}` (its knobs: {})",
+                    c.info().key,
+                    knobs.iter().map(|k| k.name).collect::<Vec<_>>().join(", ")
+                )
+            })?;
+        lists[k] = values
+            .split(',')
+            .map(|v| v.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|e| anyhow::anyhow!("--knob {name}: `{values}`: {e}"))?;
+    }
+    Ok(FrontierParams::sizes_of_lists(&lists))
 }
 
 fn set_if<T: Clone>(target: &mut Vec<T>, given: &[T]) {

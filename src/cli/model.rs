@@ -9,7 +9,7 @@ use clap::{Args, Subcommand};
 
 use super::progress::with_progress;
 use super::stability::{StabilityArgs, data_options, in_pool, options_from};
-use crate::catalogue::MethodId;
+use crate::catalogue::{Classifier, MethodId};
 use crate::experiments::result::figure_set;
 use crate::experiments::stability::{PipelineInputs, StabilityData};
 use crate::figures::{Format, RenderOptions, export_all};
@@ -49,6 +49,10 @@ pub enum FitMethod {
     /// The RBF SVM on the Table I features, C and gamma chosen by the `baselines` grid
     /// (repeated 5-fold cross validation).
     RbfSvm(FitTableOneArgs),
+    /// A registered method: `fit KEY SESSION -o MODEL.json [--features F] [--target SET]
+    /// [--seed N] [--KNOB VALUE …]` (its size knobs; `fit KEY --help` lists them).
+    #[command(external_subcommand)]
+    Registered(Vec<String>),
 }
 
 #[derive(Args, Debug)]
@@ -205,6 +209,7 @@ pub fn fit(a: FitArgs) -> anyhow::Result<()> {
         FitMethod::KMeans(f) => return fit_table_one(MethodId::KMeans, f),
         FitMethod::Som(f) => return fit_table_one(MethodId::Som, f),
         FitMethod::RbfSvm(f) => return fit_table_one(MethodId::RbfSvm, f),
+        FitMethod::Registered(args) => return fit_registered(&args),
     };
     let s = &f.stability;
     if s.json.is_some() || s.save_model.is_some() || s.nested {
@@ -398,6 +403,107 @@ fn fit_table_one(method: MethodId, a: FitTableOneArgs) -> anyhow::Result<()> {
         println!("  {} {:.2} % ({})", s.name, 100.0 * s.value, s.protocol);
     }
     println!("wrote {}", a.output.display());
+    Ok(())
+}
+
+/// The command line of a registered method, built from its declared knobs.
+fn registered_command(c: &dyn Classifier) -> clap::Command {
+    use clap::{Arg, value_parser};
+    let info = c.info();
+    let mut cmd = clap::Command::new(info.key)
+        .about(info.title)
+        .arg(
+            Arg::new("session")
+                .required(true)
+                .value_parser(value_parser!(PathBuf)),
+        )
+        .arg(
+            Arg::new("output")
+                .short('o')
+                .long("output")
+                .value_name("MODEL.json")
+                .required(true)
+                .value_parser(value_parser!(PathBuf)),
+        )
+        .arg(Arg::new("features").long("features").help(format!(
+            "Feature families per step (default {})",
+            c.features()
+        )))
+        .arg(
+            Arg::new("target")
+                .long("target")
+                .default_value("object")
+                .help("The label set to learn"),
+        )
+        .arg(
+            Arg::new("seed")
+                .long("seed")
+                .default_value("0")
+                .value_parser(value_parser!(u64)),
+        );
+    for (k, v) in info.size_knobs.iter().zip(c.default_size()) {
+        cmd = cmd.arg(
+            Arg::new(k.name)
+                .long(k.name)
+                .value_parser(value_parser!(f64))
+                .help(format!("{} (default {v})", k.meaning)),
+        );
+    }
+    cmd
+}
+
+fn fit_registered(args: &[String]) -> anyhow::Result<()> {
+    let key = args.first().map_or("", String::as_str);
+    let registered = || MethodId::keys(MethodId::all().filter(|m| m.classifier().is_some()));
+    let method: MethodId = key
+        .parse()
+        .with_context(|| format!("fit: `{key}` is no method (registered: {})", registered()))?;
+    let Some(c) = method.classifier() else {
+        bail!("fit: `{key}` takes its own options; see `fit {key} --help`");
+    };
+    let m = registered_command(c)
+        .try_get_matches_from(args)
+        .unwrap_or_else(|e| e.exit());
+    let session_path = m.get_one::<PathBuf>("session").expect("required");
+    let output = m.get_one::<PathBuf>("output").expect("required");
+    super::refuse_input_as_output(Some(output), &[session_path])?;
+    let mut size = c.default_size();
+    let mut given = false;
+    for (k, v) in c.info().size_knobs.iter().zip(size.iter_mut()) {
+        if let Some(x) = m.get_one::<f64>(k.name) {
+            *v = *x;
+            given = true;
+        }
+    }
+    c.check(&size)?;
+    let session = session::open(session_path)
+        .with_context(|| format!("opening {}", session_path.display()))?;
+    let opts = models::ClassifierFitOptions {
+        method,
+        features: m
+            .get_one::<String>("features")
+            .map(|f| f.parse())
+            .transpose()?,
+        size: Some(size),
+        label_set: m.get_one::<String>("target").expect("defaulted").clone(),
+        seed: *m.get_one::<u64>("seed").expect("defaulted"),
+    };
+    let (model, secs) = with_progress(false, |p| models::fit_classifier(&session, &opts, p))?;
+    let reason = if given {
+        crate::experiments::result::SizeReason::User
+    } else {
+        crate::experiments::result::SizeReason::MethodDefault
+    };
+    let file = models::classifier_file(model, &session, secs, reason);
+    models::save(&file, output)?;
+    let p = &file.provenance;
+    println!(
+        "{} in {:.1} s; classes {}",
+        p.summary(),
+        p.train_seconds,
+        p.classes.join(", ")
+    );
+    println!("wrote {}", output.display());
     Ok(())
 }
 

@@ -504,6 +504,8 @@ impl Experiment for FrontierSweep {
                 CLUSTERING_COST * readings(session) * (1.5 - threshold)
             }
             FrontierItem::Clusters { .. } | FrontierItem::Svm { .. } => TABLE_COST * grasps,
+            // A registered method reads every step of every grasp, as the experts do.
+            FrontierItem::Classifier { .. } => RECOGNITION_COST * readings(session),
         }
     }
 

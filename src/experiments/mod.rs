@@ -2,6 +2,7 @@
 //! results (for the CLI, the views and the figures), and what they leave behind.
 
 pub mod baselines;
+pub mod classifier;
 pub mod clustering;
 pub mod experiment;
 pub mod figure_id;

@@ -121,6 +121,8 @@ pub enum SizeReason {
     PaperDefault,
     /// Set by the user.
     User,
+    /// A registered method's own default.
+    MethodDefault,
 }
 
 impl SizeReason {
@@ -141,6 +143,7 @@ impl SizeReason {
             SizeReason::Recommended => "recommended",
             SizeReason::PaperDefault => "paper default",
             SizeReason::User => "user's",
+            SizeReason::MethodDefault => "method's default",
         }
     }
 }

@@ -10,7 +10,9 @@ use std::time::SystemTime;
 
 use serde::{Deserialize, Serialize};
 
-use super::{ClusterModel, ModelError, SequenceModel, StabilityClassifier, TableOneModel};
+use super::{
+    ClassifierModel, ClusterModel, ModelError, SequenceModel, StabilityClassifier, TableOneModel,
+};
 use crate::catalogue::MethodId;
 use crate::experiments::result::SizeReason;
 use crate::session::Session;
@@ -127,6 +129,8 @@ pub enum Model {
     Clusters(ClusterModel),
     /// k-means, the SOM or the RBF SVM on the Table I features.
     TableOne(TableOneModel),
+    /// A registered method, with the state its trait saved.
+    Classifier(ClassifierModel),
 }
 
 impl Model {
@@ -136,6 +140,7 @@ impl Model {
             Model::Sequences(m) => m.method(),
             Model::Clusters(m) => m.method(),
             Model::TableOne(m) => m.method(),
+            Model::Classifier(m) => m.method,
         }
     }
 
@@ -145,6 +150,7 @@ impl Model {
             Model::Sequences(m) => m.validate(),
             Model::Clusters(m) => m.validate(),
             Model::TableOne(m) => m.validate(),
+            Model::Classifier(m) => m.validate(),
         }
     }
 }

@@ -129,6 +129,7 @@ fn outputs(
         }
         Model::Clusters(m) => Outputs::Ids(m.assign(session, calibration)?),
         Model::TableOne(m) => Outputs::Ids(m.assign(session, calibration)?),
+        Model::Classifier(m) => Outputs::Ids(m.assign(session, calibration)?),
     })
 }
 
@@ -164,6 +165,10 @@ fn rows(model: &Model, session: &Session, out: &Outputs) -> Vec<GraspPrediction>
                 .map(|&id| (m.classes.get(id).cloned().unwrap_or_default(), f64::NAN))
                 .collect()
         }
+        (Model::Classifier(m), Outputs::Ids(ids)) => ids
+            .iter()
+            .map(|&id| (m.classes.get(id).cloned().unwrap_or_default(), f64::NAN))
+            .collect(),
         (_, Outputs::Ids(ids)) => ids.iter().map(|&c| (cluster_name(c), f64::NAN)).collect(),
         _ => unreachable!("outputs() gives each model its kind of output"),
     };
@@ -190,6 +195,7 @@ fn label_set_of(model: &Model) -> &str {
         Model::Sequences(m) => &m.label_set,
         Model::Clusters(m) => &m.label_set,
         Model::TableOne(m) => &m.label_set,
+        Model::Classifier(m) => &m.label_set,
     }
 }
 
@@ -264,6 +270,15 @@ pub fn evaluate(
             (
                 m.classes.clone(),
                 class_scores(&m.classes, m.method().key(), &predictions, ids, &[])?,
+            )
+        }
+        (Model::Classifier(m), Outputs::Ids(ids)) => {
+            if session.label_set(&m.label_set).is_none() {
+                return Err(no_label_set(&m.label_set, session));
+            }
+            (
+                m.classes.clone(),
+                class_scores(&m.classes, m.method.key(), &predictions, ids, &[])?,
             )
         }
         (model, Outputs::Ids(ids)) => {

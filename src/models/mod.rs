@@ -13,9 +13,11 @@
 //! - [`clustering`]: the unsupervised OIESGP experts (DU, GU): learning, learning further,
 //!   assigning a new session's grasps to clusters;
 //! - [`table_one`]: the offline baselines on the Table I features (k-means, SOM, RBF SVM);
+//! - [`classifier`]: any registered method, through its trait;
 //! - [`held_out`]: scores, predictions and figures on a session the model did not train on.
 
 pub mod calibration;
+pub mod classifier;
 pub mod clustering;
 pub mod file;
 pub mod held_out;
@@ -28,6 +30,7 @@ pub mod table_one;
 mod tests;
 
 pub use calibration::Calibration;
+pub use classifier::{ClassifierFitOptions, ClassifierModel, classifier_file, fit_classifier};
 pub use clustering::{
     ClusterFitOptions, ClusterModel, cluster_file, cluster_file_of_run, continue_clusters,
     fit_clusters,

@@ -34,16 +34,11 @@ pub struct RobustnessForm {
 impl Default for RobustnessForm {
     fn default() -> Self {
         RobustnessForm {
-            // DU and GU on request: each of their clusters is a GP to score every step against.
-            methods: vec![
-                MethodId::SparseSvm,
-                MethodId::RawSvm,
-                MethodId::Ds,
-                MethodId::Gs,
-                MethodId::KMeans,
-                MethodId::Som,
-                MethodId::RbfSvm,
-            ],
+            // The catalogue's defaults (DU and GU on request: each of their clusters is a
+            // GP to score every step against).
+            methods: MethodId::all()
+                .filter(|m| m.info().robustness_default)
+                .collect(),
             perturbations: vec![
                 Perturbation::Noise,
                 Perturbation::DeadTaxels,

@@ -34,6 +34,8 @@ pub struct FrontierForm {
     pub ks: String,
     pub svm_c: String,
     pub svm_gamma: String,
+    /// A registered method's values of each knob, as typed (by method key and knob name).
+    pub knobs: std::collections::BTreeMap<(&'static str, &'static str), String>,
 }
 
 fn list_text<T: ToString>(v: &[T]) -> String {
@@ -57,6 +59,7 @@ impl Default for FrontierForm {
             ks: list_text(&k_default.ks),
             svm_c: list_text(&svm_default.svm_c),
             svm_gamma: list_text(&svm_default.svm_gamma),
+            knobs: Default::default(),
         }
     }
 }
@@ -102,9 +105,27 @@ impl FrontierForm {
                 p.svm_c = parse_list(&self.svm_c, "C")?;
                 p.svm_gamma = parse_list(&self.svm_gamma, "γ")?;
             }
+            MethodId::Classifier(c) => {
+                let lists = (self.knob_texts(c.method()).iter())
+                    .map(|(name, text)| parse_list(text, name))
+                    .collect::<Result<Vec<_>, _>>()?;
+                p.sizes = FrontierParams::sizes_of_lists(&lists);
+            }
         }
         p.validate().map_err(|e| e.to_string())?;
         Ok(p)
+    }
+
+    /// A registered method's knobs with their typed values (its own lists until edited).
+    fn knob_texts(&self, c: &dyn crate::catalogue::Classifier) -> Vec<(&'static str, String)> {
+        let defaults = FrontierParams::lists_of_sizes(&c.sizes());
+        let info = c.info();
+        (info.size_knobs.iter().zip(defaults))
+            .map(|(k, d)| {
+                let typed = self.knobs.get(&(info.key, k.name));
+                (k.name, typed.cloned().unwrap_or_else(|| list_text(&d)))
+            })
+            .collect()
     }
 
     fn ready(&self, s: &crate::app::loader::LoadedSession) -> bool {
@@ -151,6 +172,14 @@ impl FrontierForm {
             MethodId::RbfSvm => {
                 text_field(ui, "penalties C", &mut self.svm_c);
                 text_field(ui, "kernel widths γ", &mut self.svm_gamma);
+            }
+            MethodId::Classifier(c) => {
+                let info = c.method().info();
+                for (k, (name, mut text)) in info.size_knobs.iter().zip(self.knob_texts(c.method()))
+                {
+                    text_field(ui, &format!("{name}: {}", k.meaning), &mut text);
+                    self.knobs.insert((info.key, name), text);
+                }
             }
         }
         ui.add(
@@ -330,6 +359,8 @@ fn spec_of(f: &Frontier, k: usize) -> Option<ModelSpec> {
             k: Some(p.knob("k")? as usize),
         },
         MethodId::RbfSvm => ModelSpec::Baselines { k: None },
+        // Fitted from the command line (`fit KEY`); no view trains one.
+        MethodId::Classifier(_) => return None,
     })
 }
 

@@ -27,9 +27,12 @@ use std::time::Instant;
 use ndarray::Array2;
 use serde::{Deserialize, Serialize};
 
-use crate::catalogue::MethodId;
+use crate::catalogue::{Classifier, MethodId};
 use crate::cluster::{SequentialKMeansParams, scores};
 use crate::experiments::ExperimentError;
+use crate::experiments::classifier::{
+    ClassifierPrep, classifier_err, cv_repetition, prepare_classifier,
+};
 use crate::experiments::clustering::{
     ClusteringParams, ClusteringPrep, ClusteringRun, UnsupervisedLearner, baseline_seed, distinct,
     one_run, prepare_clustering, som_setup,
@@ -122,6 +125,9 @@ pub struct FrontierParams {
     pub svm_c: Vec<f64>,
     #[serde(default)]
     pub svm_gamma: Vec<f64>,
+    /// A registered method's sizes, one value per knob (empty: the method's own list).
+    #[serde(default)]
+    pub sizes: Vec<Vec<f64>>,
 }
 
 impl FrontierParams {
@@ -129,7 +135,9 @@ impl FrontierParams {
     pub fn for_method(method: MethodId) -> Self {
         FrontierParams {
             method,
-            features: FeatureSet::ALL,
+            features: method
+                .classifier()
+                .map_or(FeatureSet::ALL, |c| c.features()),
             score: RecognitionScore::All,
             reps: 10,
             seed: 0,
@@ -151,6 +159,48 @@ impl FrontierParams {
             ks: vec![2, 4, 6, 8, 10, 12, 16, 20],
             svm_c: vec![1.0, 10.0, 100.0, 1000.0],
             svm_gamma: vec![1e-3, 3e-3, 1e-2, 3e-2, 1e-1],
+            sizes: Vec::new(),
+        }
+    }
+
+    /// Every combination of one value per knob, the first knob slowest.
+    pub fn sizes_of_lists(lists: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        lists.iter().fold(vec![Vec::new()], |sizes, values| {
+            sizes
+                .iter()
+                .flat_map(|s| {
+                    values.iter().map(move |&v| {
+                        let mut next = s.clone();
+                        next.push(v);
+                        next
+                    })
+                })
+                .collect()
+        })
+    }
+
+    /// Each knob's values over a method's sizes, in first-seen order.
+    pub fn lists_of_sizes(sizes: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        let knobs = sizes.first().map_or(0, Vec::len);
+        (0..knobs)
+            .map(|k| {
+                let mut values: Vec<f64> = Vec::new();
+                for s in sizes {
+                    if !values.contains(&s[k]) {
+                        values.push(s[k]);
+                    }
+                }
+                values
+            })
+            .collect()
+    }
+
+    /// A registered method's sizes: the given ones, else its own list.
+    pub fn classifier_sizes(&self, c: &dyn Classifier) -> Vec<Vec<f64>> {
+        if self.sizes.is_empty() {
+            c.sizes()
+        } else {
+            self.sizes.clone()
         }
     }
 
@@ -234,6 +284,11 @@ impl FrontierParams {
                 }
                 positive("svm_c", &self.svm_c)?;
                 positive("svm_gamma", &self.svm_gamma)?;
+            }
+            MethodId::Classifier(c) => {
+                for size in self.classifier_sizes(c.method()) {
+                    c.method().check(&size).map_err(classifier_err)?;
+                }
             }
         }
         Ok(())

@@ -345,3 +345,50 @@ pub(super) fn svm_points(
         })
         .collect()
 }
+
+/// A registered method: one point per size, its knobs named as the method names them.
+pub(super) fn classifier_points(
+    params: &FrontierParams,
+    method: &dyn Classifier,
+    pairs: &[(FrontierItem, FrontierOutput)],
+) -> Vec<FrontierPoint> {
+    let knobs = method.info().size_knobs;
+    params
+        .classifier_sizes(method)
+        .iter()
+        .enumerate()
+        .map(|(i, size)| {
+            let (mut acc, mut train, mut predict) = (Vec::new(), Vec::new(), Vec::new());
+            for (item, out) in pairs {
+                if let (
+                    FrontierItem::Classifier { size: s, .. },
+                    FrontierOutput::Classifier {
+                        accuracy,
+                        train_us,
+                        predict_us,
+                    },
+                ) = (item, out)
+                    && *s == i
+                {
+                    acc.push(*accuracy);
+                    train.push(*train_us);
+                    predict.push(*predict_us);
+                }
+            }
+            let named: Vec<(&str, f64)> = knobs.iter().map(|k| k.name).zip(size.clone()).collect();
+            let words = named
+                .iter()
+                .map(|(k, v)| format!("{k} {v}"))
+                .collect::<Vec<_>>()
+                .join(" · ");
+            point(
+                words.clone(),
+                format!("{}: {words}", method.info().title),
+                named,
+                &acc,
+                train,
+                predict,
+            )
+        })
+        .collect()
+}

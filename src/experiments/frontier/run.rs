@@ -22,6 +22,8 @@ pub enum FrontierItem {
     Clusters { k: usize, rep: usize },
     /// RBF SVM: repetition `rep` of the cross validation at (C, gamma).
     Svm { c: f64, gamma: f64, rep: usize },
+    /// A registered method: repetition `rep` of its cross validation at its `size`-th size.
+    Classifier { size: usize, rep: usize },
 }
 
 /// One (num_bases, beta, gamma) cell: its scores over the repetitions and its timings.
@@ -68,6 +70,11 @@ pub enum FrontierOutput {
         train_us: f64,
         predict_us: f64,
     },
+    Classifier {
+        accuracy: f64,
+        train_us: f64,
+        predict_us: f64,
+    },
 }
 
 /// What every item of a frontier shares.
@@ -81,7 +88,12 @@ pub enum FrontierPrep {
         x: Array2<f64>,
         labels: Vec<usize>,
     },
+    /// A registered method's sequences and objects.
+    Classifier(Box<ClassifierPrep>),
 }
+
+/// Folds of a registered method's cross validation.
+pub const CLASSIFIER_FOLDS: usize = 10;
 
 impl FrontierParams {
     /// "DS, all features", "sparse coding + SVM", "sequential k-means".
@@ -196,6 +208,11 @@ pub fn prepare_frontier(
             };
             FrontierPrep::Table { x, labels }
         }
+        MethodId::Classifier(_) => FrontierPrep::Classifier(Box::new(prepare_classifier(
+            session,
+            params.features,
+            "object",
+        )?)),
     })
 }
 
@@ -246,6 +263,12 @@ pub fn frontier_items(params: &FrontierParams) -> Vec<FrontierItem> {
             .flat_map(|(c, gamma)| {
                 reps.clone()
                     .map(move |rep| FrontierItem::Svm { c, gamma, rep })
+            })
+            .collect(),
+        MethodId::Classifier(c) => (0..params.classifier_sizes(c.method()).len())
+            .flat_map(|size| {
+                reps.clone()
+                    .map(move |rep| FrontierItem::Classifier { size, rep })
             })
             .collect(),
     }
@@ -370,6 +393,29 @@ pub fn frontier_item(
                 predict_us: micros(predict, x.nrows()),
             })
         }
+        (FrontierPrep::Classifier(prep), FrontierItem::Classifier { size, rep }) => {
+            let MethodId::Classifier(c) = params.method else {
+                return Err(wrong_item(item, params));
+            };
+            let sizes = params.classifier_sizes(c.method());
+            let Some(size) = sizes.get(size) else {
+                return Err(wrong_item(item, params));
+            };
+            let s = cv_repetition(
+                c.method(),
+                size,
+                prep,
+                CLASSIFIER_FOLDS,
+                params.seed,
+                rep,
+                progress,
+            )?;
+            Ok(FrontierOutput::Classifier {
+                accuracy: s.accuracy,
+                train_us: s.train_us,
+                predict_us: s.predict_us,
+            })
+        }
         _ => Err(wrong_item(item, params)),
     }
 }
@@ -443,6 +489,12 @@ pub fn assemble_frontier(
             svm_points(params, &pairs),
             None,
             format!("accuracy ({SVM_FOLDS}-fold)"),
+            "grasp",
+        ),
+        MethodId::Classifier(c) => (
+            classifier_points(params, c.method(), &pairs),
+            None,
+            format!("accuracy ({CLASSIFIER_FOLDS}-fold)"),
             "grasp",
         ),
     };

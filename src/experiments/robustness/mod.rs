@@ -33,6 +33,7 @@ use crate::cluster::ClusterError;
 use crate::cluster::kmeans::SequentialKMeansParams;
 use crate::cluster::scores::scores;
 use crate::experiments::ExperimentError;
+use crate::experiments::classifier::train_test;
 use crate::experiments::clustering::{
     ClusteringParams, UnsupervisedLearner, every_gu_cluster, one_run, som_setup,
 };

@@ -103,6 +103,29 @@ pub(super) fn recognition_task(
                 };
                 rbf_accuracy(params, prep, train_x, test_x, pert, rep)?
             }
+            MethodId::Classifier(c) => {
+                // The online protocol's split: taught and kept training grasps, then the
+                // test part.
+                let train: Vec<usize> = (teach.iter().copied())
+                    .chain(
+                        (order[..n_train].iter().zip(&keep)).filter_map(|(&g, &k)| k.then_some(g)),
+                    )
+                    .collect();
+                let seed = Rng::stream(params.seed, CLASSIFIER_STREAM + rep as u64).next_u64();
+                train_test(
+                    c.method(),
+                    &c.method().default_size(),
+                    train_seqs,
+                    test_seqs,
+                    &prep.labels,
+                    prep.n_classes,
+                    &train,
+                    &order[n_train..],
+                    seed,
+                    &Progress::new(),
+                )?
+                .accuracy
+            }
             MethodId::SparseSvm | MethodId::RawSvm => {
                 return Err(ExperimentError::param(
                     "methods",

@@ -51,6 +51,7 @@ pub(super) const PERTURB_STREAM: u64 = 1 << 40;
 pub(super) const PROTOCOL_STREAM: u64 = 2 << 40;
 pub(super) const CLUSTER_STREAM: u64 = 3 << 40;
 pub(super) const SVM_STREAM: u64 = 4 << 40;
+pub(super) const CLASSIFIER_STREAM: u64 = 5 << 40;
 
 pub(super) fn cluster_err(e: ClusterError) -> ExperimentError {
     ExperimentError::Data(e.to_string())

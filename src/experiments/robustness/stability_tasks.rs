@@ -203,17 +203,30 @@ pub(super) fn stability_task(
             add(&train, &folds.test_indices(f))?;
         }
     }
-    Ok(params
+    params
         .methods
         .iter()
-        .map(|m| {
+        .map(|&m| {
             let c = match m {
                 MethodId::SparseSvm => &confusion[0],
-                _ => &confusion[1],
+                MethodId::RawSvm => &confusion[1],
+                MethodId::Ds
+                | MethodId::Gs
+                | MethodId::Du
+                | MethodId::Gu
+                | MethodId::KMeans
+                | MethodId::Som
+                | MethodId::RbfSvm
+                | MethodId::Classifier(_) => {
+                    return Err(ExperimentError::param(
+                        "methods",
+                        format!("{} is not a grasp-stability method", m.key()),
+                    ));
+                }
             };
-            c.weighted_success_rate().unwrap_or(0.0)
+            Ok(c.weighted_success_rate().unwrap_or(0.0))
         })
-        .collect())
+        .collect()
 }
 
 /// Hold out round(share · objects) objects (at least one, and at least one left to learn
