@@ -57,7 +57,7 @@ fn value(scale: Scale, coord: f64) -> f64 {
 
 /// The smallest plot (or matrix, or grid of images) that still reads, in points: when a
 /// tile is short, the subtitle and then the legend fold away before the body gets less.
-const MIN_BODY: f32 = 120.0;
+const MIN_BODY: f32 = 150.0;
 
 /// Where a chart's legend goes.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -4,7 +4,7 @@ use plotters::prelude::DrawingBackend;
 use plotters::style::text_anchor::HPos;
 
 use super::scale::{Span, Ticks, ticks_for};
-use super::{AXIS_TITLE_EM, Rect, TICK_EM, fitting_em};
+use super::{AXIS_TITLE_EM, Rect, TICK_EM, fitting_em, truncated};
 use crate::figures::FigureError;
 use crate::figures::canvas::{AXIS, Canvas, TEXT};
 use crate::figures::colormap::Rgb;
@@ -84,7 +84,9 @@ pub(super) fn draw_colorbar<DB: DrawingBackend>(
     c.note_axis(&title, None, &ticks.labels);
     if !title.is_empty() {
         let title_h = c.px(AXIS_TITLE_EM * 1.3);
+        // Smaller to fit the bar's length, then cut (a long unit on a short tile).
         let em = fitting_em(c, &title, AXIS_TITLE_EM, bottom - top)?;
+        let title = truncated(c, &title, em, bottom - top)?;
         c.text(
             &title,
             (left + width - title_h / 2.0, (top + bottom) / 2.0),

@@ -62,7 +62,8 @@ pub(super) fn draw_image_grid<DB: DrawingBackend>(
         });
     let cap_h = c.px(caption_em * 1.8);
     let cs = cell_for(cols, gap, cap_h);
-    if cs <= 0.0 {
+    // Under a pixel of the image a taxel is nothing: the figure cannot be drawn this size.
+    if cs < 1.0 {
         return Err(too_small());
     }
     let rows = n.div_ceil(cols);
