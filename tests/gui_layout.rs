@@ -61,7 +61,7 @@ fn a_crowded_legend_goes_above_the_plot() {
         h.run();
         h.query_by_label("— series 10").is_some()
     };
-    assert!(row_shown(200.0), "ten entries cover a 200 px plot");
+    assert!(row_shown(260.0), "ten entries cover a 260 px plot");
     assert!(!row_shown(700.0), "a 700 px plot has room for them");
 }
 
