@@ -148,9 +148,9 @@ impl Analyses {
     /// The first export's question: which folder, with the data folder's exports offered.
     /// Once confirmed, the export waiting goes ahead and later ones do not ask again.
     pub fn export_folder_ui(&mut self, ctx: &egui::Context) {
-        let Some(pending) = self.pending_export.clone() else {
+        if self.pending_export.is_none() {
             return;
-        };
+        }
         let (mut go, mut cancel) = (false, false);
         egui::Window::new("Export to which folder?")
             .collapsible(false)
@@ -170,7 +170,9 @@ impl Analyses {
         if cancel {
             self.pending_export = None;
         } else if go {
-            self.pending_export = None;
+            let Some(pending) = self.pending_export.take() else {
+                return;
+            };
             self.export.chosen = true;
             match pending {
                 PendingExport::Figure(figure, name) => self.export_figure(&figure, &name),
