@@ -14,6 +14,7 @@ use tactile_workbench::catalogue::MethodId;
 use tactile_workbench::experiments::recognition::RecognitionParams;
 use tactile_workbench::features::FeatureSet;
 use tactile_workbench::live::client::State;
+use tactile_workbench::live::model::LiveModel;
 use tactile_workbench::live::publish::{self, Stream};
 use tactile_workbench::live::{GraspReport, Live, LiveOptions, Snapshot};
 use tactile_workbench::models::{self, Calibration, SequenceFitOptions};
@@ -67,7 +68,15 @@ impl Playing {
 /// client subscribed to every topic.
 fn play(s: &Session, rate: f64, port: u16, range: std::ops::Range<usize>) -> Playing {
     let topics = Stream::new(s, rate).unwrap().topics;
-    let mut server = serve::Server::start("127.0.0.1", port, &topics).unwrap();
+    // A port just let go of (a restarted server) may take a moment to bind again.
+    let t = Instant::now();
+    let mut server = loop {
+        match serve::Server::start("127.0.0.1", port, &topics) {
+            Ok(s) => break s,
+            Err(e) if port == 0 || t.elapsed() > Duration::from_secs(2) => panic!("{e}"),
+            Err(_) => std::thread::sleep(Duration::from_millis(50)),
+        }
+    };
     let port = server.port();
     let s = s.clone();
     let stop = Arc::new(AtomicBool::new(false));
@@ -430,16 +439,20 @@ fn early_classification_step_by_step_equals_the_grasps_verdict() {
         let n = shown.grasps.len();
         let server = play(&shown, rate_for(&shown, 1.5), 0, 0..n);
         let mut o = options(server.port, spec.clone(), None);
-        o.model = Some((path, false));
+        o.model = Some((path.clone(), false));
         let (reports, snap) = run(Live::start(o).unwrap(), Duration::from_secs(30), |r, _| {
             r.len() == n
         });
         server.done();
         assert_eq!(reports.len(), n, "{snap:?}");
         assert_eq!(snap.early_error, None);
+        // The live verdict is the steps followed while the grasp was open; the models' own
+        // prediction of the recorded grasp must give the same bits.
+        let offline = LiveModel::load(&path, false).unwrap();
         for (i, r) in reports.iter().enumerate() {
-            let v = r.verdict.as_ref().unwrap().as_ref().unwrap();
             let early = r.early.as_ref().expect("the model followed the grasp");
+            let v = &offline.verdict(r.session.as_ref().unwrap()).unwrap();
+            assert_eq!(r.verdict.as_ref().unwrap().as_ref().unwrap(), v);
             let bits = |steps: &[Vec<f64>]| -> Vec<Vec<u64>> {
                 steps
                     .iter()
@@ -462,14 +475,15 @@ fn early_classification_step_by_step_equals_the_grasps_verdict() {
     }
 }
 
-#[test]
-fn kill_9_of_live_leaves_a_valid_recording_of_every_completed_grasp() {
+/// Run `live --record` on `n` grasps of the sample, kill -9 it once it printed `printed`
+/// grasps, and check the recording: every completed grasp, validated, equal to the served.
+fn kill_9_after(n: usize, seconds: f64, printed: usize) {
     use std::io::{BufRead, BufReader};
     use std::process::{Command, Stdio};
-    let dir = common::temp_dir("live-kill");
-    let s = sample(12);
+    let dir = common::temp_dir(&format!("live-kill-{n}"));
+    let s = sample(n);
     spec_of(&s, &dir);
-    let server = play(&s, rate_for(&s, 4.0), 0, 0..s.grasps.len());
+    let server = play(&s, rate_for(&s, seconds), 0, 0..s.grasps.len());
     let out = dir.join("rec.json");
     let mut child = Command::new(env!("CARGO_BIN_EXE_tactile-workbench"))
         .args(["live", &format!("ws://127.0.0.1:{}", server.port), "--spec"])
@@ -477,17 +491,17 @@ fn kill_9_of_live_leaves_a_valid_recording_of_every_completed_grasp() {
         .arg("--record")
         .arg(&out)
         .arg("--duration")
-        .arg("30")
+        .arg("60")
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
     let stdout = child.stdout.take().unwrap();
     let mut lines = BufReader::new(stdout).lines();
-    let mut printed = 0;
-    while printed < 3 {
+    let mut seen = 0;
+    while seen < printed {
         let line = lines.next().unwrap().unwrap();
-        printed += usize::from(line.starts_with("grasp "));
+        seen += usize::from(line.starts_with("grasp "));
     }
     child.kill().unwrap(); // SIGKILL
     child.wait().unwrap();
@@ -497,6 +511,19 @@ fn kill_9_of_live_leaves_a_valid_recording_of_every_completed_grasp() {
     let mut served = s.clone();
     served.grasps.truncate(recorded.grasps.len());
     assert_same_grasps(&recorded, &served);
+    // Loading finished the killed recording: a plain session file now.
+    assert!(!session::journal::journal_path(&out).exists());
+}
+
+#[test]
+fn kill_9_of_live_leaves_a_valid_recording_of_every_completed_grasp() {
+    kill_9_after(12, 4.0, 3);
+}
+
+/// Many grasps, each appended to the journal as it ends: killed after 60 of 80.
+#[test]
+fn kill_9_after_many_grasps_keeps_every_completed_one() {
+    kill_9_after(80, 8.0, 60);
 }
 
 /// A hand-made server that offers only the old subprotocol, advertises `/a` (and `/ev`),

@@ -28,7 +28,7 @@ pub struct LiveArgs {
     /// Teach the model with each labelled grasp (DS, GS, DU, GU), saving it after each.
     #[arg(long, requires = "model")]
     pub teach: bool,
-    /// Record the grasps to this session file (valid after every grasp).
+    /// Record the grasps to this session file (each appended to its journal as it ends).
     #[arg(long)]
     pub record: Option<PathBuf>,
     /// Stop after this many seconds (default: run until interrupted).
@@ -153,6 +153,9 @@ pub fn live(a: LiveArgs) -> anyhow::Result<()> {
     );
     for r in &st.refused {
         eprintln!("refused {r}");
+    }
+    if let Some(f) = &s.failed {
+        anyhow::bail!("{f}");
     }
     Ok(())
 }

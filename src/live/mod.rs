@@ -155,8 +155,8 @@ pub struct Snapshot {
     pub model_latency: Latencies,
     /// How grasps are cut, in words.
     pub cutting: String,
-    /// Why the stream could not start (a [`Running`] engine), and why the latest command
-    /// by hand was refused.
+    /// Why the stream could not start (a [`Running`] engine) or its recording could not be
+    /// finished, and why the latest command by hand was refused.
     pub failed: Option<String>,
     pub last_command: Option<String>,
 }
@@ -198,12 +198,14 @@ impl Live {
             ),
             None => None,
         };
+        // Before the socket: a recording that cannot start stops the stream from starting.
+        let recorder = opts.record.as_deref().map(Recorder::new).transpose()?;
         Ok(Live {
             assembler: Assembler::new(&plan, opts.spec.sync_tolerance_ns),
             cutter: Cutter::new(&opts.spec, cutting.clone()),
             client: Client::start(&opts.url, plan),
             source: PathBuf::from(&opts.url),
-            recorder: opts.record.as_deref().map(Recorder::new),
+            recorder,
             spec: opts.spec,
             model,
             early: None,
@@ -264,6 +266,11 @@ impl Live {
         while let Ok(m) = self.client.queue.try_recv() {
             self.incoming(m, &mut out);
         }
+        if let Some(r) = &mut self.recorder
+            && let Err(e) = r.finish()
+        {
+            lock(&self.snapshot).failed = Some(format!("finishing the recording: {e}"));
+        }
         self.publish();
         let snap = lock(&self.snapshot).clone();
         (out, snap)
@@ -297,7 +304,15 @@ impl Live {
         let totals = f.taxels.iter().map(|v| v.iter().sum()).collect();
         let mut view = lock(&self.snapshot);
         view.latency_ms = now_ns().map(|now| (now as f64 - f.t as f64) / 1e6);
-        view.latest = Some(f.clone());
+        // Into the latest frame's own buffers: no allocation per frame.
+        match &mut view.latest {
+            Some(latest) => {
+                latest.t = f.t;
+                latest.taxels.clone_from(&f.taxels);
+                latest.encoders.clone_from(&f.encoders);
+            }
+            None => view.latest = Some(f.clone()),
+        }
         let trace = &mut view.trace;
         trace.push_back((f.t, totals));
         while trace.len() > TRACE_CAP
@@ -395,7 +410,18 @@ impl Live {
             lock(&self.snapshot).recorded = r.grasps();
         }
         if let Some(m) = &mut self.model {
-            let verdict = m.verdict(&one).map_err(|e| e.to_string());
+            // DS/GS followed the whole grasp step by step: those steps are its verdict (the
+            // models' own prediction of the grasp gives the same bits, tested), so the
+            // grasp is not predicted again, which would stall the stream at every grasp's
+            // end for as long as the grasp's steps took.
+            let followed = report
+                .early
+                .as_ref()
+                .filter(|e| e.steps.len() == report.frames);
+            let verdict = match followed {
+                Some(e) => Ok(e.clone()),
+                None => m.verdict(&one).map_err(|e| e.to_string()),
+            };
             lock(&self.snapshot).last_verdict = verdict.as_ref().ok().cloned();
             report.verdict = Some(verdict);
             if c.labelled {

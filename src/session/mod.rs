@@ -8,6 +8,7 @@ pub mod bts3;
 pub mod cdr;
 mod error;
 pub mod icub;
+pub mod journal;
 pub mod long_csv;
 mod model;
 pub mod native;
