@@ -259,8 +259,12 @@ impl Cutter {
                     };
                     push(&mut open, f);
                     self.open = Some(open);
-                } else {
-                    // Only the idle hand moves the baseline: it follows drift, not touch.
+                } else if rise <= p.min_rise {
+                    // Only the idle hand moves the baseline: it follows drift, not touch. A
+                    // rise past the floor is never idle, even when the spread allows it:
+                    // else a stream met mid-contact (the baseline seeded by a touch, the
+                    // spread by the fall from it) would feed every later touch into the
+                    // spread and never see a grasp.
                     let dt = t.saturating_sub(c.last) as f64 / 1e9;
                     let alpha = 1.0 - (-dt / p.baseline_s).exp();
                     let d = total - baseline;
@@ -375,6 +379,28 @@ mod tests {
         let err = c.event(70 * MS, "end:wobbly").unwrap_err();
         assert!(err.contains("wobbly") && err.contains("outcome"), "{err}");
         assert!(c.in_progress().is_some(), "a refused end keeps the grasp");
+    }
+
+    /// Met in the middle of a contact (the first frame pressed), the detector still finds
+    /// the grasps that follow.
+    #[test]
+    fn contact_met_mid_touch_still_finds_the_next_grasps() {
+        let mut c = Cutter::new(&spec(""), Cutting::Contact(ContactParams::default()));
+        let (mut t, mut grasps) = (0, 0);
+        for cycle in 0..30 {
+            for i in 0..60 {
+                t += 20 * MS;
+                let idle = 1.0 + 0.05 * ((i * 7 + cycle) % 5) as f64;
+                // The first cycle starts pressed.
+                let pressed = (20..40).contains(&i) || (cycle == 0 && i < 10);
+                let p = if pressed { 100.0 } else { idle };
+                grasps += usize::from(c.frame(frame(t, p)).is_some());
+            }
+            t += 500 * MS;
+        }
+        // The first few go by while the baseline falls from the touch it was seeded by (and
+        // the spread of that fall fades); without the floor, none is ever found.
+        assert!(grasps >= 20, "{grasps} grasps of 30");
     }
 
     #[test]
