@@ -672,6 +672,7 @@ fn every_figure() -> Computed {
         finger_values_figure(&stab, &stab.grasps[0], 0),
     ));
     out.extend(compare_figures(&objects, &stab));
+    out.push(("live · model at work".into(), live_figure(&objects)));
     Computed {
         results,
         figures: out,
@@ -708,6 +709,39 @@ fn compare_figures(objects: &Session, stab: &Session) -> Vec<(String, Figure)> {
         ("compare · single-frame overlay".into(), d.overlay),
         ("compare · distributions".into(), d.groups),
     ]
+}
+
+/// The Live view's "Model at work" chart: DS (fitted on 30 grasps) following a grasp it
+/// did not see, as the live engine gives its verdict.
+fn live_figure(objects: &Session) -> Figure {
+    use tactile_workbench::live::model::LiveModel;
+    let mut train = objects.clone();
+    train.grasps.truncate(30);
+    let defaults = RecognitionParams::default();
+    let mut ds = defaults.ds;
+    ds.gp.capacity = 20;
+    let opts = tactile_workbench::models::SequenceFitOptions {
+        method: MethodId::Ds,
+        features: tactile_workbench::features::FeatureSet::ALL,
+        label_set: "object".into(),
+        seed: 1,
+        ds,
+        gs: defaults.gs,
+    };
+    let (model, secs) = tactile_workbench::models::fit_sequences(&train, &opts).expect("DS fits");
+    let file =
+        tactile_workbench::models::sequence_file(model, &train, secs, Default::default(), None);
+    let path = common::temp_dir("audit-live").join("ds.json");
+    tactile_workbench::models::save(&file, &path).expect("the model saves");
+    let one = Session {
+        grasps: vec![objects.grasps[35].clone()],
+        ..objects.clone()
+    };
+    let verdict = LiveModel::load(&path, false)
+        .expect("the model loads")
+        .verdict(&one)
+        .expect("a verdict");
+    verdict.figure(5).expect("DS gives steps")
 }
 
 #[test]

@@ -32,12 +32,23 @@ fn sample() -> Session {
 /// Serve `s` at `rate` on a free port once a client subscribed to every topic, the grasps
 /// over and over until `stop`.
 fn serve_loop(s: Session, rate: f64, stop: Arc<AtomicBool>) -> (u16, std::thread::JoinHandle<()>) {
+    let topics = Stream::new(&s, rate).unwrap().topics.len();
+    serve_loop_for(s, rate, stop, topics)
+}
+
+/// [`serve_loop`] once clients hold `subscriptions` (a spec may leave topics out).
+fn serve_loop_for(
+    s: Session,
+    rate: f64,
+    stop: Arc<AtomicBool>,
+    subscriptions: usize,
+) -> (u16, std::thread::JoinHandle<()>) {
     let topics = Stream::new(&s, rate).unwrap().topics;
     let mut server = serve::Server::start("127.0.0.1", 0, &topics).unwrap();
     let port = server.port();
     let thread = std::thread::spawn(move || {
         let stream = Stream::new(&s, rate).unwrap();
-        server.wait_for_subscriptions(stream.topics.len(), &stop);
+        server.wait_for_subscriptions(subscriptions, &stop);
         while !stop.load(std::sync::atomic::Ordering::Relaxed) {
             server.play(&stream, 0..s.grasps.len(), &stop, |_| {});
         }
@@ -183,6 +194,197 @@ fn the_live_view_shows_a_served_stream_with_ds_at_work() {
     h.get_all_by_label("Disconnect").next().unwrap().click();
     h.run_ok();
     assert!(!h.state().rooms.live.is_connected());
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    server.join().unwrap();
+}
+
+/// A pad of 2 × 2 taxels pressed in the middle of each grasp: 20 idle frames (with a
+/// little noise, so the idle total has a spread), 20 pressed, 20 idle, at 50 Hz; objects
+/// cup and mug, outcome ok or slip.
+fn pressed_pad(grasps: usize) -> Session {
+    use tactile_workbench::session::{
+        Frame, Grasp, LabelSet, Layout, Sensor, SessionMeta, ValueTransform,
+    };
+    let grasps = (0..grasps)
+        .map(|g| Grasp {
+            object: ["cup", "mug"][g % 2].into(),
+            trial: None,
+            labels: vec![g % 2, (g / 2) % 2],
+            frames: (0..60)
+                .map(|i| {
+                    let idle = 1.0 + 0.05 * ((i * 7 + g) % 5) as f64;
+                    let v = if (20..40).contains(&i) { 50.0 } else { idle };
+                    Frame {
+                        t: i as f64 / 50.0,
+                        taxels: vec![vec![v; 4]],
+                        encoders: Vec::new(),
+                    }
+                })
+                .collect(),
+            key_frame: 30,
+        })
+        .collect();
+    Session {
+        meta: SessionMeta {
+            name: "pressed pad".into(),
+            source: "tests/gui_live.rs".into(),
+            licence: String::new(),
+            citation: String::new(),
+            frame_rate_hz: Some(50.0),
+            notes: String::new(),
+        },
+        sensors: vec![Sensor {
+            name: "pad".into(),
+            layout: Layout::Grid { rows: 2, cols: 2 },
+            unit: "kPa".into(),
+            transform: ValueTransform::Identity,
+            range: None,
+        }],
+        encoders: Vec::new(),
+        label_sets: vec![
+            LabelSet {
+                name: "object".into(),
+                classes: vec!["cup".into(), "mug".into()],
+            },
+            LabelSet {
+                name: "outcome".into(),
+                classes: vec!["ok".into(), "slip".into()],
+            },
+        ],
+        grasps,
+    }
+}
+
+fn snapshot_of(app: &WorkbenchApp) -> Option<tactile_workbench::live::Snapshot> {
+    app.rooms.live.snapshot().map(|s| s.lock().unwrap().clone())
+}
+
+/// Choose `option` in the combo box labelled `combo`.
+fn choose(h: &mut Harness<'static, WorkbenchApp>, combo: &str, option: &str) {
+    h.get_by_label(combo).click();
+    h.run_ok();
+    h.get_by_label(option).click();
+    h.run_ok();
+}
+
+/// Cutting by hand (Start grasp, the key K, the key G with the labels chosen) and, on a
+/// stream without events, labelling the next contact grasp: each grasp is recorded with
+/// the object and labels chosen in the view.
+#[test]
+fn the_live_view_cuts_by_hand_and_labels_contact_grasps() {
+    let dir = common::temp_dir("gui-live-hand");
+    let pad = pressed_pad(40);
+    // No events topic: grasps are cut by contact, or by hand when asked.
+    let mut spec = Stream::new(&pad, 1.0).unwrap().spec();
+    spec.as_object_mut().unwrap().remove("grasps");
+    spec["live"] = serde_json::json!({"contact": {"min_rise": 20, "min_duration_s": 0.2}});
+    let spec_path = dir.join("pad.spec.json");
+    std::fs::write(&spec_path, spec.to_string()).unwrap();
+    let stop = Arc::new(AtomicBool::new(false));
+    // The pad's topic only: the spec leaves the events out.
+    let (port, server) = serve_loop_for(pad, 1.0, stop.clone(), 1);
+
+    let mut h = common::gui::workbench(1400.0, 900.0);
+    h.get_by_label("File").click();
+    h.run_ok();
+    h.get_by_label("Connect to a live stream…").click();
+    h.run_ok();
+    let by_hand = dir.join("by-hand.json");
+    {
+        let form = &mut h.state_mut().rooms.live.form;
+        form.url = format!("ws://127.0.0.1:{port}");
+        form.spec = spec_path.display().to_string();
+        form.record = by_hand.display().to_string();
+    }
+    h.get_by_label("Cut grasps by hand").click();
+    h.run_ok();
+    h.get_by_label("Connect").click();
+    step_until(&mut h, Duration::from_secs(20), |app| {
+        snapshot_of(app).is_some_and(|s| s.latest.is_some())
+    });
+    assert!(
+        snapshot_of(h.state()).unwrap().latest.is_some(),
+        "no frame arrived"
+    );
+    h.get_by_label_contains("cut by hand");
+    choose(&mut h, "known objects", "mug");
+    choose(&mut h, "outcome", "slip");
+    h.get_by_label("Start grasp (G)").click();
+    step_until(&mut h, Duration::from_secs(10), |app| {
+        snapshot_of(app).is_some_and(|s| s.in_progress >= 10)
+    });
+    h.key_press(egui::Key::K);
+    step_until(&mut h, Duration::from_secs(10), |app| {
+        snapshot_of(app).is_some_and(|s| s.in_progress >= 20)
+    });
+    h.key_press(egui::Key::G);
+    step_until(&mut h, Duration::from_secs(10), |app| {
+        engine_grasps(app) == 1
+    });
+    assert_eq!(engine_grasps(h.state()), 1);
+    h.get_by_label_contains("grasp 1: mug outcome=slip");
+    // The next G starts a grasp again (the button says what G does next).
+    h.get_by_label("Start grasp (G)");
+    h.get_all_by_label("Disconnect").next().unwrap().click();
+    h.run_ok();
+    // The engine finishes the recording on its own thread.
+    let t = Instant::now();
+    while session::journal::journal_path(&by_hand).exists() && t.elapsed() < Duration::from_secs(10)
+    {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let recorded = session::load(&by_hand).unwrap();
+    assert_eq!(recorded.grasps.len(), 1);
+    let g = &recorded.grasps[0];
+    assert_eq!(g.object, "mug");
+    assert_eq!(recorded.label_sets[1].classes[g.labels[1]], "slip");
+    assert!(g.frames.len() >= 20, "{} frames", g.frames.len());
+    // The key frame is where K was pressed, not the last frame.
+    assert!(
+        g.key_frame >= 9 && g.key_frame + 1 < g.frames.len(),
+        "{}",
+        g.key_frame
+    );
+
+    // By contact: the labels chosen go to the next grasp; the one after is unlabelled.
+    let by_contact = dir.join("by-contact.json");
+    h.get_by_label("Cut grasps by hand").click();
+    h.state_mut().rooms.live.form.record = by_contact.display().to_string();
+    h.run_ok();
+    h.get_by_label("Connect").click();
+    step_until(&mut h, Duration::from_secs(10), |app| {
+        snapshot_of(app).is_some_and(|s| s.cutting == "by contact")
+    });
+    h.get_by_label_contains("cut by contact");
+    choose(&mut h, "known objects", "cup");
+    choose(&mut h, "outcome", "ok");
+    h.get_by_label("Label the next grasp").click();
+    h.run_ok();
+    step_until(&mut h, Duration::from_secs(30), |app| {
+        engine_grasps(app) >= 2
+    });
+    h.get_by_label_contains("grasp 1: cup outcome=ok");
+    h.get_by_label_contains("grasp 2: unlabelled");
+    h.get_all_by_label("Disconnect").next().unwrap().click();
+    h.run_ok();
+    let t = Instant::now();
+    while session::journal::journal_path(&by_contact).exists()
+        && t.elapsed() < Duration::from_secs(10)
+    {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let recorded = session::load(&by_contact).unwrap();
+    assert!(recorded.grasps.len() >= 2);
+    let (first, second) = (&recorded.grasps[0], &recorded.grasps[1]);
+    assert_eq!(first.object, "cup");
+    assert_eq!(recorded.label_sets[1].classes[first.labels[1]], "ok");
+    assert_eq!(second.object, "unlabelled");
+    // A contact grasp holds the pressed frames (20 at 50 Hz), give or take the hysteresis.
+    assert!(
+        (15..=25).contains(&first.frames.len()),
+        "{}",
+        first.frames.len()
+    );
     stop.store(true, std::sync::atomic::Ordering::Relaxed);
     server.join().unwrap();
 }

@@ -190,11 +190,14 @@ pub fn colour_bar(
         font.clone(),
         text,
     );
-    painter.text(
-        Pos2::new(rect.min.x, rect.min.y + 20.0),
-        Align2::LEFT_CENTER,
-        format!("({unit})"),
-        font,
-        text,
-    );
+    // A view that says the unit elsewhere (a long one would be cut here) gives none.
+    if !unit.is_empty() {
+        painter.text(
+            Pos2::new(rect.min.x, rect.min.y + 20.0),
+            Align2::LEFT_CENTER,
+            format!("({unit})"),
+            font,
+            text,
+        );
+    }
 }

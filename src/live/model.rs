@@ -20,6 +20,7 @@ use ndarray::ArrayView2;
 use crate::catalogue::MethodId;
 use crate::features::feature_sequences_in;
 use crate::features::sequence::{FeatureSequences, SequenceParams, SequenceRange};
+use crate::figures::{Axis, Figure, FigureKind, Orientation, RefLine, Series};
 use crate::learners::{NoveltyLearner, SequenceClassifier};
 use crate::models::clustering::Clusterer;
 use crate::models::inputs::SequenceInputs;
@@ -88,6 +89,58 @@ impl Verdict {
             })
             .collect();
         Some(format!("early {}", words.join(" ")))
+    }
+}
+
+/// Steps a chart of the distribution draws at most: a long grasp is thinned evenly (its
+/// last step always kept), since a tile has fewer pixels than a 1 kHz grasp has steps.
+pub const CHART_STEPS: usize = 600;
+
+impl Verdict {
+    /// The `top` classes' probability at every step (the classes most probable at the
+    /// latest step): how the decision formed, as a chart of the figure model, with the
+    /// step it settled at marked. None without steps (not DS/GS, or no step yet).
+    pub fn figure(&self, top: usize) -> Option<Figure> {
+        let last = self.steps.last()?;
+        let mut order: Vec<usize> = (0..last.len()).collect();
+        order.sort_by(|&a, &b| last[b].total_cmp(&last[a]));
+        let n = self.steps.len();
+        let every = n.div_ceil(CHART_STEPS).max(1);
+        let shown: Vec<usize> = (0..n)
+            .step_by(every)
+            .chain((!(n - 1).is_multiple_of(every)).then_some(n - 1))
+            .collect();
+        let series = order
+            .into_iter()
+            .take(top)
+            .map(|k| {
+                let name = self
+                    .classes
+                    .get(k)
+                    .cloned()
+                    .unwrap_or_else(|| k.to_string());
+                let x = shown.iter().map(|&i| (i + 1) as f64).collect();
+                let y = shown
+                    .iter()
+                    .map(|&i| self.steps[i].get(k).copied().unwrap_or(f64::NAN))
+                    .collect();
+                Series::new(name, x, y)
+            })
+            .collect();
+        let mut figure = Figure::chart(
+            format!("{} class distribution, step by step", self.method.key()),
+            Axis::new("step", "").including(1.0, n.max(2) as f64),
+            Axis::new("probability", "").including(0.0, 1.0),
+            series,
+        );
+        if let (Some(s), FigureKind::Chart(c)) = (self.settled, &mut figure.kind) {
+            c.ref_lines.push(RefLine {
+                orientation: Orientation::Vertical,
+                value: (s + 1) as f64,
+                label: "settled".into(),
+            });
+        }
+        Some(figure)
     }
 }
 

@@ -20,6 +20,7 @@ use serde::{Deserialize, Serialize};
 use super::pane::{LivePane, Pane};
 use super::{Cx, Room};
 use crate::app::View;
+use crate::app::figure_view::{self, Selection as FigureSelection};
 use crate::app::heatmap::{colour_bar, sensor_heatmap};
 use crate::figures::ColorMap;
 use crate::live::client::{State, lock};
@@ -59,8 +60,9 @@ impl Default for LiveForm {
     }
 }
 
-/// Points a trace line draws at most, whatever the stream's rate.
-const TRACE_POINTS: usize = 1500;
+/// Points a trace line draws at most, whatever the stream's rate: about one per pixel of
+/// a tile (more only cost frame time).
+const TRACE_POINTS: usize = 600;
 
 /// A stream the view is connected to.
 struct Connected {
@@ -303,7 +305,7 @@ impl LiveRoom {
             ui,
             "Record to (optional)",
             &mut self.form.record,
-            "a session file, written after each grasp",
+            "a session file; each grasp is journalled as it ends",
         );
         ui.checkbox(&mut self.form.by_hand, "Cut grasps by hand");
         ui.add(
@@ -526,27 +528,33 @@ impl LiveRoom {
         } else {
             (span.0, span.0 + 1.0)
         };
-        let n = sensors.len().max(1) as f32;
-        let width = ((ui.available_width() - 140.0) / n - 8.0).clamp(40.0, 300.0);
-        let cell = Vec2::new(
-            width,
-            (width * 1.3).min(ui.available_height() - 40.0).max(60.0),
-        );
         let unit = sensors.first().map(|s| s.unit.clone()).unwrap_or_default();
-        ui.horizontal_wrapped(|ui| {
-            for (sensor, p) in sensors.iter().zip(&pressures) {
-                ui.vertical(|ui| {
-                    ui.label(&sensor.name);
-                    sensor_heatmap(ui, sensor, p, range, ColorMap::Viridis, cell);
-                });
-            }
+        // The unit in a line of its own (it wraps), not in the colour bar's narrow column.
+        ui.small(format!(
+            "Pressure ({unit}), coloured over the range the stream has shown"
+        ));
+        let (cell, cols) = heatmap_cells(sensors.len(), ui.available_size());
+        ui.horizontal_top(|ui| {
+            ui.vertical(|ui| {
+                for row in sensors.chunks(cols).zip(pressures.chunks(cols)) {
+                    ui.horizontal_top(|ui| {
+                        for (sensor, p) in row.0.iter().zip(row.1) {
+                            ui.vertical(|ui| {
+                                ui.label(&sensor.name);
+                                sensor_heatmap(ui, sensor, p, range, ColorMap::Viridis, cell);
+                            });
+                        }
+                    });
+                }
+            });
+            let rows = sensors.len().div_ceil(cols).max(1) as f32;
             colour_bar(
                 ui,
                 range,
                 ColorMap::Viridis,
                 "pressure",
-                &unit,
-                cell.y + 20.0,
+                "",
+                rows * (cell.y + HEATMAP_LABEL) - 4.0,
             );
         });
     }
@@ -591,24 +599,30 @@ impl LiveRoom {
                 s.last_verdict.clone(),
                 s.early_error.clone(),
                 s.in_progress,
-                s.recent.iter().rev().take(8).cloned().collect::<Vec<_>>(),
+                s.recent.iter().rev().take(4).cloned().collect::<Vec<_>>(),
             )
         }) else {
             ui.label("No stream.");
             return;
         };
         let (open, last, early_error, in_progress, recent) = view;
+        // The latest grasps' lines stay in sight below the chart.
+        let reserve = if recent.is_empty() {
+            0.0
+        } else {
+            (recent.len() as f32 + 1.0) * 15.0 + 12.0
+        };
         if let Some(e) = early_error {
             ui.colored_label(ui.visuals().warn_fg_color, format!("model: {e}"));
         }
         match (&open, &last) {
             (Some(v), _) => {
                 ui.strong(format!("Grasp in progress: {in_progress} frames"));
-                verdict_ui(ui, v, true);
+                verdict_ui(ui, v, true, reserve);
             }
             (None, Some(v)) => {
                 ui.strong("Last grasp");
-                verdict_ui(ui, v, false);
+                verdict_ui(ui, v, false, reserve);
             }
             (None, None) => {
                 ui.label(if in_progress > 0 {
@@ -623,11 +637,36 @@ impl LiveRoom {
             ui.separator();
             ui.small("Latest grasps");
             for line in recent {
-                // The CLI's arrow is not in the window's font.
-                ui.small(line.replace('→', "->"));
+                // The CLI's arrow is not in the window's font; one line each (a cut line
+                // shows whole on hover).
+                let line = line.replace('→', "->");
+                ui.add(egui::Label::new(egui::RichText::new(line).small()).truncate());
             }
         }
     }
+}
+
+/// Room for a sensor's name above its heatmap, and for the colour bar beside them.
+const HEATMAP_LABEL: f32 = 26.0;
+const COLOUR_BAR: f32 = 130.0;
+
+/// The heatmaps' cell size and columns in `avail`: the rows (of `n` sensors) that give
+/// the largest cells, each cell 1.3 times as tall as wide.
+fn heatmap_cells(n: usize, avail: Vec2) -> (Vec2, usize) {
+    let n = n.max(1);
+    let (width, cols) = (1..=n)
+        .map(|rows| {
+            let cols = n.div_ceil(rows);
+            let w = (avail.x - COLOUR_BAR) / cols as f32 - 10.0;
+            let h = avail.y / rows as f32 - HEATMAP_LABEL;
+            (w.min(h / 1.3), cols)
+        })
+        .fold(
+            (f32::NEG_INFINITY, n),
+            |best, c| if c.0 > best.0 { c } else { best },
+        );
+    let width = width.clamp(30.0, 320.0);
+    (Vec2::new(width, width * 1.3), cols)
 }
 
 /// The connection's status as lines, the ones that need attention marked.
@@ -691,7 +730,8 @@ fn status_lines(s: &Snapshot) -> Vec<(String, bool)> {
 
 /// A verdict: the decision, when it settled, the latest step's distribution as bars and
 /// every class's probability over the steps.
-fn verdict_ui(ui: &mut egui::Ui, v: &Verdict, open: bool) {
+/// `reserve`: the height to leave below the chart.
+fn verdict_ui(ui: &mut egui::Ui, v: &Verdict, open: bool, reserve: f32) {
     let word = if open { "running decision" } else { "decided" };
     let mut head = format!("{}: {word} {}", v.method.key(), v.predicted);
     if v.decision.is_finite() {
@@ -711,7 +751,7 @@ fn verdict_ui(ui: &mut egui::Ui, v: &Verdict, open: bool) {
     let width = ui.available_width().min(420.0);
     let mut order: Vec<usize> = (0..last.len()).collect();
     order.sort_by(|&a, &b| last[b].total_cmp(&last[a]));
-    for &k in order.iter().take(10) {
+    for &k in order.iter().take(5) {
         let (rect, _) = ui.allocate_exact_size(Vec2::new(width, 16.0), Sense::hover());
         let p = last[k].clamp(0.0, 1.0) as f32;
         let label_w = 110.0;
@@ -738,25 +778,22 @@ fn verdict_ui(ui: &mut egui::Ui, v: &Verdict, open: bool) {
             text,
         );
     }
-    // The top classes' probability at every step: how the decision formed.
-    let top: Vec<usize> = order.into_iter().take(5).collect();
-    Plot::new(("live-steps", open))
-        .allow_scroll(false)
-        .include_y(0.0)
-        .include_y(1.0)
-        .legend(Legend::default())
-        .show(ui, |p| {
-            for &k in &top {
-                let pts: Vec<[f64; 2]> = v
-                    .steps
-                    .iter()
-                    .enumerate()
-                    .map(|(i, row)| [(i + 1) as f64, row.get(k).copied().unwrap_or(0.0)])
-                    .collect();
-                let name = v.classes.get(k).cloned().unwrap_or_default();
-                p.line(Line::new(name, PlotPoints::new(pts)));
-            }
-        });
+    // The top classes' probability at every step: how the decision formed (a figure of
+    // the figure model, so its legend and axes follow the audited layout rules).
+    if let Some(figure) = v.figure(5) {
+        let id = if open {
+            "live-steps-open"
+        } else {
+            "live-steps-last"
+        };
+        figure_view::show(
+            ui,
+            id,
+            &figure,
+            ui.available_height() - reserve,
+            FigureSelection::None,
+        );
+    }
 }
 
 impl Room for LiveRoom {
