@@ -593,10 +593,11 @@ impl LiveRoom {
     }
 
     fn model_ui(&self, ui: &mut egui::Ui) {
+        // Under the lock: the verdicts' last steps and charts, not every step of them.
         let Some(view) = self.shown(|s| {
             (
-                s.open_verdict.clone(),
-                s.last_verdict.clone(),
+                s.open_verdict.as_ref().map(Shown::of),
+                s.last_verdict.as_ref().map(Shown::of),
                 s.early_error.clone(),
                 s.in_progress,
                 s.recent.iter().rev().take(4).cloned().collect::<Vec<_>>(),
@@ -731,21 +732,48 @@ fn status_lines(s: &Snapshot) -> Vec<(String, bool)> {
 /// A verdict: the decision, when it settled, the latest step's distribution as bars and
 /// every class's probability over the steps.
 /// `reserve`: the height to leave below the chart.
-fn verdict_ui(ui: &mut egui::Ui, v: &Verdict, open: bool, reserve: f32) {
+/// What the model tile draws of a verdict: the verdict with its latest step only, how many
+/// steps it has, and its chart.
+struct Shown {
+    verdict: Verdict,
+    steps: usize,
+    figure: Option<crate::figures::Figure>,
+}
+
+impl Shown {
+    fn of(v: &Verdict) -> Shown {
+        Shown {
+            verdict: Verdict {
+                method: v.method,
+                predicted: v.predicted.clone(),
+                decision: v.decision,
+                classes: v.classes.clone(),
+                steps: v.steps.last().cloned().into_iter().collect(),
+                settled: v.settled,
+                novelty: v.novelty,
+            },
+            steps: v.steps.len(),
+            figure: v.figure(5),
+        }
+    }
+}
+
+fn verdict_ui(ui: &mut egui::Ui, shown: &Shown, open: bool, reserve: f32) {
+    let v = &shown.verdict;
     let word = if open { "running decision" } else { "decided" };
     let mut head = format!("{}: {word} {}", v.method.key(), v.predicted);
     if v.decision.is_finite() {
         head += &format!(" ({:.3})", v.decision);
     }
     if let Some(s) = v.settled {
-        head += &format!(" · settled at step {} of {}", s + 1, v.steps.len());
+        head += &format!(" · settled at step {} of {}", s + 1, shown.steps);
     }
     if let Some((n, t)) = v.novelty {
         head += &format!(" · novelty {n:.3} (new cluster above {t:.3})");
     }
     ui.label(head);
     let Some(last) = v.steps.last() else { return };
-    ui.small(format!("Class distribution at step {}", v.steps.len()));
+    ui.small(format!("Class distribution at step {}", shown.steps));
     let text = ui.visuals().text_color();
     let accent = ui.visuals().selection.bg_fill;
     let width = ui.available_width().min(420.0);
@@ -780,7 +808,7 @@ fn verdict_ui(ui: &mut egui::Ui, v: &Verdict, open: bool, reserve: f32) {
     }
     // The top classes' probability at every step: how the decision formed (a figure of
     // the figure model, so its legend and axes follow the audited layout rules).
-    if let Some(figure) = v.figure(5) {
+    if let Some(figure) = &shown.figure {
         let id = if open {
             "live-steps-open"
         } else {
@@ -789,7 +817,7 @@ fn verdict_ui(ui: &mut egui::Ui, v: &Verdict, open: bool, reserve: f32) {
         figure_view::show(
             ui,
             id,
-            &figure,
+            figure,
             ui.available_height() - reserve,
             FigureSelection::None,
         );
