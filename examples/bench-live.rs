@@ -10,13 +10,14 @@
 //! - the latency from a frame's publication (its log time) to DS's class distribution
 //!   for it, p50 and p95;
 //! - the window's frame time (one harness step: layout and tessellation of every tile),
-//!   p50, p95 and max;
+//!   p50, p95 and max; with `--headless` the window is never drawn (the engine alone, as
+//!   `live` runs it);
 //! - the process's RSS at 60 s and at the end (server, engine and window together; no
-//!   recording, which keeps every grasp: the issue's "recording aside").
+//!   recording: the issue's "recording aside"), and every `--rss-every` seconds.
 //!
 //! ```sh
 //! cargo run --example bench-live -- --seconds 60
-//! cargo run --example bench-live -- --seconds 600   # the 10-minute soak
+//! cargo run --example bench-live -- --seconds 600 --rss-every 60   # the 10-minute soak
 //! ```
 
 use std::path::Path;
@@ -133,12 +134,19 @@ fn percentile(v: &mut [f64], q: f64) -> f64 {
 
 fn main() {
     let mut seconds = 60.0;
+    let mut rss_every = None;
+    let mut headless = false;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
+        if a == "--headless" {
+            headless = true;
+            continue;
+        }
         match (a.as_str(), args.next().and_then(|v| v.parse::<f64>().ok())) {
             ("--seconds", Some(v)) if v > 0.0 => seconds = v,
+            ("--rss-every", Some(v)) if v > 0.0 => rss_every = Some(v),
             _ => {
-                eprintln!("usage: bench-live [--seconds S]");
+                eprintln!("usage: bench-live [--seconds S] [--rss-every S] [--headless]");
                 std::process::exit(2);
             }
         }
@@ -234,12 +242,28 @@ fn main() {
     let mut frame_ms = Vec::new();
     let started = Instant::now();
     let mut rss_at_60 = None;
+    let mut next_rss = rss_every.unwrap_or(f64::INFINITY);
     while !publisher.is_finished() {
         let t = Instant::now();
-        h.step();
-        frame_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        if !headless {
+            h.step();
+            frame_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        }
         if rss_at_60.is_none() && started.elapsed() > Duration::from_secs(60) {
             rss_at_60 = Some(rss_mb());
+        }
+        let at = started.elapsed().as_secs_f64();
+        if at >= next_rss {
+            let snap = h.state().rooms.live.snapshot();
+            let (messages, grasps) = snap.map_or((0, 0), |s| {
+                let s = s.lock().unwrap();
+                (s.status.messages, s.grasps)
+            });
+            println!(
+                "at {at:.0} s: RSS {:.1} MB, {messages} messages, {grasps} grasps",
+                rss_mb()
+            );
+            next_rss += rss_every.unwrap_or(f64::INFINITY);
         }
         // A display at 60 Hz: the next frame when it is due.
         std::thread::sleep(Duration::from_secs_f64(1.0 / 60.0).saturating_sub(t.elapsed()));
@@ -257,7 +281,9 @@ fn main() {
     };
     let (mut last, mut since) = (received(&h), Instant::now());
     while received(&h) < published as u64 && since.elapsed() < Duration::from_secs(2) {
-        h.step();
+        if !headless {
+            h.step();
+        }
         std::thread::sleep(Duration::from_millis(50));
         if received(&h) != last {
             (last, since) = (received(&h), Instant::now());
@@ -294,9 +320,13 @@ fn main() {
         percentile(&mut frame_ms, 0.5),
         percentile(&mut frame_ms, 0.95),
     );
-    println!(
-        "window frame time over {n} frames: p50 {p50:.2} ms, p95 {p95:.2} ms, max {max:.2} ms"
-    );
+    if headless {
+        println!("headless: the window was not drawn");
+    } else {
+        println!(
+            "window frame time over {n} frames: p50 {p50:.2} ms, p95 {p95:.2} ms, max {max:.2} ms"
+        );
+    }
     match rss_at_60 {
         Some(r) => println!(
             "RSS: {r:.1} MB at 60 s, {rss_end:.1} MB at the end ({:+.1} MB)",
