@@ -144,9 +144,16 @@ pub struct CompareRoom {
     pending: Option<(Key, Receiver<Comparison>)>,
     /// The grasp of the point under the pointer, and in which plot.
     pointing: Option<(ComparePlot, usize)>,
-    /// The heatmap's columns in the time plots' zoom: for which comparison (its address)
-    /// and range, and the figure (None: no column in it).
-    zoomed: Option<(usize, (f64, f64), Option<Arc<Figure>>)>,
+    zoomed: Option<Zoomed>,
+}
+
+/// The heatmap's columns in the time plots' zoom.
+struct Zoomed {
+    /// The comparison's address: a new comparison is cropped anew.
+    comparison: usize,
+    range: (f64, f64),
+    /// None: no column in the range.
+    figure: Option<Arc<Figure>>,
 }
 
 /// The link group of the time plots' x axes (zoom one, and all follow).
@@ -207,7 +214,7 @@ impl CompareRoom {
     /// The grasps × time heatmap as drawn while the time plots are zoomed (None when they
     /// are not, or no column lies in their range).
     pub fn heatmap_in_zoom(&self) -> Option<&Figure> {
-        self.zoomed.as_ref()?.2.as_deref()
+        self.zoomed.as_ref()?.figure.as_deref()
     }
 
     /// The outputs of the chosen model, once read.
@@ -618,11 +625,15 @@ impl CompareRoom {
     fn zoomed_heatmap(&mut self, c: &Arc<Comparison>, range: (f64, f64)) -> Option<Arc<Figure>> {
         let at = Arc::as_ptr(c) as usize;
         match &self.zoomed {
-            Some((a, r, f)) if *a == at && *r == range => f.clone(),
+            Some(z) if z.comparison == at && z.range == range => z.figure.clone(),
             _ => {
                 let f = compare::time_window(&c.heatmap, &c.heatmap_times, range.0, range.1)
                     .map(Arc::new);
-                self.zoomed = Some((at, range, f.clone()));
+                self.zoomed = Some(Zoomed {
+                    comparison: at,
+                    range,
+                    figure: f.clone(),
+                });
                 f
             }
         }
