@@ -346,6 +346,18 @@ fn audit(figure: &Figure, size: Vec2) -> Vec<String> {
         }
     };
     match &figure.kind {
+        // A category axis (strips of points per group): each category named like a bar's.
+        FigureKind::Chart(c) if !c.x.categories.is_empty() => match frames.first() {
+            Some(f) => {
+                check_ticks("the y axis", &y_ticks(f), &mut problems);
+                let below: Vec<Text> = (p.texts.iter())
+                    .filter(|t| t.rect.top() >= f.bottom() - 1.0)
+                    .cloned()
+                    .collect();
+                bar_categories(&mut pane, &p, *f, &c.x.categories, &below, &mut problems);
+            }
+            None => problems.push("no plot frame painted".into()),
+        },
         FigureKind::Chart(_) => match frames.first() {
             Some(f) => {
                 check_ticks("the x axis", &x_ticks(f), &mut problems);

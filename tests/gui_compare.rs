@@ -220,6 +220,18 @@ fn on_bts3_an_electrode_compares_successes_and_failures_as_distributions() {
     assert!(!d.x.title.contains("time"), "{}", d.x.title);
     let points: usize = d.series[..2].iter().map(|s| s.y.len()).sum();
     assert_eq!(points, 1276);
+    // Each strip's group is named on its axis, not a position.
+    assert_eq!(d.x.categories, ["success", "failure"]);
+    assert_eq!(d.x.title, "outcome");
+    // Single frames have no time: the grasps × time tile folds away.
+    let key = tactile_workbench::app::views::layout_key(tactile_workbench::app::View::Compare);
+    let layout = &h.state().layouts[&key];
+    let tile = (layout.tree.tiles)
+        .find_pane(&tactile_workbench::app::views::Pane::Compare(
+            tactile_workbench::compare::ComparePlot::Heatmap,
+        ))
+        .expect("the layout has the tile");
+    assert!(!layout.tree.tiles.is_visible(tile));
     // Overlaid single frames are points too, every grasp's.
     let o = chart(&c.overlay);
     assert_eq!(o.series[..2].iter().map(|s| s.y.len()).sum::<usize>(), 1276);
@@ -279,4 +291,285 @@ fn on_icub_a_ds_models_true_class_probability_by_correct_and_wrong() {
     }
     let last = |k: usize| *bands.series[k].y.last().unwrap();
     assert!(last(0) > last(1), "correct {} wrong {}", last(0), last(1));
+}
+
+/// Where chart `id` drew point `k` of its series `series` in the last frame.
+fn point_at(
+    h: &Harness<'static, WorkbenchApp>,
+    id: &str,
+    c: &Chart,
+    series: usize,
+    k: usize,
+) -> egui::Pos2 {
+    tactile_workbench::app::figure_view::marker_position(&h.ctx, id, c, series, k)
+        .unwrap_or_else(|| panic!("{id} was drawn"))
+}
+
+const OVERLAY: &str = "compare-compare-overlay";
+const GROUPS: &str = "compare-compare-groups";
+
+#[test]
+fn zooming_one_time_plot_zooms_them_all_and_the_heatmap_follows() {
+    use tactile_workbench::app::figure_view::{linked_x_range, shown_x_range};
+    let mut h = common::gui::workbench(1400.0, 900.0);
+    h.get_by_label("Simulated object recognition").click();
+    h.run_ok();
+    open_compare(&mut h);
+    h.run_ok();
+    let c = h.state().rooms.compare.shown.clone().unwrap();
+    let (overlay, groups) = (chart(&c.overlay), chart(&c.groups));
+    let before = shown_x_range(&h.ctx, OVERLAY, overlay).expect("the overlay was drawn");
+    assert!(linked_x_range(&h.ctx, egui::Id::unique("compare-time-axis")).is_none());
+    let columns =
+        |h: &Harness<'static, WorkbenchApp>| match h.state().rooms.compare.heatmap_in_zoom() {
+            Some(f) => match &f.kind {
+                FigureKind::Heatmap(m) => m.columns.len(),
+                other => panic!("a heatmap, not {other:?}"),
+            },
+            None => 0,
+        };
+    assert_eq!(columns(&h), 0, "not zoomed: the whole heatmap");
+    // Zoom in (as ctrl + wheel does) over the overlay's middle.
+    let s = &overlay.series[0];
+    let at = point_at(&h, OVERLAY, overlay, 0, s.x.len() / 2);
+    h.hover_at(at);
+    h.run_ok();
+    h.event(egui::Event::Zoom(2.0));
+    h.run_ok();
+    // The plots drawn before the zoomed one in its frame follow in the next.
+    h.step();
+    h.step();
+    let zoomed = shown_x_range(&h.ctx, OVERLAY, overlay).unwrap();
+    let width = |r: (f64, f64)| r.1 - r.0;
+    assert!(
+        width(zoomed) < 0.75 * width(before),
+        "{before:?} → {zoomed:?}"
+    );
+    // The bands follow along time, and the heatmap keeps the columns in that range.
+    let follows = shown_x_range(&h.ctx, GROUPS, groups).unwrap();
+    assert!((follows.0 - zoomed.0).abs() < 1e-9 && (follows.1 - zoomed.1).abs() < 1e-9);
+    assert_eq!(
+        linked_x_range(&h.ctx, egui::Id::unique("compare-time-axis")),
+        Some(zoomed)
+    );
+    let in_range = (c.heatmap_times.iter())
+        .filter(|t| (zoomed.0..=zoomed.1).contains(*t))
+        .count();
+    assert!(in_range > 0 && in_range < c.heatmap_times.len());
+    assert_eq!(columns(&h), in_range);
+}
+
+#[test]
+fn a_signal_dragged_from_the_tree_onto_a_plot_is_plotted() {
+    let mut h = common::gui::workbench(1400.0, 900.0);
+    h.get_by_label("Simulated object recognition").click();
+    h.run_ok();
+    open_compare(&mut h);
+    h.get_by_role_and_label(Role::TextInput, "Signals").click();
+    h.run_ok();
+    h.get_by_role_and_label(Role::TextInput, "Signals")
+        .type_text("thumb taxel 3");
+    h.run_ok();
+    let from = h.get_by_label("taxel 3").rect().center();
+    let c = h.state().rooms.compare.shown.clone().unwrap();
+    let to = point_at(&h, GROUPS, chart(&c.groups), 0, 0);
+    assert_eq!(h.state().rooms.compare.form.signal, Signal::HandTotal);
+    h.event(egui::Event::PointerMoved(from));
+    h.event(egui::Event::PointerButton {
+        pos: from,
+        button: egui::PointerButton::Primary,
+        pressed: true,
+        modifiers: Default::default(),
+    });
+    h.step();
+    for k in 1..=10 {
+        h.event(egui::Event::PointerMoved(
+            from + (to - from) * (k as f32 / 10.0),
+        ));
+        h.step();
+    }
+    h.event(egui::Event::PointerButton {
+        pos: to,
+        button: egui::PointerButton::Primary,
+        pressed: false,
+        modifiers: Default::default(),
+    });
+    settle(&mut h);
+    assert_eq!(
+        h.state().rooms.compare.form.signal,
+        Signal::Taxel {
+            sensor: 0,
+            taxel: 2
+        }
+    );
+}
+
+#[test]
+fn a_taxel_clicked_in_the_replay_is_compared() {
+    let mut h = common::gui::workbench(1400.0, 900.0);
+    h.get_by_label("Simulated object recognition").click();
+    h.run_ok();
+    open_compare(&mut h);
+    let active = h.state().browser.active;
+    h.state_mut().commands.push(Command::Focus {
+        session: active,
+        grasp: 0,
+    });
+    settle(&mut h);
+    let sensor = h.state().sessions[active].session.sensors[0].clone();
+    // The replay's first heatmap is under its sensor's caption (taxels at their places in
+    // the fingertip): click across it until a taxel is hit.
+    let caption = format!("{} ({} taxels)", sensor.name, sensor.layout.taxel_count());
+    let top = h.get_by_label(&caption).rect();
+    let spots = (0..16).flat_map(|row| (0..6).map(move |col| (row, col)));
+    for (row, col) in spots {
+        if matches!(h.state().rooms.compare.form.signal, Signal::Taxel { .. }) {
+            break;
+        }
+        let at = egui::pos2(
+            top.left() + 8.0 + 8.0 * col as f32,
+            top.bottom() + 8.0 + 8.0 * row as f32,
+        );
+        for pressed in [true, false] {
+            h.event(egui::Event::PointerMoved(at));
+            h.event(egui::Event::PointerButton {
+                pos: at,
+                button: egui::PointerButton::Primary,
+                pressed,
+                modifiers: Default::default(),
+            });
+            h.step();
+        }
+        h.run_ok();
+    }
+    assert!(
+        matches!(
+            h.state().rooms.compare.form.signal,
+            Signal::Taxel { sensor: 0, .. }
+        ),
+        "{:?}",
+        h.state().rooms.compare.form.signal
+    );
+    settle(&mut h);
+    let c = h.state().rooms.compare.shown.clone().unwrap();
+    assert!(
+        chart(&c.overlay).y.title.contains("taxel"),
+        "{}",
+        chart(&c.overlay).y.title
+    );
+}
+
+#[test]
+fn a_stability_models_decision_value_by_correct_and_wrong() {
+    use tactile_workbench::experiments::stability::{
+        Config, DataOptions, StabilityData, StabilityOptions,
+    };
+    use tactile_workbench::jobs::Progress;
+    let session =
+        tactile_workbench::session::load(&common::sample("grasp-stability.json")).unwrap();
+    let data = StabilityData::from_session(&session, &DataOptions::default()).unwrap();
+    let opts = StabilityOptions {
+        single: Config {
+            num_bases: 8,
+            beta: 1.0,
+            gamma: 1.0,
+        },
+        ..Default::default()
+    };
+    let fit = models::fit_stability(MethodId::RawSvm, &session, &data, &opts, &Progress::new());
+    let file = fit.unwrap().into_file(&session, &data);
+    let predictions = models::predict(&file, &session, models::Calibration::None).unwrap();
+    let mut h = common::gui::workbench(1400.0, 900.0);
+    h.state_mut().analyses.models.add(file);
+    h.get_by_label("Simulated grasp stability").click();
+    h.run_ok();
+    open_compare(&mut h);
+    choose(
+        &mut h,
+        "Model outputs",
+        "raw linear SVM, trained on Simulated grasp stability",
+    );
+    choose(&mut h, "Align at", "key frame");
+    choose(&mut h, "Groups", "correct vs wrong (model)");
+    h.get_by_role_and_label(Role::TextInput, "Signals").click();
+    h.run_ok();
+    h.get_by_role_and_label(Role::TextInput, "Signals")
+        .type_text("decision");
+    h.run_ok();
+    h.get_by_label("raw linear SVM · SVM decision value")
+        .click();
+    settle(&mut h);
+    let c = h.state().rooms.compare.shown.clone().unwrap();
+    let bands = chart(&c.groups);
+    assert_eq!(bands.y.title, "raw linear SVM · SVM decision value");
+    // One value per grasp, at its key frame: each band is one point at time 0, the mean of
+    // its grasps' decision values.
+    for (k, correct) in [(0, true), (1, false)] {
+        let d: Vec<f64> = (predictions.iter())
+            .filter(|p| (p.truth.as_deref() == Some(p.predicted.as_str())) == correct)
+            .map(|p| p.decision)
+            .collect();
+        if d.is_empty() {
+            continue;
+        }
+        let s = bands
+            .series
+            .iter()
+            .find(|s| {
+                s.name
+                    .starts_with(if correct { "correct" } else { "wrong" })
+            })
+            .unwrap();
+        assert!(s.name.ends_with(&format!("(n={})", d.len())), "{}", s.name);
+        let at: Vec<usize> = (0..s.x.len()).filter(|&i| s.y[i].is_finite()).collect();
+        assert_eq!(at.len(), 1, "{k}: {:?}", s.y);
+        assert_eq!(s.x[at[0]], 0.0);
+        let mean = d.iter().sum::<f64>() / d.len() as f64;
+        assert!((s.y[at[0]] - mean).abs() < 1e-9, "{} vs {mean}", s.y[at[0]]);
+    }
+}
+
+#[test]
+fn a_clustering_models_clusters_are_offered_as_groups() {
+    use tactile_workbench::experiments::clustering::{ClusteringParams, UnsupervisedLearner};
+    use tactile_workbench::models::ClusterFitOptions;
+    let session =
+        tactile_workbench::session::load(&common::sample("object-recognition.json")).unwrap();
+    let opts = ClusterFitOptions {
+        method: MethodId::Du,
+        features: FeatureSet::ALL,
+        label_set: "object".into(),
+        threshold: 0.4,
+        seed: 2,
+        params: ClusteringParams::for_learner(UnsupervisedLearner::Du),
+    };
+    // Taught three objects' first five trials: the others open clusters of their own.
+    let spec = SubsetSpec {
+        objects: session.objects()[..3].to_vec(),
+        trials: (1..=5).into(),
+        labels: Vec::new(),
+    };
+    let part = subset(&session, &spec, "part").unwrap();
+    let (model, _) = models::fit_clusters(&part, &opts).unwrap();
+    let file = models::cluster_file(model, &part, 0.0, None);
+    let assigned = models::predict(&file, &session, models::Calibration::None).unwrap();
+    let mut h = common::gui::workbench(1400.0, 900.0);
+    h.state_mut().analyses.models.add(file);
+    h.get_by_label("Simulated object recognition").click();
+    h.run_ok();
+    open_compare(&mut h);
+    choose(&mut h, "Model outputs", "DU, trained on part");
+    choose(&mut h, "Groups", "clusters (model)");
+    let c = h.state().rooms.compare.shown.clone().unwrap();
+    let bands = chart(&c.groups);
+    // One band per cluster some grasp is in, its size the grasps the model puts there.
+    let mut clusters: Vec<&str> = assigned.iter().map(|p| p.predicted.as_str()).collect();
+    clusters.sort_unstable();
+    clusters.dedup();
+    assert_eq!(bands.series.len(), clusters.len(), "{:?}", names(bands));
+    for s in &bands.series {
+        let name = s.name.split(" (n=").next().unwrap();
+        let n = assigned.iter().filter(|p| p.predicted == name).count();
+        assert_eq!(s.name, format!("{name} (n={n})"));
+    }
 }

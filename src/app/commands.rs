@@ -52,6 +52,7 @@ impl WorkbenchApp {
                 Command::SaveModel(i) => self.open_picker(Purpose::SaveModel(i)),
                 Command::LoadModel => self.open_picker(Purpose::LoadModel),
                 Command::SaveSelection => self.open_picker(Purpose::SaveSelection),
+                Command::CompareSignal(signal) => self.rooms.compare.form.signal = signal,
             }
         }
     }

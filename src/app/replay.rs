@@ -11,7 +11,7 @@ use super::figure_view::{
 };
 use crate::figures::{Axis, AxisTitle, BarGroup, Figure, Scale};
 
-use super::heatmap::{colour_bar, sensor_heatmap};
+use super::heatmap::{colour_bar, taxel_picker};
 use super::loader::LoadedSession;
 use super::results::ReplayTrace;
 use crate::experiments::recognition::{GraspTrace, SupervisedLearner};
@@ -121,6 +121,11 @@ pub enum ReplayAction {
     None,
     /// Compute the recognition trace of this grasp with this learner.
     Trace(SupervisedLearner),
+    /// A taxel was clicked: compare it.
+    PickTaxel {
+        sensor: usize,
+        taxel: usize,
+    },
 }
 
 impl Replay {
@@ -212,7 +217,9 @@ impl Replay {
         ));
         self.controls(ui, g);
         ui.separator();
-        self.heatmaps(ui, s, g);
+        if let Some((sensor, taxel)) = self.heatmaps(ui, s, g) {
+            action = ReplayAction::PickTaxel { sensor, taxel };
+        }
         let trace = trace.filter(|t| {
             t.session == session.meta.name && t.grasp == grasp && t.learner == self.learner
         });
@@ -220,7 +227,10 @@ impl Replay {
             class_distribution(ui, &t.trace, self.frame, 200.0);
         }
         if session.label_set("object").is_some() && !session.encoders.is_empty() {
-            action = self.recognition_row(ui);
+            let row = self.recognition_row(ui);
+            if !matches!(row, ReplayAction::None) {
+                action = row;
+            }
         }
         ui.separator();
         if let Some(t) = self.traces(ui, session, g) {
@@ -282,7 +292,13 @@ impl Replay {
     }
 
     /// One heatmap per sensor at the current frame, beside a colour bar.
-    fn heatmaps(&mut self, ui: &mut egui::Ui, s: &LoadedSession, g: &Grasp) {
+    /// The frame's heatmaps; the taxel clicked, as (sensor, taxel).
+    fn heatmaps(
+        &mut self,
+        ui: &mut egui::Ui,
+        s: &LoadedSession,
+        g: &Grasp,
+    ) -> Option<(usize, usize)> {
         let session = &s.session;
         let n = g.frames.len();
         let unit = session
@@ -334,6 +350,7 @@ impl Replay {
             if self.change { "change" } else { "pressure" },
             self.colours.text()
         );
+        let mut picked = None;
         ui.horizontal_wrapped(|ui| {
             for (k, sensor) in session.sensors.iter().enumerate() {
                 ui.vertical(|ui| {
@@ -342,11 +359,15 @@ impl Replay {
                         sensor.name,
                         sensor.layout.taxel_count()
                     ));
-                    sensor_heatmap(ui, sensor, &values[k], range, map, cell);
+                    // A click on a taxel plots it in the Compare view.
+                    if let Some(t) = taxel_picker(ui, sensor, &values[k], range, map, cell) {
+                        picked = Some((k, t));
+                    }
                 });
             }
             colour_bar(ui, range, map, &title, &unit, cell.y + 20.0);
         });
+        picked
     }
 
     /// The learner choice and the button that asks for its recognition trace.

@@ -113,6 +113,8 @@ pub enum Command {
     LoadModel,
     /// "Save selection as session…": the selected grasps as a session file.
     SaveSelection,
+    /// Plot this signal in the Compare view (a taxel clicked in the replay).
+    CompareSignal(crate::compare::Signal),
 }
 
 /// A model of a given size: what a frontier's point stands for.

@@ -6,7 +6,9 @@ use serde::{Deserialize, Serialize};
 
 use super::groups::Groups;
 use super::stats::{Band, Distribution, Spread, Trace};
-use crate::figures::{Axis, AxisTitle, ColorScale, Figure, Series, SeriesStyle, series_color};
+use crate::figures::{
+    Axis, AxisTitle, ColorScale, Figure, FigureKind, Series, SeriesStyle, series_color,
+};
 use crate::rng::Rng;
 use crate::session::Session;
 
@@ -176,14 +178,13 @@ pub fn distributions(
         );
         grasps.push(Vec::new());
     }
-    let positions = (dists.iter().enumerate())
-        .map(|(i, d)| format!("{} {}", i + 1, groups.names[d.group]))
-        .collect::<Vec<_>>()
-        .join(", ");
+    // Each strip's group named on the axis, on screen and on paper.
+    let names = (dists.iter())
+        .map(|d| groups.names[d.group].clone())
+        .collect();
     let figure = Figure::chart(
         format!("{} by {}", l.signal, groups.title),
-        Axis::new(format!("{}: {positions}", groups.title), "")
-            .including(0.5, dists.len() as f64 + 0.5),
+        Axis::new(&groups.title, "").categories(names),
         Axis::new(&l.signal, &l.unit),
         series,
     )
@@ -195,16 +196,22 @@ pub fn distributions(
     (figure, grasps)
 }
 
+/// A heatmap of grasps against time: the figure, each row's grasp and each column's time.
+pub struct GraspsByTime {
+    pub figure: Figure,
+    pub rows: Vec<usize>,
+    pub times: Vec<f64>,
+}
+
 /// Grasps × time of one signal, rows sorted by group (then by grasp), on the bands' grid
-/// of `step` seconds; a cell without a value is missing. Returns the figure and each row's
-/// grasp.
+/// of `step` seconds; a cell without a value is missing.
 pub fn heatmap(
     session: &Session,
     traces: &[Trace],
     groups: &Groups,
     step: f64,
     l: &Labels,
-) -> (Figure, Vec<usize>) {
+) -> GraspsByTime {
     let step = if step.is_finite() && step > 0.0 {
         step
     } else {
@@ -244,8 +251,9 @@ pub fn heatmap(
             format!("{name} · {}", grasp_name(session, tr.grasp))
         })
         .collect();
-    let columns = (lo..=hi)
-        .map(|b| crate::figures::tick_label(b as f64 * step, step, crate::figures::Scale::Linear))
+    let times: Vec<f64> = (lo..=hi).map(|b| b as f64 * step).collect();
+    let columns = (times.iter())
+        .map(|&t| crate::figures::tick_label(t, step, crate::figures::Scale::Linear))
         .collect();
     let figure = Figure::heatmap(
         format!("{}, grasps by {}", l.signal, groups.title),
@@ -256,14 +264,44 @@ pub fn heatmap(
         values,
         ColorScale::viridis(&l.signal, &l.unit),
     );
-    (figure, order.iter().map(|tr| tr.grasp).collect())
+    GraspsByTime {
+        figure,
+        rows: order.iter().map(|tr| tr.grasp).collect(),
+        times,
+    }
+}
+
+/// The columns of a grasps × time heatmap (each at its time of `times`) that lie in
+/// `lo..=hi` (the time plots' zoom), as a heatmap of its own; None when no column does. The colour scale is the
+/// whole heatmap's, so that a zoomed cell keeps its colour.
+pub fn time_window(heatmap: &Figure, times: &[f64], lo: f64, hi: f64) -> Option<Figure> {
+    let FigureKind::Heatmap(m) = &heatmap.kind else {
+        return None;
+    };
+    let keep: Vec<usize> = (0..times.len())
+        .filter(|&c| (lo..=hi).contains(&times[c]) && c < m.columns.len())
+        .collect();
+    if keep.is_empty() {
+        return None;
+    }
+    let mut window = heatmap.clone();
+    if let FigureKind::Heatmap(w) = &mut window.kind {
+        if w.colors.limits.is_none() {
+            let (lo, hi) = m.colors.resolve(m.values.iter().flatten().copied());
+            w.colors.limits = Some([lo, hi]);
+        }
+        w.columns = keep.iter().map(|&c| m.columns[c].clone()).collect();
+        w.values = (m.values.iter())
+            .map(|row| keep.iter().map(|&c| row[c]).collect())
+            .collect();
+    }
+    Some(window)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::compare::stats::Distribution;
-    use crate::figures::FigureKind;
 
     #[test]
     fn a_large_group_draws_a_sample_of_its_grasps_and_the_quartiles_of_all() {
@@ -304,5 +342,41 @@ mod tests {
         assert_eq!(c.series[0].name, "big (n=5000)");
         assert_eq!(c.series[2].y, [2499.5, 1.0]);
         assert!(f.subtitle.unwrap().contains("sample"));
+    }
+
+    #[test]
+    fn a_zoomed_heatmap_keeps_the_columns_in_the_time_range_and_their_colours() {
+        let s = crate::compare::tests::two_sensor_session();
+        let traces = [
+            Trace {
+                grasp: 0,
+                t: vec![0.0, 0.1, 0.2, 0.3],
+                v: vec![1.0, 2.0, 3.0, 4.0],
+            },
+            Trace {
+                grasp: 1,
+                t: vec![0.0, 0.1],
+                v: vec![5.0, 6.0],
+            },
+        ];
+        let labels = Labels {
+            signal: "s".into(),
+            unit: String::new(),
+            time: "t".into(),
+        };
+        let h = heatmap(&s, &traces, &Groups::all(&s), 0.1, &labels);
+        assert_eq!(h.rows, [0, 1]);
+        let w = time_window(&h.figure, &h.times, 0.05, 0.25).expect("two columns in range");
+        let FigureKind::Heatmap(m) = &w.kind else {
+            panic!("a heatmap")
+        };
+        assert_eq!(m.columns, ["0.1", "0.2"]);
+        assert_eq!(m.values[0], [2.0, 3.0]);
+        assert_eq!(m.values[1][0], 6.0);
+        assert!(m.values[1][1].is_nan());
+        // The whole heatmap's colour range (1 to 6), not the window's (2 to 6).
+        assert_eq!(m.colors.limits, Some([1.0, 6.0]));
+        w.validate().expect("drawable");
+        assert!(time_window(&h.figure, &h.times, 0.41, 0.5).is_none());
     }
 }

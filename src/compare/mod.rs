@@ -11,9 +11,9 @@ pub mod signal;
 pub mod stats;
 
 pub use align::Event;
-pub use figures::{ComparePlot, PointGrasps, grasp_name};
+pub use figures::{ComparePlot, GraspsByTime, PointGrasps, grasp_name, time_window};
 pub use groups::Groups;
-pub use outputs::{ModelReading, read_sequences};
+pub use outputs::{ModelReading, read_model, read_sequences};
 pub use signal::{Branch, SensorStat, Signal, StepOutputs};
 pub use stats::Spread;
 
@@ -45,6 +45,8 @@ pub struct Comparison {
     pub group_grasps: PointGrasps,
     pub heatmap: Figure,
     pub heatmap_rows: Vec<usize>,
+    /// Each heatmap column's aligned time (s).
+    pub heatmap_times: Vec<f64>,
     /// The session has one frame per grasp: groups are distributions, not bands.
     pub single_frame: bool,
 }
@@ -124,7 +126,7 @@ pub fn compare(session: &Session, outputs: &[StepOutputs], request: &Request) ->
         )
     };
     let (groups, group_grasps) = group_figure(session, outputs, request);
-    let (heatmap, heatmap_rows) = figures::heatmap(
+    let h = figures::heatmap(
         session,
         &overlaid,
         &request.groups,
@@ -136,8 +138,9 @@ pub fn compare(session: &Session, outputs: &[StepOutputs], request: &Request) ->
         overlay_grasps,
         groups,
         group_grasps,
-        heatmap,
-        heatmap_rows,
+        heatmap: h.figure,
+        heatmap_rows: h.rows,
+        heatmap_times: h.times,
         single_frame: single,
     }
 }
@@ -242,8 +245,13 @@ pub(crate) mod tests {
         assert_eq!(b.series[0].y[0], 25.0);
         let e = b.series[0].error.as_ref().expect("a band");
         assert_eq!((e.lower[0], e.upper[0]), (0.0, 50.0));
-        // The heatmap's rows are the overlaid grasps sorted by group: mug, then ball.
+        // The heatmap's rows are the overlaid grasps sorted by group: mug, then ball; its
+        // columns the frames at 0, 0.1 and 0.2 s.
         assert_eq!(c.heatmap_rows, [0, 1]);
+        assert_eq!(c.heatmap_times.len(), 3);
+        for (t, want) in c.heatmap_times.iter().zip([0.0, 0.1, 0.2]) {
+            assert!((t - want).abs() < 1e-12, "{:?}", c.heatmap_times);
+        }
         for f in [&c.overlay, &c.groups, &c.heatmap] {
             f.validate().expect("a drawable figure");
         }
@@ -280,6 +288,9 @@ pub(crate) mod tests {
         assert!(d.series[1].x.iter().all(|x| (x - 2.0).abs() <= 0.25));
         assert_eq!(d.series[2].y, [0.0, 25.0]);
         assert!(!d.x.title.contains("time"), "{}", d.x.title);
+        // Each strip's group named on its axis, at the strip's position.
+        assert_eq!(d.x.categories, ["success", "failure"]);
+        assert_eq!(d.x.category_at(d.series[1].x[0]), Some("failure"));
         // The same seed jitters the same way.
         assert_eq!(compare(&s, &[], &request), c);
         c.groups.validate().expect("drawable");

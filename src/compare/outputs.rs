@@ -1,9 +1,16 @@
-//! A recognition model's per-step outputs on a session: after every step of every grasp,
-//! the true class's probability and each class's, with the decided class, so that a
-//! comparison can plot how a model became sure and group grasps by correct and wrong.
+//! What a model says about a session, as signals and groups: a recognition model's class
+//! probabilities after every step of every grasp (with the decided class, so that a
+//! comparison can plot how a model became sure and group grasps by correct and wrong), a
+//! stability model's SVM decision value at each grasp's key frame, and a clustering
+//! model's clusters.
 
+use super::align::Event;
+use super::groups::Groups;
 use super::signal::StepOutputs;
-use crate::models::{Calibration, ModelError, SequenceModel};
+use crate::models::clustering::cluster_name;
+use crate::models::{
+    Calibration, ClusterModel, Model, ModelError, ModelFile, SequenceModel, StabilityClassifier,
+};
 use crate::session::Session;
 
 /// What one model says about every grasp of a session.
@@ -18,6 +25,90 @@ pub struct ModelReading {
     pub truth: Vec<Option<usize>>,
     /// The class decided from the whole grasp.
     pub predicted: Vec<Option<usize>>,
+    /// The model's clusters of the session's grasps (a clustering model).
+    pub clusters: Option<Groups>,
+}
+
+/// What model `file` (called `model`, e.g. "DS") says about `session`: DS/GS class
+/// probabilities after every step, a stability model's decision value, DU/GU clusters.
+pub fn read_model(
+    model: &str,
+    file: &ModelFile,
+    session: &Session,
+) -> Result<ModelReading, ModelError> {
+    match &file.model {
+        Model::Sequences(m) => read_sequences(model, m, session),
+        Model::Stability(c) => read_stability(model, file, c, session),
+        Model::Clusters(m) => read_clusters(model, m, session),
+        Model::TableOne(_) | Model::Classifier(_) => Err(ModelError::Mismatch(format!(
+            "{model} has no output per step, decision value or clusters to compare"
+        ))),
+    }
+}
+
+/// A stability model's SVM decision value (positive: failure) of every grasp, at its key
+/// frame (the frame the model reads), by the models' own prediction path.
+fn read_stability(
+    model: &str,
+    file: &ModelFile,
+    c: &StabilityClassifier,
+    session: &Session,
+) -> Result<ModelReading, ModelError> {
+    let rows = crate::models::predict(file, session, Calibration::None)?;
+    let classes = vec![c.success_class.clone(), c.failure_class.clone()];
+    let index = |name: &str| classes.iter().position(|k| k == name);
+    let mut per_grasp: Vec<Vec<f64>> = (session.grasps.iter())
+        .map(|g| vec![f64::NAN; g.frames.len()])
+        .collect();
+    for r in &rows {
+        let key = Event::KeyFrame.frame(session, r.grasp);
+        if let Some(v) = per_grasp.get_mut(r.grasp).and_then(|v| v.get_mut(key)) {
+            *v = r.decision;
+        }
+    }
+    let mut truth = vec![None; session.grasps.len()];
+    let mut predicted = vec![None; session.grasps.len()];
+    for r in &rows {
+        truth[r.grasp] = r.truth.as_deref().and_then(index);
+        predicted[r.grasp] = index(&r.predicted);
+    }
+    Ok(ModelReading {
+        model: model.into(),
+        outputs: vec![StepOutputs {
+            name: format!("{model} · SVM decision value"),
+            unit: String::new(),
+            per_grasp,
+        }],
+        classes,
+        truth,
+        predicted,
+        clusters: None,
+    })
+}
+
+/// A clustering model's cluster of every grasp (the experts are not changed), as groups
+/// named as predictions name them ("cluster 3"), only the clusters some grasp is in.
+fn read_clusters(
+    model: &str,
+    m: &ClusterModel,
+    session: &Session,
+) -> Result<ModelReading, ModelError> {
+    let assigned = m.assign(session, Calibration::None)?;
+    let mut used = assigned.clone();
+    used.sort_unstable();
+    used.dedup();
+    let of: Vec<Option<usize>> = (assigned.iter())
+        .map(|c| used.binary_search(c).ok())
+        .collect();
+    let names = used.iter().map(|&c| cluster_name(c)).collect();
+    Ok(ModelReading {
+        model: model.into(),
+        outputs: Vec::new(),
+        classes: Vec::new(),
+        truth: vec![None; session.grasps.len()],
+        predicted: vec![None; session.grasps.len()],
+        clusters: Some(Groups::assigned(&format!("cluster ({model})"), names, &of)),
+    })
 }
 
 /// DS or GS experts `m` (called `model`) on `session`, normalised as they were trained.
@@ -61,5 +152,96 @@ pub fn read_sequences(
         classes: m.classes.clone(),
         truth,
         predicted: predictions.iter().map(|p| Some(p.class)).collect(),
+        clusters: None,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::catalogue::MethodId;
+    use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner};
+    use crate::experiments::stability::{Config, DataOptions, StabilityData, StabilityOptions};
+    use crate::features::FeatureSet;
+    use crate::jobs::Progress;
+    use crate::models::{ClusterFitOptions, cluster_file, fit_clusters, fit_stability};
+    use crate::session::{SubsetSpec, simulate, subset};
+
+    #[test]
+    fn a_stability_models_decision_value_is_its_own_at_each_key_frame() {
+        let session = simulate::grasp_stability(0);
+        let data = StabilityData::from_session(&session, &DataOptions::default()).unwrap();
+        let opts = StabilityOptions {
+            single: Config {
+                num_bases: 8,
+                beta: 1.0,
+                gamma: 1.0,
+            },
+            ..Default::default()
+        };
+        let fit = fit_stability(MethodId::RawSvm, &session, &data, &opts, &Progress::new());
+        let file = fit.unwrap().into_file(&session, &data);
+        let Model::Stability(c) = &file.model else {
+            panic!("a stability model")
+        };
+        let want = c.decisions(&session, Calibration::None).unwrap();
+        let r = read_model("raw SVM", &file, &session).unwrap();
+        assert_eq!(r.outputs.len(), 1);
+        assert_eq!(r.outputs[0].name, "raw SVM · SVM decision value");
+        assert_eq!(
+            r.classes,
+            [c.success_class.clone(), c.failure_class.clone()]
+        );
+        let set = session.label_set(&c.label_set).unwrap();
+        for (g, grasp) in session.grasps.iter().enumerate() {
+            let v = &r.outputs[0].per_grasp[g];
+            assert_eq!(v.len(), grasp.frames.len());
+            // The decision, bit for bit, at the key frame; nothing at the other frames.
+            let key = grasp.key_frame.min(v.len() - 1);
+            assert_eq!(v[key].to_bits(), want[g].to_bits(), "grasp {g}");
+            assert!((v.iter().enumerate()).all(|(k, x)| k == key || x.is_nan()));
+            assert_eq!(
+                r.predicted[g],
+                Some(usize::from(want[g] > 0.0)),
+                "grasp {g}"
+            );
+            let truth = &session.label_sets[set].classes[grasp.labels[set]];
+            assert_eq!(r.truth[g].map(|t| &r.classes[t]), Some(truth));
+        }
+    }
+
+    #[test]
+    fn a_clustering_models_clusters_are_groups_named_as_its_predictions() {
+        let session = simulate::object_recognition(1);
+        let spec = SubsetSpec {
+            objects: session.objects()[..3].to_vec(),
+            trials: (1..=5).into(),
+            labels: Vec::new(),
+        };
+        let part = subset(&session, &spec, "part").unwrap();
+        let opts = ClusterFitOptions {
+            method: MethodId::Du,
+            features: FeatureSet::ALL,
+            label_set: "object".into(),
+            threshold: 0.4,
+            seed: 2,
+            params: ClusteringParams::for_learner(UnsupervisedLearner::Du),
+        };
+        let (model, _) = fit_clusters(&part, &opts).unwrap();
+        let file = cluster_file(model, &part, 0.0, None);
+        let r = read_model("DU", &file, &part).unwrap();
+        let groups = r.clusters.expect("clusters");
+        let predicted = crate::models::predict(&file, &part, Calibration::None).unwrap();
+        assert_eq!(groups.title, "cluster (DU)");
+        for p in &predicted {
+            let g = groups.of[p.grasp].expect("every grasp in a cluster");
+            assert_eq!(groups.names[g], p.predicted);
+        }
+        // Only clusters some grasp is in, each once.
+        assert!(groups.sizes().iter().all(|&n| n > 0));
+        assert!(r.outputs.is_empty() && r.classes.is_empty());
+        let mut names = groups.names.clone();
+        names.dedup();
+        assert_eq!(names.len(), groups.names.len());
+    }
 }

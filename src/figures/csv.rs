@@ -1,7 +1,8 @@
 //! CSV of the numbers a figure draws, with a header row. Missing values are written `NaN`;
 //! numbers use Rust's shortest round-trip formatting, so nothing is lost.
 //!
-//! - chart: one row per point: `series, x, y[, lower, upper][, label]`, then one row per
+//! - chart: one row per point: `series, x[, category], y[, lower, upper][, label]` (the
+//!   category: the name of the x slot, on a category axis), then one row per
 //!   reference line (`series` = `reference: <label>`, the value in `x` or `y`);
 //! - bars: one row per category, one column per group (and its error, if any);
 //! - heatmap: the matrix, row labels in the first column, column labels in the header;
@@ -44,7 +45,15 @@ pub fn to_csv(fig: &Figure) -> Result<String, FigureError> {
         FigureKind::Chart(c) => {
             let errors = c.series.iter().any(|s| s.error.is_some());
             let labels = c.series.iter().any(|s| !s.point_labels.is_empty());
-            let mut header = vec!["series".to_string(), c.x.text(), c.y.text()];
+            // A category axis names each point's slot beside its position.
+            let categories = !c.x.categories.is_empty();
+            let mut header = vec!["series".to_string()];
+            if categories {
+                header.extend([format!("{} position", c.x.text()), c.x.title.clone()]);
+            } else {
+                header.push(c.x.text());
+            }
+            header.push(c.y.text());
             if errors {
                 header.extend(["lower".to_string(), "upper".to_string()]);
             }
@@ -54,7 +63,11 @@ pub fn to_csv(fig: &Figure) -> Result<String, FigureError> {
             row(&mut out, header);
             for s in &c.series {
                 for i in 0..s.x.len() {
-                    let mut cells = vec![s.name.clone(), num(s.x[i]), num(s.y[i])];
+                    let mut cells = vec![s.name.clone(), num(s.x[i])];
+                    if categories {
+                        cells.push(c.x.category_at(s.x[i]).unwrap_or_default().to_string());
+                    }
+                    cells.push(num(s.y[i]));
                     if errors {
                         let (lo, hi) = s
                             .error
@@ -75,7 +88,11 @@ pub fn to_csv(fig: &Figure) -> Result<String, FigureError> {
                     Orientation::Vertical => (num(r.value), String::new()),
                     Orientation::Horizontal => (String::new(), num(r.value)),
                 };
-                let mut cells = vec![format!("reference: {}", r.label), x, y];
+                let mut cells = vec![format!("reference: {}", r.label), x];
+                if categories {
+                    cells.push(String::new());
+                }
+                cells.push(y);
                 cells.resize(
                     cells.len() + 2 * errors as usize + labels as usize,
                     String::new(),
@@ -168,6 +185,26 @@ mod tests {
         assert_eq!(
             csv,
             "series,Trials,Accuracy (%)\nDS,1,50.5\nDS,2,NaN\nreference: threshold,1.5,\n"
+        );
+    }
+
+    #[test]
+    fn a_category_axis_names_each_points_slot() {
+        let fig = Figure::chart(
+            "Electrode by outcome",
+            Axis::new("outcome", "").categories(vec!["success".into(), "fail, slip".into()]),
+            Axis::new("mf taxel 7", "a.u."),
+            vec![Series::new(
+                "points",
+                vec![0.8, 2.2, 2.6],
+                vec![1.0, 2.0, 3.0],
+            )],
+        );
+        let csv = to_csv(&fig).unwrap();
+        assert_eq!(
+            csv,
+            "series,outcome position,outcome,mf taxel 7 (a.u.)\npoints,0.8,success,1\n\
+             points,2.2,\"fail, slip\",2\npoints,2.6,,3\n"
         );
     }
 }

@@ -79,6 +79,41 @@ pub(crate) fn tick_spacer(
     }
 }
 
+/// Grid marks of a category axis (`names` at 1, 2, …): one at each category in view,
+/// every k-th when their names would touch (the export's rule, [`thin_categories`]), so
+/// that each name shown fits; the points' tooltips name the rest.
+///
+/// [`thin_categories`]: figures::legibility::thin_categories
+pub(crate) fn category_spacer(
+    ui: &egui::Ui,
+    names: &[String],
+) -> impl Fn(GridInput) -> Vec<GridMark> + 'static {
+    // The widest name and a gap, and never less than egui_plot's full-strength spacing.
+    let font = egui::TextStyle::Body.resolve(ui.style());
+    let needed = (names.iter())
+        .map(|n| {
+            let w = (ui.painter())
+                .layout_no_wrap(n.clone(), font.clone(), Color32::WHITE)
+                .size()
+                .x;
+            f64::from(w) + 10.0
+        })
+        .fold(32.0, f64::max);
+    let count = names.len();
+    move |input: GridInput| {
+        let (lo, hi) = input.bounds;
+        let per_px = input.base_step_size.max(f64::MIN_POSITIVE) / GRID_SPACING_MIN;
+        let thin = figures::legibility::thin_categories(count, 1.0 / per_px, needed);
+        (0..count)
+            .filter(|&i| thin.shows(i) && (lo..=hi).contains(&((i + 1) as f64)))
+            .map(|i| GridMark {
+                value: (i + 1) as f64,
+                step_size: thin.step as f64,
+            })
+            .collect()
+    }
+}
+
 /// The room an x tick label needs along its axis: its width (digits at most, a little
 /// conservative for the narrower '.' and '-') and a gap, and never less than the spacing at
 /// which egui_plot draws a label at full strength ([`axis_hints`]' 32 points).
@@ -122,6 +157,27 @@ pub(super) fn axis_hints(
     hints
         .label(title)
         .formatter(move |mark, _| tick_text(scale, mark))
+}
+
+/// A category x axis: each mark named after its category (see [`category_spacer`]).
+pub(super) fn category_axis_hints(
+    ui: &egui::Ui,
+    title: &str,
+    room: f32,
+    names: Vec<String>,
+) -> AxisHints<'static> {
+    let font = egui::TextStyle::Body.resolve(ui.style());
+    let title = fit_text(ui, title, &font, room);
+    AxisHints::new_x()
+        .label_spacing(24.0..=32.0)
+        .label(title)
+        .formatter(move |mark, _| {
+            let i = mark.value.round();
+            match (mark.value - i).abs() < 1e-6 && i >= 1.0 {
+                true => names.get(i as usize - 1).cloned().unwrap_or_default(),
+                false => String::new(),
+            }
+        })
 }
 
 /// The legend's place: the plot corner with the fewest points (in the data's own box).

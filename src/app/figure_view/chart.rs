@@ -1,8 +1,8 @@
 //! Line and marker charts on screen through egui_plot, with hover values and clickable markers.
 
 use super::axes::{
-    TITLE_INSET, axis_hints, emptiest_corner, inset, legend, tick_spacer, x_label_room,
-    y_label_room,
+    TITLE_INSET, axis_hints, category_axis_hints, category_spacer, emptiest_corner, inset, legend,
+    tick_spacer, x_label_room, y_label_room,
 };
 use super::*;
 
@@ -25,17 +25,22 @@ fn point_tooltip(chart: &figures::Chart, name: &str, at: PlotPoint) -> Option<St
         .filter(|l| !l.is_empty())
         .map_or(String::new(), |l| format!(" · {l}"));
     let (x, y) = (value(xs, at.x), value(ys, at.y));
+    // On a category axis the slot's name, not the point's place in it.
+    let x = match chart.x.category_at(x) {
+        Some(c) if !chart.x.categories.is_empty() => c.to_string(),
+        _ => format!("{} {}", exact(x), chart.x.unit),
+    };
     Some(format!(
-        "{name}{label}\n{}: {} {}\n{}: {} {}",
+        "{name}{label}\n{}: {}\n{}: {} {}",
         chart.x.title,
-        exact(x),
-        chart.x.unit,
+        x.trim_end(),
         chart.y.title,
         exact(y),
         chart.y.unit
     ))
 }
 
+#[allow(clippy::too_many_arguments)]
 pub(super) fn show_chart(
     ui: &mut egui::Ui,
     id: &str,
@@ -43,6 +48,7 @@ pub(super) fn show_chart(
     size: Vec2,
     selection: Selection,
     in_plot: bool,
+    link: Option<egui::Id>,
     interaction: &mut Interaction,
 ) {
     let (xs, ys) = (chart.x.scale, chart.y.scale);
@@ -62,13 +68,6 @@ pub(super) fn show_chart(
         // Room right of the frame for half the last tick label, which centres on its edge.
         .width((size.x - 20.0 - TITLE_INSET).max(0.0))
         .height(size.y)
-        .custom_x_axes(vec![axis_hints(
-            ui,
-            true,
-            &chart.x.text(),
-            size.x - 80.0,
-            xs,
-        )])
         .custom_y_axes(vec![axis_hints(
             ui,
             false,
@@ -76,7 +75,6 @@ pub(super) fn show_chart(
             size.y - 50.0,
             ys,
         )])
-        .x_grid_spacer(tick_spacer(xs, 70.0, X_EDGE, x_label_room(ui)))
         .y_grid_spacer(tick_spacer(ys, 36.0, Y_EDGE, y_label_room(ui)))
         .label_formatter(move |pos| match pos {
             HoverPosition::NearDataPoint {
@@ -86,8 +84,33 @@ pub(super) fn show_chart(
             } => point_tooltip(chart, plot_name, *position),
             HoverPosition::Elsewhere { .. } => None,
         });
+    plot = if chart.x.categories.is_empty() {
+        plot.custom_x_axes(vec![axis_hints(
+            ui,
+            true,
+            &chart.x.text(),
+            size.x - 80.0,
+            xs,
+        )])
+        .x_grid_spacer(tick_spacer(xs, 70.0, X_EDGE, x_label_room(ui)))
+    } else {
+        let names = chart.x.categories.clone();
+        plot.custom_x_axes(vec![category_axis_hints(
+            ui,
+            &chart.x.text(),
+            size.x - 80.0,
+            names,
+        )])
+        .x_grid_spacer(category_spacer(ui, &chart.x.categories))
+    };
     if in_plot {
         plot = plot.legend(legend(&all_points));
+    }
+    if let Some(link) = link {
+        // Zoom or pan one plot of the group and every plot of it follows along x.
+        plot = plot
+            .link_axis(link, [true, false])
+            .link_cursor(link, [true, false]);
     }
     // The export's limits: the data, its error bounds and reference lines, and the axes'
     // natural bounds (a share stops at 1).
@@ -113,12 +136,19 @@ pub(super) fn show_chart(
         _ => None,
     };
     if marker_mode {
-        // A drag moves the marker instead of panning the plot.
-        plot = plot.allow_drag(false);
+        // A drag moves the marker instead of panning the plot; a linked plot pans with the
+        // middle button, so that its group's time axis can still move.
+        plot = match link {
+            Some(_) => plot.pan_pointer_button(egui::PointerButton::Middle),
+            None => plot.allow_drag(false),
+        };
     }
     let accent = ui.visuals().selection.bg_fill;
     // egui_plot draws the value axis' title a little left of its rectangle: inset it.
+    let mut plot_id = egui::Id::NULL;
     let shown = inset(ui, |ui| {
+        // egui_plot's own id for the plot, to read its memory below.
+        plot_id = ui.make_persistent_id(egui::IdSalt::new(id));
         plot.show(ui, |p| {
             if let Some(x) = marker {
                 p.vline(
@@ -151,11 +181,19 @@ pub(super) fn show_chart(
     let r = &shown.response;
     ui.ctx()
         .data_mut(|d| d.insert_temp(transform_id(id), shown.transform));
+    if let Some(link) = link {
+        // The group's x range once the user zoomed or panned (None while it fits the data),
+        // for what follows the group without being a plot (a heatmap's time columns).
+        let auto = egui_plot::PlotMemory::load(ui.ctx(), plot_id).is_none_or(|m| m.auto_bounds.x);
+        let b = shown.transform.bounds();
+        let range = (!auto).then(|| (value(xs, b.min()[0]), value(xs, b.max()[0])));
+        ui.ctx().data_mut(|d| d.insert_temp(range_id(link), range));
+    }
     if let Some(pos) = r.hover_pos() {
         interaction.hovered_point = nearest_marker(chart, &shown.transform, pos, 12.0);
     }
     if marker_mode
-        && (r.dragged() || r.clicked())
+        && (r.dragged_by(egui::PointerButton::Primary) || r.clicked())
         && let Some(pos) = r.interact_pointer_pos()
     {
         let x = shown.transform.value_from_position(pos).x;
@@ -378,6 +416,27 @@ fn place_labels(
 
 fn transform_id(figure_id: &str) -> egui::Id {
     egui::Id::unique(("chart-transform", figure_id))
+}
+
+fn range_id(link: egui::Id) -> egui::Id {
+    link.with("linked-x-range")
+}
+
+/// The x range (data units) the plots linked by `link` were zoomed or panned to, None
+/// while they fit their data.
+pub fn linked_x_range(ctx: &egui::Context, link: egui::Id) -> Option<(f64, f64)> {
+    ctx.data(|d| d.get_temp::<Option<(f64, f64)>>(range_id(link)))
+        .flatten()
+}
+
+/// The x range (data units) chart `id` showed in the last frame.
+pub fn shown_x_range(ctx: &egui::Context, id: &str, chart: &figures::Chart) -> Option<(f64, f64)> {
+    let t: egui_plot::PlotTransform = ctx.data(|d| d.get_temp(transform_id(id)))?;
+    let b = t.bounds();
+    Some((
+        value(chart.x.scale, b.min()[0]),
+        value(chart.x.scale, b.max()[0]),
+    ))
 }
 
 /// Where point `k` of series `series` of `chart`, drawn with figure id `id`, was on the

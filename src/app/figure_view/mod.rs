@@ -22,8 +22,8 @@ use crate::figures::{
 pub(crate) use axes::{X_EDGE, Y_EDGE, tick_spacer, x_label_room, y_label_room};
 use bars::show_bars;
 pub(crate) use chart::legend_row;
-pub use chart::marker_position;
 use chart::show_chart;
+pub use chart::{linked_x_range, marker_position, shown_x_range};
 use grid::{show_heatmap, show_image_grid};
 
 /// The colour of series `i` on screen: its own colour, else the palette's, as the export
@@ -207,6 +207,19 @@ pub fn show(
     height: f32,
     selection: Selection,
 ) -> Interaction {
+    show_linked(ui, id, figure, height, selection, None)
+}
+
+/// [`show`], a chart's x axis linked to every plot shown with the same `link`: zoom or pan
+/// one and the others follow ([`linked_x_range`] tells where they went).
+pub fn show_linked(
+    ui: &mut egui::Ui,
+    id: &str,
+    figure: &Figure,
+    height: f32,
+    selection: Selection,
+    link: Option<egui::Id>,
+) -> Interaction {
     let height = height.min(ui.available_height()).max(0.0);
     // Within what is visible too: a wide widget above (a slider, a row of buttons) can
     // widen the tile's ui past its clip, and the figure would run out of its tile.
@@ -235,6 +248,7 @@ pub fn show(
                     body,
                     selection,
                     legend == LegendPlace::InPlot,
+                    link,
                     &mut interaction,
                 );
             }

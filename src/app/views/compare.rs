@@ -21,7 +21,7 @@ use crate::compare::{
     self, ComparePlot, Comparison, Event, Groups, ModelReading, Request, Signal, Spread,
     StepOutputs, grasp_name,
 };
-use crate::figures::{ColorMap, FigureKind};
+use crate::figures::{ColorMap, Figure, FigureKind};
 use crate::models::Model;
 use crate::session::Session;
 
@@ -37,6 +37,8 @@ pub enum Grouping {
     CorrectWrong,
     /// The cells of the chosen model's confusion map.
     ConfusionCells,
+    /// The chosen clustering model's clusters.
+    Clusters,
 }
 
 impl Grouping {
@@ -50,6 +52,7 @@ impl Grouping {
             Grouping::Object => "object".into(),
             Grouping::CorrectWrong => "correct vs wrong (model)".into(),
             Grouping::ConfusionCells => "confusion cells (model)".into(),
+            Grouping::Clusters => "clusters (model)".into(),
         }
     }
 
@@ -70,8 +73,17 @@ impl Grouping {
             (Grouping::ConfusionCells, Some(r)) => {
                 Groups::confusion_cells(&r.classes, &r.truth, &r.predicted)
             }
-            // A model's groups without a model read yet: everything in one.
-            (Grouping::CorrectWrong | Grouping::ConfusionCells, None) => Groups::all(session),
+            (
+                Grouping::Clusters,
+                Some(ModelReading {
+                    clusters: Some(c), ..
+                }),
+            ) => c.clone(),
+            // A model's groups without a model read yet (or of another kind of model):
+            // everything in one.
+            (Grouping::CorrectWrong | Grouping::ConfusionCells | Grouping::Clusters, _) => {
+                Groups::all(session)
+            }
         }
     }
 }
@@ -132,6 +144,21 @@ pub struct CompareRoom {
     pending: Option<(Key, Receiver<Comparison>)>,
     /// The grasp of the point under the pointer, and in which plot.
     pointing: Option<(ComparePlot, usize)>,
+    zoomed: Option<Zoomed>,
+}
+
+/// The heatmap's columns in the time plots' zoom.
+struct Zoomed {
+    /// The comparison's address: a new comparison is cropped anew.
+    comparison: usize,
+    range: (f64, f64),
+    /// None: no column in the range.
+    figure: Option<Arc<Figure>>,
+}
+
+/// The link group of the time plots' x axes (zoom one, and all follow).
+fn time_link() -> egui::Id {
+    egui::Id::unique("compare-time-axis")
 }
 
 impl Room for CompareRoom {
@@ -170,12 +197,24 @@ impl Room for CompareRoom {
         self.plot_ui(ui, *plot, cx);
         true
     }
+
+    fn hides(&self, pane: &Pane) -> bool {
+        // Single frames have no time: their grasps × time would be one column.
+        *pane == Pane::Compare(ComparePlot::Heatmap)
+            && self.shown.as_ref().is_some_and(|c| c.single_frame)
+    }
 }
 
 impl CompareRoom {
     /// Whether a comparison or a model's reading is being computed.
     pub fn computing(&self) -> bool {
         self.pending.is_some() || self.reading.as_ref().is_some_and(|r| r.rx.is_some())
+    }
+
+    /// The grasps × time heatmap as drawn while the time plots are zoomed (None when they
+    /// are not, or no column lies in their range).
+    pub fn heatmap_in_zoom(&self) -> Option<&Figure> {
+        self.zoomed.as_ref()?.figure.as_deref()
     }
 
     /// The outputs of the chosen model, once read.
@@ -205,7 +244,7 @@ impl CompareRoom {
         // A model of another session, or gone from the list, is dropped.
         if self
             .model
-            .is_some_and(|m| sequence_model(cx, m, &name).is_none())
+            .is_some_and(|m| session_model(cx, m, &name).is_none())
         {
             self.model = None;
         }
@@ -269,13 +308,13 @@ impl CompareRoom {
         let ctx = cx.ctx.clone();
         let session = cx.session().map(|s| s.session.clone());
         // The outputs are named by the method alone ("DS · true class probability").
-        let model = sequence_model(cx, m, &session_name).map(|(_, model)| {
-            let method = cx.analyses.models.list[m].file.provenance.method;
-            (method.title().to_string(), model.clone())
+        let model = session_model(cx, m, &session_name).map(|_| {
+            let file = &cx.analyses.models.list[m].file;
+            (file.provenance.method.title().to_string(), file.clone())
         });
-        if let (Some(session), Some((title, model))) = (session, model) {
+        if let (Some(session), Some((title, file))) = (session, model) {
             std::thread::spawn(move || {
-                let r = compare::read_sequences(&title, &model, &session);
+                let r = compare::read_model(&title, &file, &session);
                 let _ = tx.send(r.map_err(|e| e.to_string()));
                 ctx.request_repaint();
             });
@@ -312,8 +351,11 @@ impl CompareRoom {
         let mut choices: Vec<Grouping> = Vec::new();
         choices.extend((session.label_sets.iter()).map(|l| Grouping::LabelSet(l.name.clone())));
         choices.push(Grouping::Object);
-        if reading.is_some() {
+        if reading.as_ref().is_some_and(|r| !r.classes.is_empty()) {
             choices.extend([Grouping::CorrectWrong, Grouping::ConfusionCells]);
+        }
+        if reading.as_ref().is_some_and(|r| r.clusters.is_some()) {
+            choices.push(Grouping::Clusters);
         }
         egui::ComboBox::from_id_salt("compare-groups")
             .selected_text(self.form.grouping.text(session))
@@ -337,7 +379,7 @@ impl CompareRoom {
             .labelled_by(caption.id);
         let name = session.meta.name.clone();
         let models: Vec<(usize, String)> = (0..cx.analyses.models.list.len())
-            .filter_map(|m| sequence_model(cx, m, &name).map(|(t, _)| (m, t)))
+            .filter_map(|m| session_model(cx, m, &name).map(|t| (m, t)))
             .collect();
         let caption = ui.label("Model outputs");
         let chosen = self
@@ -355,11 +397,13 @@ impl CompareRoom {
             .response
             .labelled_by(caption.id)
             .on_hover_text(
-                "A recognition model of this session (DS, GS): its class probabilities after \
-                 every step join the signals, and its decisions the groups",
+                "A model of this session: a recognition model's (DS, GS) class probabilities \
+                 after every step, or a stability model's SVM decision value, join the \
+                 signals, and its decisions the groups; a clustering model's (DU, GU) \
+                 clusters join the groups",
             );
         if models.is_empty() {
-            ui.weak("No recognition model of this session yet (run Recognition).");
+            ui.weak("No model of this session yet (run an analysis).");
         }
         match &self.reading {
             Some(Reading { rx: Some(_), .. }) => {
@@ -442,7 +486,10 @@ impl CompareRoom {
                 .show(ui, |ui| {
                     for (name, signal) in &branch.leaves {
                         let on = self.form.signal == *signal;
-                        if ui.selectable_label(on, name).clicked() {
+                        // Click to plot it, or drag it onto a plot.
+                        let leaf = (ui.selectable_label(on, name)).interact(egui::Sense::drag());
+                        leaf.dnd_set_drag_payload(*signal);
+                        if leaf.clicked() {
                             self.form.signal = *signal;
                         }
                     }
@@ -451,6 +498,20 @@ impl CompareRoom {
     }
 
     fn plot_ui(&mut self, ui: &mut egui::Ui, plot: ComparePlot, cx: &mut Cx) {
+        // A signal dragged from the tree and dropped anywhere on the tile is plotted.
+        let area = ui.max_rect();
+        let zone = ui.interact(
+            area,
+            ui.make_persistent_id(("compare-drop", plot.key())),
+            egui::Sense::hover(),
+        );
+        if zone.dnd_hover_payload::<Signal>().is_some() {
+            let stroke = ui.visuals().selection.stroke;
+            (ui.painter()).rect_stroke(area, 4.0, stroke, egui::StrokeKind::Inside);
+        }
+        if let Some(signal) = zone.dnd_release_payload::<Signal>() {
+            self.form.signal = *signal;
+        }
         let Some(s) = cx.session() else {
             ui.label("Open a session first.");
             return;
@@ -490,7 +551,29 @@ impl CompareRoom {
             (_, false) => FigureSelection::None,
         };
         let height = ui.available_height();
-        let done = figure_view::show(ui, &id, figure, height, selection);
+        let link = (!c.single_frame).then(time_link);
+        let zoomed = match plot {
+            ComparePlot::Heatmap => {
+                let range = link.and_then(|l| figure_view::linked_x_range(ui.ctx(), l));
+                match range {
+                    Some(range) => Some(self.zoomed_heatmap(&c, range)),
+                    None => {
+                        self.zoomed = None;
+                        None
+                    }
+                }
+            }
+            _ => None,
+        };
+        let done = match &zoomed {
+            Some(Some(window)) => figure_view::show(ui, &id, window, height, selection),
+            Some(None) => {
+                ui.label("No frame in the time plots' zoom (double-click one to show all).");
+                return;
+            }
+            None if time_plot => figure_view::show_linked(ui, &id, figure, height, selection, link),
+            None => figure_view::show(ui, &id, figure, height, selection),
+        };
         let points = match plot {
             ComparePlot::Overlay => &c.overlay_grasps,
             _ => &c.group_grasps,
@@ -533,9 +616,26 @@ impl CompareRoom {
             self.pointing = pointing.map(|g| (plot, g));
         }
         if export {
-            cx.analyses
-                .export
-                .write(figure, plot.key(), &mut cx.analyses.notes);
+            cx.analyses.export_figure(figure, plot.key());
+        }
+    }
+
+    /// The heatmap's columns within `range` of aligned time, built once per comparison and
+    /// range.
+    fn zoomed_heatmap(&mut self, c: &Arc<Comparison>, range: (f64, f64)) -> Option<Arc<Figure>> {
+        let at = Arc::as_ptr(c) as usize;
+        match &self.zoomed {
+            Some(z) if z.comparison == at && z.range == range => z.figure.clone(),
+            _ => {
+                let f = compare::time_window(&c.heatmap, &c.heatmap_times, range.0, range.1)
+                    .map(Arc::new);
+                self.zoomed = Some(Zoomed {
+                    comparison: at,
+                    range,
+                    figure: f.clone(),
+                });
+                f
+            }
         }
     }
 }
@@ -550,26 +650,27 @@ fn overlaid(cx: &Cx, session: &Session) -> Vec<usize> {
     }
 }
 
-/// Model `m` of the models list when it is a sequence model (DS, GS) whose label set
-/// the session named `session` has, with its title ("DS, trained on …").
-fn sequence_model<'a>(
-    cx: &'a Cx,
-    m: usize,
-    session: &str,
-) -> Option<(String, &'a crate::models::SequenceModel)> {
+/// Model `m` of the models list when the Compare view reads it (DS, GS; sparse-svm,
+/// raw-svm; DU, GU) and the session named `session` has its label set: its title ("DS,
+/// trained on …").
+fn session_model(cx: &Cx, m: usize, session: &str) -> Option<String> {
     let kept = cx.analyses.models.list.get(m)?;
-    let Model::Sequences(model) = &kept.file.model else {
-        return None;
+    let label_set = match &kept.file.model {
+        Model::Sequences(model) => &model.label_set,
+        Model::Stability(model) => &model.label_set,
+        Model::Clusters(model) => &model.label_set,
+        Model::TableOne(_) | Model::Classifier(_) => return None,
     };
     let s = cx
         .sessions
         .iter()
         .find(|s| s.session.meta.name == session)?;
-    s.session.label_set(&model.label_set)?;
+    s.session.label_set(label_set)?;
     let p = &kept.file.provenance;
-    Some((
-        format!("{}, trained on {}", p.method.title(), p.session.name),
-        model,
+    Some(format!(
+        "{}, trained on {}",
+        p.method.title(),
+        p.session.name
     ))
 }
 

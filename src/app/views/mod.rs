@@ -120,6 +120,12 @@ pub trait Room {
     fn pane_ui(&mut self, _ui: &mut egui::Ui, _pane: &Pane, _cx: &mut Cx) -> bool {
         false
     }
+
+    /// A pane the room has nothing to show in now: its tile folds away (and comes back
+    /// when it has).
+    fn hides(&self, _pane: &Pane) -> bool {
+        false
+    }
 }
 
 /// Every view in one place, a line each: the field of [`Rooms`] that owns its room and the

@@ -542,9 +542,16 @@ pub fn replay_pane(ui: &mut egui::Ui, cx: &mut Cx) {
     let action = cx
         .replay
         .ui(ui, &cx.sessions[s], g, cx.analyses.trace.as_ref());
-    if let ReplayAction::Trace(learner) = action {
-        let ctx = cx.ctx.clone();
-        cx.analyses.request_trace(&ctx, &cx.sessions[s], g, learner);
+    match action {
+        ReplayAction::Trace(learner) => {
+            let ctx = cx.ctx.clone();
+            cx.analyses.request_trace(&ctx, &cx.sessions[s], g, learner);
+        }
+        ReplayAction::PickTaxel { sensor, taxel } => {
+            let signal = crate::compare::Signal::Taxel { sensor, taxel };
+            cx.commands.push(Command::CompareSignal(signal));
+        }
+        ReplayAction::None => {}
     }
 }
 

@@ -268,6 +268,12 @@ fn shows(pane: &Pane, result: Option<&AnalysisResult>) -> bool {
 pub fn show(ui: &mut egui::Ui, layout: &mut Layout, room: &mut dyn Room, cx: &mut Cx) {
     let shown = room.kind().and_then(|k| cx.shown(k));
     layout.fit_to(shown.map(|i| &cx.analyses.results[i]));
+    let hidden: Vec<TileId> = (layout.tree.tiles.iter())
+        .filter_map(|(id, t)| matches!(t, Tile::Pane(p) if room.hides(p)).then_some(*id))
+        .collect();
+    for id in hidden {
+        layout.tree.tiles.set_visible(id, false);
+    }
     let mut behavior = RoomTiles {
         room,
         cx,

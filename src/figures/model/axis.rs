@@ -61,6 +61,10 @@ pub struct Axis {
     /// Data is never clipped: the axis always covers every drawn value.
     #[serde(default)]
     pub include: Option<[f64; 2]>,
+    /// The names of positions 1, 2, … along the axis: a category axis whose slots hold
+    /// points (a strip of points per group). Empty for a numeric axis.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub categories: Vec<String>,
 }
 
 impl Axis {
@@ -70,7 +74,22 @@ impl Axis {
             unit: unit.into(),
             scale: Scale::Linear,
             include: None,
+            categories: Vec::new(),
         }
+    }
+
+    /// A category axis: `names` at positions 1, 2, …, each with its slot from half a
+    /// position before to half after.
+    pub fn categories(mut self, names: Vec<String>) -> Self {
+        self.include = Some([0.5, names.len() as f64 + 0.5]);
+        self.categories = names;
+        self
+    }
+
+    /// The category whose slot holds `v` (position `i + 1` ± ½), if any.
+    pub fn category_at(&self, v: f64) -> Option<&str> {
+        let i = (v.is_finite() && v >= 0.5).then(|| (v - 0.5).floor() as usize)?;
+        self.categories.get(i).map(String::as_str)
     }
 
     pub fn log(mut self) -> Self {
@@ -89,6 +108,12 @@ impl Axis {
 }
 
 pub(super) fn check_include(axis: &Axis) -> Result<(), String> {
+    if !axis.categories.is_empty() && axis.scale == Scale::Log {
+        return Err(format!(
+            "axis {:?}: a category axis cannot be logarithmic",
+            axis.title
+        ));
+    }
     match axis.include {
         Some([lo, hi]) if !(lo.is_finite() && hi.is_finite() && lo <= hi) => Err(format!(
             "axis {:?}: the included range must be finite and ordered",

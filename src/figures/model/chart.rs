@@ -213,6 +213,9 @@ impl Chart {
         }
         check_include(&c.x)?;
         check_include(&c.y)?;
+        if !c.y.categories.is_empty() {
+            return Err("only a chart's x axis can name categories".into());
+        }
         Ok(())
     }
 }

@@ -7,6 +7,7 @@ use super::scale::{Span, Ticks, linear_on_log, ticks_for};
 use super::{AXIS_TITLE_EM, Rect, TICK_EM, fitting_em, truncated};
 use crate::figures::FigureError;
 use crate::figures::canvas::{AXIS, Canvas, GRID, TEXT};
+use crate::figures::legibility::thin_categories;
 use crate::figures::model::{Axis, Scale};
 
 /// Frame of a numeric chart: y axis on the left, x axis at the bottom.
@@ -16,6 +17,8 @@ pub(super) struct Frame {
     pub(super) y: Span,
     pub(super) xt: Ticks,
     pub(super) yt: Ticks,
+    /// How many categories the x axis names (a category axis), for the layout record.
+    pub(super) x_categories: Option<usize>,
 }
 
 /// Lay out the axes in `area` (nothing is drawn: see [`draw_grid`] and [`axes`]).
@@ -73,7 +76,11 @@ pub(super) fn frame<DB: DrawingBackend>(
             let room = |l: &str| Ok(c.text_size(l, TICK_EM)?.0 + gap);
             // A label centred on its tick stays on the image (the plot reaches its edge).
             let image = Some((-gap / 2.0, c.size().0 + gap / 2.0));
-            let xt = fitted_ticks(&x, max, room, image)?;
+            let xt = if axis.categories.is_empty() {
+                fitted_ticks(&x, max, room, image)?
+            } else {
+                category_ticks(&x, &axis.categories, room)?
+            };
             (x, xt)
         }
         None => (
@@ -90,7 +97,37 @@ pub(super) fn frame<DB: DrawingBackend>(
             },
         ),
     };
-    Ok(Frame { plot, x, y, xt, yt })
+    let x_categories = x_numeric
+        .map(|(axis, _, _)| axis.categories.len())
+        .filter(|&n| n > 0);
+    Ok(Frame {
+        plot,
+        x,
+        y,
+        xt,
+        yt,
+        x_categories,
+    })
+}
+
+/// A category axis' ticks: each name at its position (1, 2, …), every k-th when the names
+/// would touch (the rule bars and heatmaps follow), so that each drawn name fits.
+fn category_ticks(
+    span: &Span,
+    names: &[String],
+    room: impl Fn(&str) -> Result<f64, FigureError>,
+) -> Result<Ticks, FigureError> {
+    let mut needed: f64 = 0.0;
+    for n in names {
+        needed = needed.max(room(n)?);
+    }
+    let slot = (span.map(2.0) - span.map(1.0)).abs();
+    let thin = thin_categories(names.len(), slot, needed);
+    let shown: Vec<usize> = (0..names.len()).filter(|&i| thin.shows(i)).collect();
+    Ok(Ticks {
+        values: shown.iter().map(|&i| (i + 1) as f64).collect(),
+        labels: shown.iter().map(|&i| names[i].clone()).collect(),
+    })
 }
 
 /// The ticks of a numeric axis drawn along `span`: about `max` round values, thinned until
@@ -252,7 +289,7 @@ pub(super) fn axes<DB: DrawingBackend>(
     }
     c.note_axis(y_title, None, &f.yt.labels);
     if !f.xt.values.is_empty() {
-        c.note_axis(x_title, None, &f.xt.labels);
+        c.note_axis(x_title, f.x_categories, &f.xt.labels);
     }
     // Axis titles shrink, then are cut, to their axis' length.
     let title_h = c.px(AXIS_TITLE_EM * 1.3);
@@ -310,5 +347,33 @@ mod tests {
         };
         let kept = thinned(ticks, &span, |_| Ok(150.0), None).unwrap();
         assert_eq!(kept.labels, vec!["a", "d"]);
+    }
+
+    #[test]
+    fn a_category_axis_names_its_categories_not_positions() {
+        use crate::figures::{Figure, RenderOptions, Series, SeriesStyle, layout_of};
+        let names = vec!["success".to_string(), "failure".to_string()];
+        let fig = Figure::chart(
+            "mf taxel 7 by outcome",
+            Axis::new("outcome", "").categories(names.clone()),
+            Axis::new("mf taxel 7", ""),
+            vec![
+                Series::new("points", vec![1.1, 1.9, 2.2], vec![1.0, 2.0, 3.0])
+                    .style(SeriesStyle::Markers),
+            ],
+        );
+        let tile = RenderOptions {
+            width: 300,
+            height: 200,
+            dpi: 96.0,
+        };
+        for opts in [RenderOptions::default(), RenderOptions::column(), tile] {
+            let layout = layout_of(&fig, &opts).unwrap();
+            let x = (layout.axes.iter())
+                .find(|a| a.title == "outcome")
+                .expect("the x axis is recorded");
+            assert_eq!(x.categories, Some(2));
+            assert_eq!(x.labels, names);
+        }
     }
 }
