@@ -11,8 +11,8 @@ use serde::{Deserialize, Serialize};
 
 use super::{Calibration, Model, ModelError, ModelFile, Provenance, SelectionScore, SessionRef};
 use crate::catalogue::MethodId;
-use crate::cluster::baselines::{BaselinesParams, BaselinesResult, SvmSummary, svm_grid};
 use crate::cluster::{SelfOrganisingMap, SequentialKMeans, SequentialKMeansParams, SomParams};
+use crate::experiments::baselines::{BaselinesParams, BaselinesResult, SvmSummary, svm_grid};
 use crate::experiments::clustering::som_setup;
 use crate::experiments::result::SizeReason;
 use crate::features::Normaliser;
