@@ -271,6 +271,14 @@ pub enum SequenceError {
     Parameter { name: &'static str, reason: String },
     #[error("session cannot give {set} features: {reason}")]
     Session { set: String, reason: String },
+    /// A grasp's frames the codes' dictionaries cannot code (the sparse coder's error kept).
+    #[error("session cannot give {set} features: grasp {grasp}: {source}")]
+    Codes {
+        set: String,
+        grasp: usize,
+        #[source]
+        source: crate::sparse::SparseError,
+    },
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
