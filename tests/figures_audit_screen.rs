@@ -621,7 +621,7 @@ fn every_figure() -> Computed {
     let truth = objects.labels_of(set);
     let features = session_features(&objects).expect("features");
     // One SVM setting: the search's size does not change the figures.
-    let params = tactile_workbench::cluster::baselines::BaselinesParams {
+    let params = tactile_workbench::experiments::baselines::BaselinesParams {
         orders: 1,
         seed: 1,
         svm_c: vec![10.0],
@@ -629,7 +629,7 @@ fn every_figure() -> Computed {
         cv_repeats: 1,
         ..Default::default()
     };
-    let b = tactile_workbench::cluster::baselines::run_baselines(
+    let b = tactile_workbench::experiments::baselines::run_baselines(
         features.view(),
         &truth,
         &params,

@@ -138,6 +138,8 @@ fn the_frontier_command_writes_json_and_rejects_unknown_methods() {
             "frontier",
             "--method",
             "ds",
+            "--features",
+            "all",
             "--reps",
             "2",
             "--capacities",
@@ -170,6 +172,8 @@ fn the_frontier_command_writes_json_and_rejects_unknown_methods() {
             "ds",
             "--reps",
             "2",
+            "--features",
+            "all",
             "--frontier",
         ])
         .arg(&json)
@@ -195,6 +199,8 @@ fn the_frontier_command_writes_json_and_rejects_unknown_methods() {
             "gs",
             "--reps",
             "2",
+            "--features",
+            "all",
             "--frontier",
         ])
         .arg(&json)

@@ -72,8 +72,17 @@ fn recognition_runs_by_default_on_one_sensor_without_encoders() {
         "{stdout}\n{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    assert!(stdout.contains("all features (moments)"), "{stdout}");
+    // The default chooses the inputs by cross validation; `all` is the moments here.
+    assert!(stdout.contains("auto chose"), "{stdout}");
     assert!(stdout.contains("target object"), "{stdout}");
+    let out = bin()
+        .args(["recognition", "--quiet", "--reps", "1", "--tau", "3"])
+        .args(["--features", "all"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("all features (moments)"), "{stdout}");
     // An explicit family the session lacks, or a label set it lacks, is a clear error.
     for (args, says) in [
         (["--features", "encoders"], "no joint encoders"),

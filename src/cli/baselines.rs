@@ -6,8 +6,10 @@ use std::path::PathBuf;
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 
-use crate::cluster::baselines::{BaselinesParams, BaselinesResult, ScoreSummary, run_baselines};
 use crate::cluster::{Schedule, SomParams};
+use crate::experiments::baselines::{
+    BaselinesParams, BaselinesResult, ScoreSummary, run_baselines,
+};
 use crate::features::{Normalisation, table_one::session_features};
 use crate::jobs::Progress;
 
@@ -276,7 +278,8 @@ mod tests {
         super::run(a).unwrap();
         let text = std::fs::read_to_string(&out).unwrap();
         let _ = std::fs::remove_file(&out);
-        let r: crate::cluster::baselines::BaselinesResult = serde_json::from_str(&text).unwrap();
+        let r: crate::experiments::baselines::BaselinesResult =
+            serde_json::from_str(&text).unwrap();
         assert_eq!((r.samples, r.features), (200, 165));
         assert_eq!(r.sweep.len(), 2);
         assert!(r.svm.is_none());

@@ -22,8 +22,9 @@ pub struct FrontierArgs {
     /// registered methods.
     #[arg(long, value_delimiter = ',', default_value = "gs")]
     pub method: Vec<String>,
-    /// Feature sets of the sequence methods, comma separated: all, tactile, encoder, raw …
-    /// (one frontier each; default `all`, a registered method's own families).
+    /// Feature sets of the sequence methods, comma separated: auto, all, tactile, encoder,
+    /// raw … (one frontier each; default `auto`: the set with the fewest features within
+    /// one standard error of the best 5-fold accuracy at the method's default size).
     #[arg(long, value_delimiter = ',')]
     pub features: Vec<String>,
     /// Seeded repetitions per size (at least 2).
@@ -126,9 +127,11 @@ impl FrontierArgs {
                         MethodId::keys(frontier::methods())
                     )
                 })?;
-            let own = [method
-                .classifier()
-                .map_or(FeatureSet::ALL, |c| c.features())];
+            let own = [if method.uses_features() {
+                FeatureSet::AUTO
+            } else {
+                FeatureSet::ALL
+            }];
             let sets = match (features.is_empty(), method.uses_features()) {
                 (true, _) => &own[..],
                 (false, true) => &features[..],
@@ -266,6 +269,7 @@ pub fn run(args: FrontierArgs) -> anyhow::Result<()> {
     let mut frontiers = Vec::new();
     for p in &params {
         let f = with_progress(args.quiet, |progress| run_frontier(&session, p, progress))?;
+        super::model::print_choice(f.feature_choice.as_ref());
         print_frontier(&f);
         frontiers.push(f);
     }

@@ -10,6 +10,7 @@ use clap::{Args, Subcommand};
 use super::progress::with_progress;
 use super::stability::{StabilityArgs, data_options, in_pool, options_from};
 use crate::catalogue::{Classifier, MethodId};
+use crate::experiments::feature_choice::{AUTO_FOLDS, FeatureChoice};
 use crate::experiments::result::figure_set;
 use crate::experiments::stability::{PipelineInputs, StabilityData};
 use crate::figures::{Format, RenderOptions, export_all};
@@ -77,7 +78,8 @@ pub struct FitClusterArgs {
     /// chose without labels); required unless --from.
     #[arg(long)]
     pub threshold: Option<f64>,
-    /// Feature families per step, as for `fit ds` (default `all`).
+    /// Feature families per step, as for `fit ds` (default `auto`: chosen by cross
+    /// validation of DU's (GU's) experts, DS (GS), on SESSION).
     #[arg(long)]
     pub features: Option<String>,
     /// The label set clusters are scored against by `evaluate` (default `object`; never
@@ -101,8 +103,9 @@ pub struct FitClusterArgs {
 #[derive(Args, Debug)]
 pub struct FitSequenceArgs {
     pub session: PathBuf,
-    /// Feature families per step (`all`, `moments`, `encoders`, `raw`, `change`, or
-    /// combinations such as `raw+encoders`; default `all`).
+    /// Feature families per step (`auto`, `all`, `moments`, `encoders`, `raw`, `change`, or
+    /// combinations such as `raw+encoders`; default `auto`: the family with the fewest
+    /// features within one standard error of the best 5-fold accuracy on SESSION).
     #[arg(long)]
     pub features: Option<String>,
     /// The label set to learn (default `object`).
@@ -307,14 +310,20 @@ fn fit_sequences(method: MethodId, a: FitSequenceArgs) -> anyhow::Result<()> {
             }
             let opts = models::SequenceFitOptions {
                 method,
-                features: a.features.as_deref().unwrap_or("all").parse()?,
+                features: a.features.as_deref().unwrap_or("auto").parse()?,
                 label_set: a.target.clone().unwrap_or_else(|| "object".into()),
                 seed: a.seed,
                 ds,
                 gs,
             };
+            let (opts, choice) = with_progress(false, |p| {
+                models::choose_sequence_features(&session, &opts, p)
+            })?;
+            print_choice(choice.as_ref());
             let (model, secs) = models::fit_sequences(&session, &opts)?;
-            models::sequence_file(model, &session, secs, reason, None)
+            let mut file = models::sequence_file(model, &session, secs, reason, None);
+            file.provenance.feature_choice = choice;
+            file
         }
     };
     models::save(&file, &a.output)?;
@@ -359,18 +368,24 @@ fn fit_clusters(method: MethodId, a: FitClusterArgs) -> anyhow::Result<()> {
                     "--threshold: the novelty threshold the model opens clusters at (`clustering --choose-threshold stability` chooses one without labels)"
                 );
             };
-            let learner = models::clustering::learner_of(method)
+            let learner = crate::experiments::clustering::UnsupervisedLearner::of(method)
                 .with_context(|| format!("{} is not du or gu", method.key()))?;
             let opts = models::ClusterFitOptions {
                 method,
-                features: a.features.as_deref().unwrap_or("all").parse()?,
+                features: a.features.as_deref().unwrap_or("auto").parse()?,
                 label_set: a.target.clone().unwrap_or_else(|| "object".into()),
                 threshold,
                 seed: a.seed,
                 params: crate::experiments::clustering::ClusteringParams::for_learner(learner),
             };
+            let (opts, choice) = with_progress(false, |p| {
+                models::choose_cluster_features(&session, &opts, p)
+            })?;
+            print_choice(choice.as_ref());
             let (model, secs) = models::fit_clusters(&session, &opts)?;
-            models::cluster_file(model, &session, secs, None)
+            let mut file = models::cluster_file(model, &session, secs, None);
+            file.provenance.feature_choice = choice;
+            file
         }
     };
     models::save(&file, &a.output)?;
@@ -425,10 +440,17 @@ fn registered_command(c: &dyn Classifier) -> clap::Command {
                 .required(true)
                 .value_parser(value_parser!(PathBuf)),
         )
-        .arg(Arg::new("features").long("features").help(format!(
-            "Feature families per step (default {})",
-            c.features()
-        )))
+        .arg(
+            Arg::new("features")
+                .long("features")
+                .default_value("auto")
+                .help(format!(
+                    "Feature families per step: auto (the family with the fewest features \
+                     within one standard error of the best {AUTO_FOLDS}-fold accuracy on \
+                     SESSION), or a set as for `fit ds` (the method's own: {})",
+                    c.features()
+                )),
+        )
         .arg(
             Arg::new("target")
                 .long("target")
@@ -488,13 +510,18 @@ fn fit_registered(args: &[String]) -> anyhow::Result<()> {
         label_set: m.get_one::<String>("target").expect("defaulted").clone(),
         seed: *m.get_one::<u64>("seed").expect("defaulted"),
     };
+    let (opts, choice) = with_progress(false, |p| {
+        models::choose_classifier_features(&session, &opts, p)
+    })?;
+    print_choice(choice.as_ref());
     let (model, secs) = with_progress(false, |p| models::fit_classifier(&session, &opts, p))?;
     let reason = if given {
         crate::experiments::result::SizeReason::User
     } else {
         crate::experiments::result::SizeReason::MethodDefault
     };
-    let file = models::classifier_file(model, &session, secs, reason);
+    let mut file = models::classifier_file(model, &session, secs, reason);
+    file.provenance.feature_choice = choice;
     models::save(&file, output)?;
     let p = &file.provenance;
     println!(
@@ -505,6 +532,13 @@ fn fit_registered(args: &[String]) -> anyhow::Result<()> {
     );
     println!("wrote {}", output.display());
     Ok(())
+}
+
+/// What `auto` chose and why, when it chose.
+pub(crate) fn print_choice(choice: Option<&FeatureChoice>) {
+    if let Some(c) = choice {
+        println!("{}", c.text());
+    }
 }
 
 fn load_pair(model: &Path, session: &Path) -> anyhow::Result<(ModelFile, Session)> {

@@ -43,9 +43,11 @@ pub struct RecognitionArgs {
     /// ds (discriminative) or gs (generative).
     #[arg(long, default_value = "gs")]
     pub learner: String,
-    /// Inputs: all (the paper's families the session has), or families moments (alias
-    /// tactile), encoders (alias encoder), raw, change, codes, combined with + (raw+encoders).
-    #[arg(long, default_value = "all")]
+    /// Inputs: auto (the family with the fewest features within one standard error of the
+    /// best 5-fold accuracy of the experts on SESSION), all (the paper's families the
+    /// session has), or families moments (alias tactile), encoders (alias encoder), raw,
+    /// change, codes, combined with + (raw+encoders).
+    #[arg(long, default_value = "auto")]
     pub features: String,
     /// The label set whose classes are learned and scored.
     #[arg(long, default_value = "object")]
@@ -99,6 +101,9 @@ impl RecognitionArgs {
             ..RecognitionParams::default()
         };
         let (capacity, tau, reason) = match &self.frontier {
+            Some(_) if p.features.is_auto() => anyhow::bail!(
+                "--frontier: a frontier file holds one frontier per feature set; give --features"
+            ),
             Some(path) => {
                 let (c, t) = recommended_size(path, p.learner, p.features)?;
                 (c, t, SizeReason::Recommended)
@@ -219,6 +224,7 @@ pub fn recognition(args: RecognitionArgs) -> anyhow::Result<()> {
     let session = open_session(&args.session)?;
     super::refuse_input_as_output(args.save_model.as_deref(), &inputs)?;
     let result = with_progress(args.quiet, |p| run_recognition(&session, &params, p))?;
+    super::model::print_choice(result.feature_choice.as_ref());
     print_recognition(&result);
     write_json(&result, args.json.as_deref())?;
     if let Some(path) = &args.save_model {
@@ -245,9 +251,11 @@ pub struct ClusteringArgs {
     pub reps: usize,
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Inputs: all (the paper's families the session has), or families moments (alias
-    /// tactile), encoders (alias encoder), raw, change, codes, combined with + (raw+encoders).
-    #[arg(long, default_value = "all")]
+    /// Inputs: auto (the family with the fewest features within one standard error of the
+    /// best 5-fold accuracy of the experts on SESSION), all (the paper's families the
+    /// session has), or families moments (alias tactile), encoders (alias encoder), raw,
+    /// change, codes, combined with + (raw+encoders).
+    #[arg(long, default_value = "auto")]
     pub features: String,
     /// The label set whose classes are learned and scored.
     #[arg(long, default_value = "object")]
@@ -432,6 +440,7 @@ pub fn clustering(args: ClusteringArgs) -> anyhow::Result<()> {
     let params = args.params()?;
     let session = open_session(&args.session)?;
     let r = with_progress(args.quiet, |p| run_clustering(&session, &params, p))?;
+    super::model::print_choice(r.feature_choice.as_ref());
     println!(
         "{:?} / {}, target {}, {} orders per threshold, {:.1} s",
         params.learner,

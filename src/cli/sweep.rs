@@ -208,34 +208,57 @@ fn experiment_of(e: &PlanExperiment) -> anyhow::Result<(Experiment, Session, &Pa
             if args.save_model.is_some() {
                 bail!("a plan saves no model: `fit du|gu --threshold T` on the session does");
             }
-            (
-                Experiment::Clustering(args.params()?),
-                open_session(&args.session)?,
-                &args.session,
-            )
+            let session = open_session(&args.session)?;
+            let params = args.params()?;
+            let (params, choice) = with_progress(args.quiet, |p| {
+                crate::experiments::clustering::choose_auto_features(&session, &params, p)
+            })?;
+            plan_choice(choice.as_ref());
+            (Experiment::Clustering(params), session, &args.session)
         }
         PlanExperiment::Recognition { args, .. } => {
             no_json(&args.json)?;
             if args.save_model.is_some() {
                 bail!("a plan saves no model: `fit ds|gs` on the session does");
             }
-            (
-                Experiment::Recognition(args.params()?),
-                open_session(&args.session)?,
-                &args.session,
-            )
+            let session = open_session(&args.session)?;
+            let params = args.params()?;
+            let (params, choice) = with_progress(args.quiet, |p| {
+                crate::experiments::recognition::choose_auto_features(&session, &params, p)
+            })?;
+            plan_choice(choice.as_ref());
+            (Experiment::Recognition(params), session, &args.session)
         }
         PlanExperiment::Frontier { args, .. } => {
             no_json(&args.json)?;
+            let session = open_session(&args.session)?;
+            let mut frontiers = Vec::new();
+            for params in args.params()? {
+                let (params, choice) = with_progress(args.quiet, |p| {
+                    crate::experiments::frontier::choose_auto_features(&session, &params, p)
+                })?;
+                plan_choice(choice.as_ref());
+                frontiers.push(params);
+            }
             (
-                Experiment::Frontier(FrontierSweep {
-                    frontiers: args.params()?,
-                }),
-                open_session(&args.session)?,
+                Experiment::Frontier(FrontierSweep { frontiers }),
+                session,
                 &args.session,
             )
         }
     })
+}
+
+/// `auto` is chosen once, when planning: the shards all run the chosen family, and the
+/// merged result is the single-machine command's with that family given.
+fn plan_choice(choice: Option<&crate::experiments::feature_choice::FeatureChoice>) {
+    if let Some(c) = choice {
+        super::model::print_choice(Some(c));
+        println!(
+            "the plan runs {}: compare with the single-machine command given --features {}",
+            c.chosen, c.chosen
+        );
+    }
 }
 
 fn plan(a: PlanArgs) -> anyhow::Result<()> {

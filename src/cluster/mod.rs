@@ -1,8 +1,7 @@
-//! Clustering baselines and clustering scores (the second paper, Sec. VII-A, Table IV):
-//! sequential k-means and a self-organising map on per-grasp features, and the external
-//! scores purity / ARI / NMI against true labels.
+//! Clustering and its scores (the second paper, Sec. VII-A, Table IV): sequential
+//! k-means and a self-organising map on per-grasp features, and the external scores
+//! purity / ARI / NMI against true labels (the baselines' protocol: `experiments::baselines`).
 
-pub mod baselines;
 pub mod kmeans;
 pub mod order_agreement;
 pub mod scores;

@@ -8,6 +8,7 @@ use std::time::Instant;
 use ndarray::ArrayView2;
 
 use super::ExperimentError;
+use super::feature_choice::FoldScorer;
 use super::labels::session_labels;
 use crate::catalogue::{Classifier, ClassifierError, Training};
 use crate::features::{FeatureSequences, FeatureSet, SequenceParams, feature_sequences};
@@ -157,4 +158,45 @@ pub fn cv_repetition(
         train_us,
         predict_us,
     })
+}
+
+/// A registered method at `size`, scored on a fold by its own fit and predict.
+pub struct ClassifierScorer<'a> {
+    pub method: &'static dyn Classifier,
+    pub size: &'a [f64],
+}
+
+impl FoldScorer for ClassifierScorer<'_> {
+    fn method(&self) -> crate::catalogue::MethodId {
+        self.method.info().id
+    }
+
+    fn check(&self) -> Result<(), ExperimentError> {
+        self.method.check(self.size).map_err(classifier_err)
+    }
+
+    fn accuracy(
+        &self,
+        feats: &FeatureSequences,
+        labels: &[usize],
+        n_classes: usize,
+        train: &[usize],
+        test: &[usize],
+        seed: u64,
+        progress: &Progress,
+    ) -> Result<f64, ExperimentError> {
+        let s = train_test(
+            self.method,
+            self.size,
+            feats,
+            feats,
+            labels,
+            n_classes,
+            train,
+            test,
+            seed,
+            progress,
+        )?;
+        Ok(s.accuracy)
+    }
 }

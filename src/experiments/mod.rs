@@ -5,6 +5,7 @@ pub mod baselines;
 pub mod classifier;
 pub mod clustering;
 pub mod experiment;
+pub mod feature_choice;
 pub mod figure_id;
 pub mod frontier;
 pub mod labels;

@@ -11,6 +11,8 @@ use serde::{Deserialize, Serialize};
 use super::inputs::SequenceInputs;
 use super::{Calibration, Model, ModelError, ModelFile, Provenance, SessionRef};
 use crate::catalogue::{Classifier, ClassifierError, Fitted, MethodId, Training};
+use crate::experiments::classifier::ClassifierScorer;
+use crate::experiments::feature_choice::{AUTO_FOLDS, FeatureChoice, choose_features};
 use crate::experiments::result::SizeReason;
 use crate::features::FeatureSet;
 use crate::jobs::Progress;
@@ -57,6 +59,37 @@ fn model_err(e: ClassifierError) -> ModelError {
         ClassifierError::Data(d) => ModelError::Mismatch(d),
         other => ModelError::Param(other.to_string()),
     }
+}
+
+/// `opts` with `auto` features replaced by the family the method's own cross validation on
+/// `session` chooses at its size (`experiments::feature_choice`), and that choice; or as
+/// they are.
+pub fn choose_classifier_features(
+    session: &Session,
+    opts: &ClassifierFitOptions,
+    progress: &Progress,
+) -> Result<(ClassifierFitOptions, Option<FeatureChoice>), ModelError> {
+    if opts.features != Some(FeatureSet::AUTO) {
+        return Ok((opts.clone(), None));
+    }
+    let method = method_of(opts.method)?;
+    let size = opts.size.clone().unwrap_or_else(|| method.default_size());
+    let choice = choose_features(
+        session,
+        &ClassifierScorer {
+            method,
+            size: &size,
+        },
+        &opts.label_set,
+        AUTO_FOLDS,
+        opts.seed,
+        progress,
+    )?;
+    let opts = ClassifierFitOptions {
+        features: Some(choice.chosen),
+        ..opts.clone()
+    };
+    Ok((opts, Some(choice)))
 }
 
 /// Fit a registered method on every grasp of `session`.
@@ -175,6 +208,7 @@ pub fn classifier_file(
         trained_at: Provenance::now(),
         train_seconds: secs,
         selection: Vec::new(),
+        feature_choice: None,
     };
     ModelFile::new(provenance, Model::Classifier(model))
 }

@@ -12,9 +12,13 @@ use serde::{Deserialize, Serialize};
 use super::inputs::SequenceInputs;
 use super::{Calibration, Model, ModelError, ModelFile, Provenance, SelectionScore, SessionRef};
 use crate::catalogue::MethodId;
-use crate::experiments::clustering::{ClusteringParams, ClusteringResult, UnsupervisedLearner};
+use crate::experiments::clustering::{
+    ClusteringParams, ClusteringResult, UnsupervisedLearner, choose_auto_features,
+};
+use crate::experiments::feature_choice::FeatureChoice;
 use crate::experiments::result::SizeReason;
 use crate::features::FeatureSet;
+use crate::jobs::Progress;
 use crate::learners::{Du, DuParams, Gu, GuParams, NoveltyLearner};
 use crate::rng::Rng;
 use crate::session::Session;
@@ -150,7 +154,14 @@ pub fn fit_clusters(
                 min_grasps: p.gu_min_grasps,
             },
         )?),
-        other => {
+        other @ (MethodId::SparseSvm
+        | MethodId::RawSvm
+        | MethodId::Ds
+        | MethodId::Gs
+        | MethodId::KMeans
+        | MethodId::Som
+        | MethodId::RbfSvm
+        | MethodId::Classifier(_)) => {
             return Err(ModelError::Param(format!(
                 "{} is not an online clustering method (du, gu)",
                 other.key()
@@ -167,6 +178,31 @@ pub fn fit_clusters(
     };
     model.learn(session)?;
     Ok((model, t0.elapsed().as_secs_f64()))
+}
+
+/// `opts` with `auto` features replaced by the family chosen by cross validation of the
+/// experts the learner is built from (`experiments::clustering::choose_auto_features`),
+/// and that choice; or as they are.
+pub fn choose_cluster_features(
+    session: &Session,
+    opts: &ClusterFitOptions,
+    progress: &Progress,
+) -> Result<(ClusterFitOptions, Option<FeatureChoice>), ModelError> {
+    let learner = UnsupervisedLearner::of(opts.method)
+        .ok_or_else(|| ModelError::Param(format!("{} is not du or gu", opts.method.key())))?;
+    let params = ClusteringParams {
+        learner,
+        features: opts.features,
+        label_set: opts.label_set.clone(),
+        seed: opts.seed,
+        ..opts.params.clone()
+    };
+    let (params, choice) = choose_auto_features(session, &params, progress)?;
+    let opts = ClusterFitOptions {
+        features: params.features,
+        ..opts.clone()
+    };
+    Ok((opts, choice))
 }
 
 /// The model a `clustering` run leaves: DU or GU learned on every grasp of `session` at the
@@ -191,6 +227,7 @@ pub fn cluster_file_of_run(
     };
     let (model, secs) = fit_clusters(session, &opts)?;
     let mut file = cluster_file(model, session, secs, None);
+    file.provenance.feature_choice = run.feature_choice.clone();
     file.provenance.selection = SelectionScore::under(
         &format!("{}, {} orders", choice.criterion.text(), params.reps),
         &[("mean pairwise ARI", choice.agreement)],
@@ -212,15 +249,6 @@ pub fn continue_clusters(
 /// How a cluster is named in predictions and figures (1-based, as the window counts).
 pub fn cluster_name(c: usize) -> String {
     format!("cluster {}", c + 1)
-}
-
-/// The learner the catalogue names `method`, for the clustering protocol's defaults.
-pub fn learner_of(method: MethodId) -> Option<UnsupervisedLearner> {
-    match method {
-        MethodId::Du => Some(UnsupervisedLearner::Du),
-        MethodId::Gu => Some(UnsupervisedLearner::Gu),
-        _ => None,
-    }
 }
 
 /// The model file of an unsupervised model learned (or learned further) on `session`.
@@ -268,6 +296,8 @@ pub fn cluster_file(
         trained_at: Provenance::now(),
         train_seconds: secs,
         selection: Vec::new(),
+        // Learned further, the inputs stay the ones the first session chose.
+        feature_choice: previous.and_then(|p| p.feature_choice.clone()),
     };
     ModelFile::new(provenance, Model::Clusters(model))
 }

@@ -14,6 +14,7 @@ use super::{
     ClassifierModel, ClusterModel, ModelError, SequenceModel, StabilityClassifier, TableOneModel,
 };
 use crate::catalogue::MethodId;
+use crate::experiments::feature_choice::FeatureChoice;
 use crate::experiments::result::SizeReason;
 use crate::session::Session;
 
@@ -80,6 +81,9 @@ pub struct Provenance {
     pub trained_at: String,
     pub train_seconds: f64,
     pub selection: Vec<SelectionScore>,
+    /// How `--features auto` chose the inputs (None: they were given).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub feature_choice: Option<FeatureChoice>,
 }
 
 impl Provenance {

@@ -169,8 +169,15 @@ fn rows(model: &Model, session: &Session, out: &Outputs) -> Vec<GraspPrediction>
             .iter()
             .map(|&id| (m.classes.get(id).cloned().unwrap_or_default(), f64::NAN))
             .collect(),
-        (_, Outputs::Ids(ids)) => ids.iter().map(|&c| (cluster_name(c), f64::NAN)).collect(),
-        _ => unreachable!("outputs() gives each model its kind of output"),
+        (Model::Clusters(_) | Model::TableOne(_), Outputs::Ids(ids)) => {
+            ids.iter().map(|&c| (cluster_name(c), f64::NAN)).collect()
+        }
+        (Model::Stability(_), Outputs::Steps(_) | Outputs::Ids(_))
+        | (Model::Sequences(_), Outputs::Decisions(_) | Outputs::Ids(_))
+        | (
+            Model::Clusters(_) | Model::TableOne(_) | Model::Classifier(_),
+            Outputs::Decisions(_) | Outputs::Steps(_),
+        ) => unreachable!("outputs() gives each model its kind of output"),
     };
     let set = session.label_set(label_set_of(model));
     session
@@ -249,6 +256,14 @@ pub fn evaluate(
     let out = outputs(&file.model, session, calibration)?;
     let predictions = rows(&file.model, session, &out);
     let label_set = label_set_of(&file.model).to_string();
+    // A model that groups grasps: its clusters by name, scored against the label set.
+    let clustered =
+        |clusters: usize, ids: &[usize]| -> Result<(Vec<String>, HeldOutScores), ModelError> {
+            Ok((
+                (0..clusters).map(cluster_name).collect(),
+                cluster_scores(&label_set, session, ids, clusters)?,
+            ))
+        };
     let (classes, scores) = match (&file.model, &out) {
         (Model::Stability(c), _) => (
             vec![c.success_class.clone(), c.failure_class.clone()],
@@ -281,18 +296,13 @@ pub fn evaluate(
                 class_scores(&m.classes, m.method.key(), &predictions, ids, &[])?,
             )
         }
-        (model, Outputs::Ids(ids)) => {
-            let clusters = match model {
-                Model::Clusters(m) => m.clusters(),
-                Model::TableOne(m) => m.outputs(),
-                _ => 0,
-            };
-            (
-                (0..clusters).map(cluster_name).collect(),
-                cluster_scores(&label_set, session, ids, clusters)?,
-            )
-        }
-        _ => unreachable!("outputs() gives each model its kind of output"),
+        (Model::Clusters(m), Outputs::Ids(ids)) => clustered(m.clusters(), ids)?,
+        (Model::TableOne(m), Outputs::Ids(ids)) => clustered(m.outputs(), ids)?,
+        (Model::Sequences(_), Outputs::Decisions(_) | Outputs::Ids(_))
+        | (
+            Model::Clusters(_) | Model::TableOne(_) | Model::Classifier(_),
+            Outputs::Decisions(_) | Outputs::Steps(_),
+        ) => unreachable!("outputs() gives each model its kind of output"),
     };
     Ok(HeldOutResult {
         method: file.provenance.method,

@@ -30,10 +30,13 @@ pub mod table_one;
 mod tests;
 
 pub use calibration::Calibration;
-pub use classifier::{ClassifierFitOptions, ClassifierModel, classifier_file, fit_classifier};
+pub use classifier::{
+    ClassifierFitOptions, ClassifierModel, choose_classifier_features, classifier_file,
+    fit_classifier,
+};
 pub use clustering::{
-    ClusterFitOptions, ClusterModel, cluster_file, cluster_file_of_run, continue_clusters,
-    fit_clusters,
+    ClusterFitOptions, ClusterModel, choose_cluster_features, cluster_file, cluster_file_of_run,
+    continue_clusters, fit_clusters,
 };
 pub use file::{
     FORMAT, Model, ModelFile, Provenance, SelectionScore, SessionRef, VERSION, load, save,
@@ -41,8 +44,8 @@ pub use file::{
 pub use held_out::{GraspPrediction, HeldOutResult, HeldOutScores, evaluate, predict};
 pub use held_out_report::held_out_report;
 pub use recognition::{
-    SequenceFitOptions, SequenceModel, continue_sequences, fit_sequences, sequence_file,
-    sequence_file_of_run,
+    SequenceFitOptions, SequenceModel, choose_sequence_features, continue_sequences, fit_sequences,
+    sequence_file, sequence_file_of_run,
 };
 pub use stability::{SensorShape, SparseCodes, StabilityClassifier, fit_stability};
 pub use table_one::{
@@ -71,6 +74,8 @@ pub enum ModelError {
     Stability(#[from] StabilityError),
     #[error(transparent)]
     Learner(#[from] crate::learners::LearnerError),
+    #[error(transparent)]
+    Experiment(#[from] crate::experiments::ExperimentError),
 }
 
 impl ModelError {

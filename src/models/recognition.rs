@@ -17,10 +17,15 @@ use serde::{Deserialize, Serialize};
 use super::inputs::SequenceInputs;
 use super::{Calibration, Model, ModelError, ModelFile, Provenance, SelectionScore, SessionRef};
 use crate::catalogue::MethodId;
+use crate::experiments::feature_choice::FeatureChoice;
 use crate::experiments::labels::session_labels;
-use crate::experiments::recognition::{RecognitionResult, prefix_len, protocol_order};
+use crate::experiments::recognition::{
+    RecognitionParams, RecognitionResult, SupervisedLearner, choose_auto_features, prefix_len,
+    protocol_order,
+};
 use crate::experiments::result::SizeReason;
 use crate::features::FeatureSet;
+use crate::jobs::Progress;
 use crate::learners::{Ds, DsParams, Gs, GsParams, SequenceClassifier};
 use crate::rng::Rng;
 use crate::session::Session;
@@ -132,7 +137,14 @@ pub fn fit_sequences(
     let experts = match opts.method {
         MethodId::Ds => Experts::Ds(Ds::new(dim, &opts.ds)?),
         MethodId::Gs => Experts::Gs(Gs::new(dim, &opts.gs)?),
-        other => {
+        other @ (MethodId::SparseSvm
+        | MethodId::RawSvm
+        | MethodId::Du
+        | MethodId::Gu
+        | MethodId::KMeans
+        | MethodId::Som
+        | MethodId::RbfSvm
+        | MethodId::Classifier(_)) => {
             return Err(ModelError::Param(format!(
                 "{} is not a supervised sequence method (ds, gs)",
                 other.key()
@@ -149,6 +161,36 @@ pub fn fit_sequences(
     };
     teach(&mut model, session)?;
     Ok((model, t0.elapsed().as_secs_f64()))
+}
+
+/// `opts` with `auto` features replaced by the family the experts' cross validation on
+/// `session` chooses (`experiments::feature_choice`), and that choice; or as they are.
+pub fn choose_sequence_features(
+    session: &Session,
+    opts: &SequenceFitOptions,
+    progress: &Progress,
+) -> Result<(SequenceFitOptions, Option<FeatureChoice>), ModelError> {
+    let learner = SupervisedLearner::of(opts.method).ok_or_else(|| {
+        ModelError::Param(format!(
+            "{} is not a supervised sequence method (ds, gs)",
+            opts.method.key()
+        ))
+    })?;
+    let params = RecognitionParams {
+        learner,
+        features: opts.features,
+        label_set: opts.label_set.clone(),
+        seed: opts.seed,
+        ds: opts.ds.clone(),
+        gs: opts.gs.clone(),
+        ..RecognitionParams::default()
+    };
+    let (params, choice) = choose_auto_features(session, &params, progress)?;
+    let opts = SequenceFitOptions {
+        features: params.features,
+        ..opts.clone()
+    };
+    Ok((opts, choice))
 }
 
 /// The model a `recognition` run leaves: DS or GS fitted on every grasp of `session` with
@@ -169,6 +211,7 @@ pub fn sequence_file_of_run(
     };
     let (model, secs) = fit_sequences(session, &opts)?;
     let mut file = sequence_file(model, session, secs, params.size_reason, None);
+    file.provenance.feature_choice = run.feature_choice.clone();
     let protocol = format!("online protocol, {} orders", params.reps);
     file.provenance.selection = SelectionScore::under(
         &protocol,
@@ -300,6 +343,8 @@ pub fn sequence_file(
         trained_at: Provenance::now(),
         train_seconds: secs,
         selection: Vec::new(),
+        // Taught further, the inputs stay the ones the first session chose.
+        feature_choice: previous.and_then(|p| p.feature_choice.clone()),
     };
     ModelFile::new(provenance, Model::Sequences(model))
 }

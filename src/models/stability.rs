@@ -135,6 +135,7 @@ impl StabilityFit {
             trained_at: Provenance::now(),
             train_seconds: self.secs,
             selection: self.selection,
+            feature_choice: None,
         };
         ModelFile::new(provenance, Model::Stability(self.classifier))
     }
@@ -507,7 +508,14 @@ pub fn fit_stability(
                 secs: t0.elapsed().as_secs_f64(),
             })
         }
-        other => Err(ModelError::Param(format!(
+        other @ (MethodId::Ds
+        | MethodId::Gs
+        | MethodId::Du
+        | MethodId::Gu
+        | MethodId::KMeans
+        | MethodId::Som
+        | MethodId::RbfSvm
+        | MethodId::Classifier(_)) => Err(ModelError::Param(format!(
             "{} is not a grasp-stability method (sparse-svm, raw-svm)",
             other.key()
         ))),

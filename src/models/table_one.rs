@@ -11,8 +11,8 @@ use serde::{Deserialize, Serialize};
 
 use super::{Calibration, Model, ModelError, ModelFile, Provenance, SelectionScore, SessionRef};
 use crate::catalogue::MethodId;
-use crate::cluster::baselines::{BaselinesParams, BaselinesResult, SvmSummary, svm_grid};
 use crate::cluster::{SelfOrganisingMap, SequentialKMeans, SequentialKMeansParams, SomParams};
+use crate::experiments::baselines::{BaselinesParams, BaselinesResult, SvmSummary, svm_grid};
 use crate::experiments::clustering::som_setup;
 use crate::experiments::result::SizeReason;
 use crate::features::Normaliser;
@@ -108,7 +108,7 @@ impl TableOneModel {
                 }
                 svm.predict(x.view()).map_err(err)
             }
-            learner => {
+            learner @ (TableOneLearner::KMeans(_) | TableOneLearner::Som(_)) => {
                 let normaliser = match rows(x.view(), calibration)? {
                     Some(part) => Normaliser::fit(self.normaliser.kind, part).map_err(err)?,
                     None => self.normaliser.clone(),
@@ -361,7 +361,13 @@ pub fn fit_table_one(
             };
             TableOneLearner::RbfSvm(p.fit(x.view(), &labels).map_err(err)?)
         }
-        other => {
+        other @ (MethodId::SparseSvm
+        | MethodId::RawSvm
+        | MethodId::Ds
+        | MethodId::Gs
+        | MethodId::Du
+        | MethodId::Gu
+        | MethodId::Classifier(_)) => {
             return Err(ModelError::Param(format!(
                 "{} is not a Table I baseline (kmeans, som, rbf-svm)",
                 other.key()
@@ -401,7 +407,7 @@ pub fn table_one_file(model: TableOneModel, session: &Session, fit: TableOneFit)
     };
     let classes = match &model.learner {
         TableOneLearner::RbfSvm(_) => model.classes.clone(),
-        _ => (0..model.outputs())
+        TableOneLearner::KMeans(_) | TableOneLearner::Som(_) => (0..model.outputs())
             .map(super::clustering::cluster_name)
             .collect(),
     };
@@ -414,7 +420,7 @@ pub fn table_one_file(model: TableOneModel, session: &Session, fit: TableOneFit)
         features: format!("{} Table I features per grasp: {}", model.feature_names.len(), model.feature_names.join(", ")),
         normalisation: match model.learner {
             TableOneLearner::RbfSvm(_) => "each feature z-scored over the training grasps (a new session: see its calibration)",
-            _ => "each feature min-max scaled over the training grasps (a new session: see its calibration)",
+            TableOneLearner::KMeans(_) | TableOneLearner::Som(_) => "each feature min-max scaled over the training grasps (a new session: see its calibration)",
         }
         .into(),
         label_set: model.label_set.clone(),
@@ -422,6 +428,7 @@ pub fn table_one_file(model: TableOneModel, session: &Session, fit: TableOneFit)
         trained_at: Provenance::now(),
         train_seconds: secs,
         selection,
+        feature_choice: None,
     };
     ModelFile::new(provenance, Model::TableOne(model))
 }
@@ -450,7 +457,15 @@ pub fn table_one_files_of_run(
             let scores = match method {
                 MethodId::KMeans => Some(&run.kmeans),
                 MethodId::Som => Some(&run.som),
-                _ => None,
+                // The RBF SVM keeps its cross-validated accuracy.
+                MethodId::SparseSvm
+                | MethodId::RawSvm
+                | MethodId::Ds
+                | MethodId::Gs
+                | MethodId::Du
+                | MethodId::Gu
+                | MethodId::RbfSvm
+                | MethodId::Classifier(_) => None,
             };
             if let Some(s) = scores {
                 let protocol = format!("{} random orders", run.params.orders);

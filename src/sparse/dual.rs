@@ -19,7 +19,7 @@
 
 use ndarray::{Array2, ArrayView2};
 
-use super::dense::{self, chol_solve, chol_solve_rows, cholesky};
+use crate::linalg::dense::{self, chol_solve, chol_solve_rows, cholesky};
 
 const MAX_NEWTON: usize = 50;
 

@@ -9,7 +9,7 @@
 //! from a warm start. (The reference code runs nonlinear conjugate gradient to a 0.005 tolerance
 //! for at most 100 iterations; Newton converges quadratically on this small problem.)
 
-use super::dense::{self, chol_solve, cholesky};
+use crate::linalg::dense::{self, chol_solve, cholesky};
 
 /// `0.5 aᵀ G a − cᵀ a + β Σ sqrt(a² + ε)`.
 pub fn eps_l1_objective(g: &[f64], c: &[f64], beta: f64, epsilon: f64, a: &[f64]) -> f64 {

@@ -23,7 +23,7 @@
 //! All buffers live in the [`FeatureSign`] workspace: after the first call, solving
 //! allocates nothing.
 
-use super::dense::{chol_append, chol_delete, chol_solve};
+use crate::linalg::dense::{chol_append, chol_delete, chol_solve};
 
 /// Outcome of one solve.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -659,7 +659,7 @@ mod tests {
         l
     }
 
-    use super::super::dense::{chol_append, chol_solve, dot};
+    use crate::linalg::dense::{chol_append, chol_solve, dot};
 
     #[test]
     fn the_kept_factor_is_the_factor_of_the_active_set() {

@@ -21,7 +21,6 @@
 //! is twice ours (β_paper = 2 β_ours), and its β = 950, γ = 1000 were on its sensors' raw
 //! scale, so they do not transfer to standardised data.
 
-pub(crate) mod dense;
 mod dictionary;
 mod dual;
 mod eps_l1;

@@ -12,7 +12,7 @@
 use ndarray::{Array2, ArrayView1, ArrayView2};
 use serde::{Deserialize, Serialize};
 
-use crate::features::{Normalisation, Normaliser};
+use crate::features::{FeatureError, Normalisation, Normaliser};
 use crate::rng::Rng;
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -21,6 +21,9 @@ pub enum KernelSvmError {
     InvalidParameter { name: &'static str, reason: String },
     #[error("invalid data: {0}")]
     InvalidData(String),
+    /// The scaling of the inputs failed (its source kept).
+    #[error(transparent)]
+    Features(#[from] FeatureError),
 }
 
 fn invalid(name: &'static str, reason: impl Into<String>) -> KernelSvmError {
@@ -279,9 +282,7 @@ impl KernelSvmParams {
             )));
         }
         let scaler = match self.scaling {
-            Some(kind) => Some(
-                Normaliser::fit(kind, x).map_err(|e| KernelSvmError::InvalidData(e.to_string()))?,
-            ),
+            Some(kind) => Some(Normaliser::fit(kind, x)?),
             None => None,
         };
         let x = scale(&scaler, x)?;
@@ -349,9 +350,7 @@ fn check_features(x: ArrayView2<f64>) -> Result<(), KernelSvmError> {
 
 fn scale(scaler: &Option<Normaliser>, x: ArrayView2<f64>) -> Result<Array2<f64>, KernelSvmError> {
     match scaler {
-        Some(s) => s
-            .transform(x)
-            .map_err(|e| KernelSvmError::InvalidData(e.to_string())),
+        Some(s) => Ok(s.transform(x)?),
         None => Ok(x.to_owned()),
     }
 }

@@ -23,8 +23,8 @@ use serde::{Deserialize, Serialize};
 
 use super::SvmError;
 use crate::features::Standardizer;
+use crate::linalg::dense;
 use crate::rng::Rng;
-use crate::sparse::dense;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]

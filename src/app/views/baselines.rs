@@ -7,8 +7,8 @@ use crate::app::loader::LoadedSession;
 use crate::app::results::Analyses;
 use crate::app::results::{JobOutput, recognition_ready};
 use crate::catalogue::Input;
-use crate::cluster::baselines::{BaselinesParams, run_baselines};
 use crate::experiments::baselines::baselines_report;
+use crate::experiments::baselines::{BaselinesParams, run_baselines};
 use crate::experiments::figure_id::FigureId;
 use crate::experiments::result::AnalysisKind;
 use crate::features::table_one::session_features;
@@ -136,7 +136,7 @@ impl Room for BaselinesRoom {
                     .ok_or_else(|| JobError::failed("no `object` labels"))?;
                 let truth = session.labels_of(set);
                 let features = session_features(&session).map_err(JobError::failed)?;
-                let (rows, cols) = crate::cluster::baselines::grid_for(form.k);
+                let (rows, cols) = crate::experiments::baselines::grid_for(form.k);
                 let mut params = BaselinesParams {
                     orders: form.orders,
                     seed: form.seed,
@@ -149,7 +149,7 @@ impl Room for BaselinesRoom {
                 params.cv_repeats = if form.with_svm { 2 } else { 0 };
                 let r =
                     run_baselines(features.view(), &truth, &params, p).map_err(|e| match e {
-                        crate::cluster::baselines::BaselinesError::Cancelled(_) => {
+                        crate::experiments::baselines::BaselinesError::Cancelled(_) => {
                             JobError::Cancelled
                         }
                         other => JobError::failed(other),

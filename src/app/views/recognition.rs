@@ -38,7 +38,7 @@ impl Default for RecognitionForm {
     fn default() -> Self {
         RecognitionForm {
             learner: SupervisedLearner::Ds,
-            features: FeatureSet::ALL,
+            features: FeatureSet::AUTO,
             reps: 3,
             noise_variance: 0.0,
             seed: 0,
@@ -169,12 +169,13 @@ impl Room for RecognitionRoom {
                 ui.selectable_value(&mut f.learner, SupervisedLearner::Ds, "DS (discriminative)");
                 ui.selectable_value(&mut f.learner, SupervisedLearner::Gs, "GS (generative)");
             });
-        // The paper's three sets and the per-taxel families; the count is on this session.
+        // auto (chosen by cross validation on the session), the paper's three sets and the
+        // per-taxel families; the count is on this session.
         let session = cx.session().map(|s| &s.session);
         egui::ComboBox::from_label("Features")
             .selected_text(features_text(f.features))
             .show_ui(ui, |ui| {
-                for set in FeatureSet::OFFERED {
+                for set in std::iter::once(FeatureSet::AUTO).chain(FeatureSet::OFFERED) {
                     let dim = session
                         .and_then(|s| set.dim(s))
                         .map(|d| format!(" ({d})"))

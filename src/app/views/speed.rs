@@ -10,7 +10,7 @@ use crate::app::View;
 use crate::app::figure_view::{self, Selection as FigureSelection};
 use crate::app::results::{FRONTIER_JOB, JobOutput, experiment_error, recognition_ready};
 use crate::app::selection::{Command, ModelSpec};
-use crate::catalogue::MethodId;
+use crate::catalogue::{MethodId, Task};
 use crate::experiments::clustering::UnsupervisedLearner;
 use crate::experiments::frontier::report::frontier_figures;
 use crate::experiments::frontier::{CostAxis, Frontier, FrontierParams};
@@ -129,9 +129,9 @@ impl FrontierForm {
     }
 
     fn ready(&self, s: &crate::app::loader::LoadedSession) -> bool {
-        match self.method {
-            MethodId::SparseSvm => s.session.label_sets.iter().any(|l| l.classes.len() == 2),
-            _ => recognition_ready(s),
+        match self.method.task() {
+            Task::Stability => s.session.label_sets.iter().any(|l| l.classes.len() == 2),
+            Task::Recognition | Task::Clustering => recognition_ready(s),
         }
     }
 
@@ -233,9 +233,11 @@ impl Room for SpeedRoom {
         self.frontier.ui(ui);
         let Some(s) = cx.session() else { return };
         let problem = if !self.frontier.ready(s) {
-            Some(match self.frontier.method {
-                MethodId::SparseSvm => "(needs a session with a two-class outcome)".into(),
-                _ => "(needs an object-recognition session: encoders and `object` labels)".into(),
+            Some(match self.frontier.method.task() {
+                Task::Stability => "(needs a session with a two-class outcome)".into(),
+                Task::Recognition | Task::Clustering => {
+                    "(needs an object-recognition session: encoders and `object` labels)".into()
+                }
             })
         } else {
             self.frontier.params().err()
@@ -335,10 +337,7 @@ fn spec_of(f: &Frontier, k: usize) -> Option<ModelSpec> {
     Some(match f.params.method {
         MethodId::RawSvm => return None,
         MethodId::Ds | MethodId::Gs => ModelSpec::Recognition {
-            learner: match f.params.method {
-                MethodId::Ds => SupervisedLearner::Ds,
-                _ => SupervisedLearner::Gs,
-            },
+            learner: SupervisedLearner::of(f.params.method)?,
             features: f.params.features,
             capacity: p.knob("capacity")? as usize,
             tau: p.knob("tau")? as usize,
@@ -349,10 +348,7 @@ fn spec_of(f: &Frontier, k: usize) -> Option<ModelSpec> {
             gamma: p.knob("gamma")?,
         }),
         MethodId::Du | MethodId::Gu => ModelSpec::Clustering {
-            learner: match f.params.method {
-                MethodId::Du => UnsupervisedLearner::Du,
-                _ => UnsupervisedLearner::Gu,
-            },
+            learner: UnsupervisedLearner::of(f.params.method)?,
             threshold: p.knob("threshold")?,
         },
         MethodId::KMeans | MethodId::Som => ModelSpec::Baselines {

@@ -20,11 +20,14 @@ use serde::{Deserialize, Serialize};
 pub mod forked;
 pub mod report;
 
+use crate::catalogue::MethodId;
 use crate::cluster::order_agreement::{ThresholdChoice, ThresholdCriterion, choose_threshold};
 use crate::cluster::{Schedule, SequentialKMeansParams, SomParams, scores};
 use crate::experiments::ExperimentError;
+use crate::experiments::feature_choice::{AUTO_FOLDS, FeatureChoice, choose_features};
 use crate::experiments::labels::session_labels;
 use crate::experiments::parallel::compute_items;
+use crate::experiments::recognition::{ExpertsScorer, SupervisedLearner};
 use crate::experiments::result::MeanSd;
 use crate::features::{FeatureSequences, FeatureSet, SequenceParams, feature_sequences};
 use crate::features::{Normalisation, Normaliser, table_one::session_features};
@@ -46,10 +49,26 @@ pub enum UnsupervisedLearner {
 
 impl UnsupervisedLearner {
     /// The learner as the catalogue names it.
-    pub fn method(self) -> crate::catalogue::MethodId {
+    pub fn method(self) -> MethodId {
         match self {
-            UnsupervisedLearner::Du => crate::catalogue::MethodId::Du,
-            UnsupervisedLearner::Gu => crate::catalogue::MethodId::Gu,
+            UnsupervisedLearner::Du => MethodId::Du,
+            UnsupervisedLearner::Gu => MethodId::Gu,
+        }
+    }
+
+    /// The learner the catalogue's `method` is (None: not DU or GU).
+    pub fn of(method: MethodId) -> Option<UnsupervisedLearner> {
+        match method {
+            MethodId::Du => Some(UnsupervisedLearner::Du),
+            MethodId::Gu => Some(UnsupervisedLearner::Gu),
+            MethodId::SparseSvm
+            | MethodId::RawSvm
+            | MethodId::Ds
+            | MethodId::Gs
+            | MethodId::KMeans
+            | MethodId::Som
+            | MethodId::RbfSvm
+            | MethodId::Classifier(_) => None,
         }
     }
 }
@@ -248,6 +267,9 @@ pub struct ClusteringResult {
     /// The families the inputs held (`all` resolved on the session; None in older results).
     #[serde(default)]
     pub features_used: Option<FeatureSet>,
+    /// How `auto` chose the family (None: the family was given).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub feature_choice: Option<FeatureChoice>,
 }
 
 /// Every threshold's run on presentation order `rep` (in the thresholds' order), learned
@@ -621,6 +643,7 @@ pub fn assemble_clustering(
         labels: prep.labels,
         class_names: prep.class_names,
         features_used: Some(prep.feats.families),
+        feature_choice: None,
     }
 }
 
@@ -669,16 +692,51 @@ pub fn run_clustering(
     progress: &Progress,
 ) -> Result<ClusteringResult, ExperimentError> {
     let start = Instant::now();
+    let (params, feature_choice) = choose_auto_features(session, params, progress)?;
+    let params = &params;
     let prep = prepare_clustering(session, params)?;
     let items = clustering_items(params, session.grasps.len());
     progress.set(0.0, "clustering: starting");
     let outputs = compute_items(&items, progress, "clustering", "items", |&item| {
         clustering_item(params, &prep, item, progress)
     })?;
-    Ok(assemble_clustering(
-        params,
-        prep,
-        outputs,
-        start.elapsed().as_secs_f64(),
-    ))
+    Ok(ClusteringResult {
+        feature_choice,
+        ..assemble_clustering(params, prep, outputs, start.elapsed().as_secs_f64())
+    })
+}
+
+/// `params` with `auto` replaced by the family chosen by cross validation of the experts
+/// the learner is built from (DU: DS's, GU: GS's; see `feature_choice`), or as they are.
+pub fn choose_auto_features(
+    session: &Session,
+    params: &ClusteringParams,
+    progress: &Progress,
+) -> Result<(ClusteringParams, Option<FeatureChoice>), ExperimentError> {
+    if !params.features.is_auto() {
+        return Ok((params.clone(), None));
+    }
+    progress.set(0.0, "auto features: cross validation");
+    let learner = match params.learner {
+        UnsupervisedLearner::Du => SupervisedLearner::Ds,
+        UnsupervisedLearner::Gu => SupervisedLearner::Gs,
+    };
+    let scorer = ExpertsScorer {
+        learner,
+        ds: &params.ds,
+        gs: &params.gs,
+    };
+    let choice = choose_features(
+        session,
+        &scorer,
+        &params.label_set,
+        AUTO_FOLDS,
+        params.seed,
+        progress,
+    )?;
+    let chosen = ClusteringParams {
+        features: choice.chosen,
+        ..params.clone()
+    };
+    Ok((chosen, Some(choice)))
 }

@@ -425,6 +425,7 @@ mod tests {
             labels: labels.clone(),
             class_names: vec!["a".into(), "b".into(), "c".into()],
             features_used: None,
+            feature_choice: None,
         };
         let (details, links) = clustering_details(&r);
         let FigureKind::Heatmap(h) = &details[0].items[0].1.kind else {

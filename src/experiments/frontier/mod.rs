@@ -31,16 +31,17 @@ use crate::catalogue::{Classifier, MethodId};
 use crate::cluster::{SequentialKMeansParams, scores};
 use crate::experiments::ExperimentError;
 use crate::experiments::classifier::{
-    ClassifierPrep, classifier_err, cv_repetition, prepare_classifier,
+    ClassifierPrep, ClassifierScorer, classifier_err, cv_repetition, prepare_classifier,
 };
 use crate::experiments::clustering::{
     ClusteringParams, ClusteringPrep, ClusteringRun, UnsupervisedLearner, baseline_seed, distinct,
     one_run, prepare_clustering, som_setup,
 };
+use crate::experiments::feature_choice::{AUTO_FOLDS, FeatureChoice, FoldScorer, choose_features};
 use crate::experiments::labels::session_labels;
 use crate::experiments::parallel::compute_items;
 use crate::experiments::recognition::{
-    RecognitionParams, RecognitionPrep, SupervisedLearner, prepare_recognition,
+    ExpertsScorer, RecognitionParams, RecognitionPrep, SupervisedLearner, prepare_recognition,
     recognition_repetition,
 };
 use crate::experiments::stability::{
@@ -147,12 +148,14 @@ impl FrontierParams {
             num_bases: vec![2, 3, 5, 10, 15, 20, 29, 40, 60],
             beta: vec![0.5, 1.0, 2.0],
             gamma: vec![0.5, 1.0, 2.0],
-            thresholds: match method {
+            thresholds: match UnsupervisedLearner::of(method) {
                 // DU's experts grow as the threshold falls (about 80 at 0.2, 180 at 0.1);
                 // below 0.2 a run costs minutes.
-                MethodId::Du => vec![0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8],
+                Some(UnsupervisedLearner::Du) => vec![0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8],
                 // GU's cluster count falls from ~30 to ~3 between 0.05 and 0.3.
-                _ => vec![0.05, 0.08, 0.1, 0.12, 0.15, 0.2, 0.3],
+                Some(UnsupervisedLearner::Gu) => vec![0.05, 0.08, 0.1, 0.12, 0.15, 0.2, 0.3],
+                // No threshold to sweep.
+                None => Vec::new(),
             },
             expert_capacity: None,
             expert_tau: None,
@@ -357,6 +360,9 @@ pub struct Frontier {
     /// The papers' default size, where the sweep holds it.
     pub paper_default: Option<usize>,
     pub wall_seconds: f64,
+    /// How `auto` chose the feature set (None: it was given).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub feature_choice: Option<FeatureChoice>,
 }
 
 impl Frontier {
@@ -367,10 +373,13 @@ impl Frontier {
 
     /// A short name for a chart legend: "DS all", "GU encoder", "SC+SVM", "SOM".
     pub fn short_label(&self) -> String {
-        match self.params.method {
-            MethodId::SparseSvm => "SC+SVM".into(),
-            m if m.uses_features() => format!("{} {}", m.title(), self.params.features.name()),
-            m => m.title().to_string(),
+        let m = self.params.method;
+        if m == MethodId::SparseSvm {
+            "SC+SVM".into()
+        } else if m.uses_features() {
+            format!("{} {}", m.title(), self.params.features.name())
+        } else {
+            m.title().to_string()
         }
     }
 }
@@ -379,22 +388,12 @@ impl Frontier {
 /// cheapest on `axis` among the points whose mean score is at least the best's mean minus
 /// the best's standard error (ties: the higher score). None without points.
 pub fn recommend(points: &[FrontierPoint], axis: CostAxis) -> Option<(usize, usize)> {
-    let cheaper = |a: usize, b: usize| points[a].cost(axis).total_cmp(&points[b].cost(axis));
-    let best = (0..points.len()).max_by(|&a, &b| {
-        points[a]
-            .score
-            .total_cmp(&points[b].score)
-            .then(cheaper(b, a))
-    })?;
-    let bar = points[best].score - points[best].score_se.max(0.0);
-    let recommended = (0..points.len())
-        .filter(|&i| points[i].score >= bar)
-        .min_by(|&a, &b| {
-            cheaper(a, b)
-                .then(points[b].score.total_cmp(&points[a].score))
-                .then(a.cmp(&b))
-        })?;
-    Some((best, recommended))
+    super::feature_choice::one_se_rule(
+        points.len(),
+        |i| points[i].score,
+        |i| points[i].score_se,
+        |i| points[i].cost(axis),
+    )
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

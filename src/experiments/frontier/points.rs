@@ -204,9 +204,9 @@ pub(super) fn threshold_points(
     pairs: &[(FrontierItem, FrontierOutput)],
 ) -> Vec<FrontierPoint> {
     let c = params.clustering();
-    let expert = match params.method {
-        MethodId::Du => (c.ds.gp.capacity, c.ds.gp.tau),
-        _ => (c.gs.gp.capacity, c.gs.gp.tau),
+    let expert = match c.learner {
+        UnsupervisedLearner::Du => (c.ds.gp.capacity, c.ds.gp.tau),
+        UnsupervisedLearner::Gu => (c.gs.gp.capacity, c.gs.gp.tau),
     };
     params
         .thresholds
@@ -284,7 +284,15 @@ pub(super) fn cluster_points(
                     let s = som_setup(k, 0);
                     format!("SOM {} × {} units", s.rows, s.cols)
                 }
-                _ => format!("sequential k-means, k {k}"),
+                MethodId::KMeans => format!("sequential k-means, k {k}"),
+                MethodId::SparseSvm
+                | MethodId::RawSvm
+                | MethodId::Ds
+                | MethodId::Gs
+                | MethodId::Du
+                | MethodId::Gu
+                | MethodId::RbfSvm
+                | MethodId::Classifier(_) => format!("{}, k {k}", params.method.title()),
             };
             point(
                 format!("k {k}"),

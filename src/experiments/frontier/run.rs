@@ -98,20 +98,21 @@ pub const CLASSIFIER_FOLDS: usize = 10;
 impl FrontierParams {
     /// "DS, all features", "sparse coding + SVM", "sequential k-means".
     pub fn label(&self) -> String {
-        match self.method {
-            m if m.uses_features() => format!("{}, {} features", m.title(), self.features.name()),
-            MethodId::KMeans => crate::cluster::KMEANS_NAME.into(),
-            m => m.title().to_string(),
+        let m = self.method;
+        if m.uses_features() {
+            format!("{}, {} features", m.title(), self.features.name())
+        } else if m == MethodId::KMeans {
+            crate::cluster::KMEANS_NAME.into()
+        } else {
+            m.title().to_string()
         }
     }
 
     /// The protocol of DS/GS at the paper's size (items set capacity and tau).
     pub(super) fn recognition(&self) -> RecognitionParams {
         RecognitionParams {
-            learner: match self.method {
-                MethodId::Ds => SupervisedLearner::Ds,
-                _ => SupervisedLearner::Gs,
-            },
+            // Only DS and GS frontiers run the protocol.
+            learner: SupervisedLearner::of(self.method).unwrap_or(SupervisedLearner::Gs),
             features: self.features,
             reps: self.reps,
             seed: self.seed,
@@ -122,10 +123,8 @@ impl FrontierParams {
 
     /// The clustering run of DU/GU over the thresholds, without the baselines.
     pub(super) fn clustering(&self) -> ClusteringParams {
-        let learner = match self.method {
-            MethodId::Du => UnsupervisedLearner::Du,
-            _ => UnsupervisedLearner::Gu,
-        };
+        // Only DU and GU frontiers run the clustering.
+        let learner = UnsupervisedLearner::of(self.method).unwrap_or(UnsupervisedLearner::Gu);
         let mut p = ClusteringParams {
             features: self.features,
             thresholds: self.thresholds.clone(),
@@ -356,7 +355,14 @@ pub fn frontier_item(
                     let train = t0.elapsed().as_secs_f64();
                     (m.assign(x.view()).map_err(data_err)?, train)
                 }
-                _ => return Err(wrong_item(item, params)),
+                MethodId::SparseSvm
+                | MethodId::RawSvm
+                | MethodId::Ds
+                | MethodId::Gs
+                | MethodId::Du
+                | MethodId::Gu
+                | MethodId::RbfSvm
+                | MethodId::Classifier(_) => return Err(wrong_item(item, params)),
             };
             let predict = t0.elapsed().as_secs_f64() - train;
             Ok(FrontierOutput::Clusters {
@@ -427,6 +433,8 @@ pub fn run_frontier(
     progress: &Progress,
 ) -> Result<Frontier, ExperimentError> {
     let start = Instant::now();
+    let (params, feature_choice) = choose_auto_features(session, params, progress)?;
+    let params = &params;
     let prep = prepare_frontier(session, params)?;
     let items = frontier_items(params);
     let label = params.label();
@@ -438,13 +446,72 @@ pub fn run_frontier(
         "runs",
         |item| frontier_item(session, params, &prep, item, progress),
     )?;
-    assemble_frontier(
+    let frontier = assemble_frontier(
         &session.meta.name,
         params,
         &items,
         outputs,
         start.elapsed().as_secs_f64(),
-    )
+    )?;
+    Ok(Frontier {
+        feature_choice,
+        ..frontier
+    })
+}
+
+/// `params` with `auto` replaced by the feature set chosen by cross validation on the
+/// object labels at the method's default size (DS, GS: the paper's capacity and tau; DU,
+/// GU: their experts' size, scored by DS's and GS's experts; a registered method: its
+/// default size), and that choice; or as they are.
+pub fn choose_auto_features(
+    session: &Session,
+    params: &FrontierParams,
+    progress: &Progress,
+) -> Result<(FrontierParams, Option<FeatureChoice>), ExperimentError> {
+    if !params.features.is_auto() {
+        return Ok((params.clone(), None));
+    }
+    progress.set(0.0, "auto features: cross validation");
+    let defaults = RecognitionParams::default();
+    let (mut ds, mut gs) = (defaults.ds, defaults.gs);
+    for gp in [&mut ds.gp, &mut gs.gp] {
+        gp.capacity = params.expert_capacity.unwrap_or(gp.capacity);
+        gp.tau = params.expert_tau.unwrap_or(gp.tau);
+    }
+    let experts = |learner| ExpertsScorer {
+        learner,
+        ds: &ds,
+        gs: &gs,
+    };
+    let choose = |scorer: &dyn FoldScorer| {
+        choose_features(session, scorer, "object", AUTO_FOLDS, params.seed, progress)
+    };
+    let choice = match params.method {
+        MethodId::Ds | MethodId::Du => choose(&experts(SupervisedLearner::Ds))?,
+        MethodId::Gs | MethodId::Gu => choose(&experts(SupervisedLearner::Gs))?,
+        MethodId::Classifier(c) => {
+            let size = c.method().default_size();
+            choose(&ClassifierScorer {
+                method: c.method(),
+                size: &size,
+            })?
+        }
+        MethodId::SparseSvm
+        | MethodId::RawSvm
+        | MethodId::KMeans
+        | MethodId::Som
+        | MethodId::RbfSvm => {
+            return Err(ExperimentError::param(
+                "features",
+                format!("auto: {} reads no feature sequences", params.method.key()),
+            ));
+        }
+    };
+    let chosen = FrontierParams {
+        features: choice.chosen,
+        ..params.clone()
+    };
+    Ok((chosen, Some(choice)))
 }
 
 /// The frontier from every item's output (in item order): the points, the best and the
@@ -517,5 +584,6 @@ pub fn assemble_frontier(
         recommended,
         paper_default,
         wall_seconds,
+        feature_choice: None,
     })
 }

@@ -17,7 +17,9 @@ use std::time::Instant;
 use ndarray::{Array2, s};
 use serde::{Deserialize, Serialize};
 
+use crate::catalogue::MethodId;
 use crate::experiments::ExperimentError;
+use crate::experiments::feature_choice::{AUTO_FOLDS, FeatureChoice, FoldScorer, choose_features};
 use crate::experiments::labels::session_labels;
 use crate::experiments::parallel::compute_items;
 use crate::experiments::result::{MeanSd, SizeReason};
@@ -41,10 +43,26 @@ pub enum SupervisedLearner {
 
 impl SupervisedLearner {
     /// The learner as the catalogue names it.
-    pub fn method(self) -> crate::catalogue::MethodId {
+    pub fn method(self) -> MethodId {
         match self {
-            SupervisedLearner::Ds => crate::catalogue::MethodId::Ds,
-            SupervisedLearner::Gs => crate::catalogue::MethodId::Gs,
+            SupervisedLearner::Ds => MethodId::Ds,
+            SupervisedLearner::Gs => MethodId::Gs,
+        }
+    }
+
+    /// The learner the catalogue's `method` is (None: not DS or GS).
+    pub fn of(method: MethodId) -> Option<SupervisedLearner> {
+        match method {
+            MethodId::Ds => Some(SupervisedLearner::Ds),
+            MethodId::Gs => Some(SupervisedLearner::Gs),
+            MethodId::SparseSvm
+            | MethodId::RawSvm
+            | MethodId::Du
+            | MethodId::Gu
+            | MethodId::KMeans
+            | MethodId::Som
+            | MethodId::RbfSvm
+            | MethodId::Classifier(_) => None,
         }
     }
 }
@@ -133,7 +151,12 @@ impl RecognitionParams {
         self.ds.validate()?;
         self.gs.validate()?;
         SequenceParams {
-            features: self.features,
+            // `auto` becomes a family before the run (`choose_auto_features`).
+            features: if self.features.is_auto() {
+                FeatureSet::ALL
+            } else {
+                self.features
+            },
             taxel_noise_variance: self.taxel_noise_variance,
             seed: self.seed,
         }
@@ -197,6 +220,9 @@ pub struct RecognitionResult {
     /// The families the inputs held (`all` resolved on the session; None in older results).
     #[serde(default)]
     pub features_used: Option<FeatureSet>,
+    /// How `auto` chose the family (None: the family was given).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub feature_choice: Option<FeatureChoice>,
     pub summary: RecognitionSummary,
     pub repetitions: Vec<RepetitionResult>,
     pub wall_seconds: f64,
@@ -419,6 +445,7 @@ pub fn assemble_recognition(
         params: params.clone(),
         classes: prep.classes,
         features_used: Some(prep.feats.families),
+        feature_choice: None,
         feature_names: prep.feats.names,
         summary,
         repetitions: reps,
@@ -436,19 +463,95 @@ pub fn run_recognition(
 ) -> Result<RecognitionResult, ExperimentError> {
     let start = Instant::now();
     let cpu_start = cpu_seconds(true);
+    let (params, feature_choice) = choose_auto_features(session, params, progress)?;
+    let params = &params;
     let prep = prepare_recognition(session, params)?;
     progress.set(0.0, "recognition: starting");
     let items: Vec<usize> = (0..params.reps).collect();
     let reps = compute_items(&items, progress, "recognition", "repetitions", |&rep| {
         recognition_repetition(params, session, &prep, rep)
     })?;
-    Ok(assemble_recognition(
-        params,
-        prep,
-        reps,
-        start.elapsed().as_secs_f64(),
-        cpu_seconds(true).zip(cpu_start).map(|(b, a)| b - a),
-    ))
+    Ok(RecognitionResult {
+        feature_choice,
+        ..assemble_recognition(
+            params,
+            prep,
+            reps,
+            start.elapsed().as_secs_f64(),
+            cpu_seconds(true).zip(cpu_start).map(|(b, a)| b - a),
+        )
+    })
+}
+
+/// `params` with `auto` replaced by the family its experts' cross validation on `session`
+/// chooses (and how), or as they are.
+pub fn choose_auto_features(
+    session: &Session,
+    params: &RecognitionParams,
+    progress: &Progress,
+) -> Result<(RecognitionParams, Option<FeatureChoice>), ExperimentError> {
+    if !params.features.is_auto() {
+        return Ok((params.clone(), None));
+    }
+    progress.set(0.0, "auto features: cross validation");
+    let choice = choose_features(
+        session,
+        &ExpertsScorer {
+            learner: params.learner,
+            ds: &params.ds,
+            gs: &params.gs,
+        },
+        &params.label_set,
+        AUTO_FOLDS,
+        params.seed,
+        progress,
+    )?;
+    let chosen = RecognitionParams {
+        features: choice.chosen,
+        ..params.clone()
+    };
+    Ok((chosen, Some(choice)))
+}
+
+/// DS or GS experts scored on a fold: taught the training grasps in the protocol's order
+/// (one per class, then stratified rounds), then asked each held-out grasp.
+pub struct ExpertsScorer<'a> {
+    pub learner: SupervisedLearner,
+    pub ds: &'a DsParams,
+    pub gs: &'a GsParams,
+}
+
+impl FoldScorer for ExpertsScorer<'_> {
+    fn method(&self) -> MethodId {
+        self.learner.method()
+    }
+
+    fn accuracy(
+        &self,
+        feats: &FeatureSequences,
+        labels: &[usize],
+        n_classes: usize,
+        train: &[usize],
+        test: &[usize],
+        seed: u64,
+        progress: &Progress,
+    ) -> Result<f64, ExperimentError> {
+        let mut experts = new_learner(self.learner, feats.dim(), n_classes, self.ds, self.gs)?;
+        let train_labels: Vec<usize> = train.iter().map(|&g| labels[g]).collect();
+        let (teach, order) = protocol_order(&train_labels, n_classes, &mut Rng::stream(seed, 0));
+        for i in teach.into_iter().chain(order) {
+            progress.checkpoint()?;
+            experts.train_sequence(feats.sequences[train[i]].view(), train_labels[i]);
+        }
+        let right = test
+            .iter()
+            .filter(|&&g| {
+                let dist = experts.predict_sequence(feats.sequences[g].view());
+                experts.decide(dist.view()) == labels[g]
+            })
+            .count();
+        Ok(right as f64 / test.len().max(1) as f64)
+    }
 }
 
 fn summarise(

@@ -315,7 +315,11 @@ impl Columns<'_> {
                 .map_err(|e| failed(e.to_string()))?;
             let coded = book
                 .encode(s, frames.view())
-                .map_err(|e| failed(e.to_string()))?;
+                .map_err(|source| SequenceError::Codes {
+                    set: self.set.clone(),
+                    grasp: g,
+                    source,
+                })?;
             m.slice_mut(ndarray::s![.., col..col + coded.ncols()])
                 .assign(&coded);
             col += coded.ncols();

@@ -11,6 +11,9 @@
 //!
 //! `all` is the paper's 34 (encoders then moments) where the session has encoders and the
 //! moments alone where it has none; `FeatureSequences::families` says which it used.
+//! `auto` asks for a family chosen from the data by cross validation on the training
+//! session (`crate::experiments::feature_choice`): it is replaced by the chosen family
+//! before any sequence is built.
 //!
 //! Every column is min-max normalised to [0, 1] over every frame of every grasp of the
 //! session, as the paper normalises its dataset (the OIESGP lengthscales start at 1 on that
@@ -102,21 +105,26 @@ impl Family {
     }
 }
 
-/// The inputs of the OIESGP experiments: `all` (the paper's families the session has) or
-/// an explicit combination of families. Saved as its name (`"all"`, `"moments"`,
-/// `"raw+encoders"`); the older names `"tactile"` and `"encoder"` still load.
+/// The inputs of the OIESGP experiments: `all` (the paper's families the session has),
+/// `auto` (a family chosen from the data) or an explicit combination of families. Saved as
+/// its name (`"all"`, `"auto"`, `"moments"`, `"raw+encoders"`); the older names
+/// `"tactile"` and `"encoder"` still load.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct FeatureSet {
-    /// Bits of `Family::bit`; `ALL_BIT` alone for `all`.
+    /// Bits of `Family::bit`; `ALL_BIT` alone for `all`, `AUTO_BIT` alone for `auto`.
     bits: u8,
 }
 
 const ALL_BIT: u8 = 0x80;
+const AUTO_BIT: u8 = 0x40;
 
 impl FeatureSet {
     /// The paper's families the session has: encoders and moments (34 on the iCub), or the
     /// moments alone on a session without encoders.
     pub const ALL: FeatureSet = FeatureSet { bits: ALL_BIT };
+    /// A family chosen by cross validation on the training session (the sequence methods'
+    /// default on the command line and in the window).
+    pub const AUTO: FeatureSet = FeatureSet { bits: AUTO_BIT };
     /// The paper's tactile features (25 on the iCub).
     pub const MOMENTS: FeatureSet = FeatureSet { bits: 2 };
     /// The paper's encoder features (9 on the iCub).
@@ -149,7 +157,12 @@ impl FeatureSet {
         self.bits == ALL_BIT
     }
 
-    /// The explicit families, in column order (empty for `all`, which depends on the session).
+    pub fn is_auto(self) -> bool {
+        self.bits == AUTO_BIT
+    }
+
+    /// The explicit families, in column order (empty for `all` and `auto`, which depend on
+    /// the session).
     pub fn families(self) -> Vec<Family> {
         Family::COLUMN_ORDER
             .into_iter()
@@ -184,10 +197,13 @@ impl FeatureSet {
             .filter(|&d| d > 0)
     }
 
-    /// `all` or the families joined by `+` (tactile first: `raw+encoders`).
+    /// `all`, `auto` or the families joined by `+` (tactile first: `raw+encoders`).
     pub fn name(self) -> String {
         if self.is_all() {
             return "all".into();
+        }
+        if self.is_auto() {
+            return "auto".into();
         }
         Family::NAME_ORDER
             .into_iter()
@@ -217,14 +233,16 @@ impl FromStr for FeatureSet {
             name: "features",
             reason,
         };
-        if s.trim() == "all" {
-            return Ok(FeatureSet::ALL);
+        match s.trim() {
+            "all" => return Ok(FeatureSet::ALL),
+            "auto" => return Ok(FeatureSet::AUTO),
+            _ => {}
         }
         let mut set = FeatureSet { bits: 0 };
         for part in s.split('+').map(str::trim) {
             let f = Family::parse(part).ok_or_else(|| {
                 bad(format!(
-                    "`{part}` is not all or a family: moments (or tactile), encoders (or \
+                    "`{part}` is not all, auto or a family: moments (or tactile), encoders (or \
                      encoder), raw, change, codes; combine families with +, e.g. raw+encoders"
                 ))
             })?;
@@ -253,6 +271,14 @@ pub enum SequenceError {
     Parameter { name: &'static str, reason: String },
     #[error("session cannot give {set} features: {reason}")]
     Session { set: String, reason: String },
+    /// A grasp's frames the codes' dictionaries cannot code (the sparse coder's error kept).
+    #[error("session cannot give {set} features: grasp {grasp}: {source}")]
+    Codes {
+        set: String,
+        grasp: usize,
+        #[source]
+        source: crate::sparse::SparseError,
+    },
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -280,6 +306,14 @@ impl SequenceParams {
             return Err(SequenceError::Parameter {
                 name: "taxel_noise_variance",
                 reason: "must be finite and non-negative".into(),
+            });
+        }
+        if self.features.is_auto() {
+            return Err(SequenceError::Parameter {
+                name: "features",
+                reason: "auto is replaced by the family cross validation chooses before \
+                         sequences are built"
+                    .into(),
             });
         }
         if self.features.families().is_empty() && !self.features.is_all() {
@@ -370,7 +404,9 @@ mod tests {
         assert_eq!(p("raw+encoders").name(), "raw+encoders");
         assert_eq!(p("change+moments").name(), "moments+change");
         assert_eq!(p("all"), FeatureSet::ALL);
-        for bad in ["", "all+raw", "pressure", "raw+"] {
+        assert_eq!(p("auto"), FeatureSet::AUTO);
+        assert_eq!(p("auto").name(), "auto");
+        for bad in ["", "all+raw", "auto+raw", "pressure", "raw+"] {
             let e = bad.parse::<FeatureSet>().unwrap_err().to_string();
             assert!(
                 e.contains("features") && e.contains("raw+encoders"),

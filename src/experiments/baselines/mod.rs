@@ -10,8 +10,12 @@ use ndarray::{Array2, ArrayView2};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::scores::{ClusterScores, scores};
-use super::{ClusterError, SequentialKMeansParams, SomParams};
+mod report;
+
+pub use report::baselines_report;
+
+use crate::cluster::scores::{ClusterScores, scores};
+use crate::cluster::{ClusterError, SequentialKMeansParams, SomParams};
 use crate::features::{Normalisation, Normaliser};
 use crate::jobs::{Cancelled, Progress};
 use crate::rng::Rng;
@@ -275,7 +279,7 @@ pub fn run_baselines(
         let som_k = SomParams {
             rows,
             cols,
-            radius: super::Schedule::Exponential {
+            radius: crate::cluster::Schedule::Exponential {
                 start: (0.5 * cols as f64).max(0.5),
                 end: 0.3,
             },

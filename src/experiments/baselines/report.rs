@@ -7,8 +7,8 @@ use crate::cluster::{KMEANS_NAME, SOM_NAME};
 use crate::experiments::figure_id::FigureId;
 use std::collections::BTreeMap;
 
-use super::result::{AnalysisKind, AnalysisResult, distinct_sorted, now_unix};
-use crate::cluster::baselines::{BaselinesResult, ScoreSummary};
+use super::{BaselinesResult, ScoreSummary};
+use crate::experiments::result::{AnalysisKind, AnalysisResult, distinct_sorted, now_unix};
 use crate::figures::{
     Axis, AxisTitle, BarGroup, ColorScale, ErrorDisplay, ErrorRange, Figure, FigureKind, Heatmap,
     Series, SeriesStyle,

@@ -4,6 +4,10 @@
 //! The engines only ever factor small matrices (a K × K dictionary system with K ≤ a few
 //! hundred, a GP Gram matrix of at most a few hundred basis vectors), where a plain
 //! row-oriented Cholesky is as fast as a library call and needs no system BLAS/LAPACK.
+//! [`dense`] holds the kernels on row-major slices that sparse coding and the linear SVM
+//! run in their inner loops.
+
+pub(crate) mod dense;
 
 use ndarray::{Array1, Array2, ArrayView1, ArrayView2};
 
