@@ -503,6 +503,22 @@ fn du_pairs(
     Ok(PairDistances::new(&kernel, steps).map(Arc::new))
 }
 
+/// What an item costs, relative to the others of its run on a session of `steps` steps
+/// and `grasps` grasps: an order learns every step under every threshold; a baseline's
+/// sequential k-means and SOM pass once over the grasps' Table I features per centre, some
+/// hundred times cheaper a grasp than a step of the experts.
+pub fn item_cost(
+    params: &ClusteringParams,
+    steps: usize,
+    grasps: usize,
+    item: ClusteringItem,
+) -> f64 {
+    match item {
+        ClusteringItem::Order { .. } => (steps * params.thresholds.len()) as f64,
+        ClusteringItem::Baseline { k, .. } => 0.01 * (grasps * k) as f64,
+    }
+}
+
 /// The items of a run on `grasps` grasps: every order, then every (k, order) of the
 /// baselines.
 pub fn clustering_items(params: &ClusteringParams, grasps: usize) -> Vec<ClusteringItem> {
@@ -672,9 +688,16 @@ pub fn run_clustering(
     let prep = prepare_clustering(session, params)?;
     let items = clustering_items(params, session.grasps.len());
     progress.set(0.0, "clustering: starting");
-    let outputs = compute_items(&items, progress, "clustering", "items", |&item| {
-        clustering_item(params, &prep, item, progress)
-    })?;
+    let grasps = session.grasps.len();
+    let steps = session.grasps.iter().map(|g| g.frames.len()).sum();
+    let outputs = compute_items(
+        &items,
+        progress,
+        "clustering",
+        "items",
+        |&item| item_cost(params, steps, grasps, item),
+        |&item, part| clustering_item(params, &prep, item, part),
+    )?;
     Ok(assemble_clustering(
         params,
         prep,

@@ -272,6 +272,7 @@ fn run_repetition(
     labels: &[usize],
     n_classes: usize,
     rep: usize,
+    progress: &Progress,
 ) -> Result<RepetitionResult, ExperimentError> {
     let mut rng = Rng::stream(params.seed, rep as u64);
     let noisy;
@@ -336,6 +337,7 @@ fn run_repetition(
                 h.push(learner.decide(dist.slice(s![..k, ..])) == labels[g]);
             }
         }
+        progress.set_fraction((i + 1) as f64 / order.len() as f64);
     }
     let set_len = order.len().div_ceil(params.trial_sets).max(1);
     Ok(RepetitionResult {
@@ -395,6 +397,7 @@ pub fn recognition_repetition(
     session: &Session,
     prep: &RecognitionPrep,
     rep: usize,
+    progress: &Progress,
 ) -> Result<RepetitionResult, ExperimentError> {
     run_repetition(
         params,
@@ -403,6 +406,7 @@ pub fn recognition_repetition(
         &prep.labels,
         prep.classes.len(),
         rep,
+        progress,
     )
 }
 
@@ -439,9 +443,15 @@ pub fn run_recognition(
     let prep = prepare_recognition(session, params)?;
     progress.set(0.0, "recognition: starting");
     let items: Vec<usize> = (0..params.reps).collect();
-    let reps = compute_items(&items, progress, "recognition", "repetitions", |&rep| {
-        recognition_repetition(params, session, &prep, rep)
-    })?;
+    // Repetitions cost alike.
+    let reps = compute_items(
+        &items,
+        progress,
+        "recognition",
+        "repetitions",
+        |_| 1.0,
+        |&rep, part| recognition_repetition(params, session, &prep, rep, part),
+    )?;
     Ok(assemble_recognition(
         params,
         prep,
