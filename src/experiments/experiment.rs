@@ -400,7 +400,7 @@ impl Experiment for RecognitionParams {
         progress: &Progress,
     ) -> Result<RepetitionResult, ExperimentError> {
         progress.checkpoint()?;
-        recognition_repetition(self, session, prep, *rep)
+        recognition_repetition(self, session, prep, *rep, progress)
     }
 
     fn assemble(

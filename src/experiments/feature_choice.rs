@@ -176,7 +176,14 @@ pub fn choose_features(
     let items: Vec<(usize, usize)> = (0..families.len())
         .flat_map(|c| (0..folds).map(move |f| (c, f)))
         .collect();
-    let accuracies = compute_items(&items, progress, "auto features", "folds", |&(c, f)| {
+    // A family's folds cost with its features per step.
+    let accuracies = compute_items(
+        &items,
+        progress,
+        "auto features",
+        "folds",
+        |&(c, _)| seqs[c].dim() as f64,
+        |&(c, f), progress| {
         let (test, train): (Vec<usize>, Vec<usize>) = (0..n).partition(|&g| fold_of[g] == f);
         if test.is_empty() {
             return Ok(None);
@@ -193,7 +200,8 @@ pub fn choose_features(
                 progress,
             )
             .map(Some)
-    })?;
+        },
+    )?;
     let candidates: Vec<FamilyScore> = families
         .iter()
         .enumerate()

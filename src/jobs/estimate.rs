@@ -54,16 +54,36 @@ impl Timings {
     }
 }
 
+/// The fraction done at which what the finished part says weighs as much as the
+/// expectation. A cost model is right to within about 2× across sessions; the rate of the
+/// part done is nearer once a few items have finished, so it takes over early: at a fifth
+/// done it weighs 0.8.
+const HALF_WEIGHT_AT: f64 = 0.05;
+
 /// Seconds left of a run: `fraction` of it was done `at` seconds in, `now` seconds have
 /// passed, and it was expected to take `expected` seconds in all (None: no expectation).
-/// The total is the expectation at first and what the finished part says as it grows
-/// (weighted by the fraction done); between two reports the time left counts down with the
-/// clock instead of waiting for the next report. None while nothing says anything.
-pub fn time_left(expected: Option<f64>, fraction: f64, at: f64, now: f64) -> Option<f64> {
+/// `first` is when the fraction first moved and to what: the rate is measured from there,
+/// since what came before (reading the session, preparing what every item shares, the
+/// first item) may have reported nothing. The total is the expectation at first and what
+/// the rate says as the fraction grows past `first` (weighted d / (d + HALF_WEIGHT_AT) for
+/// a growth d); between two reports the time left counts down with the clock instead of
+/// waiting for the next report. None while nothing says anything.
+pub fn time_left(
+    expected: Option<f64>,
+    fraction: f64,
+    at: f64,
+    now: f64,
+    first: Option<(f64, f64)>,
+) -> Option<f64> {
     let f = fraction.clamp(0.0, 1.0);
-    let observed = (f > 1e-3).then(|| at / f);
+    let (t1, f1) = first.unwrap_or((0.0, 0.0));
+    let d = f - f1;
+    let observed = (d > 1e-3).then(|| t1 + (at - t1) / d * (1.0 - f1));
     let total = match (expected.filter(|e| *e > 0.0), observed) {
-        (Some(e), Some(o)) => (1.0 - f) * e + f * o,
+        (Some(e), Some(o)) => {
+            let w = d / (d + HALF_WEIGHT_AT);
+            (1.0 - w) * e + w * o
+        }
         (Some(e), None) => e,
         (None, Some(o)) => o,
         (None, None) => return None,
@@ -96,20 +116,32 @@ mod tests {
     #[test]
     fn time_left_counts_down_between_reports_and_follows_the_items_done() {
         // Expected 100 s; nothing done yet: 100 s, then 90 s ten seconds in.
-        assert_eq!(time_left(Some(100.0), 0.0, 0.0, 0.0), Some(100.0));
-        assert_eq!(time_left(Some(100.0), 0.0, 0.0, 10.0), Some(90.0));
-        // Half done at 20 s (the run goes faster than expected): total (0.5·100 + 0.5·40)
-        // = 70 s; the time left falls while no new item finishes.
-        let a = time_left(Some(100.0), 0.5, 20.0, 20.0).unwrap();
-        let b = time_left(Some(100.0), 0.5, 20.0, 25.0).unwrap();
+        assert_eq!(time_left(Some(100.0), 0.0, 0.0, 0.0, None), Some(100.0));
+        assert_eq!(time_left(Some(100.0), 0.0, 0.0, 10.0, None), Some(90.0));
+        // Half done at 20 s (the run goes faster than expected): the part done says 40 s
+        // and weighs 0.5 / 0.55, so the total is 100/11 + 400/11 = 500/11 s; the time left
+        // falls while no new item finishes.
+        let a = time_left(Some(100.0), 0.5, 20.0, 20.0, None).unwrap();
+        let b = time_left(Some(100.0), 0.5, 20.0, 25.0, None).unwrap();
+        let total = 500.0 / 11.0;
         assert!(
-            (a - 50.0).abs() < 1e-9 && (b - 45.0).abs() < 1e-9,
+            (a - (total - 20.0)).abs() < 1e-9 && (b - (total - 25.0)).abs() < 1e-9,
             "{a} {b}"
         );
+        // A fifth done: an expectation 2× off moves the total by a fifth of it at most.
+        let t = 10.0 + time_left(Some(100.0), 0.2, 10.0, 10.0, None).unwrap();
+        assert!((t / 50.0 - 1.2).abs() < 1e-9, "{t}");
+        // Ten silent seconds of preparation, then the fraction first moved to 0.1 at 12 s
+        // and reached 0.3 at 16 s: 0.2 in 4 s, so the remaining 0.9 after the first move
+        // takes 18 s; the total is 30 s, not 16 / 0.3 = 53 s.
+        let first = Some((12.0, 0.1));
+        assert_eq!(time_left(None, 0.3, 16.0, 16.0, first), Some(14.0));
+        // The first move alone gives no rate yet: the expectation stands.
+        assert_eq!(time_left(Some(40.0), 0.1, 12.0, 12.0, first), Some(28.0));
         // With no expectation, the items done alone: a quarter at 10 s, 30 s left.
-        assert_eq!(time_left(None, 0.25, 10.0, 10.0), Some(30.0));
-        assert_eq!(time_left(None, 0.0, 0.0, 3.0), None);
+        assert_eq!(time_left(None, 0.25, 10.0, 10.0, None), Some(30.0));
+        assert_eq!(time_left(None, 0.0, 0.0, 3.0, None), None);
         // Never negative.
-        assert_eq!(time_left(Some(1.0), 0.0, 0.0, 5.0), Some(0.0));
+        assert_eq!(time_left(Some(1.0), 0.0, 0.0, 5.0, None), Some(0.0));
     }
 }

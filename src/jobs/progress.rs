@@ -2,7 +2,9 @@
 //!
 //! An engine function takes a `&Progress`, reports the fraction done with a short message,
 //! and calls [`Progress::checkpoint`] between units of work so that a Cancel takes effect
-//! within one unit (the views promise under a second).
+//! within one unit (the views promise under a second). Work split into items of unequal
+//! cost hands each item a [part](Progress::parts) weighted by its expected cost, so that
+//! the fraction done follows the time spent, items in flight included.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
@@ -22,12 +24,23 @@ struct Inner {
     moved_at_bits: AtomicU64,
     /// Seconds the whole run is expected to take (NaN: no expectation).
     expected_bits: AtomicU64,
+    /// When the fraction first moved from 0, and to what (None: not yet).
+    first_move: Mutex<Option<(f64, f64)>>,
 }
 
 /// A cheap, cloneable handle: the worker reports, the UI reads and may cancel.
 #[derive(Debug, Clone)]
 pub struct Progress {
     inner: Arc<Inner>,
+    /// For a part: the whole it moves, by its weight.
+    whole: Option<Arc<Part>>,
+}
+
+/// How a part moves the whole: its share of it.
+#[derive(Debug)]
+struct Part {
+    whole: Progress,
+    weight: f64,
 }
 
 impl Default for Progress {
@@ -46,15 +59,48 @@ impl Progress {
                 started: Instant::now(),
                 moved_at_bits: AtomicU64::new(0f64.to_bits()),
                 expected_bits: AtomicU64::new(f64::NAN.to_bits()),
+                first_move: Mutex::new(None),
             }),
+            whole: None,
         }
+    }
+
+    /// Parts of what is left of this run, one per weight, each worth its weight's share of
+    /// it: a part's fraction moves this one by that share. A cancel of the whole reaches
+    /// every part; a part's message becomes the whole's.
+    pub fn parts(&self, weights: &[f64]) -> Vec<Progress> {
+        let clean = |w: f64| if w.is_finite() && w > 0.0 { w } else { 0.0 };
+        let total: f64 = weights.iter().map(|&w| clean(w)).sum();
+        let left = 1.0 - self.fraction();
+        weights
+            .iter()
+            .map(|&w| {
+                let weight = match total > 0.0 {
+                    true => left * clean(w) / total,
+                    false => left / weights.len() as f64,
+                };
+                let mut part = Progress::new();
+                part.whole = Some(Arc::new(Part {
+                    whole: self.clone(),
+                    weight,
+                }));
+                part
+            })
+            .collect()
     }
 
     /// Report `fraction` (clamped to 0..=1) done, with what is being done now.
     pub fn set(&self, fraction: f64, message: impl Into<String>) {
         self.set_fraction(fraction);
+        self.set_message(message.into());
+    }
+
+    fn set_message(&self, message: String) {
+        if let Some(p) = &self.whole {
+            p.whole.set_message(message.clone());
+        }
         if let Ok(mut m) = self.inner.message.lock() {
-            *m = message.into();
+            *m = message;
         }
     }
 
@@ -69,9 +115,49 @@ impl Progress {
             .fraction_bits
             .swap(f.to_bits(), Ordering::Relaxed);
         if before != f.to_bits() {
-            self.inner
-                .moved_at_bits
-                .store(self.elapsed_secs().to_bits(), Ordering::Relaxed);
+            self.moved(f);
+            if let Some(p) = &self.whole {
+                p.whole
+                    .add_fraction(p.weight * (f - f64::from_bits(before)));
+            }
+        }
+    }
+
+    /// Move the fraction by `delta` (a part's share of its change), atomically: parts
+    /// report from several threads at once.
+    fn add_fraction(&self, delta: f64) {
+        let mut current = self.inner.fraction_bits.load(Ordering::Relaxed);
+        loop {
+            let f = (f64::from_bits(current) + delta).clamp(0.0, 1.0);
+            match self.inner.fraction_bits.compare_exchange_weak(
+                current,
+                f.to_bits(),
+                Ordering::Relaxed,
+                Ordering::Relaxed,
+            ) {
+                Ok(_) => {
+                    self.moved(f);
+                    break;
+                }
+                Err(now) => current = now,
+            }
+        }
+        if let Some(p) = &self.whole {
+            p.whole.add_fraction(p.weight * delta);
+        }
+    }
+
+    /// The fraction moved to `f` now.
+    fn moved(&self, f: f64) {
+        let now = self.elapsed_secs();
+        self.inner
+            .moved_at_bits
+            .store(now.to_bits(), Ordering::Relaxed);
+        if f > 0.0
+            && let Ok(mut first) = self.inner.first_move.lock()
+            && first.is_none()
+        {
+            *first = Some((now, f));
         }
     }
 
@@ -100,6 +186,7 @@ impl Progress {
 
     pub fn is_cancelled(&self) -> bool {
         self.inner.cancelled.load(Ordering::Relaxed)
+            || self.whole.as_ref().is_some_and(|p| p.whole.is_cancelled())
     }
 
     /// `Err(Cancelled)` once cancel was asked: call between units of work and return early.
@@ -124,11 +211,13 @@ impl Progress {
         }
         let expected = f64::from_bits(self.inner.expected_bits.load(Ordering::Relaxed));
         let at = f64::from_bits(self.inner.moved_at_bits.load(Ordering::Relaxed));
+        let first = self.inner.first_move.lock().ok().and_then(|m| *m);
         super::estimate::time_left(
             expected.is_finite().then_some(expected),
             f,
             at,
             self.elapsed_secs(),
+            first,
         )
     }
 }
@@ -149,5 +238,29 @@ mod tests {
         assert_eq!(q.checkpoint(), Err(Cancelled));
         q.set_fraction(f64::NAN);
         assert_eq!(p.fraction(), 0.0);
+    }
+
+    #[test]
+    fn parts_move_the_whole_by_their_weights_and_hear_its_cancel() {
+        let whole = Progress::new();
+        whole.set_fraction(0.2);
+        // What is left (0.8) split 3 : 1.
+        let parts = whole.parts(&[3.0, 1.0]);
+        parts[0].set(0.5, "first half-way");
+        assert!((whole.fraction() - (0.2 + 0.8 * 0.75 * 0.5)).abs() < 1e-12);
+        assert_eq!(whole.message(), "first half-way");
+        parts[1].set_fraction(1.0);
+        parts[0].set_fraction(1.0);
+        assert!((whole.fraction() - 1.0).abs() < 1e-12);
+        // Moving back moves the whole back; a part of a part moves both.
+        parts[1].set_fraction(0.0);
+        assert!((whole.fraction() - 0.8).abs() < 1e-12);
+        let sub = parts[1].parts(&[1.0, 1.0]);
+        sub[0].set_fraction(1.0);
+        assert!((parts[1].fraction() - 0.5).abs() < 1e-12);
+        assert!((whole.fraction() - 0.9).abs() < 1e-12);
+        assert!(sub[1].checkpoint().is_ok());
+        whole.cancel();
+        assert_eq!(sub[1].checkpoint(), Err(Cancelled));
     }
 }

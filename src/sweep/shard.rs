@@ -142,9 +142,15 @@ fn compute_shard<E: Sweepable>(
         .prepare(session, progress)
         .map_err(|e| SweepError::Experiment(e.to_string()))?;
     progress.set(0.0, format!("{}: 0/{} items", e.name(), items.len()));
-    let outputs = compute_items(&items, progress, e.name(), "items", |item| {
-        e.compute(session, &prep, item, progress)
-    })
+    // A shard's items are weighed alike: its progress is a count of them.
+    let outputs = compute_items(
+        &items,
+        progress,
+        e.name(),
+        "items",
+        |_| 1.0,
+        |item, part| e.compute(session, &prep, item, part),
+    )
     .map_err(|e| SweepError::Experiment(e.to_string()))?;
     outputs.iter().map(to_value).collect()
 }

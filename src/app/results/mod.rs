@@ -28,6 +28,7 @@ use crate::figures::{self, Format, RenderOptions};
 use crate::jobs::estimate::Timings;
 use crate::jobs::{Job, JobError, Outcome};
 use crate::models::{self, Calibration, ModelFile};
+use crate::session::Session;
 
 /// How a frontier job's title starts (one frontier runs at a time).
 pub const FRONTIER_JOB: &str = "Frontier of ";
@@ -86,14 +87,14 @@ pub(super) fn experiment_error(e: ExperimentError) -> JobError {
 }
 
 /// An object-recognition session: encoders, sequences and `object` labels.
-pub(super) fn recognition_ready(s: &LoadedSession) -> bool {
-    s.session.label_set("object").is_some() && !s.session.encoders.is_empty()
+pub(super) fn recognition_ready(s: &Session) -> bool {
+    s.label_set("object").is_some() && !s.encoders.is_empty()
 }
 
 /// DS and GS need `object` labels and the paper's features: `all` is the moments alone on
 /// a session without encoders.
-pub(super) fn sequences_ready(s: &LoadedSession) -> bool {
-    s.session.label_set("object").is_some() && FeatureSet::ALL.dim(&s.session).is_some()
+pub(super) fn sequences_ready(s: &Session) -> bool {
+    s.label_set("object").is_some() && FeatureSet::ALL.dim(s).is_some()
 }
 
 #[derive(Default)]
@@ -341,23 +342,22 @@ impl Analyses {
         }
     }
 
-    /// Spawn a run of the timed kind `timing` whose model expects `modelled` seconds: its
-    /// time left starts from the expectation measured on this machine, and its time, once
-    /// done, corrects the next.
+    /// Spawn a run whose cost model expects `estimate`: its time left starts from the
+    /// expectation measured on this machine, and its time, once done, corrects the next.
     pub fn spawn_timed(
         &mut self,
         ctx: &egui::Context,
-        kind: AnalysisKind,
+        kind: Option<AnalysisKind>,
         title: String,
-        (timing, modelled): (String, f64),
+        estimate: crate::app::views::Estimate,
         work: impl FnOnce(&crate::jobs::Progress) -> Result<JobOutput, JobError> + Send + 'static,
     ) {
-        self.spawn(ctx, Some(kind), title, work);
+        self.spawn(ctx, kind, title, work);
         if let Some(rj) = self.jobs.last_mut() {
             rj.job
                 .progress
-                .set_expected(self.timings.expected(&timing, modelled));
-            rj.timing = Some((timing, modelled));
+                .set_expected(self.timings.expected(&estimate.timing, estimate.modelled));
+            rj.timing = Some((estimate.timing, estimate.modelled));
         }
     }
 

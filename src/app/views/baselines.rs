@@ -1,7 +1,7 @@
 //! Baselines: sequential k-means, a SOM and an RBF SVM on the per-grasp Table I features.
 
 use super::pane::Pane;
-use super::{Cx, Room, duration_text, run_button};
+use super::{Cx, Estimate, Room, Run, run_button};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
 use crate::app::results::Analyses;
@@ -13,6 +13,8 @@ use crate::experiments::figure_id::FigureId;
 use crate::experiments::result::AnalysisKind;
 use crate::features::table_one::session_features;
 use crate::jobs::JobError;
+use crate::session::Session;
+use std::sync::Arc;
 
 /// Baselines form: few orders by default so the view answers in seconds.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
@@ -37,20 +39,20 @@ impl Default for BaselinesForm {
 /// Seconds per order (k-means and SOM) and per repeat of the SVM's 5-fold grid, per grasp,
 /// on 2 cores: 10 orders of the recognition sample (200 grasps) took 0.2 s, and two repeats
 /// of the SVM grid 2.8 s more.
-const SECONDS_PER_ORDER_GRASP: f64 = 0.0001;
-const SECONDS_PER_SVM_REPEAT_GRASP: f64 = 0.007;
+const SECONDS_PER_ORDER_GRASP: f64 = 0.0003;
+const SECONDS_PER_SVM_REPEAT_GRASP: f64 = 0.021;
 
 impl BaselinesForm {
-    /// The kind of run whose measured times correct [`Self::expected_seconds`]: with or
-    /// without the RBF SVM's grid.
-    pub fn timing(&self) -> String {
-        format!("baselines{}", if self.with_svm { " with SVM" } else { "" })
-    }
-
-    pub fn expected_seconds(&self, grasps: usize) -> f64 {
-        let g = grasps as f64;
+    /// What a run on `session` is expected to cost (timed apart with and without the RBF
+    /// SVM's grid).
+    pub fn estimate(&self, session: &Session) -> Estimate {
+        let g = session.grasps.len() as f64;
         let svm = if self.with_svm { 2.0 } else { 0.0 };
-        SECONDS_PER_ORDER_GRASP * g * self.orders as f64 + SECONDS_PER_SVM_REPEAT_GRASP * g * svm
+        Estimate {
+            timing: format!("baselines{}", if self.with_svm { " with SVM" } else { "" }),
+            modelled: SECONDS_PER_ORDER_GRASP * g * self.orders as f64
+                + SECONDS_PER_SVM_REPEAT_GRASP * g * svm,
+        }
     }
 }
 
@@ -74,7 +76,7 @@ impl Room for BaselinesRoom {
     }
 
     fn run_text(&self, s: &LoadedSession, analyses: &Analyses) -> Option<String> {
-        if !recognition_ready(s) {
+        if !recognition_ready(&s.session) {
             return None;
         }
         let f = &self.form;
@@ -88,11 +90,7 @@ impl Room for BaselinesRoom {
                 ""
             },
             s.session.grasps.len(),
-            duration_text(
-                analyses
-                    .timings
-                    .expected(&f.timing(), f.expected_seconds(s.session.grasps.len()))
-            )
+            f.estimate(&s.session).text(analyses)
         ))
     }
 
@@ -120,16 +118,17 @@ impl Room for BaselinesRoom {
         super::models::section(ui, cx, |m| m.input() == Input::TableOne);
     }
 
-    fn start(&mut self, cx: &mut Cx) {
-        let Some(s) = cx.session() else { return };
+    fn run(&self, session: &Arc<Session>, _analyses: &Analyses) -> Option<Run> {
+        if !recognition_ready(session) {
+            return None;
+        }
         let form = self.form.clone();
-        let timing = (form.timing(), form.expected_seconds(s.session.grasps.len()));
-        let session = s.session.clone();
-        cx.spawn_timed(
-            AnalysisKind::Baselines,
-            format!("Baselines on {}", session.meta.name),
-            timing,
-            move |p| {
+        let session = session.clone();
+        Some(Run {
+            kind: Some(AnalysisKind::Baselines),
+            title: format!("Baselines on {}", session.meta.name),
+            estimate: self.form.estimate(&session),
+            work: Box::new(move |p| {
                 let t0 = std::time::Instant::now();
                 let set = session
                     .label_set("object")
@@ -163,7 +162,7 @@ impl Room for BaselinesRoom {
                 let models = crate::models::table_one_files_of_run(&session, "object", &r)
                     .map_err(JobError::failed)?;
                 Ok(JobOutput::Trained { result, models })
-            },
-        );
+            }),
+        })
     }
 }

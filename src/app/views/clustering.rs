@@ -3,7 +3,7 @@
 //! clusters at the threshold the marker selects, as tiles.
 
 use super::pane::Pane;
-use super::{Cx, Room, duration_text, run_button};
+use super::{Cx, Estimate, Room, Run, run_button};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
 use crate::app::results::Analyses;
@@ -14,7 +14,9 @@ use crate::experiments::clustering::{ClusteringParams, UnsupervisedLearner, run_
 use crate::experiments::figure_id::FigureId;
 use crate::experiments::result::AnalysisKind;
 use crate::jobs::JobError;
+use crate::session::Session;
 use crate::sweep::Experiment;
+use std::sync::Arc;
 
 /// Unsupervised clustering form.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
@@ -87,24 +89,23 @@ impl ClusteringForm {
 /// threshold the more thresholds share it.
 fn seconds_per_step(learner: UnsupervisedLearner) -> f64 {
     match learner {
-        UnsupervisedLearner::Du => 0.00004,
-        UnsupervisedLearner::Gu => 0.00002,
+        UnsupervisedLearner::Du => 0.00029,
+        UnsupervisedLearner::Gu => 0.00022,
     }
 }
 
 impl ClusteringForm {
-    /// The kind of run whose measured times correct [`Self::expected_seconds`]: DU and GU
-    /// cost differently.
-    pub fn timing(&self) -> String {
-        format!("clustering {:?}", self.learner)
-    }
-
-    pub fn expected_seconds(&self, s: &LoadedSession) -> f64 {
-        let steps: usize = s.session.grasps.iter().map(|g| g.frames.len()).sum();
-        seconds_per_step(self.learner)
-            * steps as f64
-            * self.reps as f64
-            * self.threshold_list().len() as f64
+    /// What a run on `session` is expected to cost (DU and GU are timed apart: they cost
+    /// differently).
+    pub fn estimate(&self, session: &Session) -> Estimate {
+        let steps: usize = session.grasps.iter().map(|g| g.frames.len()).sum();
+        Estimate {
+            timing: format!("clustering {:?}", self.learner),
+            modelled: seconds_per_step(self.learner)
+                * steps as f64
+                * self.reps as f64
+                * self.threshold_list().len() as f64,
+        }
     }
 }
 
@@ -129,7 +130,7 @@ impl Room for ClusteringRoom {
     }
 
     fn run_text(&self, s: &LoadedSession, analyses: &Analyses) -> Option<String> {
-        if !recognition_ready(s) {
+        if !recognition_ready(&s.session) {
             return None;
         }
         let f = &self.form;
@@ -143,11 +144,7 @@ impl Room for ClusteringRoom {
             f.reps,
             if f.reps == 1 { "" } else { "s" },
             s.session.grasps.len(),
-            duration_text(
-                analyses
-                    .timings
-                    .expected(&f.timing(), f.expected_seconds(s))
-            )
+            f.estimate(&s.session).text(analyses)
         ))
     }
 
@@ -228,16 +225,17 @@ impl Room for ClusteringRoom {
         Some(Ok(Experiment::Clustering(self.form.params())))
     }
 
-    fn start(&mut self, cx: &mut Cx) {
-        let Some(s) = cx.session() else { return };
+    fn run(&self, session: &Arc<Session>, _analyses: &Analyses) -> Option<Run> {
+        if !recognition_ready(session) {
+            return None;
+        }
         let f = self.form.clone();
-        let timing = (self.form.timing(), self.form.expected_seconds(s));
-        let session = s.session.clone();
-        cx.spawn_timed(
-            AnalysisKind::Clustering,
-            format!("Clustering on {}", session.meta.name),
-            timing,
-            move |p| {
+        let session = session.clone();
+        Some(Run {
+            kind: Some(AnalysisKind::Clustering),
+            title: format!("Clustering on {}", session.meta.name),
+            estimate: self.form.estimate(&session),
+            work: Box::new(move |p| {
                 let r = run_clustering(&session, &f.params(), p).map_err(experiment_error)?;
                 let result = Box::new(clustering_report(&session.meta.name, &r));
                 // Learned at the threshold chosen without labels (when the run chose one),
@@ -247,7 +245,7 @@ impl Room for ClusteringRoom {
                     .into_iter()
                     .collect();
                 Ok(JobOutput::Trained { result, models })
-            },
-        );
+            }),
+        })
     }
 }

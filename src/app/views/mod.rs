@@ -20,10 +20,13 @@ pub mod tiles;
 use super::View;
 use super::loader::LoadedSession;
 use super::replay::Replay;
-use super::results::Analyses;
+use super::results::{Analyses, JobOutput};
 use super::selection::{Command, Selection};
 use crate::experiments::result::AnalysisKind;
+use crate::jobs::{JobError, Progress};
+use crate::session::Session;
 pub use pane::Pane;
+use std::sync::Arc;
 pub use tiles::Layout;
 
 /// What a room may read and ask for while it draws.
@@ -60,21 +63,11 @@ impl Cx<'_> {
         self.analyses.spawn(&ctx, Some(kind), title, work);
     }
 
-    /// Run `work` as a background job of analysis `kind`, a run of the timed kind `timing`
-    /// that its cost model puts at `modelled` seconds (see [`crate::jobs::estimate`]).
-    pub fn spawn_timed(
-        &mut self,
-        kind: AnalysisKind,
-        title: String,
-        timing: (String, f64),
-        work: impl FnOnce(
-            &crate::jobs::Progress,
-        ) -> Result<super::results::JobOutput, crate::jobs::JobError>
-        + Send
-        + 'static,
-    ) {
+    /// Start a form's run as a background job whose time left starts from its estimate.
+    pub fn spawn_run(&mut self, run: Run) {
         let ctx = self.ctx.clone();
-        self.analyses.spawn_timed(&ctx, kind, title, timing, work);
+        self.analyses
+            .spawn_timed(&ctx, run.kind, run.title, run.estimate, run.work);
     }
 
     /// The result of `kind` shown for the active session (index into the results).
@@ -106,8 +99,18 @@ pub trait Room {
         None
     }
 
+    /// The form's run on `session` as it stands (with the model size it trains, which a
+    /// frontier among `analyses` may recommend); None when the session cannot run it.
+    fn run(&self, _session: &Arc<Session>, _analyses: &Analyses) -> Option<Run> {
+        None
+    }
+
     /// Start the form's run on the active session (a background job).
-    fn start(&mut self, _cx: &mut Cx) {}
+    fn start(&mut self, cx: &mut Cx) {
+        if let Some(run) = cx.session().and_then(|s| self.run(&s.session, cx.analyses)) {
+            cx.spawn_run(run);
+        }
+    }
 
     /// The form's run on the active session as a sweep a cluster can shard: None for rooms
     /// whose runs do not shard, an error saying why when the form as it is cannot be sharded.
@@ -202,6 +205,38 @@ views! {
     compare: compare::CompareRoom => Compare, "Compare", None, form;
 }
 
+/// A run as a form starts it: the job's title and analysis, what it is expected to cost,
+/// and the work (on a worker thread). The window and `benches/estimates.rs` start the same.
+pub struct Run {
+    pub kind: Option<AnalysisKind>,
+    pub title: String,
+    pub estimate: Estimate,
+    pub work: Work,
+}
+
+/// The work of a run.
+pub type Work = Box<dyn FnOnce(&Progress) -> Result<JobOutput, JobError> + Send>;
+
+/// What a run is expected to cost: the kind of run whose measured times correct its cost
+/// model (see [`crate::jobs::estimate`]) and the seconds the model puts it at.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Estimate {
+    pub timing: String,
+    pub modelled: f64,
+}
+
+impl Estimate {
+    /// The expectation on this machine: the model corrected by the runs measured here.
+    pub fn expected(&self, analyses: &Analyses) -> f64 {
+        analyses.timings.expected(&self.timing, self.modelled)
+    }
+
+    /// "about 20 s", as the forms say it.
+    pub fn text(&self, analyses: &Analyses) -> String {
+        duration_text(self.expected(analyses))
+    }
+}
+
 /// Each room's form settings as they persist between runs, by the room's field name.
 pub type Forms = std::collections::BTreeMap<String, serde_json::Value>;
 
@@ -211,11 +246,11 @@ pub fn run_button(
     ui: &mut egui::Ui,
     cx: &Cx,
     kind: AnalysisKind,
-    ready: impl Fn(&LoadedSession) -> bool,
+    ready: impl Fn(&Session) -> bool,
     needs: &str,
 ) -> bool {
     let Some(s) = cx.session() else { return false };
-    let ok = ready(s);
+    let ok = ready(&s.session);
     if !ok {
         ui.label(needs);
     }

@@ -3,7 +3,7 @@
 //! lengthscale relevance as tiles, with every model of the session compared on one chart.
 
 use super::pane::Pane;
-use super::{Cx, Room, duration_text, run_button};
+use super::{Cx, Estimate, Room, Run, run_button};
 use crate::app::View;
 use crate::app::figure_view::{self, Selection as FigureSelection};
 use crate::app::loader::LoadedSession;
@@ -16,7 +16,9 @@ use crate::experiments::result::features_text;
 use crate::experiments::result::{AnalysisKind, SizeReason};
 use crate::features::sequence::FeatureSet;
 use crate::jobs::JobError;
+use crate::session::Session;
 use crate::sweep::Experiment;
+use std::sync::Arc;
 
 /// Supervised recognition form: a few repetitions by default so the view answers quickly;
 /// the CLI runs the paper's 50.
@@ -80,10 +82,23 @@ impl RecognitionForm {
     }
 }
 
-/// Seconds per repetition per observed step (every grasp's frames, trained and predicted):
-/// one repetition of DS on all features took 1.5 s on the recognition sample (200 grasps,
-/// about 2,600 steps) on 2 cores.
-const SECONDS_PER_STEP: f64 = 0.0006;
+/// Seconds per repetition per observed step (every grasp's frames, trained and predicted)
+/// at the paper's size, DS and GS: the geometric mean of the recognition sample and iCub
+/// (`benches/estimates.rs`; docs/estimates.md has the table).
+fn seconds_per_step(learner: SupervisedLearner) -> f64 {
+    match learner {
+        SupervisedLearner::Ds => 0.00043,
+        SupervisedLearner::Gs => 0.00024,
+    }
+}
+
+/// What choosing the inputs costs, in repetitions of the protocol (none unless `auto`).
+fn auto_repetitions(features: FeatureSet) -> f64 {
+    match features.is_auto() {
+        true => crate::experiments::recognition::AUTO_REPETITIONS,
+        false => 0.0,
+    }
+}
 
 impl RecognitionForm {
     /// The parameters the form runs with on `session`.
@@ -105,15 +120,16 @@ impl RecognitionForm {
         p
     }
 
-    /// The kind of run whose measured times correct [`Self::expected_seconds`]: DS and GS
-    /// cost differently.
-    pub fn timing(&self) -> String {
-        format!("recognition {:?}", self.learner)
-    }
-
-    pub fn expected_seconds(&self, s: &LoadedSession) -> f64 {
-        let steps: usize = s.session.grasps.iter().map(|g| g.frames.len()).sum();
-        SECONDS_PER_STEP * steps as f64 * self.reps as f64
+    /// What a run on `session` is expected to cost (DS and GS are timed apart: they cost
+    /// differently).
+    pub fn estimate(&self, session: &Session, _analyses: &Analyses) -> Estimate {
+        let steps: usize = session.grasps.iter().map(|g| g.frames.len()).sum();
+        Estimate {
+            timing: format!("recognition {:?}", self.learner),
+            modelled: seconds_per_step(self.learner)
+                * steps as f64
+                * (self.reps as f64 + auto_repetitions(self.features)),
+        }
     }
 }
 
@@ -138,7 +154,7 @@ impl Room for RecognitionRoom {
     }
 
     fn run_text(&self, s: &LoadedSession, analyses: &Analyses) -> Option<String> {
-        if !sequences_ready(s) {
+        if !sequences_ready(&s.session) {
             return None;
         }
         let f = &self.form;
@@ -151,11 +167,7 @@ impl Room for RecognitionRoom {
             f.reps,
             if f.reps == 1 { "" } else { "s" },
             s.session.grasps.len(),
-            duration_text(
-                analyses
-                    .timings
-                    .expected(&f.timing(), f.expected_seconds(s))
-            )
+            f.estimate(&s.session, analyses).text(analyses)
         ))
     }
 
@@ -241,7 +253,7 @@ impl Room for RecognitionRoom {
 
     fn sweep(&self, cx: &Cx) -> Option<Result<Experiment, String>> {
         let s = cx.session()?;
-        Some(if sequences_ready(s) {
+        Some(if sequences_ready(&s.session) {
             Ok(Experiment::Recognition(
                 self.form.params(cx.analyses, &s.session.meta.name),
             ))
@@ -250,16 +262,17 @@ impl Room for RecognitionRoom {
         })
     }
 
-    fn start(&mut self, cx: &mut Cx) {
-        let Some(s) = cx.session() else { return };
-        let params = self.form.params(cx.analyses, &s.session.meta.name);
-        let timing = (self.form.timing(), self.form.expected_seconds(s));
-        let session = s.session.clone();
-        cx.spawn_timed(
-            AnalysisKind::Recognition,
-            format!("Recognition on {}", session.meta.name),
-            timing,
-            move |p| {
+    fn run(&self, session: &Arc<Session>, analyses: &Analyses) -> Option<Run> {
+        if !sequences_ready(session) {
+            return None;
+        }
+        let params = self.form.params(analyses, &session.meta.name);
+        let session = session.clone();
+        Some(Run {
+            kind: Some(AnalysisKind::Recognition),
+            title: format!("Recognition on {}", session.meta.name),
+            estimate: self.form.estimate(&session, analyses),
+            work: Box::new(move |p| {
                 let r = run_recognition(&session, &params, p).map_err(experiment_error)?;
                 // The experts trained on every grasp leave the session as a model file.
                 let model =
@@ -268,8 +281,8 @@ impl Room for RecognitionRoom {
                     result: Box::new(recognition_report(&session.meta.name, &r)),
                     models: vec![model],
                 })
-            },
-        );
+            }),
+        })
     }
 
     fn pane_ui(&mut self, ui: &mut egui::Ui, pane: &Pane, cx: &mut Cx) -> bool {

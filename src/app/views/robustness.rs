@@ -8,7 +8,7 @@ use crate::catalogue::MethodId;
 use egui::RichText;
 
 use super::pane::Pane;
-use super::{Cx, Room, duration_text};
+use super::{Cx, Estimate, Room, Run};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
 use crate::app::results::{JobOutput, experiment_error, recognition_ready};
@@ -17,7 +17,9 @@ use crate::experiments::robustness::report::robustness_report;
 use crate::experiments::robustness::{
     Family, Perturbation, RobustnessParams, Sweep, run_robustness,
 };
+use crate::session::Session;
 use crate::sweep::Experiment;
+use std::sync::Arc;
 
 /// The form: which methods and perturbations, with few repetitions by default so the view
 /// answers in minutes; the CLI runs the full sweeps.
@@ -88,11 +90,10 @@ fn applies(p: Perturbation, family: Family) -> bool {
 }
 
 /// The family a session supports, if any.
-fn family_of(s: &LoadedSession) -> Option<Family> {
+fn family_of(s: &Session) -> Option<Family> {
     if recognition_ready(s) {
         Some(Family::Recognition)
     } else if s
-        .session
         .label_sets
         .iter()
         .any(|l| l.classes.len() == 2 && l.name == "outcome")
@@ -103,22 +104,29 @@ fn family_of(s: &LoadedSession) -> Option<Family> {
     }
 }
 
-/// Seconds per method, perturbation strength and repetition, per grasp, on 2 cores: both
-/// stability methods under every perturbation (292 cells) took 17.5 s on the grasp-stability
-/// sample (540 grasps). The recognition family's learners cost more per grasp.
-const SECONDS_PER_CELL_GRASP: f64 = 0.00011;
-
-/// The kind of run whose measured times correct [`RobustnessForm::expected_seconds`]: the
-/// families' methods cost differently.
-fn timing(family: Family) -> String {
-    format!("robustness {family:?}")
+/// Seconds per method, perturbation strength and repetition on 2 cores: per grasp squared
+/// for the stability family (its SVMs' training grows about so: 10.7 s on the 540-grasp
+/// sample, 65 s on BTS3's 1,276), per grasp for the recognition family's online learners
+/// (the geometric means of the sample sessions and BTS3 or iCub, `benches/estimates.rs`).
+fn seconds_per_cell(family: Family, grasps: usize) -> f64 {
+    let g = grasps as f64;
+    match family {
+        Family::Stability => 4.34e-7 * g * g,
+        Family::Recognition => 0.00103 * g,
+    }
 }
 
 impl RobustnessForm {
-    pub fn expected_seconds(&self, family: Family, grasps: usize) -> f64 {
+    /// What a run of `family` on `session` is expected to cost (the families are timed
+    /// apart: their methods cost differently).
+    pub fn estimate(&self, family: Family, session: &Session) -> Estimate {
         let p = self.params(family);
         let strengths: usize = p.sweeps.iter().map(|s| s.strengths.len() + 1).sum();
-        SECONDS_PER_CELL_GRASP * grasps as f64 * (p.methods.len() * strengths * p.reps) as f64
+        Estimate {
+            timing: format!("robustness {family:?}"),
+            modelled: seconds_per_cell(family, session.grasps.len())
+                * (p.methods.len() * strengths * p.reps) as f64,
+        }
     }
 }
 
@@ -139,7 +147,7 @@ impl Room for RobustnessRoom {
     }
 
     fn run_text(&self, s: &LoadedSession, analyses: &Analyses) -> Option<String> {
-        let family = family_of(s)?;
+        let family = family_of(&s.session)?;
         let p = self.form.params(family);
         p.validate().ok()?;
         Some(format!(
@@ -151,10 +159,7 @@ impl Room for RobustnessRoom {
             p.reps,
             if p.reps == 1 { "" } else { "s" },
             s.session.grasps.len(),
-            duration_text(analyses.timings.expected(
-                &timing(family),
-                self.form.expected_seconds(family, s.session.grasps.len())
-            ))
+            self.form.estimate(family, &s.session).text(analyses)
         ))
     }
 
@@ -162,7 +167,7 @@ impl Room for RobustnessRoom {
         ui.heading("Where methods fail");
         ui.label("Score against perturbation strength");
         let Some(s) = cx.session() else { return };
-        let family = family_of(s);
+        let family = family_of(&s.session);
         let form = &mut self.form;
         ui.label("Methods:");
         for m in family.into_iter().flat_map(methods_of) {
@@ -210,7 +215,7 @@ impl Room for RobustnessRoom {
 
     fn sweep(&self, cx: &Cx) -> Option<Result<Experiment, String>> {
         let s = cx.session()?;
-        let Some(family) = family_of(s) else {
+        let Some(family) = family_of(&s.session) else {
             return Some(Err(
                 "This session has no family of methods to perturb.".into()
             ));
@@ -224,24 +229,22 @@ impl Room for RobustnessRoom {
         )
     }
 
-    fn start(&mut self, cx: &mut Cx) {
-        let Some(s) = cx.session() else { return };
-        let Some(family) = family_of(s) else { return };
+    fn run(&self, session: &Arc<Session>, _analyses: &Analyses) -> Option<Run> {
+        let family = family_of(session)?;
         let params = self.form.params(family);
-        let modelled = self.form.expected_seconds(family, s.session.grasps.len());
-        let session = s.session.clone();
-        cx.spawn_timed(
-            AnalysisKind::Robustness,
-            format!("Robustness sweep on {}", session.meta.name),
-            (timing(family), modelled),
-            move |p| {
+        let session = session.clone();
+        Some(Run {
+            kind: Some(AnalysisKind::Robustness),
+            title: format!("Robustness sweep on {}", session.meta.name),
+            estimate: self.form.estimate(family, &session),
+            work: Box::new(move |p| {
                 let r = run_robustness(&session, &params, p).map_err(experiment_error)?;
                 Ok(JobOutput::Result(Box::new(robustness_report(
                     &session.meta.name,
                     &r,
                 ))))
-            },
-        );
+            }),
+        })
     }
 }
 

@@ -5,20 +5,26 @@
 //! that model's result, or trains it.
 
 use super::tiles::Pane;
-use super::{Cx, Room};
+use super::{Cx, Estimate, Room, Run};
 use crate::app::View;
 use crate::app::figure_view::{self, Selection as FigureSelection};
+use crate::app::results::Analyses;
 use crate::app::results::{FRONTIER_JOB, JobOutput, experiment_error, recognition_ready};
 use crate::app::selection::{Command, ModelSpec};
 use crate::catalogue::{MethodId, Task};
 use crate::experiments::clustering::UnsupervisedLearner;
 use crate::experiments::frontier::report::frontier_figures;
-use crate::experiments::frontier::{CostAxis, Frontier, FrontierParams};
+use crate::experiments::frontier::{
+    CostAxis, Frontier, FrontierItem, FrontierParams, frontier_items,
+    item_cost as frontier_item_cost,
+};
 use crate::experiments::recognition::SupervisedLearner;
 use crate::experiments::result::{self, TimeAxis, date_text};
 use crate::experiments::stability::Config;
 use crate::features::FeatureSet;
 use crate::figures::{self, Rgb, Series, SeriesStyle};
+use crate::session::Session;
+use std::sync::Arc;
 
 /// What the frontier form sweeps: a method, its knobs' values as typed, and repetitions.
 #[derive(Clone, Debug)]
@@ -128,11 +134,28 @@ impl FrontierForm {
             .collect()
     }
 
-    fn ready(&self, s: &crate::app::loader::LoadedSession) -> bool {
+    fn ready(&self, s: &Session) -> bool {
         match self.method.task() {
-            Task::Stability => s.session.label_sets.iter().any(|l| l.classes.len() == 2),
+            Task::Stability => s.label_sets.iter().any(|l| l.classes.len() == 2),
             Task::Recognition | Task::Clustering => recognition_ready(s),
         }
+    }
+
+    /// What the frontier on `session` is expected to cost; None when the form or the
+    /// session cannot run it.
+    pub fn estimate(&self, session: &Session) -> Option<Estimate> {
+        if !self.ready(session) {
+            return None;
+        }
+        let p = self.params().ok()?;
+        let modelled = frontier_items(&p)
+            .iter()
+            .map(|item| item_seconds(item, &p, session))
+            .sum();
+        Some(Estimate {
+            timing: format!("frontier {}", p.method.key()),
+            modelled,
+        })
     }
 
     fn ui(&mut self, ui: &mut egui::Ui) {
@@ -190,6 +213,34 @@ impl FrontierForm {
     }
 }
 
+/// Seconds one item of a frontier takes on `session` on 2 cores (`benches/estimates.rs`
+/// measured the constants; see docs/estimates.md).
+fn item_seconds(item: &FrontierItem, p: &FrontierParams, session: &Session) -> f64 {
+    let grasps = session.grasps.len() as f64;
+    let steps = session.grasps.iter().map(|g| g.frames.len()).sum::<usize>() as f64;
+    let relative = frontier_item_cost(item);
+    match *item {
+        // A repetition of the supervised protocol at the paper's capacity (cost 100) takes
+        // about a repetition of Recognition.
+        FrontierItem::Recognition { .. } => FRONTIER_STEP * steps * relative / 100.0,
+        // A dictionary is coded and cross-validated at every γ and repetition; its SVMs
+        // grow about with the square of the grasps.
+        FrontierItem::Dictionary { .. } => {
+            FRONTIER_GRASP2_BASIS * grasps * grasps * relative * (p.gamma.len() * p.reps) as f64
+        }
+        FrontierItem::Threshold { .. } | FrontierItem::Classifier { .. } => FRONTIER_STEP * steps,
+        FrontierItem::Clusters { .. } | FrontierItem::Svm { .. } => {
+            FRONTIER_GRASP2_BASIS * grasps * grasps * relative
+        }
+    }
+}
+
+/// DS's frontier on the recognition sample and iCub; sparse coding's on the
+/// grasp-stability sample and BTS3 (geometric means, `benches/estimates.rs`). The other
+/// methods' items are modelled on these.
+const FRONTIER_STEP: f64 = 0.00038;
+const FRONTIER_GRASP2_BASIS: f64 = 2.36e-9;
+
 /// A labelled one-line field.
 fn text_field(ui: &mut egui::Ui, label: &str, text: &mut String) {
     let label = ui.label(label);
@@ -232,7 +283,7 @@ impl Room for SpeedRoom {
         );
         self.frontier.ui(ui);
         let Some(s) = cx.session() else { return };
-        let problem = if !self.frontier.ready(s) {
+        let problem = if !self.frontier.ready(&s.session) {
             Some(match self.frontier.method.task() {
                 Task::Stability => "(needs a session with a two-class outcome)".into(),
                 Task::Recognition | Task::Clustering => {
@@ -246,31 +297,39 @@ impl Room for SpeedRoom {
             ui.label(egui::RichText::new(p).color(ui.visuals().warn_fg_color));
         }
         let running = cx.analyses.frontier_running();
+        if let Some(e) = self.frontier.estimate(&s.session) {
+            ui.label(format!("Expected to take {}.", e.text(cx.analyses)));
+        }
         if ui
             .add_enabled(
                 problem.is_none() && !running,
                 egui::Button::new("Compute frontier"),
             )
             .clicked()
-            && let Ok(params) = self.frontier.params()
         {
-            let session = s.session.clone();
-            let ctx = cx.ctx.clone();
-            cx.analyses.spawn(
-                &ctx,
-                None,
-                format!(
-                    "{FRONTIER_JOB}{} on {}",
-                    params.method.title(),
-                    session.meta.name
-                ),
-                move |p| {
-                    let f = crate::experiments::frontier::run_frontier(&session, &params, p)
-                        .map_err(experiment_error)?;
-                    Ok(JobOutput::Frontier(Box::new(f)))
-                },
-            );
+            self.start(cx);
         }
+    }
+
+    /// The frontier the form sweeps.
+    fn run(&self, session: &Arc<Session>, _analyses: &Analyses) -> Option<Run> {
+        let params = self.frontier.params().ok()?;
+        let estimate = self.frontier.estimate(session)?;
+        let session = session.clone();
+        Some(Run {
+            kind: None,
+            title: format!(
+                "{FRONTIER_JOB}{} on {}",
+                params.method.title(),
+                session.meta.name
+            ),
+            estimate,
+            work: Box::new(move |p| {
+                let f = crate::experiments::frontier::run_frontier(&session, &params, p)
+                    .map_err(experiment_error)?;
+                Ok(JobOutput::Frontier(Box::new(f)))
+            }),
+        })
     }
 
     fn pane_ui(&mut self, ui: &mut egui::Ui, pane: &Pane, cx: &mut Cx) -> bool {

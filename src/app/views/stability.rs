@@ -3,7 +3,7 @@
 //! maps as tiles.
 
 use super::pane::Pane;
-use super::{Cx, Room, duration_text, run_button};
+use super::{Cx, Estimate, Room, Run, run_button};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
 use crate::app::results::Analyses;
@@ -18,7 +18,9 @@ use crate::experiments::stability::{
 use crate::features::FeatureSet;
 use crate::jobs::JobError;
 use crate::models::stability::StabilityFit;
+use crate::session::Session;
 use crate::sweep::{Experiment, StabilitySweep};
+use std::sync::Arc;
 
 /// Grasp-stability form: one configuration, or a grid search with the parsimony rule.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
@@ -51,10 +53,13 @@ impl Default for StabilityForm {
     }
 }
 
-/// Seconds one configuration (dictionary, codes, both cross validations) takes per grasp
-/// at 29 bases: `stability` on the grasp-stability sample (540 grasps, 29 bases) took 0.2 s
-/// on 2 cores; the dictionary's cost grows about linearly with the number of bases.
-const SECONDS_PER_GRASP_CONFIG: f64 = 0.0004;
+/// Seconds one configuration takes per grasp squared at 29 bases, on 2 cores (its SVMs'
+/// training grows about with the square of the grasps): alone, with both cross
+/// validations; in a grid, where a dictionary serves every γ and only 10-fold runs. The
+/// dictionary's cost grows about linearly with the number of bases. Geometric means of the
+/// grasp-stability sample (540 grasps) and BTS3 (1,276), `benches/estimates.rs`.
+const SECONDS_PER_GRASP2_CONFIG: f64 = 3.0e-7;
+const SECONDS_PER_GRASP2_GRID_CELL: f64 = 1.2e-7;
 
 /// The kind of run whose measured times correct the model above.
 const TIMING: &str = "stability";
@@ -109,19 +114,32 @@ impl StabilityForm {
         })
     }
 
-    /// Expected seconds on a session of `grasps` grasps.
-    pub fn expected_seconds(&self, grasps: usize) -> f64 {
-        let per = |k: usize| SECONDS_PER_GRASP_CONFIG * grasps as f64 * (k as f64 / 29.0).max(0.2);
+    /// What a run on a session of `grasps` grasps is expected to cost.
+    pub fn estimate(&self, grasps: usize) -> Estimate {
+        Estimate {
+            timing: TIMING.into(),
+            modelled: self.expected_seconds(grasps),
+        }
+    }
+
+    fn expected_seconds(&self, grasps: usize) -> f64 {
+        let g2 = (grasps * grasps) as f64;
+        let bases = |k: usize| (k as f64 / 29.0).max(0.2);
         match self.grid_spec() {
-            Some(g) => g.num_bases.iter().map(|&k| per(k)).sum::<f64>() * 9.0,
-            None => per(self.num_bases),
+            Some(g) => {
+                SECONDS_PER_GRASP2_GRID_CELL
+                    * g2
+                    * g.num_bases.iter().map(|&k| bases(k)).sum::<f64>()
+                    * 9.0
+            }
+            None => SECONDS_PER_GRASP2_CONFIG * g2 * bases(self.num_bases),
         }
     }
 }
 
 /// The pipeline predicts a two-class outcome (success / failure).
-fn ready(s: &LoadedSession) -> bool {
-    s.session.label_sets.iter().any(|l| l.classes.len() == 2)
+fn ready(s: &Session) -> bool {
+    s.label_sets.iter().any(|l| l.classes.len() == 2)
 }
 
 #[derive(Default)]
@@ -163,7 +181,7 @@ impl Room for StabilityRoom {
     }
 
     fn run_text(&self, s: &LoadedSession, analyses: &Analyses) -> Option<String> {
-        if !ready(s) {
+        if !ready(&s.session) {
             return None;
         }
         let f = &self.form;
@@ -187,11 +205,7 @@ impl Room for StabilityRoom {
         Some(format!(
             "Run: sparse coding + linear SVM on {} grasps, {what}; {}.",
             s.session.grasps.len(),
-            duration_text(
-                analyses
-                    .timings
-                    .expected(TIMING, f.expected_seconds(s.session.grasps.len()))
-            )
+            f.estimate(s.session.grasps.len()).text(analyses)
         ))
     }
 
@@ -286,7 +300,7 @@ impl Room for StabilityRoom {
 
     fn sweep(&self, cx: &Cx) -> Option<Result<Experiment, String>> {
         let s = cx.session()?;
-        Some(if !ready(s) {
+        Some(if !ready(&s.session) {
             Err("This session has no two-class outcome.".into())
         } else if !self.form.grid {
             Err("A cluster shards a grid search: tick Grid search.".into())
@@ -298,16 +312,17 @@ impl Room for StabilityRoom {
         })
     }
 
-    fn start(&mut self, cx: &mut Cx) {
-        let Some(s) = cx.session() else { return };
-        let options = self.form.options(cx.analyses, &s.session.meta.name);
-        let modelled = self.form.expected_seconds(s.session.grasps.len());
-        let session = s.session.clone();
-        cx.spawn_timed(
-            AnalysisKind::Stability,
-            format!("Grasp stability on {}", session.meta.name),
-            (TIMING.into(), modelled),
-            move |p| {
+    fn run(&self, session: &Arc<Session>, analyses: &Analyses) -> Option<Run> {
+        if !ready(session) {
+            return None;
+        }
+        let options = self.form.options(analyses, &session.meta.name);
+        let session = session.clone();
+        Some(Run {
+            kind: Some(AnalysisKind::Stability),
+            title: format!("Grasp stability on {}", session.meta.name),
+            estimate: self.form.estimate(session.grasps.len()),
+            work: Box::new(move |p| {
                 let data = StabilityData::from_session(&session, &DataOptions::default())
                     .map_err(JobError::failed)?;
                 let r = crate::experiments::stability::run(&data, &options, p).map_err(
@@ -323,7 +338,7 @@ impl Room for StabilityRoom {
                     result: Box::new(stability_report(&r)),
                     models: vec![model],
                 })
-            },
-        );
+            }),
+        })
     }
 }

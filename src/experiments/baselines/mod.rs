@@ -260,7 +260,12 @@ pub fn run_baselines(
         .into());
     }
     let data: Array2<f64> = Normaliser::fit(params.normalisation, features)?.transform(features)?;
-    let steps = (1 + params.k_sweep.len() + 1) as f64;
+    // The SVM's grid takes most of the time: about 7 times the clustering per repeat of
+    // its cross validation (benches/estimates.rs).
+    let svm_weight = 7.0 * params.cv_repeats as f64;
+    let parts = progress.parts(&[1.0, svm_weight]);
+    let (progress, svm_part) = (&parts[0], &parts[1]);
+    let steps = (1 + params.k_sweep.len()) as f64;
     progress.set(0.0, format!("k-means and SOM, k = {}", params.k));
     let (kmeans, som) = cluster_runs(
         data.view(),
@@ -301,13 +306,13 @@ pub fn run_baselines(
             som: sm,
         });
     }
+    progress.set(1.0, "SVM grid search");
     let svm = if params.cv_repeats > 0 {
-        progress.set((steps - 1.0) / steps, "SVM grid search");
-        Some(svm_grid(features, truth, params, progress)?)
+        Some(svm_grid(features, truth, params, svm_part)?)
     } else {
         None
     };
-    progress.set(1.0, "done");
+    svm_part.set(1.0, "done");
     Ok(BaselinesResult {
         params: params.clone(),
         samples: features.nrows(),
@@ -332,10 +337,12 @@ pub fn svm_grid(
         .iter()
         .flat_map(|&c| params.svm_gamma.iter().map(move |&g| (c, g)))
         .collect();
+    let parts = progress.parts(&vec![1.0; cells.len()]);
     let grid: Vec<Result<SvmGridCell, BaselinesError>> = cells
         .par_iter()
-        .map(|&(c, gamma)| {
-            progress.checkpoint()?;
+        .zip(&parts)
+        .map(|(&(c, gamma), part)| {
+            part.checkpoint()?;
             let p = KernelSvmParams {
                 c,
                 gamma,
@@ -347,6 +354,7 @@ pub fn svm_grid(
                     cross_validate(&p, features, truth, params.cv_folds, seed).map(|cv| cv.accuracy)
                 })
                 .collect::<Result<_, _>>()?;
+            part.set_fraction(1.0);
             let n = acc.len() as f64;
             let mean = acc.iter().sum::<f64>() / n;
             let sd = (acc.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / n).sqrt();

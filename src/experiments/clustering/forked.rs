@@ -43,7 +43,9 @@ struct Branch<L: NoveltyLearner> {
 
 /// Learn the grasps `seqs` in `order` under each of `thresholds`, starting from `learner`
 /// (its own threshold is not used), then re-assign every grasp; one outcome per threshold,
-/// in their order. Stops at the next grasp once `progress` is cancelled.
+/// in their order. Stops at the next grasp once `progress` is cancelled. Progress counts
+/// the grasps learned under each threshold: branches part within the first grasps, so
+/// from there on a grasp costs about the same in every branch.
 pub fn learn_order<L: NoveltyLearner>(
     learner: L,
     seqs: &[Array2<f64>],
@@ -54,6 +56,8 @@ pub fn learn_order<L: NoveltyLearner>(
     let views: Vec<ArrayView2<f64>> = seqs.iter().map(|s| s.view()).collect();
     let mut learn_seconds = vec![0.0; thresholds.len()];
     let mut outcomes: Vec<(usize, ThresholdOutcome)> = Vec::with_capacity(thresholds.len());
+    let total = (thresholds.len() * order.len()).max(1) as f64;
+    let mut learned = 0usize;
     let mut pending = vec![Branch {
         learner,
         members: (0..thresholds.len()).collect(),
@@ -67,6 +71,7 @@ pub fn learn_order<L: NoveltyLearner>(
                 .commit(seqs[order[b.next]].view(), Some(a), false)?;
             add(&mut learn_seconds, &b.members, t0.elapsed().as_secs_f64());
             b.next += 1;
+            learned += b.members.len();
         }
         for (i, &g) in order.iter().enumerate().skip(b.next) {
             progress.checkpoint()?;
@@ -99,6 +104,8 @@ pub fn learn_order<L: NoveltyLearner>(
                 &b.members,
                 assessing + t1.elapsed().as_secs_f64(),
             );
+            learned += b.members.len();
+            progress.set_fraction(learned as f64 / total);
         }
         let t0 = Instant::now();
         let assignment = b.learner.assign_all(&views);

@@ -525,6 +525,22 @@ fn du_pairs(
     Ok(PairDistances::new(&kernel, steps).map(Arc::new))
 }
 
+/// What an item costs, relative to the others of its run on a session of `steps` steps
+/// and `grasps` grasps: an order learns every step under every threshold; a baseline's
+/// sequential k-means and SOM pass once over the grasps' Table I features per centre, some
+/// hundred times cheaper a grasp than a step of the experts.
+pub fn item_cost(
+    params: &ClusteringParams,
+    steps: usize,
+    grasps: usize,
+    item: ClusteringItem,
+) -> f64 {
+    match item {
+        ClusteringItem::Order { .. } => (steps * params.thresholds.len()) as f64,
+        ClusteringItem::Baseline { k, .. } => 0.01 * (grasps * k) as f64,
+    }
+}
+
 /// The items of a run on `grasps` grasps: every order, then every (k, order) of the
 /// baselines.
 pub fn clustering_items(params: &ClusteringParams, grasps: usize) -> Vec<ClusteringItem> {
@@ -692,14 +708,32 @@ pub fn run_clustering(
     progress: &Progress,
 ) -> Result<ClusteringResult, ExperimentError> {
     let start = Instant::now();
-    let (params, feature_choice) = choose_auto_features(session, params, progress)?;
+    let items = clustering_items(params, session.grasps.len());
+    let steps: usize = session.grasps.iter().map(|g| g.frames.len()).sum();
+    let grasps = session.grasps.len();
+    // Choosing the inputs costs about AUTO_REPETITIONS repetitions of the supervised
+    // protocol, each about as much as learning a step under 1.5 thresholds.
+    let auto = match params.features.is_auto() {
+        true => crate::experiments::recognition::AUTO_REPETITIONS * 1.5 * steps as f64,
+        false => 0.0,
+    };
+    let work: f64 = (items.iter())
+        .map(|&item| item_cost(params, steps, grasps, item))
+        .sum();
+    let parts = progress.parts(&[auto, work]);
+    let (params, feature_choice) = choose_auto_features(session, params, &parts[0])?;
     let params = &params;
     let prep = prepare_clustering(session, params)?;
-    let items = clustering_items(params, session.grasps.len());
+    let progress = &parts[1];
     progress.set(0.0, "clustering: starting");
-    let outputs = compute_items(&items, progress, "clustering", "items", |&item| {
-        clustering_item(params, &prep, item, progress)
-    })?;
+    let outputs = compute_items(
+        &items,
+        progress,
+        "clustering",
+        "items",
+        |&item| item_cost(params, steps, grasps, item),
+        |&item, part| clustering_item(params, &prep, item, part),
+    )?;
     Ok(ClusteringResult {
         feature_choice,
         ..assemble_clustering(params, prep, outputs, start.elapsed().as_secs_f64())

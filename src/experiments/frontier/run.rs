@@ -215,6 +215,26 @@ pub fn prepare_frontier(
     })
 }
 
+/// What an item costs relative to the others of its frontier: the experts' update grows
+/// with their capacity, a dictionary's learning and coding with its bases, the clusterers
+/// with their centres; an RBF SVM's or a registered method's cross validation costs about
+/// the same at every size.
+pub fn item_cost(item: &FrontierItem) -> f64 {
+    match *item {
+        // A sparse GP's update grows with its basis vectors, and with their square past a
+        // few tens.
+        FrontierItem::Recognition { capacity, .. } => {
+            let c = capacity as f64;
+            c + c * c / 50.0
+        }
+        FrontierItem::Dictionary { num_bases, .. } => num_bases as f64,
+        FrontierItem::Clusters { k, .. } => k as f64,
+        FrontierItem::Threshold { .. }
+        | FrontierItem::Svm { .. }
+        | FrontierItem::Classifier { .. } => 1.0,
+    }
+}
+
 /// The items of a frontier, in the order its points are assembled: every size (or knob
 /// value) with its repetitions in order.
 pub fn frontier_items(params: &FrontierParams) -> Vec<FrontierItem> {
@@ -305,7 +325,7 @@ pub fn frontier_item(
                 gp.capacity = capacity;
                 gp.tau = tau;
             }
-            let r = recognition_repetition(&p, session, prep, rep)?;
+            let r = recognition_repetition(&p, session, prep, rep, progress)?;
             Ok(FrontierOutput::Recognition {
                 all: r.all,
                 final_20: r.final_20,
@@ -433,8 +453,19 @@ pub fn run_frontier(
     progress: &Progress,
 ) -> Result<Frontier, ExperimentError> {
     let start = Instant::now();
-    let (params, feature_choice) = choose_auto_features(session, params, progress)?;
+    // Choosing the inputs costs about AUTO_REPETITIONS of the frontier's average item.
+    let costs: Vec<f64> = frontier_items(params).iter().map(item_cost).collect();
+    let auto = match params.features.is_auto() {
+        true => {
+            crate::experiments::recognition::AUTO_REPETITIONS * costs.iter().sum::<f64>()
+                / costs.len().max(1) as f64
+        }
+        false => 0.0,
+    };
+    let parts = progress.parts(&[auto, costs.iter().sum()]);
+    let (params, feature_choice) = choose_auto_features(session, params, &parts[0])?;
     let params = &params;
+    let progress = &parts[1];
     let prep = prepare_frontier(session, params)?;
     let items = frontier_items(params);
     let label = params.label();
@@ -444,7 +475,8 @@ pub fn run_frontier(
         progress,
         &format!("frontier {label}"),
         "runs",
-        |item| frontier_item(session, params, &prep, item, progress),
+        item_cost,
+        |item, part| frontier_item(session, params, &prep, item, part),
     )?;
     let frontier = assemble_frontier(
         &session.meta.name,

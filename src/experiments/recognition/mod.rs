@@ -298,6 +298,7 @@ fn run_repetition(
     labels: &[usize],
     n_classes: usize,
     rep: usize,
+    progress: &Progress,
 ) -> Result<RepetitionResult, ExperimentError> {
     let mut rng = Rng::stream(params.seed, rep as u64);
     let noisy;
@@ -362,6 +363,7 @@ fn run_repetition(
                 h.push(learner.decide(dist.slice(s![..k, ..])) == labels[g]);
             }
         }
+        progress.set_fraction((i + 1) as f64 / order.len() as f64);
     }
     let set_len = order.len().div_ceil(params.trial_sets).max(1);
     Ok(RepetitionResult {
@@ -421,6 +423,7 @@ pub fn recognition_repetition(
     session: &Session,
     prep: &RecognitionPrep,
     rep: usize,
+    progress: &Progress,
 ) -> Result<RepetitionResult, ExperimentError> {
     run_repetition(
         params,
@@ -429,6 +432,7 @@ pub fn recognition_repetition(
         &prep.labels,
         prep.classes.len(),
         rep,
+        progress,
     )
 }
 
@@ -463,14 +467,28 @@ pub fn run_recognition(
 ) -> Result<RecognitionResult, ExperimentError> {
     let start = Instant::now();
     let cpu_start = cpu_seconds(true);
-    let (params, feature_choice) = choose_auto_features(session, params, progress)?;
+    // Choosing the inputs costs about AUTO_REPETITIONS repetitions of the protocol.
+    let auto = if params.features.is_auto() {
+        AUTO_REPETITIONS
+    } else {
+        0.0
+    };
+    let parts = progress.parts(&[auto, params.reps as f64]);
+    let (params, feature_choice) = choose_auto_features(session, params, &parts[0])?;
     let params = &params;
     let prep = prepare_recognition(session, params)?;
+    let progress = &parts[1];
     progress.set(0.0, "recognition: starting");
     let items: Vec<usize> = (0..params.reps).collect();
-    let reps = compute_items(&items, progress, "recognition", "repetitions", |&rep| {
-        recognition_repetition(params, session, &prep, rep)
-    })?;
+    // Repetitions cost alike.
+    let reps = compute_items(
+        &items,
+        progress,
+        "recognition",
+        "repetitions",
+        |_| 1.0,
+        |&rep, part| recognition_repetition(params, session, &prep, rep, part),
+    )?;
     Ok(RecognitionResult {
         feature_choice,
         ..assemble_recognition(
@@ -482,6 +500,11 @@ pub fn run_recognition(
         )
     })
 }
+
+/// What `--features auto`'s cross validation costs, in repetitions of the protocol: every
+/// candidate family (five on the iCub) in every fold (five), each fold teaching four
+/// fifths of the grasps (`benches/estimates.rs`: 24 s on iCub for DS, a repetition 0.8 s).
+pub const AUTO_REPETITIONS: f64 = 25.0;
 
 /// `params` with `auto` replaced by the family its experts' cross validation on `session`
 /// chooses (and how), or as they are.

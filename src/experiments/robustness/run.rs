@@ -114,12 +114,22 @@ pub fn run_robustness(
     let tasks = robustness_tasks(session, params)?;
     let start = Instant::now();
     progress.set(0.0, "robustness: preparing");
-    let prepared = prepare(session, params, progress)?;
+    // What every task shares (a dictionary, the clean features) costs about two tasks.
+    let parts = progress.parts(&[2.0, tasks.len() as f64]);
+    let prepared = prepare(session, params, &parts[0])?;
+    parts[0].set_fraction(1.0);
+    let progress = &parts[1];
     let setup_seconds = start.elapsed().as_secs_f64();
     let total = tasks.len();
-    let results = compute_items(&tasks, progress, "robustness", "runs", |t| {
-        robustness_task(session, params, &prepared, *t)
-    })?;
+    let results = compute_items(
+        &tasks,
+        progress,
+        "robustness",
+        "runs",
+        // Every task runs every method once, on data of one size.
+        |_| 1.0,
+        |t, _| robustness_task(session, params, &prepared, *t),
+    )?;
     progress.set(1.0, format!("robustness: {total}/{total} runs done"));
     Ok(assemble_robustness(
         session,
