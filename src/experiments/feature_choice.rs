@@ -184,22 +184,22 @@ pub fn choose_features(
         "folds",
         |&(c, _)| seqs[c].dim() as f64,
         |&(c, f), progress| {
-        let (test, train): (Vec<usize>, Vec<usize>) = (0..n).partition(|&g| fold_of[g] == f);
-        if test.is_empty() {
-            return Ok(None);
-        }
-        let seed = Rng::stream(seed, 1 + f as u64).next_u64();
-        scorer
-            .accuracy(
-                &seqs[c],
-                &labels,
-                classes.len(),
-                &train,
-                &test,
-                seed,
-                progress,
-            )
-            .map(Some)
+            let (test, train): (Vec<usize>, Vec<usize>) = (0..n).partition(|&g| fold_of[g] == f);
+            if test.is_empty() {
+                return Ok(None);
+            }
+            let seed = Rng::stream(seed, 1 + f as u64).next_u64();
+            scorer
+                .accuracy(
+                    &seqs[c],
+                    &labels,
+                    classes.len(),
+                    &train,
+                    &test,
+                    seed,
+                    progress,
+                )
+                .map(Some)
         },
     )?;
     let candidates: Vec<FamilyScore> = families

@@ -37,10 +37,10 @@ impl Default for BaselinesForm {
 }
 
 /// Seconds per order (k-means and SOM) and per repeat of the SVM's 5-fold grid, per grasp,
-/// on 2 cores: 10 orders of the recognition sample (200 grasps) took 0.2 s, and two repeats
-/// of the SVM grid 2.8 s more.
-const SECONDS_PER_ORDER_GRASP: f64 = 0.0003;
-const SECONDS_PER_SVM_REPEAT_GRASP: f64 = 0.021;
+/// on 2 cores: the defaults took 2.6 s on the recognition sample and 2.9 s on iCub (200
+/// grasps each; `benches/estimates.rs`), the SVM's grid most of it.
+const SECONDS_PER_ORDER_GRASP: f64 = 0.00009;
+const SECONDS_PER_SVM_REPEAT_GRASP: f64 = 0.0064;
 
 impl BaselinesForm {
     /// What a run on `session` is expected to cost (timed apart with and without the RBF

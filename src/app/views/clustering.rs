@@ -82,15 +82,14 @@ impl ClusteringForm {
     }
 }
 
-/// Seconds per observed step per threshold and order on 2 cores, for the suggested sweeps
-/// on the recognition sample (about 2,600 steps an order): 2 orders took 3.4 s wall for
-/// DU's 18 thresholds (its experts read the session's pair table) and 2.3 s for GU's 24.
-/// An order is learned once for all thresholds until they part, so a sweep costs less per
-/// threshold the more thresholds share it.
+/// Seconds per observed step per threshold and order on 2 cores, for the suggested sweeps:
+/// the geometric mean of the recognition sample and iCub (DU 9.0 and 17.8 s, GU 6.3 and
+/// 11.4 s for two orders; `benches/estimates.rs`). DU's experts read the session's pair
+/// table; an order is learned once for all thresholds until they part.
 fn seconds_per_step(learner: UnsupervisedLearner) -> f64 {
     match learner {
-        UnsupervisedLearner::Du => 0.00029,
-        UnsupervisedLearner::Gu => 0.00022,
+        UnsupervisedLearner::Du => 0.000139,
+        UnsupervisedLearner::Gu => 0.00007,
     }
 }
 

@@ -87,8 +87,8 @@ impl RecognitionForm {
 /// (`benches/estimates.rs`; docs/estimates.md has the table).
 fn seconds_per_step(learner: SupervisedLearner) -> f64 {
     match learner {
-        SupervisedLearner::Ds => 0.00043,
-        SupervisedLearner::Gs => 0.00024,
+        SupervisedLearner::Ds => 0.000117,
+        SupervisedLearner::Gs => 0.0000386,
     }
 }
 

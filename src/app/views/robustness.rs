@@ -105,14 +105,14 @@ fn family_of(s: &Session) -> Option<Family> {
 }
 
 /// Seconds per method, perturbation strength and repetition on 2 cores: per grasp squared
-/// for the stability family (its SVMs' training grows about so: 10.7 s on the 540-grasp
-/// sample, 65 s on BTS3's 1,276), per grasp for the recognition family's online learners
+/// for the stability family (its SVMs' training grows about so: 3.9 s on the 540-grasp
+/// sample, 13.7 s on BTS3's 1,276), per grasp for the recognition family's online learners
 /// (the geometric means of the sample sessions and BTS3 or iCub, `benches/estimates.rs`).
 fn seconds_per_cell(family: Family, grasps: usize) -> f64 {
     let g = grasps as f64;
     match family {
-        Family::Stability => 4.34e-7 * g * g,
-        Family::Recognition => 0.00103 * g,
+        Family::Stability => 1.21e-7 * g * g,
+        Family::Recognition => 0.000287 * g,
     }
 }
 

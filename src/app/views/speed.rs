@@ -238,8 +238,8 @@ fn item_seconds(item: &FrontierItem, p: &FrontierParams, session: &Session) -> f
 /// DS's frontier on the recognition sample and iCub; sparse coding's on the
 /// grasp-stability sample and BTS3 (geometric means, `benches/estimates.rs`). The other
 /// methods' items are modelled on these.
-const FRONTIER_STEP: f64 = 0.00038;
-const FRONTIER_GRASP2_BASIS: f64 = 2.36e-9;
+const FRONTIER_STEP: f64 = 0.000081;
+const FRONTIER_GRASP2_BASIS: f64 = 6.6e-10;
 
 /// A labelled one-line field.
 fn text_field(ui: &mut egui::Ui, label: &str, text: &mut String) {

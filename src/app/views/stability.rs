@@ -58,8 +58,8 @@ impl Default for StabilityForm {
 /// validations; in a grid, where a dictionary serves every γ and only 10-fold runs. The
 /// dictionary's cost grows about linearly with the number of bases. Geometric means of the
 /// grasp-stability sample (540 grasps) and BTS3 (1,276), `benches/estimates.rs`.
-const SECONDS_PER_GRASP2_CONFIG: f64 = 3.0e-7;
-const SECONDS_PER_GRASP2_GRID_CELL: f64 = 1.2e-7;
+const SECONDS_PER_GRASP2_CONFIG: f64 = 1.9e-7;
+const SECONDS_PER_GRASP2_GRID_CELL: f64 = 3.1e-8;
 
 /// The kind of run whose measured times correct the model above.
 const TIMING: &str = "stability";

@@ -584,17 +584,20 @@ pub fn run(
     progress: &Progress,
 ) -> Result<StabilityReport, StabilityError> {
     let start = Instant::now();
+    // After a grid, evaluating the chosen configurations under both protocols takes about
+    // two fifths of the run (benches/estimates.rs): it gets that share of the progress.
+    let parts = progress.parts(&[if opts.grid.is_some() { 1.5 } else { 0.0 }, 1.0]);
     let grid = match &opts.grid {
         Some(spec) => Some(grid_search(
             data,
             spec,
             &opts.settings,
             opts.selection_cv,
-            progress,
+            &parts[0],
         )?),
         None => None,
     };
-    finish(data, opts, grid, start, progress)
+    finish(data, opts, grid, start, &parts[1])
 }
 
 /// The pipeline after the grid (if any): evaluation of the best and the parsimonious
@@ -608,7 +611,7 @@ pub fn finish(
     progress: &Progress,
 ) -> Result<StabilityReport, StabilityError> {
     let s = &opts.settings;
-    progress.set(1.0, "evaluating the chosen models");
+    progress.set(0.0, "evaluating the chosen models");
     let (best_cfg, best_dict, pars_cfg, pars_dict) = match &grid {
         Some(g) => (
             g.best.config,
@@ -618,6 +621,8 @@ pub fn finish(
         ),
         None => (opts.single, None, opts.single, None),
     };
+    // The best and the parsimonious configuration cost alike (one when they are the same).
+    let parts = progress.parts(&[1.0, if pars_cfg == best_cfg { 0.0 } else { 1.0 }]);
     let (mut best, bd) = evaluate_config(
         data,
         best_cfg,
@@ -625,8 +630,9 @@ pub fn finish(
         opts.kfold,
         opts.objects,
         best_dict,
-        progress,
+        &parts[0],
     )?;
+    parts[0].set_fraction(1.0);
     let (parsimonious, pd) = if pars_cfg == best_cfg {
         (best.clone(), bd.clone())
     } else {
@@ -637,7 +643,7 @@ pub fn finish(
             opts.kfold,
             opts.objects,
             pars_dict,
-            progress,
+            &parts[1],
         )?
     };
     // Keep the learning statistics of the grid's cells where they exist.
