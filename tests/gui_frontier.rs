@@ -13,6 +13,7 @@ use tactile_workbench::app::{View, WorkbenchApp, figure_view};
 use tactile_workbench::experiments::frontier::Frontier;
 use tactile_workbench::experiments::frontier::report::frontier_figures;
 use tactile_workbench::experiments::result::{AnalysisResult, SizeReason};
+use tactile_workbench::features::FeatureSet;
 use tactile_workbench::figures::FigureKind;
 
 fn wait_for_jobs(h: &mut Harness<'static, WorkbenchApp>) {
@@ -117,7 +118,10 @@ fn a_frontier_sets_the_default_size_and_its_points_train_and_open_models() {
     let (capacity, tau) = (rec.knob("capacity").unwrap(), rec.knob("tau").unwrap());
     h.get_by_label_contains("Recommended DS, all features: capacity");
 
-    // The Recognition view now trains the recommended size by default, and says so.
+    // The Recognition view, on the frontier's features (its default is `auto`, which a
+    // frontier on `all` does not speak for), now trains the recommended size by default,
+    // and says so.
+    h.state_mut().rooms.recognition.form.features = FeatureSet::ALL;
     h.get_by_label("Recognition").click();
     h.run_ok();
     h.get_by_label("Model size (recommended):");

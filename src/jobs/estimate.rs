@@ -62,9 +62,9 @@ const HALF_WEIGHT_AT: f64 = 0.05;
 
 /// Seconds left of a run: `fraction` of it was done `at` seconds in, `now` seconds have
 /// passed, and it was expected to take `expected` seconds in all (None: no expectation).
-/// `first` is when the fraction first moved and to what: the rate is measured from there,
-/// since what came before (reading the session, preparing what every item shares, the
-/// first item) may have reported nothing. The total is the expectation at first and what
+/// `first` is when the fraction first moved and to what: the rate is measured from there
+/// once it moves again, since what came before (reading the session, preparing what every
+/// item shares, the first item) may have reported nothing. The total is the expectation at first and what
 /// the rate says as the fraction grows past `first` (weighted d / (d + HALF_WEIGHT_AT) for
 /// a growth d); between two reports the time left counts down with the clock instead of
 /// waiting for the next report. None while nothing says anything.
@@ -78,10 +78,15 @@ pub fn time_left(
     let f = fraction.clamp(0.0, 1.0);
     let (t1, f1) = first.unwrap_or((0.0, 0.0));
     let d = f - f1;
-    let observed = (d > 1e-3).then(|| t1 + (at - t1) / d * (1.0 - f1));
+    // Until the fraction moves a second time, the plain rate since the start.
+    let (observed, grown) = match (d > 1e-3, f > 1e-3) {
+        (true, _) => (Some(t1 + (at - t1) / d * (1.0 - f1)), d),
+        (false, true) => (Some(at / f), f),
+        (false, false) => (None, 0.0),
+    };
     let total = match (expected.filter(|e| *e > 0.0), observed) {
         (Some(e), Some(o)) => {
-            let w = d / (d + HALF_WEIGHT_AT);
+            let w = grown / (grown + HALF_WEIGHT_AT);
             (1.0 - w) * e + w * o
         }
         (Some(e), None) => e,
@@ -136,8 +141,10 @@ mod tests {
         // takes 18 s; the total is 30 s, not 16 / 0.3 = 53 s.
         let first = Some((12.0, 0.1));
         assert_eq!(time_left(None, 0.3, 16.0, 16.0, first), Some(14.0));
-        // The first move alone gives no rate yet: the expectation stands.
-        assert_eq!(time_left(Some(40.0), 0.1, 12.0, 12.0, first), Some(28.0));
+        // The first move alone gives no rate from it yet: the plain rate since the start
+        // (120 s, weighing 0.1 / 0.15) and the expectation.
+        let left = time_left(Some(40.0), 0.1, 12.0, 12.0, first).unwrap();
+        assert!((left - (40.0 / 3.0 + 80.0 - 12.0)).abs() < 1e-9, "{left}");
         // With no expectation, the items done alone: a quarter at 10 s, 30 s left.
         assert_eq!(time_left(None, 0.25, 10.0, 10.0, None), Some(30.0));
         assert_eq!(time_left(None, 0.0, 0.0, 3.0, None), None);

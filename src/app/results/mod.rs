@@ -292,7 +292,8 @@ impl Analyses {
         }
     }
 
-    /// The frontier of `method` with `features` on `session`.
+    /// The frontier of `method` with `features` on `session` (for `auto`, one whose
+    /// features `auto` chose).
     pub fn frontier(
         &self,
         session: &str,
@@ -302,7 +303,11 @@ impl Analyses {
         self.frontiers.iter().find(|f| {
             f.session == session
                 && f.params.method == method
-                && (method == MethodId::SparseSvm || f.params.features == features)
+                && (method == MethodId::SparseSvm
+                    || match features.is_auto() {
+                        true => f.feature_choice.is_some(),
+                        false => f.params.features == features,
+                    })
         })
     }
 
