@@ -105,7 +105,7 @@ fn measure(
     run: tactile_workbench::app::views::Run,
     analyses: &Analyses,
 ) -> Result<Measured, String> {
-    let first = run.estimate.expected(analyses);
+    let first = run.estimate.expected(&analyses.timings);
     let progress = Progress::new();
     progress.set_expected(first);
     let p = progress.clone();

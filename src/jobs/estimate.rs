@@ -19,6 +19,21 @@ struct Factor {
     runs: u32,
 }
 
+/// What a run is expected to cost: the kind of run whose measured times correct its cost
+/// model and the seconds the model puts it at.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Estimate {
+    pub timing: String,
+    pub modelled: f64,
+}
+
+impl Estimate {
+    /// The expectation on this machine: the model corrected by the runs measured here.
+    pub fn expected(&self, timings: &Timings) -> f64 {
+        timings.expected(&self.timing, self.modelled)
+    }
+}
+
 /// Measured corrections to the modelled run times, by kind of run.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Timings {

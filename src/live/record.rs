@@ -184,10 +184,10 @@ mod tests {
         for (i, g) in grasps.iter().enumerate() {
             rec.append(&grasp_session(&spec, source, g.clone()).unwrap())
                 .unwrap();
-            let back = native::load(&path).unwrap();
+            let back = crate::session::load(&path).unwrap();
             assert_eq!(back.grasps.len(), i + 1);
         }
-        let back = native::load(&path).unwrap();
+        let back = crate::session::load(&path).unwrap();
         let objects = &back.label_sets[back.label_set(OBJECT).unwrap()].classes;
         assert_eq!(objects, &["mug", "cup"]);
         // Object, trial, labels, frames, key frame.
@@ -216,7 +216,7 @@ mod tests {
         // Finished: the recording is a plain session file, the journal gone.
         rec.finish().unwrap();
         assert!(!journal::journal_path(&path).exists());
-        assert_eq!(native::load(&path).unwrap(), back);
+        assert_eq!(crate::session::load(&path).unwrap(), back);
         let _ = std::fs::remove_dir_all(&dir);
     }
 
@@ -248,9 +248,9 @@ mod tests {
             lines += line;
         }
         assert_eq!(rec.written(), lines);
-        assert_eq!(native::load(&path).unwrap().grasps.len(), 400);
+        assert_eq!(crate::session::load(&path).unwrap().grasps.len(), 400);
         rec.finish().unwrap();
-        let back = native::load(&path).unwrap();
+        let back = crate::session::load(&path).unwrap();
         assert_eq!(back.grasps.len(), 400);
         assert_eq!(back.grasps[399].trial, Some(100));
         let _ = std::fs::remove_dir_all(&dir);
@@ -284,7 +284,7 @@ mod tests {
         let back = crate::session::open(&path).unwrap();
         assert_eq!(back.grasps.len(), 2);
         assert!(!jpath.exists() && path.is_file());
-        assert_eq!(native::load(&path).unwrap(), back);
+        assert_eq!(crate::session::load(&path).unwrap(), back);
         assert!(Recorder::new(&path).is_ok());
         let _ = std::fs::remove_dir_all(&dir);
     }

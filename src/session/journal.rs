@@ -6,7 +6,7 @@
 //! A grasp is one append and one fsync, so writing is linear in the grasps, and a kill -9
 //! loses at most the grasp being written (a last line cut short is left out). When
 //! recording ends, the journal's session is written to `OUT.json` atomically and the
-//! journal removed ([`finalise`]). Loading `OUT.json` ([`super::native::load`]) looks for
+//! journal removed ([`finalise`]). Loading `OUT.json` ([`super::load`]) looks for
 //! the journal first: one whose writer is gone (killed) is finalised then, one whose writer
 //! still runs is read as it stands, so the recording opens as a normal session at any
 //! moment.
@@ -20,8 +20,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::spec::OBJECT;
-use super::{FORMAT_VERSION, Grasp, Session, SessionError, native, validate};
+use super::{FORMAT_VERSION, Grasp, OBJECT, Session, SessionError, native, validate};
 use crate::fsutil;
 
 pub const JOURNAL_TAG: &str = "tactile-workbench-recording-journal";

@@ -25,7 +25,19 @@ pub use error::{Location, SessionError};
 pub(crate) use error::{bag_time, shorten};
 pub use icub::{import_icub, import_icub_with};
 pub use model::*;
-pub use native::{load, save};
+pub use native::save;
+
+/// The label set every imported session has: the grasped object.
+pub const OBJECT: &str = "object";
+
+/// Read a native session file. A live recording still journalled (being written, or its
+/// writer killed) is read from its journal ([`journal`]).
+pub fn load(path: &std::path::Path) -> Result<Session, SessionError> {
+    if let Some(recording) = journal::open_unfinished(path) {
+        return recording;
+    }
+    native::load(path)
+}
 pub use spec::ImportSpec;
 pub use subset::{SubsetError, SubsetSpec, Trials, subset, subset_grasps};
 pub use validate::validate;

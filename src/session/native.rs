@@ -86,10 +86,6 @@ pub fn from_str(text: &str, path: &Path) -> Result<Session, SessionError> {
 /// Read a native session file as it is parsed: the header first (one pass that keeps
 /// nothing of the session), then the session. At most [`crate::fsutil::max_bytes::SESSION`].
 pub fn load(path: &Path) -> Result<Session, SessionError> {
-    // A live recording still journalled (being written, or its writer killed).
-    if let Some(recording) = super::journal::open_unfinished(path) {
-        return recording;
-    }
     fn parse<T: DeserializeOwned>(path: &Path) -> Result<T, SessionError> {
         let reader = open_json(path, crate::fsutil::max_bytes::SESSION, "session file")?;
         serde_json::from_reader(reader).map_err(|e| json_error(path, &e))

@@ -38,8 +38,7 @@ use super::{
 /// The largest `sync_tolerance_s`: an hour, far beyond any two topics of one recording.
 const MAX_SYNC_TOLERANCE_S: f64 = 3600.0;
 
-/// The label set every imported session has: the grasped object.
-pub const OBJECT: &str = "object";
+pub use super::OBJECT;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -354,7 +354,7 @@ impl Analyses {
         ctx: &egui::Context,
         kind: Option<AnalysisKind>,
         title: String,
-        estimate: crate::app::views::Estimate,
+        estimate: crate::jobs::estimate::Estimate,
         work: impl FnOnce(&crate::jobs::Progress) -> Result<JobOutput, JobError> + Send + 'static,
     ) {
         self.spawn(ctx, kind, title, work);

@@ -1,7 +1,7 @@
 //! Baselines: sequential k-means, a SOM and an RBF SVM on the per-grasp Table I features.
 
 use super::pane::Pane;
-use super::{Cx, Estimate, Room, Run, run_button};
+use super::{Cx, Estimate, Room, Run, estimate_text, run_button};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
 use crate::app::results::Analyses;
@@ -90,7 +90,7 @@ impl Room for BaselinesRoom {
                 ""
             },
             s.session.grasps.len(),
-            f.estimate(&s.session).text(analyses)
+            estimate_text(&f.estimate(&s.session), analyses)
         ))
     }
 

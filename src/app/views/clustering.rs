@@ -3,7 +3,7 @@
 //! clusters at the threshold the marker selects, as tiles.
 
 use super::pane::Pane;
-use super::{Cx, Estimate, Room, Run, run_button};
+use super::{Cx, Estimate, Room, Run, estimate_text, run_button};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
 use crate::app::results::Analyses;
@@ -143,7 +143,7 @@ impl Room for ClusteringRoom {
             f.reps,
             if f.reps == 1 { "" } else { "s" },
             s.session.grasps.len(),
-            f.estimate(&s.session).text(analyses)
+            estimate_text(&f.estimate(&s.session), analyses)
         ))
     }
 

@@ -23,6 +23,7 @@ use super::replay::Replay;
 use super::results::{Analyses, JobOutput};
 use super::selection::{Command, Selection};
 use crate::experiments::result::AnalysisKind;
+pub use crate::jobs::estimate::Estimate;
 use crate::jobs::{JobError, Progress};
 use crate::session::Session;
 pub use pane::Pane;
@@ -217,24 +218,9 @@ pub struct Run {
 /// The work of a run.
 pub type Work = Box<dyn FnOnce(&Progress) -> Result<JobOutput, JobError> + Send>;
 
-/// What a run is expected to cost: the kind of run whose measured times correct its cost
-/// model (see [`crate::jobs::estimate`]) and the seconds the model puts it at.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Estimate {
-    pub timing: String,
-    pub modelled: f64,
-}
-
-impl Estimate {
-    /// The expectation on this machine: the model corrected by the runs measured here.
-    pub fn expected(&self, analyses: &Analyses) -> f64 {
-        analyses.timings.expected(&self.timing, self.modelled)
-    }
-
-    /// "about 20 s", as the forms say it.
-    pub fn text(&self, analyses: &Analyses) -> String {
-        duration_text(self.expected(analyses))
-    }
+/// "about 20 s": what a form says `estimate` will take on this machine.
+pub fn estimate_text(estimate: &Estimate, analyses: &Analyses) -> String {
+    duration_text(estimate.expected(&analyses.timings))
 }
 
 /// Each room's form settings as they persist between runs, by the room's field name.

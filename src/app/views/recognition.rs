@@ -3,7 +3,7 @@
 //! lengthscale relevance as tiles, with every model of the session compared on one chart.
 
 use super::pane::Pane;
-use super::{Cx, Estimate, Room, Run, run_button};
+use super::{Cx, Estimate, Room, Run, estimate_text, run_button};
 use crate::app::View;
 use crate::app::figure_view::{self, Selection as FigureSelection};
 use crate::app::loader::LoadedSession;
@@ -167,7 +167,7 @@ impl Room for RecognitionRoom {
             f.reps,
             if f.reps == 1 { "" } else { "s" },
             s.session.grasps.len(),
-            f.estimate(&s.session, analyses).text(analyses)
+            estimate_text(&f.estimate(&s.session, analyses), analyses)
         ))
     }
 

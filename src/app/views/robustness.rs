@@ -8,7 +8,7 @@ use crate::catalogue::MethodId;
 use egui::RichText;
 
 use super::pane::Pane;
-use super::{Cx, Estimate, Room, Run};
+use super::{Cx, Estimate, Room, Run, estimate_text};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
 use crate::app::results::{JobOutput, experiment_error, recognition_ready};
@@ -159,7 +159,7 @@ impl Room for RobustnessRoom {
             p.reps,
             if p.reps == 1 { "" } else { "s" },
             s.session.grasps.len(),
-            self.form.estimate(family, &s.session).text(analyses)
+            estimate_text(&self.form.estimate(family, &s.session), analyses)
         ))
     }
 

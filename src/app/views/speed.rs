@@ -5,7 +5,7 @@
 //! that model's result, or trains it.
 
 use super::tiles::Pane;
-use super::{Cx, Estimate, Room, Run};
+use super::{Cx, Estimate, Room, Run, estimate_text};
 use crate::app::View;
 use crate::app::figure_view::{self, Selection as FigureSelection};
 use crate::app::results::Analyses;
@@ -298,7 +298,10 @@ impl Room for SpeedRoom {
         }
         let running = cx.analyses.frontier_running();
         if let Some(e) = self.frontier.estimate(&s.session) {
-            ui.label(format!("Expected to take {}.", e.text(cx.analyses)));
+            ui.label(format!(
+                "Expected to take {}.",
+                estimate_text(&e, cx.analyses)
+            ));
         }
         if ui
             .add_enabled(

@@ -3,7 +3,7 @@
 //! maps as tiles.
 
 use super::pane::Pane;
-use super::{Cx, Estimate, Room, Run, run_button};
+use super::{Cx, Estimate, Room, Run, estimate_text, run_button};
 use crate::app::View;
 use crate::app::loader::LoadedSession;
 use crate::app::results::Analyses;
@@ -205,7 +205,7 @@ impl Room for StabilityRoom {
         Some(format!(
             "Run: sparse coding + linear SVM on {} grasps, {what}; {}.",
             s.session.grasps.len(),
-            f.estimate(s.session.grasps.len()).text(analyses)
+            estimate_text(&f.estimate(s.session.grasps.len()), analyses)
         ))
     }
 
