@@ -758,6 +758,9 @@ impl Shown {
     }
 }
 
+/// The height the model's chart keeps before class bars give way.
+const CHART_MIN: f32 = 150.0;
+
 fn verdict_ui(ui: &mut egui::Ui, shown: &Shown, open: bool, reserve: f32) {
     let v = &shown.verdict;
     let word = if open { "running decision" } else { "decided" };
@@ -779,7 +782,13 @@ fn verdict_ui(ui: &mut egui::Ui, shown: &Shown, open: bool, reserve: f32) {
     let width = ui.available_width().min(420.0);
     let mut order: Vec<usize> = (0..last.len()).collect();
     order.sort_by(|&a, &b| last[b].total_cmp(&last[a]));
-    for &k in order.iter().take(5) {
+    // The chart keeps a readable height: in a short tile, fewer class bars (the chart
+    // names every class it draws).
+    let bars = match shown.figure {
+        Some(_) => ((ui.available_height() - reserve - CHART_MIN - 20.0) / 16.0).floor() as usize,
+        None => 5,
+    };
+    for &k in order.iter().take(bars.clamp(1, 5)) {
         let (rect, _) = ui.allocate_exact_size(Vec2::new(width, 16.0), Sense::hover());
         let p = last[k].clamp(0.0, 1.0) as f32;
         let label_w = 110.0;
