@@ -97,7 +97,7 @@ pub trait Experiment: Serialize + DeserializeOwned + Clone + Sync {
 /// Readings in a session (grasps × frames × taxels): the size the cost models scale with.
 fn readings(session: &Session) -> f64 {
     let taxels: usize = session.sensors.iter().map(|s| s.layout.taxel_count()).sum();
-    let frames: usize = session.grasps.iter().map(|g| g.frames.len()).sum();
+    let frames = session.total_frames();
     (taxels.max(1) * frames.max(1)) as f64
 }
 

@@ -7,7 +7,7 @@
 //! the fraction done follows the time spent, items in flight included.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -25,7 +25,7 @@ struct Inner {
     /// Seconds the whole run is expected to take (NaN: no expectation).
     expected_bits: AtomicU64,
     /// When the fraction first moved from 0, and to what (None: not yet).
-    first_move: Mutex<Option<(f64, f64)>>,
+    first_move: OnceLock<(f64, f64)>,
 }
 
 /// A cheap, cloneable handle: the worker reports, the UI reads and may cancel.
@@ -59,7 +59,7 @@ impl Progress {
                 started: Instant::now(),
                 moved_at_bits: AtomicU64::new(0f64.to_bits()),
                 expected_bits: AtomicU64::new(f64::NAN.to_bits()),
-                first_move: Mutex::new(None),
+                first_move: OnceLock::new(),
             }),
             whole: None,
         }
@@ -153,11 +153,9 @@ impl Progress {
         self.inner
             .moved_at_bits
             .store(now.to_bits(), Ordering::Relaxed);
-        if f > 0.0
-            && let Ok(mut first) = self.inner.first_move.lock()
-            && first.is_none()
-        {
-            *first = Some((now, f));
+        if f > 0.0 && self.inner.first_move.get().is_none() {
+            // Two parts moving at once: the first to set it is the first move.
+            let _ = self.inner.first_move.set((now, f));
         }
     }
 
@@ -211,7 +209,7 @@ impl Progress {
         }
         let expected = f64::from_bits(self.inner.expected_bits.load(Ordering::Relaxed));
         let at = f64::from_bits(self.inner.moved_at_bits.load(Ordering::Relaxed));
-        let first = self.inner.first_move.lock().ok().and_then(|m| *m);
+        let first = self.inner.first_move.get().copied();
         super::estimate::time_left(
             expected.is_finite().then_some(expected),
             f,

@@ -208,6 +208,11 @@ impl Session {
         self.sensors.iter().map(|s| s.layout.taxel_count()).sum()
     }
 
+    /// Every grasp's frames, counted together (the steps a sequence method reads).
+    pub fn total_frames(&self) -> usize {
+        self.grasps.iter().map(|g| g.frames.len()).sum()
+    }
+
     /// Distinct object names in first-seen order.
     pub fn objects(&self) -> Vec<String> {
         let mut out: Vec<String> = Vec::new();

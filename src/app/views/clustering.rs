@@ -97,7 +97,7 @@ impl ClusteringForm {
     /// What a run on `session` is expected to cost (DU and GU are timed apart: they cost
     /// differently).
     pub fn estimate(&self, session: &Session) -> Estimate {
-        let steps: usize = session.grasps.iter().map(|g| g.frames.len()).sum();
+        let steps = session.total_frames();
         Estimate {
             timing: format!("clustering {:?}", self.learner),
             modelled: seconds_per_step(self.learner)

@@ -123,7 +123,7 @@ impl RecognitionForm {
     /// What a run on `session` is expected to cost (DS and GS are timed apart: they cost
     /// differently).
     pub fn estimate(&self, session: &Session, _analyses: &Analyses) -> Estimate {
-        let steps: usize = session.grasps.iter().map(|g| g.frames.len()).sum();
+        let steps = session.total_frames();
         Estimate {
             timing: format!("recognition {:?}", self.learner),
             modelled: seconds_per_step(self.learner)

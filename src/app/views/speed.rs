@@ -148,9 +148,11 @@ impl FrontierForm {
             return None;
         }
         let p = self.params().ok()?;
+        // The session's size once, not per item (this runs every frame the form shows).
+        let (grasps, steps) = (session.grasps.len() as f64, session.total_frames() as f64);
         let modelled = frontier_items(&p)
             .iter()
-            .map(|item| item_seconds(item, &p, session))
+            .map(|item| item_seconds(item, &p, grasps, steps))
             .sum();
         Some(Estimate {
             timing: format!("frontier {}", p.method.key()),
@@ -213,11 +215,9 @@ impl FrontierForm {
     }
 }
 
-/// Seconds one item of a frontier takes on `session` on 2 cores (`benches/estimates.rs`
-/// measured the constants; see docs/estimates.md).
-fn item_seconds(item: &FrontierItem, p: &FrontierParams, session: &Session) -> f64 {
-    let grasps = session.grasps.len() as f64;
-    let steps = session.grasps.iter().map(|g| g.frames.len()).sum::<usize>() as f64;
+/// Seconds one item of a frontier takes on a session of `grasps` grasps and `steps` frames
+/// on 2 cores (`benches/estimates.rs` measured the constants; see docs/estimates.md).
+fn item_seconds(item: &FrontierItem, p: &FrontierParams, grasps: f64, steps: f64) -> f64 {
     let relative = frontier_item_cost(item);
     match *item {
         // A repetition of the supervised protocol at the paper's capacity (cost 100) takes

@@ -709,7 +709,7 @@ pub fn run_clustering(
 ) -> Result<ClusteringResult, ExperimentError> {
     let start = Instant::now();
     let items = clustering_items(params, session.grasps.len());
-    let steps: usize = session.grasps.iter().map(|g| g.frames.len()).sum();
+    let steps = session.total_frames();
     let grasps = session.grasps.len();
     // Choosing the inputs costs about AUTO_REPETITIONS repetitions of the supervised
     // protocol, each about as much as learning a step under 1.5 thresholds.
