@@ -850,6 +850,24 @@ fn figure_tiles_read_in_the_whole_window() {
                 })
                 .collect();
             let p = painted(&harness.output().shapes);
+            // Every tile keeps to the central panel, left of the form beside it.
+            if let Some(hide) = p.texts.iter().find(|t| t.text == "Hide form") {
+                for (id, _) in layout.tree.tiles.iter() {
+                    let Some(rect) = layout.tree.tiles.rect(*id) else {
+                        continue;
+                    };
+                    if layout.tree.is_visible(*id) && rect.right() > hide.clip.right() + 0.5 {
+                        report.push(format!(
+                            "{} in {w}×{h}: a tile reaches x = {} past the central panel's \
+                             edge at {}",
+                            r.label,
+                            rect.right(),
+                            hide.clip.right()
+                        ));
+                        failing.insert(format!("{} tiles in {w}×{h}", r.label));
+                    }
+                }
+            }
             for (_, area, pane) in &tiles {
                 let case = format!("{} · {pane} in {w}×{h}", r.label);
                 for problem in audit_in_window(&p, *area, bg) {

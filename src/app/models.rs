@@ -33,6 +33,17 @@ pub struct EvaluateForm {
     pub calibration: Calibration,
     /// K of `first:K`, kept while another calibration is chosen.
     pub first: usize,
+    /// Which open sessions the model can read (or why not), for the model and the open
+    /// sessions' names it was asked of.
+    pub readable: Option<Readable>,
+}
+
+/// The model's answer for each open session, asked once per model and set of sessions.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Readable {
+    pub model: usize,
+    pub sessions: Vec<String>,
+    pub verdicts: Vec<Result<(), String>>,
 }
 
 impl EvaluateForm {
@@ -42,6 +53,7 @@ impl EvaluateForm {
             session,
             calibration: Calibration::default(),
             first: 50,
+            readable: None,
         }
     }
 }

@@ -216,6 +216,29 @@ pub fn predict(
     Ok(rows(&file.model, session, &out))
 }
 
+/// Why `evaluate` could not read `session` with this model, or Ok: the label set it is
+/// scored against, then its prediction of the first grasp alone. The inputs a model reads
+/// (sensors, features, their names) are the session's, the same for every grasp, so one
+/// grasp answers for all at a fraction of the cost (the window asks it of every open
+/// session when a model is to be evaluated).
+pub fn check_readable(file: &ModelFile, session: &Session) -> Result<(), ModelError> {
+    let label_set = label_set_of(&file.model);
+    if session.label_set(label_set).is_none() {
+        return Err(no_label_set(label_set, session));
+    }
+    let first = Session {
+        meta: session.meta.clone(),
+        sensors: session.sensors.clone(),
+        encoders: session.encoders.clone(),
+        label_sets: session.label_sets.clone(),
+        grasps: session.grasps.iter().take(1).cloned().collect(),
+    };
+    if first.grasps.is_empty() {
+        return Err(ModelError::Mismatch("the session has no grasps".into()));
+    }
+    outputs(&file.model, &first, Calibration::None).map(|_| ())
+}
+
 /// Grasp `g`'s class name under label set `set`, if it has one.
 fn truth_of(session: &Session, set: Option<usize>, g: usize) -> Option<String> {
     let s = set?;

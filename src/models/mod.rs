@@ -41,7 +41,9 @@ pub use clustering::{
 pub use file::{
     FORMAT, Model, ModelFile, Provenance, SelectionScore, SessionRef, VERSION, load, save,
 };
-pub use held_out::{GraspPrediction, HeldOutResult, HeldOutScores, evaluate, predict};
+pub use held_out::{
+    GraspPrediction, HeldOutResult, HeldOutScores, check_readable, evaluate, predict,
+};
 pub use held_out_report::held_out_report;
 pub use recognition::{
     SequenceFitOptions, SequenceModel, choose_sequence_features, continue_sequences, fit_sequences,

@@ -251,6 +251,31 @@ fn a_session_of_other_sensors_or_classes_is_refused_by_name() {
     assert!(e.contains("wobbly") && e.contains(&old), "{e}");
 }
 
+/// The window's check reads one grasp, and refuses what `evaluate` refuses: a session
+/// without the model's label set, or of other sensors.
+#[test]
+fn check_readable_answers_as_evaluate_does() {
+    let (session, file) = fitted(MethodId::RawSvm);
+    assert!(check_readable(&file, &session).is_ok());
+    let Model::Stability(c) = &file.model else {
+        panic!("a stability model")
+    };
+    let mut other = simulate::object_recognition(0);
+    let e = check_readable(&file, &other).unwrap_err().to_string();
+    assert!(e.contains("label set") && e.contains(&c.label_set), "{e}");
+    // Given the label set, the sensors still differ.
+    let mut set = other.label_sets[0].clone();
+    set.name = c.label_set.clone();
+    other.label_sets.push(set);
+    for g in &mut other.grasps {
+        let l = g.labels[0];
+        g.labels.push(l);
+    }
+    let e = check_readable(&file, &other).unwrap_err().to_string();
+    assert!(e.contains("sensors"), "{e}");
+    assert!(evaluate(&file, &other, Calibration::None).is_err());
+}
+
 mod sequences {
     use super::*;
     use crate::features::FeatureSet;

@@ -6,10 +6,10 @@
 use egui::RichText;
 
 use super::{Cx, number};
-use crate::app::models::{EvaluateForm, KeptModel, trained_when};
+use crate::app::models::{EvaluateForm, KeptModel, Readable, trained_when};
 use crate::app::selection::Command;
 use crate::catalogue::MethodId;
-use crate::models::Calibration;
+use crate::models::{self, Calibration};
 
 /// The collapsible Models section of a form panel: the models whose method `shows`.
 pub fn section(ui: &mut egui::Ui, cx: &mut Cx, shows: impl Fn(MethodId) -> bool) {
@@ -139,6 +139,37 @@ pub fn evaluate_window(ctx: &egui::Context, cx: &mut Cx) {
     let models = &cx.analyses.models.list;
     form.model = form.model.min(models.len() - 1);
     form.session = form.session.min(cx.sessions.len() - 1);
+    let names: Vec<String> = (cx.sessions.iter())
+        .map(|s| s.session.meta.name.clone())
+        .collect();
+    if form
+        .readable
+        .as_ref()
+        .is_none_or(|r| r.model != form.model || r.sessions != names)
+    {
+        let file = &models[form.model].file;
+        let verdicts = (cx.sessions.iter())
+            .map(|s| models::check_readable(file, &s.session).map_err(|e| e.to_string()))
+            .collect();
+        form.readable = Some(Readable {
+            model: form.model,
+            sessions: names,
+            verdicts,
+        });
+    }
+    let verdicts = form.readable.as_ref().map(|r| r.verdicts.clone());
+    let verdicts = verdicts.unwrap_or_default();
+    let fits = |k: usize| verdicts.get(k).is_some_and(Result::is_ok);
+    let trained = &models[form.model].file.provenance.session.name;
+    if !fits(form.session) {
+        // The first session the model can read, one it did not train on if there is one.
+        let other = |k: &usize| fits(*k) && &cx.sessions[*k].session.meta.name != trained;
+        form.session = (0..cx.sessions.len())
+            .find(other)
+            .or_else(|| (0..cx.sessions.len()).find(|k| fits(*k)))
+            .unwrap_or(form.session);
+    }
+    let any = (0..cx.sessions.len()).any(fits);
     let mut open = true;
     let mut go = false;
     let mut cancel = false;
@@ -169,7 +200,6 @@ pub fn evaluate_window(ctx: &egui::Context, cx: &mut Cx) {
                         .response
                         .labelled_by(caption.id);
                     ui.end_row();
-                    let trained = &models[form.model].file.provenance.session.name;
                     let name = |k: usize| {
                         let n = &cx.sessions[k].session.meta.name;
                         if n == trained {
@@ -181,9 +211,12 @@ pub fn evaluate_window(ctx: &egui::Context, cx: &mut Cx) {
                     let caption = ui.label("Session");
                     egui::ComboBox::from_id_salt("evaluate-session")
                         .width(300.0)
-                        .selected_text(name(form.session))
+                        .selected_text(match any {
+                            true => name(form.session),
+                            false => "(none this model can read)".into(),
+                        })
                         .show_ui(ui, |ui| {
-                            for k in 0..cx.sessions.len() {
+                            for k in (0..cx.sessions.len()).filter(|k| fits(*k)) {
                                 ui.selectable_value(&mut form.session, k, name(k));
                             }
                         })
@@ -219,8 +252,14 @@ pub fn evaluate_window(ctx: &egui::Context, cx: &mut Cx) {
                     ui.end_row();
                 });
             ui.small(format!("Calibration: {}.", form.calibration.describe()));
+            for (k, v) in verdicts.iter().enumerate() {
+                if let Err(why) = v {
+                    let name = &cx.sessions[k].session.meta.name;
+                    ui.small(format!("Not listed: {name}: {why}."));
+                }
+            }
             ui.horizontal(|ui| {
-                go = ui.button("Evaluate").clicked();
+                go = ui.add_enabled(any, egui::Button::new("Evaluate")).clicked();
                 cancel = ui.button("Cancel").clicked();
             });
         });

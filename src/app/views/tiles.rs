@@ -280,6 +280,12 @@ pub fn show(ui: &mut egui::Ui, layout: &mut Layout, room: &mut dyn Room, cx: &mu
         requests: Vec::new(),
         edited: false,
     };
+    // The tiles keep to the panel they are in: a wide row above them (a long headline)
+    // widens the panel's layout rect past its clip, and egui_tiles clips each tile to the
+    // tile's own rect, which would then paint over the form beside the panel.
+    let rect = ui.available_rect_before_wrap().intersect(ui.clip_rect());
+    let mut ui = ui.new_child(egui::UiBuilder::new().max_rect(rect));
+    let ui = &mut ui;
     match layout.maximised {
         Some(id)
             if layout.tree.tiles.get_pane(&id).is_some() && layout.tree.tiles.is_visible(id) =>
