@@ -65,6 +65,39 @@ fn a_crowded_legend_goes_above_the_plot() {
     assert!(!row_shown(700.0), "a 700 px plot has room for them");
 }
 
+/// Two short legend entries over a chart whose data reach every corner (two traces
+/// sweeping the whole plot, as overlaid grasps do) go above the plot, however tall; the
+/// same entries over data that leave a corner free stay in the plot.
+#[test]
+fn a_legend_never_covers_data() {
+    use tactile_workbench::app::figure_view::{self, Selection};
+    use tactile_workbench::figures::{Axis, Figure, Series};
+    let row_shown = |series: Vec<Series>| {
+        let fig = Figure::chart("two traces", Axis::new("x", ""), Axis::new("y", ""), series);
+        let mut h = egui_kittest::Harness::builder()
+            .with_size(egui::Vec2::new(600.0, 820.0))
+            .build_ui(move |ui| {
+                figure_view::show(ui, "two", &fig, 700.0, Selection::None);
+            });
+        h.run();
+        h.query_by_label("— up").is_some()
+    };
+    let x: Vec<f64> = (0..=200).map(|i| i as f64 / 200.0).collect();
+    let wave = |f: fn(f64) -> f64| x.iter().map(|&x| f(x)).collect::<Vec<f64>>();
+    // Zigzags over the whole height, one rising and one falling: every corner has data.
+    let up = wave(|x| (x * 40.0).sin() * 0.5 + 0.5);
+    let down = wave(|x| (x * 37.0).cos() * 0.5 + 0.5);
+    assert!(row_shown(vec![
+        Series::new("up", x.clone(), up),
+        Series::new("down", x.clone(), down),
+    ]));
+    // Two rising lines leave the top left and bottom right free.
+    assert!(!row_shown(vec![
+        Series::new("up", x.clone(), x.clone()),
+        Series::new("down", x.clone(), wave(|x| x * 0.9)),
+    ]));
+}
+
 /// Figures are exported to the data folder's exports until the user chooses a folder (never
 /// the working folder); the folder and the preset come back after a restart, and an export
 /// names the files it wrote by their absolute paths.

@@ -1,5 +1,5 @@
 //! Axes and legends of charts on screen: ticks at the figure model's scale, the legend in
-//! the emptiest corner.
+//! the corner where it covers the fewest points.
 
 use super::*;
 
@@ -180,50 +180,12 @@ pub(super) fn category_axis_hints(
         })
 }
 
-/// The legend's place: the plot corner with the fewest points (in the data's own box).
-pub(super) fn emptiest_corner(points: &[[f64; 2]]) -> Corner {
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in points {
-        for a in 0..2 {
-            lo[a] = lo[a].min(p[a]);
-            hi[a] = hi[a].max(p[a]);
-        }
-    }
-    let t = |p: &[f64; 2], a: usize| {
-        if hi[a] > lo[a] {
-            (p[a] - lo[a]) / (hi[a] - lo[a])
-        } else {
-            0.5
-        }
-    };
-    // A corner box of 40 % × 45 % of the data's extent.
-    let count = |right: bool, top: bool| {
-        points
-            .iter()
-            .filter(|p| {
-                let (x, y) = (t(p, 0), t(p, 1));
-                (if right { x >= 0.6 } else { x <= 0.4 })
-                    && (if top { y >= 0.55 } else { y <= 0.45 })
-            })
-            .count()
-    };
-    [
-        (Corner::RightTop, count(true, true)),
-        (Corner::LeftTop, count(false, true)),
-        (Corner::RightBottom, count(true, false)),
-        (Corner::LeftBottom, count(false, false)),
-    ]
-    .into_iter()
-    .min_by_key(|&(_, n)| n)
-    .map_or(Corner::RightTop, |(c, _)| c)
-}
-
-/// The legend in the emptiest corner, one entry per series in the series' colour (a
-/// series' band and error bars share its entry; the solid line or markers, drawn last,
-/// give the swatch its colour).
-pub(super) fn legend(points: &[[f64; 2]]) -> Legend {
+/// The legend in `corner`, one entry per series in the series' colour (a series' band and
+/// error bars share its entry; the solid line or markers, drawn last, give the swatch its
+/// colour).
+pub(super) fn legend(corner: Corner) -> Legend {
     Legend::default()
-        .position(emptiest_corner(points))
+        .position(corner)
         .color_conflict_handling(ColorConflictHandling::PickLast)
         .follow_insertion_order(true)
 }

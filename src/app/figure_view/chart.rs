@@ -1,8 +1,8 @@
 //! Line and marker charts on screen through egui_plot, with hover values and clickable markers.
 
 use super::axes::{
-    TITLE_INSET, axis_hints, category_axis_hints, category_spacer, emptiest_corner, inset, legend,
-    tick_spacer, x_label_room, y_label_room,
+    TITLE_INSET, axis_hints, category_axis_hints, category_spacer, inset, legend, tick_spacer,
+    x_label_room, y_label_room,
 };
 use super::*;
 
@@ -52,15 +52,6 @@ pub(super) fn show_chart(
     interaction: &mut Interaction,
 ) {
     let (xs, ys) = (chart.x.scale, chart.y.scale);
-    let all_points: Vec<[f64; 2]> = chart
-        .series
-        .iter()
-        .flat_map(|s| {
-            s.x.iter()
-                .zip(&s.y)
-                .filter_map(|(&x, &y)| Some([coord(xs, x)?, coord(ys, y)?]))
-        })
-        .collect();
     let entries = legend_entries(ui.ctx(), chart);
     // Views scroll as pages: the wheel scrolls the page, it does not pan the plot.
     let mut plot = Plot::new(id)
@@ -103,8 +94,9 @@ pub(super) fn show_chart(
         )])
         .x_grid_spacer(category_spacer(ui, &chart.x.categories))
     };
+    let corner = legend_corner(ui, chart, &entries, size).0;
     if in_plot {
-        plot = plot.legend(legend(&all_points));
+        plot = plot.legend(legend(corner));
     }
     if let Some(link) = link {
         // Zoom or pan one plot of the group and every plot of it follows along x.
@@ -176,7 +168,7 @@ pub(super) fn show_chart(
             }
         })
     });
-    let legend_box = in_plot.then(|| (emptiest_corner(&all_points), entries.as_slice()));
+    let legend_box = in_plot.then_some((corner, entries.as_slice()));
     paint_point_labels(ui, chart, &shown.transform, legend_box);
     let r = &shown.response;
     ui.ctx()
@@ -347,6 +339,95 @@ fn paint_point_labels(
             painter.galley(r.min, galley, color);
         }
     }
+}
+
+/// Points of a chart the legend test looks at, at most (a long trace is read every k-th).
+const LEGEND_TEST_POINTS: usize = 4000;
+
+/// The corner of a chart of `size` whose legend of `entries` covers the fewest of the
+/// chart's points, and how many it covers there. The points are placed in the plot frame
+/// the chart will get (its size less the axes' room) within the export's limits, as the
+/// plot draws them; a line's segments count by their midpoints too, so that a line
+/// crossing the corner between two points is seen.
+pub(super) fn legend_corner(
+    ui: &egui::Ui,
+    chart: &figures::Chart,
+    entries: &[(String, Color32)],
+    size: Vec2,
+) -> (Corner, usize) {
+    let corners = [
+        Corner::RightTop,
+        Corner::LeftTop,
+        Corner::RightBottom,
+        Corner::LeftBottom,
+    ];
+    let (xs, ys) = (chart.x.scale, chart.y.scale);
+    let Ok([(xlo, xhi), (ylo, yhi)]) = figures::chart_limits(chart) else {
+        return (Corner::RightTop, 0);
+    };
+    let (Some(xlo), Some(xhi), Some(ylo), Some(yhi)) = (
+        coord(xs, xlo),
+        coord(xs, xhi),
+        coord(ys, ylo),
+        coord(ys, yhi),
+    ) else {
+        return (Corner::RightTop, 0);
+    };
+    // The frame: the y axis' labels and title left of it, the x axis' below (as in
+    // `show_chart`'s plot of `size`).
+    let frame = Rect::from_min_size(
+        Pos2::ZERO,
+        Vec2::new(
+            (size.x - 20.0 - TITLE_INSET - 50.0).max(1.0),
+            (size.y - 40.0).max(1.0),
+        ),
+    );
+    let at = |x: f64, y: f64| -> Option<Pos2> {
+        let (x, y) = (coord(xs, x)?, coord(ys, y)?);
+        let tx = if xhi > xlo {
+            (x - xlo) / (xhi - xlo)
+        } else {
+            0.5
+        };
+        let ty = if yhi > ylo {
+            (y - ylo) / (yhi - ylo)
+        } else {
+            0.5
+        };
+        Some(Pos2::new(
+            frame.width() * tx as f32,
+            frame.height() * (1.0 - ty as f32),
+        ))
+    };
+    let total: usize = chart.series.iter().map(|s| s.x.len()).sum();
+    let every = total.div_ceil(LEGEND_TEST_POINTS).max(1);
+    let mut points = Vec::new();
+    for s in &chart.series {
+        let line = s.style != figures::SeriesStyle::Markers;
+        let mut last: Option<Pos2> = None;
+        for (k, (&x, &y)) in s.x.iter().zip(&s.y).enumerate().step_by(every) {
+            let p = at(x, y);
+            if let (Some(a), Some(b), true) = (last, p, line) {
+                points.push(a.lerp(b, 0.5));
+            }
+            points.extend(p);
+            last = p;
+            // A band's or error bar's ends are drawn data too.
+            if let Some(e) = &s.error {
+                for v in [e.lower.get(k), e.upper.get(k)].into_iter().flatten() {
+                    points.extend(at(x, *v));
+                }
+            }
+        }
+    }
+    corners
+        .into_iter()
+        .map(|c| {
+            let r = legend_rect(ui, frame, c, entries);
+            (c, points.iter().filter(|p| r.contains(**p)).count())
+        })
+        .min_by_key(|&(_, n)| n)
+        .unwrap_or((Corner::RightTop, 0))
 }
 
 /// Where egui_plot draws its legend of `entries` in `corner` of `frame`: 4 points in from

@@ -112,10 +112,14 @@ fn header(ui: &mut egui::Ui, id: &str, figure: &Figure, height: f32) -> LegendPl
     let line = ui.text_style_height(&egui::TextStyle::Body) + ui.spacing().item_spacing.y;
     let width = ui.available_width();
     let body = height - line;
-    // A legend taller than a third of the plot would cover the data: a row above it instead.
+    // A legend taller than a third of the plot, or one that would cover data in every
+    // corner: a row above the plot instead.
     let wanted = match &figure.kind {
         _ if entries.is_empty() || hidden => LegendPlace::None,
-        FigureKind::Chart(_) if entries.len() as f32 * 18.0 <= (body - 40.0) / 3.0 => {
+        FigureKind::Chart(c)
+            if entries.len() as f32 * 18.0 <= (body - 40.0) / 3.0
+                && chart::legend_corner(ui, c, &entries, Vec2::new(width, body)).1 == 0 =>
+        {
             LegendPlace::InPlot
         }
         _ => LegendPlace::Row(legend_row_height(ui, &entries, width)),
