@@ -573,3 +573,50 @@ fn a_clustering_models_clusters_are_offered_as_groups() {
         assert_eq!(s.name, format!("{name} (n={n})"));
     }
 }
+
+/// The replay beside the plots keeps its controls and every fingertip inside its tile, at
+/// both window sizes: the fingertips wrap onto another row rather than run past its edge.
+#[test]
+fn the_replay_tile_keeps_its_controls_and_fingertips_inside() {
+    use tactile_workbench::app::View;
+    use tactile_workbench::app::views::{Pane, layout_key};
+    for (w, hgt) in [(1400.0, 900.0), (1000.0, 700.0)] {
+        let mut h = common::gui::workbench(w, hgt);
+        h.get_by_label("Simulated object recognition").click();
+        h.run_ok();
+        open_compare(&mut h);
+        let active = h.state().browser.active;
+        h.state_mut().commands.push(Command::Focus {
+            session: active,
+            grasp: 0,
+        });
+        settle(&mut h);
+        h.run_steps(2);
+        let layout = &h.state().layouts[&layout_key(View::Compare)];
+        let id = layout
+            .tree
+            .tiles
+            .find_pane(&Pane::Replay)
+            .expect("a replay tile");
+        let tile = layout.tree.tiles.rect(id).expect("shown");
+        let mut inside = vec![
+            h.get_by_label("Show the recognition as the hand closes")
+                .rect(),
+        ];
+        inside.extend(h.get_all_by_label_contains("(12 taxels)").map(|n| n.rect()));
+        inside.push(h.get_by_label("Step forward").rect());
+        inside.push(h.get_by_role_and_label(Role::Slider, "frame").rect());
+        inside.push(h.get_by_label("Joint encoders trace").rect());
+        assert_eq!(
+            inside.len(),
+            9,
+            "five fingertips, three controls and a trace"
+        );
+        for r in inside {
+            assert!(
+                r.right() <= tile.right() + 1.0,
+                "{r:?} runs past the replay tile {tile:?} in {w}×{hgt}"
+            );
+        }
+    }
+}

@@ -269,6 +269,12 @@ impl Replay {
                         ui.selectable_value(&mut self.speed, sp, format!("{sp}×"));
                     }
                 });
+            // A slider does not wrap by itself: a row of its own when the rest of this one
+            // is too short for it (and its value and name), so that it stays in the tile.
+            // (In a wrapping row `available_width` is a whole row's: the rest is measured.)
+            if ui.max_rect().right() - ui.cursor().min.x < ui.spacing().slider_width + 110.0 {
+                ui.end_row();
+            }
             // Numbered from 1, as everywhere the frame is shown.
             let mut frame = self.frame + 1;
             if ui
@@ -309,7 +315,7 @@ impl Replay {
                 _ => "reading below rest".into(),
             })
             .unwrap_or_default();
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             ComboBox::from_label("Colour range")
                 .selected_text(self.colours.text())
                 .show_ui(ui, |ui| {
@@ -342,7 +348,11 @@ impl Replay {
         };
         // The heatmaps grow with the tile: one column per sensor, beside a colour bar.
         let sensors = session.sensors.len().max(1) as f32;
-        let width = ((ui.available_width() - 140.0) / sensors - 8.0).clamp(40.0, 420.0);
+        // The tile's width (its clip), not a row's overflow from above.
+        let room = ui
+            .available_width()
+            .min(ui.clip_rect().right() - ui.cursor().min.x);
+        let width = ((room - 140.0) / sensors - 8.0).clamp(40.0, 420.0);
         let height = (width * 1.3).min((ui.available_height() * 0.45).max(120.0));
         let cell = Vec2::new(width, height);
         let title = format!(
@@ -354,11 +364,11 @@ impl Replay {
         ui.horizontal_wrapped(|ui| {
             for (k, sensor) in session.sensors.iter().enumerate() {
                 ui.vertical(|ui| {
-                    ui.label(format!(
-                        "{} ({} taxels)",
-                        sensor.name,
-                        sensor.layout.taxel_count()
-                    ));
+                    // A column no wider than its heatmap, so that the row wraps inside the
+                    // tile rather than running past its edge (the name whole on hover).
+                    ui.set_max_width(width);
+                    let name = format!("{} ({} taxels)", sensor.name, sensor.layout.taxel_count());
+                    ui.add(egui::Label::new(name).truncate());
                     // A click on a taxel plots it in the Compare view.
                     if let Some(t) = taxel_picker(ui, sensor, &values[k], range, map, cell) {
                         picked = Some((k, t));
@@ -380,8 +390,11 @@ impl Replay {
                     ui.selectable_value(&mut self.learner, SupervisedLearner::Ds, "DS");
                     ui.selectable_value(&mut self.learner, SupervisedLearner::Gs, "GS");
                 });
+            // Its words wrap in a narrow tile rather than run past the edge.
+            let button = egui::Button::new("Show the recognition as the hand closes")
+                .wrap_mode(egui::TextWrapMode::Wrap);
             if ui
-                .button("Show the recognition as the hand closes")
+                .add(button)
                 .on_hover_text(
                     "Teach the learner every other grasp, then classify this one step by step",
                 )
