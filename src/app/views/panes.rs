@@ -567,7 +567,9 @@ pub fn card(ui: &mut egui::Ui, cx: &mut Cx, i: usize, reset: &mut bool) {
         // A long label (a held-out result's) is cut to the card's width rather than
         // wrapped down it.
         let caption = ui.label("Result");
-        let width = (ui.available_width() - 8.0).clamp(120.0, 520.0);
+        // What is left of the row (a wrapping row's `available_width` is a whole row's).
+        let rest = ui.max_rect().right() - ui.cursor().min.x;
+        let width = (rest - 8.0).clamp(120.0, 520.0);
         ui.scope(|ui| {
             ui.set_max_width(width);
             egui::ComboBox::from_id_salt(("result", kind))
