@@ -232,6 +232,20 @@ fn on_bts3_an_electrode_compares_successes_and_failures_as_distributions() {
         ))
         .expect("the layout has the tile");
     assert!(!layout.tree.tiles.is_visible(tile));
+    // ... and the replay beside it takes its row: no empty cell.
+    let rect = |pane| {
+        let id = layout.tree.tiles.find_pane(&pane).expect("a tile");
+        layout.tree.tiles.rect(id).expect("shown")
+    };
+    use tactile_workbench::app::views::Pane;
+    use tactile_workbench::compare::ComparePlot;
+    let replay = rect(Pane::Replay).width();
+    let above = rect(Pane::Compare(ComparePlot::Groups)).width()
+        + rect(Pane::Compare(ComparePlot::Overlay)).width();
+    assert!(
+        replay >= 0.95 * above,
+        "the replay {replay} wide under {above}"
+    );
     // Overlaid single frames are points too, every grasp's.
     let o = chart(&c.overlay);
     assert_eq!(o.series[..2].iter().map(|s| s.y.len()).sum::<usize>(), 1276);

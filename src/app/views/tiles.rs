@@ -84,6 +84,16 @@ impl Layout {
             .collect();
         let root = if cells.len() == 1 {
             cells[0]
+        } else if cells.len() <= 4 {
+            // Rows of two: a cell whose neighbour is hidden (a figure the result lacks, a
+            // plot the session has no use for) takes its row instead of leaving a hole.
+            let rows = (cells.chunks(2))
+                .map(|row| match row {
+                    [one] => *one,
+                    _ => tiles.insert_horizontal_tile(row.to_vec()),
+                })
+                .collect();
+            tiles.insert_vertical_tile(rows)
         } else {
             let n = cells.len();
             let mut grid = egui_tiles::Grid::new(cells);
@@ -167,6 +177,30 @@ impl Layout {
                     self.tree.root = Some(tabs);
                 }
             }
+        }
+    }
+
+    /// A group of tabs, or a row of groups, shows only while something in it does: one
+    /// whose every pane is hidden gives its room to the others rather than showing empty.
+    pub fn fold_empty_containers(&mut self) {
+        // Children before parents: a row's visibility reads its groups' just set.
+        let Some(root) = self.tree.root else { return };
+        let mut order = Vec::new();
+        let mut stack = vec![root];
+        while let Some(id) = stack.pop() {
+            order.push(id);
+            if let Some(Tile::Container(c)) = self.tree.tiles.get(id) {
+                stack.extend(c.children());
+            }
+        }
+        for &id in order.iter().rev() {
+            let visible = match self.tree.tiles.get(id) {
+                Some(Tile::Container(c)) => {
+                    c.children().any(|child| self.tree.tiles.is_visible(*child))
+                }
+                _ => continue,
+            };
+            self.tree.tiles.set_visible(id, visible);
         }
     }
 
@@ -274,6 +308,7 @@ pub fn show(ui: &mut egui::Ui, layout: &mut Layout, room: &mut dyn Room, cx: &mu
     for id in hidden {
         layout.tree.tiles.set_visible(id, false);
     }
+    layout.fold_empty_containers();
     let mut behavior = RoomTiles {
         room,
         cx,
