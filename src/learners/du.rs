@@ -303,6 +303,10 @@ impl NoveltySteps for DuSteps {
         1.0 - self.q_sums[self.winner] / self.t as f64
     }
 
+    fn winner(&self) -> usize {
+        self.winner
+    }
+
     fn len(&self) -> usize {
         self.t
     }

@@ -723,6 +723,10 @@ impl NoveltySteps for GuSteps {
                 .knows(self.gs.dim() * self.t, self.draws[self.winner])
     }
 
+    fn winner(&self) -> usize {
+        self.winner
+    }
+
     fn len(&self) -> usize {
         self.t
     }

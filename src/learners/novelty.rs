@@ -91,6 +91,8 @@ pub trait NoveltySteps {
     /// # Panics
     /// If `o` is not `dim` values long.
     fn push(&mut self, o: &[f64]) -> usize;
+    /// The winner of the steps so far (what the last [`NoveltySteps::push`] gave; 0 before).
+    fn winner(&self) -> usize;
     /// The novelty of the steps so far (under the winner [`NoveltySteps::push`] gave).
     /// O(1), but see [`NoveltySteps::novelty_costly`].
     fn novelty(&mut self) -> f64;
