@@ -685,6 +685,10 @@ fn every_figure() -> Computed {
     ));
     out.extend(compare_figures(&objects, &stab));
     out.push(("live · model at work".into(), live_figure(&objects)));
+    out.push((
+        "live · novelty at work".into(),
+        live_novelty_figure(&objects),
+    ));
     Computed {
         results,
         figures: out,
@@ -754,6 +758,40 @@ fn live_figure(objects: &Session) -> Figure {
         .verdict(&one)
         .expect("a verdict");
     verdict.figure(5).expect("DS gives steps")
+}
+
+/// The Live view's "Model at work" chart of a clustering: DU (taught 30 grasps) following
+/// a grasp it did not see, its novelty step by step against the threshold.
+fn live_novelty_figure(objects: &Session) -> Figure {
+    use tactile_workbench::experiments::clustering::{ClusteringParams, UnsupervisedLearner};
+    use tactile_workbench::live::model::LiveModel;
+    let mut train = objects.clone();
+    train.grasps.truncate(30);
+    let mut params = ClusteringParams::for_learner(UnsupervisedLearner::Du);
+    params.ds.gp.capacity = 20;
+    let opts = tactile_workbench::models::ClusterFitOptions {
+        method: MethodId::Du,
+        features: tactile_workbench::features::FeatureSet::ALL,
+        label_set: "object".into(),
+        threshold: 0.4,
+        seed: 1,
+        params,
+    };
+    let (model, _) = tactile_workbench::models::fit_clusters(&train, &opts).expect("DU fits");
+    let file = tactile_workbench::models::cluster_file(model, &train, 0.0, None);
+    let path = common::temp_dir("audit-live-du").join("du.json");
+    tactile_workbench::models::save(&file, &path).expect("the model saves");
+    let one = Session {
+        grasps: vec![objects.grasps[35].clone()],
+        ..objects.clone()
+    };
+    let verdict = LiveModel::load(&path, false)
+        .expect("the model loads")
+        .verdict(&one)
+        .expect("a verdict");
+    verdict
+        .figure(5)
+        .expect("DU gives its novelty step by step")
 }
 
 #[test]

@@ -586,6 +586,26 @@ fn a_clustering_models_clusters_are_offered_as_groups() {
         let n = assigned.iter().filter(|p| p.predicted == name).count();
         assert_eq!(s.name, format!("{name} (n={n})"));
     }
+    // Its novelty of each grasp so far, step by step, is a signal to plot by cluster.
+    h.get_by_role_and_label(Role::TextInput, "Signals").click();
+    h.run_ok();
+    h.get_by_role_and_label(Role::TextInput, "Signals")
+        .type_text("novelty");
+    h.run_ok();
+    h.get_by_label("DU · novelty").click();
+    settle(&mut h);
+    let c = h.state().rooms.compare.shown.clone().unwrap();
+    let bands = chart(&c.groups);
+    assert_eq!(bands.y.title, "DU · novelty");
+    assert_eq!(bands.series.len(), clusters.len(), "{:?}", names(bands));
+    let mut finite = 0;
+    for s in &bands.series {
+        for v in s.y.iter().filter(|v| v.is_finite()) {
+            assert!((0.0..=1.0).contains(v), "{}: {v}", s.name);
+            finite += 1;
+        }
+    }
+    assert!(finite > 0);
 }
 
 /// The replay beside the plots keeps its controls and every fingertip inside its tile, at

@@ -198,6 +198,82 @@ fn the_live_view_shows_a_served_stream_with_ds_at_work() {
     server.join().unwrap();
 }
 
+/// A DU model at work on an open grasp: the running cluster, and the novelty of the grasp
+/// so far as a chart against the threshold, step by step.
+#[test]
+fn the_live_view_shows_du_novelty_step_by_step() {
+    use tactile_workbench::experiments::clustering::{ClusteringParams, UnsupervisedLearner};
+    use tactile_workbench::models::ClusterFitOptions;
+    let dir = common::temp_dir("gui-live-du");
+    let all = sample();
+    let (mut train, mut shown) = (all.clone(), all);
+    train.grasps.truncate(40);
+    shown.grasps.drain(..40);
+    shown.grasps.truncate(4);
+    let mut params = ClusteringParams::for_learner(UnsupervisedLearner::Du);
+    params.ds.gp.capacity = 20;
+    let opts = ClusterFitOptions {
+        method: MethodId::Du,
+        features: FeatureSet::ALL,
+        label_set: "object".into(),
+        threshold: 0.4,
+        seed: 0,
+        params,
+    };
+    let (model, _) = models::fit_clusters(&train, &opts).unwrap();
+    let model_path = dir.join("du.json");
+    models::save(&models::cluster_file(model, &train, 0.0, None), &model_path).unwrap();
+    let spec_path = dir.join("served.spec.json");
+    std::fs::write(
+        &spec_path,
+        Stream::new(&shown, 1.0).unwrap().spec().to_string(),
+    )
+    .unwrap();
+    let stop = Arc::new(AtomicBool::new(false));
+    let (port, server) = serve_loop(shown, 1.0, stop.clone());
+    let mut h = common::gui::workbench(1400.0, 900.0);
+    h.get_by_label("File").click();
+    h.run_ok();
+    h.get_by_label("Connect to a live stream…").click();
+    h.run_ok();
+    {
+        let form = &mut h.state_mut().rooms.live.form;
+        form.url = format!("ws://127.0.0.1:{port}");
+        form.spec = spec_path.display().to_string();
+        form.model = model_path.display().to_string();
+    }
+    h.get_by_label("Connect").click();
+    step_until(&mut h, Duration::from_secs(30), |app| {
+        app.rooms.live.snapshot().is_some_and(|s| {
+            let s = s.lock().unwrap();
+            s.open_verdict
+                .as_ref()
+                .is_some_and(|v| v.novelty_steps.len() >= 3)
+        })
+    });
+    h.get_by_label_contains("Grasp in progress:");
+    h.get_by_label_contains("du: running decision cluster");
+    h.get_by_label_contains("(new cluster above 0.400)");
+    h.get_by_label_contains("of the grasp so far against cluster");
+    h.get_by_label_contains("du novelty of the grasp so far, step by step");
+    // The chart is the open verdict's: its novelty at every step, the threshold marked.
+    let snap = h.state().rooms.live.snapshot().unwrap();
+    let v = snap.lock().unwrap().open_verdict.clone().unwrap();
+    let figure = v.figure(5).unwrap();
+    let tactile_workbench::figures::FigureKind::Chart(c) = &figure.kind else {
+        panic!("a chart")
+    };
+    assert_eq!(c.series.len(), 1);
+    let novelties: Vec<f64> = v.novelty_steps.iter().map(|s| s.novelty).collect();
+    assert_eq!(c.series[0].y, novelties);
+    assert_eq!(c.ref_lines.len(), 1);
+    assert_eq!(c.ref_lines[0].value, 0.4);
+    h.get_all_by_label("Disconnect").next().unwrap().click();
+    h.run_ok();
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    server.join().unwrap();
+}
+
 /// A pad of 2 × 2 taxels pressed in the middle of each grasp: 20 idle frames (with a
 /// little noise, so the idle total has a spread), 20 pressed, 20 idle, at 50 Hz; objects
 /// cup and mug, outcome ok or slip.

@@ -475,6 +475,105 @@ fn early_classification_step_by_step_equals_the_grasps_verdict() {
     }
 }
 
+/// DU and GU (the mean and the joint novelty) follow a grasp while it is open: the cluster
+/// and the novelty of the grasp so far, one step per frame; every step they give equals the
+/// offline assessment of that prefix (the verdict's steps, from the recorded grasp), and
+/// the last step's novelty is the grasp's end-of-grasp novelty, bit for bit.
+#[test]
+fn du_and_gu_novelty_step_by_step_equals_the_grasps_verdict() {
+    use tactile_workbench::experiments::clustering::{ClusteringParams, UnsupervisedLearner};
+    use tactile_workbench::learners::GuAggregate;
+    use tactile_workbench::models::ClusterFitOptions;
+    let dir = common::temp_dir("live-novelty");
+    let s = sample(36);
+    let (train, shown) = {
+        let (mut a, mut b) = (s.clone(), s.clone());
+        a.grasps.truncate(30);
+        b.grasps.drain(..30);
+        (a, b)
+    };
+    let spec = spec_of(&shown, &dir);
+    for (method, aggregate) in [
+        (MethodId::Du, GuAggregate::Mean),
+        (MethodId::Gu, GuAggregate::Mean),
+        (MethodId::Gu, GuAggregate::Joint),
+    ] {
+        let learner = match method {
+            MethodId::Du => UnsupervisedLearner::Du,
+            _ => UnsupervisedLearner::Gu,
+        };
+        let mut params = ClusteringParams::for_learner(learner);
+        params.ds.gp.capacity = 20;
+        params.gs.gp.capacity = 20;
+        params.gu_aggregate = aggregate;
+        let opts = ClusterFitOptions {
+            method,
+            features: FeatureSet::ALL,
+            label_set: "object".into(),
+            threshold: if method == MethodId::Du { 0.4 } else { 0.1 },
+            seed: 1,
+            params,
+        };
+        let case = format!("{method:?} {aggregate:?}");
+        let (model, _) = models::fit_clusters(&train, &opts).unwrap();
+        let file = models::cluster_file(model, &train, 0.0, None);
+        let path = dir.join(format!("{}-{aggregate:?}.json", method.key()));
+        models::save(&file, &path).unwrap();
+        let n = shown.grasps.len();
+        let server = play(&shown, rate_for(&shown, 1.5), 0, 0..n);
+        let mut o = options(server.port, spec.clone(), None);
+        o.model = Some((path.clone(), false));
+        let (reports, snap) = run(Live::start(o).unwrap(), Duration::from_secs(30), |r, _| {
+            r.len() == n
+        });
+        server.done();
+        assert_eq!(reports.len(), n, "{case}: {snap:?}");
+        assert_eq!(snap.early_error, None, "{case}");
+        let offline = LiveModel::load(&path, false).unwrap();
+        for (i, r) in reports.iter().enumerate() {
+            let early = r.early.as_ref().expect("the model followed the grasp");
+            let v = r.verdict.as_ref().unwrap().as_ref().unwrap();
+            // (Debug: exact for floats, and NaN, the decision of a clustering, is equal there.)
+            let again = offline.verdict(r.session.as_ref().unwrap()).unwrap();
+            assert_eq!(format!("{v:?}"), format!("{again:?}"), "{case} grasp {i}");
+            // The verdict's last step is the whole grasp's assessment.
+            let (novelty, threshold) = v.novelty.expect("a DU/GU novelty");
+            assert_eq!(threshold, opts.threshold);
+            let last = v.novelty_steps.last().expect("steps");
+            assert_eq!(last.step + 1, r.frames, "{case} grasp {i}");
+            assert_eq!(
+                last.novelty.to_bits(),
+                novelty.to_bits(),
+                "{case} grasp {i}"
+            );
+            // Live, step by step: every step followed is the verdict's at that step.
+            assert!(!early.novelty_steps.is_empty(), "{case} grasp {i}");
+            if aggregate == GuAggregate::Mean {
+                assert_eq!(early.novelty_steps.len(), r.frames, "{case} grasp {i}");
+            }
+            for e in &early.novelty_steps {
+                let at = v.novelty_steps.iter().find(|s| s.step == e.step);
+                let at = at.expect("the verdict has every step live has");
+                assert_eq!(
+                    (e.cluster, e.novelty.to_bits()),
+                    (at.cluster, at.novelty.to_bits()),
+                    "{case} grasp {i} step {}",
+                    e.step
+                );
+            }
+            let live_last = early.novelty_steps.last().unwrap();
+            if live_last.step + 1 == r.frames {
+                assert_eq!(live_last.novelty.to_bits(), novelty.to_bits(), "{case}");
+            }
+        }
+        assert!(
+            reports[0].line().contains("novelty by step 10%:cluster"),
+            "{}",
+            reports[0].line()
+        );
+    }
+}
+
 /// Run `live --record` on `n` grasps of the sample, kill -9 it once it printed `printed`
 /// grasps, and check the recording: every completed grasp, validated, equal to the served.
 fn kill_9_after(n: usize, seconds: f64, printed: usize) {

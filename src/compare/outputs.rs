@@ -2,7 +2,7 @@
 //! probabilities after every step of every grasp (with the decided class, so that a
 //! comparison can plot how a model became sure and group grasps by correct and wrong), a
 //! stability model's SVM decision value at each grasp's key frame, and a clustering
-//! model's clusters.
+//! model's clusters and its novelty of each grasp so far after every step.
 
 use super::align::Event;
 use super::groups::Groups;
@@ -30,7 +30,8 @@ pub struct ModelReading {
 }
 
 /// What model `file` (called `model`, e.g. "DS") says about `session`: DS/GS class
-/// probabilities after every step, a stability model's decision value, DU/GU clusters.
+/// probabilities after every step, a stability model's decision value, DU/GU clusters and
+/// novelty after every step.
 pub fn read_model(
     model: &str,
     file: &ModelFile,
@@ -101,9 +102,14 @@ fn read_clusters(
         .map(|c| used.binary_search(c).ok())
         .collect();
     let names = used.iter().map(|&c| cluster_name(c)).collect();
+    let novelty = StepOutputs {
+        name: format!("{model} · novelty"),
+        unit: String::new(),
+        per_grasp: m.novelty_steps(session, Calibration::None)?,
+    };
     Ok(ModelReading {
         model: model.into(),
-        outputs: Vec::new(),
+        outputs: vec![novelty],
         classes: Vec::new(),
         truth: vec![None; session.grasps.len()],
         predicted: vec![None; session.grasps.len()],
@@ -239,7 +245,26 @@ mod tests {
         }
         // Only clusters some grasp is in, each once.
         assert!(groups.sizes().iter().all(|&n| n > 0));
-        assert!(r.outputs.is_empty() && r.classes.is_empty());
+        assert!(r.classes.is_empty());
+        // The novelty of each grasp so far after every step: the last step's is the whole
+        // grasp's assessment, bit for bit.
+        assert_eq!(r.outputs.len(), 1);
+        assert_eq!(r.outputs[0].name, "DU · novelty");
+        let Model::Clusters(m) = &file.model else {
+            panic!("a clustering")
+        };
+        let feats = m.inputs.read(&part, Some(Calibration::None)).unwrap();
+        let crate::models::clustering::Clusterer::Du(du) = &m.clusterer else {
+            panic!("DU")
+        };
+        for (g, grasp) in part.grasps.iter().enumerate() {
+            let v = &r.outputs[0].per_grasp[g];
+            assert_eq!(v.len(), grasp.frames.len(), "grasp {g}");
+            use crate::learners::{Du, NoveltyLearner};
+            let a = du.clone().assess(feats.sequences[g].view()).unwrap();
+            let whole = <Du as NoveltyLearner>::novelty(&a);
+            assert_eq!(v.last().unwrap().to_bits(), whole.to_bits(), "grasp {g}");
+        }
         let mut names = groups.names.clone();
         names.dedup();
         assert_eq!(names.len(), groups.names.len());

@@ -13,8 +13,8 @@ use ndarray::{Array2, ArrayView2, Axis};
 use serde::{Deserialize, Serialize};
 
 use super::ds::p_of_q;
-use super::novelty::{Assignment, NoveltyLearner};
-use super::{Ds, DsParams, LearnerError, SequenceClassifier, argmax_of_mean};
+use super::novelty::{Assignment, NoveltyLearner, NoveltySteps};
+use super::{Ds, DsParams, LearnerError, SequenceClassifier, argmax, argmax_of_mean};
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DuParams {
@@ -180,6 +180,7 @@ pub struct DuAssessment {
 
 impl NoveltyLearner for Du {
     type Assessment = DuAssessment;
+    type Steps = DuSteps;
 
     fn threshold(&self) -> f64 {
         self.threshold
@@ -237,6 +238,78 @@ impl NoveltyLearner for Du {
     fn assign_all(&mut self, seqs: &[ArrayView2<f64>]) -> Vec<usize> {
         Du::assign_all(self, seqs)
     }
+
+    fn steps(&self) -> Option<DuSteps> {
+        let c = self.ds.n_classes();
+        if c == 0 {
+            return None;
+        }
+        let mut ds = self.ds.clone();
+        ds.start_sequence();
+        Some(DuSteps {
+            ds,
+            p_sums: vec![0.0; c],
+            q_sums: vec![0.0; c],
+            dist: vec![0.0; c],
+            winner: 0,
+            t: 0,
+        })
+    }
+}
+
+/// DU following a grasp step by step ([`NoveltyLearner::steps`]): DS's q is causal (a
+/// step's q depends on the steps up to it), so each step is one `predict_step` of every
+/// expert, and the prefix is two running sums per cluster, added in step order as
+/// [`Du`]'s assessment adds them: Σ p (its winner is the argmax of the mean p) and
+/// Σ max(0, 2q − 1) (eq. 28's sum).
+#[derive(Clone, Debug)]
+pub struct DuSteps {
+    /// A copy of the learner's experts, observing the grasp.
+    ds: Ds,
+    p_sums: Vec<f64>,
+    q_sums: Vec<f64>,
+    /// The step's p (scratch).
+    dist: Vec<f64>,
+    winner: usize,
+    t: usize,
+}
+
+impl NoveltySteps for DuSteps {
+    fn dim(&self) -> usize {
+        self.ds.dim()
+    }
+
+    fn push(&mut self, o: &[f64]) -> usize {
+        assert_eq!(o.len(), self.ds.dim(), "a step of the learner's width");
+        self.ds.predict_step(o, &mut self.dist);
+        for ((s, p), (h, q)) in self
+            .p_sums
+            .iter_mut()
+            .zip(&self.dist)
+            .zip(self.q_sums.iter_mut().zip(self.ds.q()))
+        {
+            *s += p;
+            *h += (2.0 * q - 1.0).max(0.0);
+        }
+        self.t += 1;
+        self.winner = argmax(self.p_sums.iter().copied());
+        self.winner
+    }
+
+    fn novelty(&mut self) -> f64 {
+        if self.t == 0 {
+            return 1.0;
+        }
+        1.0 - self.q_sums[self.winner] / self.t as f64
+    }
+
+    fn winner(&self) -> usize {
+        self.winner
+    }
+
+    fn len(&self) -> usize {
+        self.t
+    }
 }
 
 /// The DS decision among the `confirmed` clusters from every cluster's q at each step: each
@@ -259,7 +332,7 @@ fn confirmed_decision(q: ArrayView2<f64>, confirmed: &[usize]) -> usize {
 mod tests {
     use ndarray::array;
 
-    use super::super::testing::{grasps, load_error, quick_adaptation, round_trip};
+    use super::super::testing::{grasps, load_error, probes, quick_adaptation, round_trip};
     use super::*;
     use crate::gp::SogpParams;
 
@@ -319,6 +392,44 @@ mod tests {
             }
             let (ja, jb) = (serde_json::to_string(&a), serde_json::to_string(&b));
             assert_eq!(ja.unwrap(), jb.unwrap());
+        }
+    }
+
+    /// Followed step by step, every prefix of a grasp gets the winner and the novelty that
+    /// assessing that prefix gives, bit for bit (so the last step is the whole grasp's),
+    /// with the experts' own distance tables (adapting) and the shared one (not), at a
+    /// threshold low enough for many clusters; the learner is left as it was. Among the probes, some prefix's winner is not the
+    /// grasp's: the running sums are kept for every cluster.
+    #[test]
+    fn du_steps_equal_the_assessment_of_every_prefix_bit_for_bit() {
+        for (adapting, threshold) in [(true, 0.1), (false, 0.1)] {
+            let p = DuParams {
+                threshold,
+                ..small(adapting)
+            };
+            let mut du = Du::new(3, &p).unwrap();
+            for (_, g) in &grasps(1, 30, 3, 3) {
+                du.learn(g.view()).unwrap();
+            }
+            assert!(du.n_clusters() >= 2, "{}", du.n_clusters());
+            let mut winner_changed = false;
+            for (i, g) in probes().iter().enumerate() {
+                let before = serde_json::to_string(&du).unwrap();
+                let steps = du.assess_steps(g.view());
+                assert_eq!(serde_json::to_string(&du).unwrap(), before);
+                assert_eq!(steps.len(), g.nrows());
+                for (t, &(winner, novelty)) in steps.iter().enumerate() {
+                    let a = du.assess(g.slice(ndarray::s![..t + 1, ..])).unwrap();
+                    assert_eq!(
+                        (winner, novelty.to_bits()),
+                        (a.winner, a.novelty.to_bits()),
+                        "adapting {adapting}, grasp {i}, step {t}: {novelty} vs {}",
+                        a.novelty
+                    );
+                }
+                winner_changed |= steps.iter().any(|s| s.0 != steps.last().unwrap().0);
+            }
+            assert!(winner_changed, "adapting {adapting}");
         }
     }
 

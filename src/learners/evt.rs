@@ -295,17 +295,61 @@ pub fn evt_novelty(residual: &[f64], variance: &[f64], m: usize) -> f64 {
     let r2: f64 = residual
         .iter()
         .zip(variance)
-        .map(|(&e, &v)| {
-            let v = if v.is_nan() || v < MIN_VARIANCE {
-                MIN_VARIANCE
-            } else {
-                v
-            };
-            e * e / v
-        })
+        .map(|(&e, &v)| scaled_square(e, v))
         .sum();
     let t_c = radius_quantile(n, m);
     novelty_from_log_ratio(weibull_shape(n, m, t_c), 0.5 * (t_c - r2))
+}
+
+/// One dimension's term e²/v of the squared Mahalanobis radius that [`evt_novelty`] sums
+/// (the variance raised to `f64::MIN_POSITIVE` as there): a radius summed from these terms
+/// in the same order is the one [`evt_novelty`] computes, bit for bit.
+pub fn scaled_square(e: f64, v: f64) -> f64 {
+    let v = if v.is_nan() || v < MIN_VARIANCE {
+        MIN_VARIANCE
+    } else {
+        v
+    };
+    e * e / v
+}
+
+/// [`evt_novelty`] from the squared radius `r2` (a sum of [`scaled_square`] terms) of an
+/// observation in `n` dimensions, with the Weibull parameters of each (n, m) computed once
+/// and kept: the same value, bit for bit, as [`evt_novelty`] of the residuals behind `r2`.
+/// The parameters depend on n and m alone, and their root-finding costs O(n) per step of
+/// its iteration, so a caller that scores many observations of one size (GU's per-step
+/// novelties), or of the sizes of a growing grasp again and again, pays it once per size.
+#[derive(Clone, Debug, Default)]
+pub struct EvtQuantiles {
+    /// (n, m) → (t_c, α_m).
+    kept: std::collections::HashMap<(usize, usize), (f64, f64)>,
+}
+
+impl EvtQuantiles {
+    /// Sizes kept at most: past them the map starts afresh (a bound on memory).
+    const CAP: usize = 1 << 16;
+
+    /// Whether [`EvtQuantiles::novelty`] at (n, m) costs O(1): no root to find.
+    pub fn knows(&self, n: usize, m: usize) -> bool {
+        n == 0 || m < 2 || self.kept.contains_key(&(n, m))
+    }
+
+    pub fn novelty(&mut self, n: usize, m: usize, r2: f64) -> f64 {
+        if n == 0 {
+            return 0.0;
+        }
+        if m < 2 {
+            return 1.0;
+        }
+        if self.kept.len() >= Self::CAP {
+            self.kept.clear();
+        }
+        let (t_c, shape) = *self.kept.entry((n, m)).or_insert_with(|| {
+            let t_c = radius_quantile(n, m);
+            (t_c, weibull_shape(n, m, t_c))
+        });
+        novelty_from_log_ratio(shape, 0.5 * (t_c - r2))
+    }
 }
 
 #[cfg(test)]

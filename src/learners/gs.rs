@@ -197,9 +197,20 @@ impl Gs {
         totals
     }
 
+    /// One step of a sequence as [`SequenceClassifier::predict_step`] takes it, before the
+    /// filter: each expert's prediction of `o` from the window of the steps before it
+    /// (`each(c, mean, predictive variance)`), then `o` joins the window.
+    pub(crate) fn predict_each(&mut self, o: &[f64], mut each: impl FnMut(usize, &[f64], f64)) {
+        for (c, m) in self.models.iter_mut().enumerate() {
+            m.observe_window(&self.window);
+            each(c, m.mean(), m.predictive_variance());
+        }
+        self.window.push(o);
+    }
+
     /// The filter of [`SequenceClassifier::predict_step`] over one step's log-likelihoods
     /// (in `dist`, replaced by the posterior).
-    fn filter_step(&mut self, dist: &mut [f64]) {
+    pub(crate) fn filter_step(&mut self, dist: &mut [f64]) {
         // A step so far from every expert that all of them give −∞ (e.g. inputs of 1e200)
         // carries no evidence and is skipped, since adding it would make −∞ − (−∞) = NaN
         // below.
@@ -274,12 +285,12 @@ impl SequenceClassifier for Gs {
     }
 
     fn predict_step(&mut self, o: &[f64], dist: &mut [f64]) {
-        for (m, ll) in self.models.iter_mut().zip(dist.iter_mut()) {
-            m.observe_window(&self.window);
-            *ll = log_likelihood(o, m.mean(), m.predictive_variance());
-        }
+        self.predict_each(o, |c, mean, var| {
+            if let Some(ll) = dist.get_mut(c) {
+                *ll = log_likelihood(o, mean, var);
+            }
+        });
         self.filter_step(dist);
-        self.window.push(o);
     }
 
     fn train_step(&mut self, o: &[f64], class: usize) {

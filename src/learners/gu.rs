@@ -37,8 +37,8 @@
 use ndarray::ArrayView2;
 use serde::{Deserialize, Serialize};
 
-use super::evt::evt_novelty;
-use super::novelty::{Assignment, NoveltyLearner};
+use super::evt::{EvtQuantiles, evt_novelty, scaled_square};
+use super::novelty::{Assignment, NoveltyLearner, NoveltySteps};
 use super::{Gs, GsParams, LearnerError, SequenceClassifier, argmax, argmax_of_last};
 
 /// How the per-step novelties of a grasp become one score.
@@ -486,6 +486,7 @@ pub struct GuAssessment {
 
 impl NoveltyLearner for Gu {
     type Assessment = GuAssessment;
+    type Steps = GuSteps;
 
     fn threshold(&self) -> f64 {
         self.threshold
@@ -530,13 +531,212 @@ impl NoveltyLearner for Gu {
     fn assign_all(&mut self, seqs: &[ArrayView2<f64>]) -> Vec<usize> {
         seqs.iter().map(|s| self.assign(*s)).collect()
     }
+
+    fn steps(&self) -> Option<GuSteps> {
+        let c = self.gs.n_classes();
+        if c == 0 {
+            return None;
+        }
+        // The experts of the learning phase's winner, as `winner_among(seq, 1)` takes them.
+        let mut experts: Vec<usize> = (0..c)
+            .filter(|&k| self.grasps.get(k).is_some_and(|g| *g >= 1))
+            .collect();
+        if experts.is_empty() {
+            experts = (0..c).collect();
+        }
+        let filter = experts.len() == c && self.noise != GuNoise::PerDimensionFilter;
+        let likelihood_noise = experts
+            .iter()
+            .map(|&k| match self.noise {
+                GuNoise::PerDimensionFilter => self.noise_variances(k),
+                _ => None,
+            })
+            .collect();
+        let draws = (0..c)
+            .map(|k| match (self.aggregate, self.draws) {
+                (GuAggregate::Joint, _) | (_, EvtDraws::Grasps) => self.grasps_drawn(k),
+                (_, EvtDraws::Steps) => self.gs.models()[k].seen(),
+            })
+            .collect();
+        let mut gs = self.gs.clone();
+        gs.start_sequence();
+        let dim = gs.dim();
+        Some(GuSteps {
+            gs,
+            aggregate: self.aggregate,
+            totals: vec![0.0; experts.len()],
+            experts,
+            filter,
+            likelihood_noise,
+            noise: (0..c).map(|k| self.noise_variances(k)).collect(),
+            draws,
+            quantiles: EvtQuantiles::default(),
+            dist: vec![0.0; c],
+            step_lls: Vec::new(),
+            novelty_sums: vec![0.0; c],
+            novelty_max: vec![0.0; c],
+            radius2: vec![0.0; c],
+            residual: vec![0.0; dim],
+            variance: vec![0.0; dim],
+            winner: 0,
+            t: 0,
+        })
+    }
+}
+
+/// GU following a grasp step by step ([`NoveltyLearner::steps`]). Each step is one
+/// prediction of every expert (the GS filter's step), and the prefix is a few running
+/// quantities per expert, added in step order as [`Gu`]'s assessment adds them, kept for
+/// every expert since the winner may change from one prefix to the next:
+/// - the winner: the GS filter's posterior (causal), or under
+///   [`GuNoise::PerDimensionFilter`] the summed log-likelihoods;
+/// - [`GuAggregate::Mean`] / [`GuAggregate::Max`]: the sum and the largest of the per-step
+///   novelties;
+/// - [`GuAggregate::Joint`]: the squared Mahalanobis radius over all steps so far, r² =
+///   Σ_t Σ_d e²/v, the one thing of the residuals the extreme-value novelty reads; its
+///   Weibull parameters depend on the size n = D·t and on m alone ([`EvtQuantiles`]).
+///
+/// m (the draws) counts the expert's grasps or seen steps, which do not change while
+/// nothing is trained.
+#[derive(Clone, Debug)]
+pub struct GuSteps {
+    /// A copy of the learner's experts, observing the grasp.
+    gs: Gs,
+    aggregate: GuAggregate,
+    /// The experts the winner is chosen among, and whether the GS filter chooses it (else
+    /// the summed log-likelihoods, with `likelihood_noise` per expert of `experts`).
+    experts: Vec<usize>,
+    filter: bool,
+    likelihood_noise: Vec<Option<(Vec<f64>, f64)>>,
+    /// Per expert: the noise of the novelty's Σ, and m.
+    noise: Vec<Option<(Vec<f64>, f64)>>,
+    draws: Vec<usize>,
+    quantiles: EvtQuantiles,
+    /// Scratch: the step's log-likelihoods (the filter's, and of `experts`).
+    dist: Vec<f64>,
+    step_lls: Vec<f64>,
+    /// Per expert of `experts`: the summed log-likelihoods (without the filter).
+    totals: Vec<f64>,
+    /// Per expert: the running sum and max of the per-step novelties, and r².
+    novelty_sums: Vec<f64>,
+    novelty_max: Vec<f64>,
+    radius2: Vec<f64>,
+    residual: Vec<f64>,
+    variance: Vec<f64>,
+    winner: usize,
+    t: usize,
+}
+
+impl NoveltySteps for GuSteps {
+    fn dim(&self) -> usize {
+        self.gs.dim()
+    }
+
+    fn push(&mut self, o: &[f64]) -> usize {
+        let d = self.gs.dim();
+        assert_eq!(o.len(), d, "a step of the learner's width");
+        let Self {
+            gs,
+            aggregate,
+            experts,
+            filter,
+            likelihood_noise,
+            noise,
+            draws,
+            quantiles,
+            dist,
+            step_lls,
+            novelty_sums,
+            novelty_max,
+            radius2,
+            residual,
+            variance,
+            ..
+        } = self;
+        step_lls.clear();
+        let mut next = 0;
+        gs.predict_each(o, |c, mean, v| {
+            if *filter {
+                dist[c] = super::gs::log_likelihood(o, mean, v);
+            } else if experts.get(next) == Some(&c) {
+                Gu::fill_variance(variance, v, likelihood_noise[next].as_ref());
+                step_lls.push(log_likelihood_diag(o, mean, variance));
+                next += 1;
+            }
+            for ((r, x), y) in residual.iter_mut().zip(o).zip(mean) {
+                *r = x - y;
+            }
+            Gu::fill_variance(variance, v, noise[c].as_ref());
+            match aggregate {
+                GuAggregate::Joint => {
+                    for (e, v) in residual.iter().zip(variance.iter()) {
+                        radius2[c] += scaled_square(*e, *v);
+                    }
+                }
+                GuAggregate::Mean | GuAggregate::Max => {
+                    let r2: f64 = residual
+                        .iter()
+                        .zip(variance.iter())
+                        .map(|(e, v)| scaled_square(*e, *v))
+                        .sum();
+                    let nu = quantiles.novelty(d, draws[c], r2);
+                    novelty_sums[c] += nu;
+                    novelty_max[c] = novelty_max[c].max(nu);
+                }
+            }
+        });
+        self.t += 1;
+        let winner = if self.filter {
+            self.gs.filter_step(&mut self.dist);
+            argmax(self.dist.iter().copied())
+        } else {
+            if self.step_lls.iter().any(|l| *l > f64::NEG_INFINITY) {
+                for (total, l) in self.totals.iter_mut().zip(&self.step_lls) {
+                    *total += l;
+                }
+            }
+            self.experts[argmax(self.totals.iter().copied())]
+        };
+        self.winner = winner;
+        winner
+    }
+
+    fn novelty(&mut self) -> f64 {
+        if self.t == 0 {
+            return 1.0;
+        }
+        let w = self.winner;
+        match self.aggregate {
+            GuAggregate::Mean => self.novelty_sums[w] / self.t as f64,
+            GuAggregate::Max => self.novelty_max[w],
+            GuAggregate::Joint => {
+                let n = self.gs.dim() * self.t;
+                self.quantiles.novelty(n, self.draws[w], self.radius2[w])
+            }
+        }
+    }
+
+    fn novelty_costly(&self) -> bool {
+        self.aggregate == GuAggregate::Joint
+            && !self
+                .quantiles
+                .knows(self.gs.dim() * self.t, self.draws[self.winner])
+    }
+
+    fn winner(&self) -> usize {
+        self.winner
+    }
+
+    fn len(&self) -> usize {
+        self.t
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use ndarray::Array2;
 
-    use super::super::testing::{grasps, load_error, quick_adaptation, round_trip};
+    use super::super::testing::{grasps, load_error, probes, quick_adaptation, round_trip};
     use super::*;
     use crate::gp::SogpParams;
     use crate::rng::Rng;
@@ -603,6 +803,55 @@ mod tests {
             }
             let (ja, jb) = (serde_json::to_string(&a), serde_json::to_string(&b));
             assert_eq!(ja.unwrap(), jb.unwrap());
+        }
+    }
+
+    /// Followed step by step, every prefix of a grasp gets the winner and the novelty that
+    /// assessing that prefix gives, bit for bit (so the last step is the whole grasp's),
+    /// under each aggregate, each noise (the GS filter's winner and the summed
+    /// per-dimension likelihoods') and each m; the learner is left as it was. Among the
+    /// probes, some prefix's winner is not the grasp's: the running quantities are kept
+    /// for every expert.
+    #[test]
+    fn gu_steps_equal_the_assessment_of_every_prefix_bit_for_bit() {
+        for aggregate in [GuAggregate::Mean, GuAggregate::Max, GuAggregate::Joint] {
+            for noise in [
+                GuNoise::Shared,
+                GuNoise::PerDimension,
+                GuNoise::PerDimensionFilter,
+            ] {
+                for draws in [EvtDraws::Grasps, EvtDraws::Steps] {
+                    let p = GuParams {
+                        aggregate,
+                        draws,
+                        ..small(noise == GuNoise::PerDimension, noise)
+                    };
+                    let mut gu = Gu::new(3, &p).unwrap();
+                    for (_, g) in &grasps(1, 30, 3, 3) {
+                        gu.learn(g.view()).unwrap();
+                    }
+                    let case = format!("{aggregate:?} {noise:?} {draws:?}");
+                    assert!(gu.n_clusters() >= 2, "{case}: {}", gu.n_clusters());
+                    let mut winner_changed = false;
+                    for (i, g) in probes().iter().enumerate() {
+                        let before = serde_json::to_string(&gu).unwrap();
+                        let steps = gu.assess_steps(g.view());
+                        assert_eq!(serde_json::to_string(&gu).unwrap(), before, "{case}");
+                        assert_eq!(steps.len(), g.nrows());
+                        for (t, &(winner, novelty)) in steps.iter().enumerate() {
+                            let a = gu.assess(g.slice(ndarray::s![..t + 1, ..])).unwrap();
+                            assert_eq!(
+                                (winner, novelty.to_bits()),
+                                (a.winner, a.novelty.to_bits()),
+                                "{case}, grasp {i}, step {t}: {novelty} vs {}",
+                                a.novelty
+                            );
+                        }
+                        winner_changed |= steps.iter().any(|s| s.0 != steps.last().unwrap().0);
+                    }
+                    assert!(winner_changed, "{case}");
+                }
+            }
         }
     }
 

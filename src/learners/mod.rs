@@ -22,7 +22,7 @@ pub use ds::{Ds, DsParams};
 pub use du::{Du, DuParams, du_novelty};
 pub use gs::{Gs, GsParams};
 pub use gu::{EvtDraws, Gu, GuAggregate, GuNoise, GuParams};
-pub use novelty::{Assignment, NoveltyLearner};
+pub use novelty::{Assignment, NoveltyLearner, NoveltySteps, novelty_due};
 
 use crate::gp::{GpError, Sogp, SogpParams, Window};
 
@@ -262,7 +262,7 @@ pub fn lengthscales(learner: &dyn SequenceClassifier) -> Array2<f64> {
 /// Seeded synthetic grasps and checks shared by the learners' save-and-load tests.
 #[cfg(test)]
 pub(crate) mod testing {
-    use ndarray::Array2;
+    use ndarray::{Array2, Axis, concatenate, s};
     use serde::Serialize;
     use serde::de::DeserializeOwned;
 
@@ -285,6 +285,19 @@ pub(crate) mod testing {
                 (k, grasp)
             })
             .collect()
+    }
+
+    /// Probes of the step-by-step tests: grasps of five objects (three learned), and grasps
+    /// that turn from one learned object into another halfway.
+    pub fn probes() -> Vec<Array2<f64>> {
+        let mut out: Vec<Array2<f64>> = grasps(2, 10, 5, 3).into_iter().map(|g| g.1).collect();
+        let learned = grasps(3, 6, 3, 3);
+        for pair in learned.windows(2) {
+            let (a, b) = (&pair[0].1, &pair[1].1);
+            let half = a.nrows() / 2;
+            out.push(concatenate![Axis(0), a.slice(s![..half, ..]), b.view()]);
+        }
+        out
     }
 
     /// Adaptation that starts early and steps often, so that short runs adapt many times.

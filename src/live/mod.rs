@@ -347,10 +347,16 @@ impl Live {
                 let v = &early.verdict;
                 let shown = view.open_verdict.get_or_insert_with(|| Verdict {
                     steps: Vec::new(),
+                    novelty_steps: Vec::new(),
                     ..v.clone()
                 });
                 let have = shown.steps.len().min(v.steps.len());
                 shown.steps.extend_from_slice(&v.steps[have..]);
+                let have = shown.novelty_steps.len().min(v.novelty_steps.len());
+                shown
+                    .novelty_steps
+                    .extend_from_slice(&v.novelty_steps[have..]);
+                shown.novelty = v.novelty;
                 shown.predicted.clone_from(&v.predicted);
                 shown.decision = v.decision;
                 shown.settled = v.settled;

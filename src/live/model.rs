@@ -6,7 +6,10 @@
 //!
 //! While a grasp is still open, [`Early`] gives DS/GS's class distribution one step at a
 //! time from its first frame (the paper's early classification): each new frame's feature
-//! row through a copy of the saved experts' `predict_step`.
+//! row through a copy of the saved experts' `predict_step`. For DU/GU it gives the winner
+//! cluster and the novelty of the grasp so far, through the learner's
+//! [`NoveltySteps`](crate::learners::NoveltySteps) (equal bit for bit to assessing the
+//! prefix, at O(clusters) per step).
 //!
 //! Teaching: a labelled grasp teaches DS/GS (or DU/GU learn it) exactly as
 //! `fit --from MODEL` on that one grasp's session would, and the model file is then saved
@@ -21,8 +24,10 @@ use crate::catalogue::MethodId;
 use crate::features::feature_sequences_in;
 use crate::features::sequence::{FeatureSequences, SequenceParams, SequenceRange};
 use crate::figures::{Axis, Figure, FigureKind, Orientation, RefLine, Series};
-use crate::learners::{NoveltyLearner, SequenceClassifier};
-use crate::models::clustering::Clusterer;
+use crate::learners::du::DuSteps;
+use crate::learners::gu::GuSteps;
+use crate::learners::{NoveltyLearner, NoveltySteps, SequenceClassifier, novelty_due};
+use crate::models::clustering::{Clusterer, cluster_name};
 use crate::models::inputs::SequenceInputs;
 use crate::models::recognition::Experts;
 use crate::models::{
@@ -52,6 +57,19 @@ pub struct Verdict {
     /// DU/GU: the grasp's novelty against the clusters learned so far, and the threshold
     /// above which learning it would open a new cluster.
     pub novelty: Option<(f64, f64)>,
+    /// DU/GU: the winner and the novelty of the grasp so far, step by step (every step; GU's
+    /// joint novelty at the steps of [`novelty_due`] and the last, see
+    /// [`NoveltySteps::novelty_costly`]).
+    pub novelty_steps: Vec<NoveltyStep>,
+}
+
+/// DU/GU's assessment of a grasp's first `step` + 1 steps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NoveltyStep {
+    /// From 0.
+    pub step: usize,
+    pub cluster: usize,
+    pub novelty: f64,
 }
 
 impl Verdict {
@@ -72,10 +90,10 @@ impl Verdict {
 
     /// The early decisions: the running decision after 10 %, 20 %, … 100 % of the steps.
     pub fn early_line(&self) -> Option<String> {
-        let n = self.steps.len();
-        if n == 0 {
-            return None;
+        if self.steps.is_empty() {
+            return self.novelty_line();
         }
+        let n = self.steps.len();
         let mean = self.method == MethodId::Ds;
         let words: Vec<String> = (1..=10)
             .map(|k| {
@@ -92,6 +110,62 @@ impl Verdict {
     }
 }
 
+impl Verdict {
+    /// DU/GU: the cluster and the novelty of the grasp so far after 10 %, 20 %, … 100 % of
+    /// its steps (the latest assessed at or before each).
+    fn novelty_line(&self) -> Option<String> {
+        let last = self.novelty_steps.last()?;
+        let n = last.step + 1;
+        let words: Vec<String> = (1..=10)
+            .filter_map(|k| {
+                let upto = (n * k).div_ceil(10).max(1);
+                let i = self.novelty_steps.partition_point(|s| s.step < upto);
+                let s = self.novelty_steps.get(i.checked_sub(1)?)?;
+                Some(format!(
+                    "{}%:{}@{:.3}",
+                    k * 10,
+                    cluster_name(s.cluster).replace(' ', ""),
+                    s.novelty
+                ))
+            })
+            .collect();
+        Some(format!("novelty by step {}", words.join(" ")))
+    }
+
+    /// DU/GU: the novelty of the grasp so far at every step assessed, against the threshold
+    /// (a reference line), as a chart of the figure model. None without steps.
+    pub fn novelty_figure(&self) -> Option<Figure> {
+        let last = self.novelty_steps.last()?;
+        let n = self.novelty_steps.len();
+        let every = n.div_ceil(CHART_STEPS).max(1);
+        let shown: Vec<&NoveltyStep> = self
+            .novelty_steps
+            .iter()
+            .step_by(every)
+            .chain((!(n - 1).is_multiple_of(every)).then_some(last))
+            .collect();
+        let x = shown.iter().map(|s| (s.step + 1) as f64).collect();
+        let y = shown.iter().map(|s| s.novelty).collect();
+        let mut figure = Figure::chart(
+            format!(
+                "{} novelty of the grasp so far, step by step",
+                self.method.key()
+            ),
+            Axis::new("step", "").including(1.0, (last.step + 1).max(2) as f64),
+            Axis::new("novelty", "").including(0.0, 1.0),
+            vec![Series::new("novelty", x, y)],
+        );
+        if let (Some((_, threshold)), FigureKind::Chart(c)) = (self.novelty, &mut figure.kind) {
+            c.ref_lines.push(RefLine {
+                orientation: Orientation::Horizontal,
+                value: threshold,
+                label: "threshold".into(),
+            });
+        }
+        Some(figure)
+    }
+}
+
 /// Steps a chart of the distribution draws at most: a long grasp is thinned evenly (its
 /// last step always kept), since a tile has fewer pixels than a 1 kHz grasp has steps.
 pub const CHART_STEPS: usize = 600;
@@ -101,7 +175,9 @@ impl Verdict {
     /// latest step): how the decision formed, as a chart of the figure model, with the
     /// step it settled at marked. None without steps (not DS/GS, or no step yet).
     pub fn figure(&self, top: usize) -> Option<Figure> {
-        let last = self.steps.last()?;
+        let Some(last) = self.steps.last() else {
+            return self.novelty_figure();
+        };
         let mut order: Vec<usize> = (0..last.len()).collect();
         order.sort_by(|&a, &b| last[b].total_cmp(&last[a]));
         let n = self.steps.len();
@@ -177,6 +253,7 @@ impl LiveModel {
             steps: Vec::new(),
             settled: None,
             novelty: None,
+            novelty_steps: Vec::new(),
         };
         if let Model::Clusters(m) = &self.file.model
             && let Some(seq) = features(&m.inputs, one)?.sequences.first()
@@ -187,6 +264,23 @@ impl LiveModel {
                 Clusterer::Gu(l) => assess(l, seq.view()),
             };
             verdict.novelty = novelty.map(|n| (n, m.threshold));
+            if let Some(mut f) = Follower::of_clusters(&m.clusterer) {
+                for row in seq.rows() {
+                    let row = row.to_vec();
+                    if let Some(s) = f.cluster_step(&row, false)? {
+                        verdict.novelty_steps.push(s);
+                    }
+                }
+                // The last step always (GU's joint novelty may skip the steps before).
+                if let Some(s) = f.cluster_step_last()
+                    && verdict
+                        .novelty_steps
+                        .last()
+                        .is_none_or(|l| l.step != s.step)
+                {
+                    verdict.novelty_steps.push(s);
+                }
+            }
         }
         if let Model::Sequences(m) = &self.file.model
             && let Some(p) = m.predict(one, Calibration::None)?.into_iter().next()
@@ -218,28 +312,44 @@ impl LiveModel {
         Ok(true)
     }
 
-    /// The early classification of a grasp that starts now; None for a model that has
-    /// none (stability, clustering, baselines).
+    /// The early classification of a grasp that starts now (DS/GS), or its cluster and
+    /// novelty step by step (DU/GU); None for a model that has none (stability, baselines)
+    /// or a DU/GU that has no cluster yet.
     pub fn early(&self) -> Option<Early> {
-        let Model::Sequences(m) = &self.file.model else {
-            return None;
+        let (follower, inputs, classes, threshold) = match &self.file.model {
+            Model::Sequences(m) => {
+                let mut experts = m.experts.clone();
+                learner(&mut experts).start_sequence();
+                (
+                    Follower::Classes(Box::new(experts)),
+                    &m.inputs,
+                    m.classes.clone(),
+                    None,
+                )
+            }
+            Model::Clusters(m) => (
+                Follower::of_clusters(&m.clusterer)?,
+                &m.inputs,
+                Vec::new(),
+                Some(m.threshold),
+            ),
+            _ => return None,
         };
-        let mut experts = m.experts.clone();
-        learner(&mut experts).start_sequence();
         Some(Early {
-            experts,
-            inputs: m.inputs.clone(),
+            sums: vec![0.0; classes.len()],
+            follower,
+            inputs: inputs.clone(),
             verdict: Verdict {
                 method: self.file.provenance.method,
                 predicted: String::new(),
                 decision: f64::NAN,
-                classes: m.classes.clone(),
+                classes,
                 steps: Vec::new(),
                 settled: None,
-                novelty: None,
+                novelty: threshold.map(|t| (f64::NAN, t)),
+                novelty_steps: Vec::new(),
             },
             template: None,
-            sums: vec![0.0; m.classes.len()],
             best: None,
             seen: 0,
         })
@@ -321,9 +431,75 @@ fn assess<L: NoveltyLearner>(l: &mut L, seq: ArrayView2<f64>) -> Option<f64> {
     l.assess(seq).map(|a| L::novelty(&a))
 }
 
-/// DS/GS at work on a grasp still open: one step per frame.
+/// What follows an open grasp: DS/GS's experts, or DU/GU's [`NoveltySteps`].
+enum Follower {
+    Classes(Box<Experts>),
+    Du(Box<DuSteps>),
+    Gu(Box<GuSteps>),
+}
+
+impl Follower {
+    fn of_clusters(c: &Clusterer) -> Option<Follower> {
+        Some(match c {
+            Clusterer::Du(l) => Follower::Du(Box::new(l.steps()?)),
+            Clusterer::Gu(l) => Follower::Gu(Box::new(l.steps()?)),
+        })
+    }
+
+    fn steps(&mut self) -> Option<&mut dyn NoveltySteps> {
+        match self {
+            Follower::Classes(_) => None,
+            Follower::Du(s) => Some(s.as_mut()),
+            Follower::Gu(s) => Some(s.as_mut()),
+        }
+    }
+
+    /// DU/GU: the next step; its cluster and novelty, unless the novelty is costly now and
+    /// not due ([`novelty_due`]), or `every` asks for it anyway.
+    fn cluster_step(
+        &mut self,
+        row: &[f64],
+        every: bool,
+    ) -> Result<Option<NoveltyStep>, ModelError> {
+        let Some(s) = self.steps() else {
+            return Ok(None);
+        };
+        if row.len() != s.dim() {
+            return Err(ModelError::Mismatch(format!(
+                "a step of {} features for a model of {}",
+                row.len(),
+                s.dim()
+            )));
+        }
+        let cluster = s.push(row);
+        let step = s.len() - 1;
+        if !every && s.novelty_costly() && !novelty_due(s.len()) {
+            return Ok(None);
+        }
+        let novelty = s.novelty();
+        Ok(Some(NoveltyStep {
+            step,
+            cluster,
+            novelty,
+        }))
+    }
+
+    /// DU/GU: the cluster and novelty after the last step taken.
+    fn cluster_step_last(&mut self) -> Option<NoveltyStep> {
+        let s = self.steps()?;
+        let step = s.len().checked_sub(1)?;
+        let novelty = s.novelty();
+        Some(NoveltyStep {
+            step,
+            cluster: s.winner(),
+            novelty,
+        })
+    }
+}
+
+/// DS/GS (or DU/GU) at work on a grasp still open: one step per frame.
 pub struct Early {
-    experts: Experts,
+    follower: Follower,
     inputs: SequenceInputs,
     /// The distribution so far, the running decision and when it settled.
     pub verdict: Verdict,
@@ -346,12 +522,37 @@ impl Early {
         };
         while self.seen < frames.len() {
             let row = self.row(spec, first, &frames[self.seen])?;
-            let mut dist = vec![0.0; self.verdict.classes.len()];
-            learner(&mut self.experts).predict_step(&row, &mut dist);
-            self.push(self.seen, dist);
+            match &mut self.follower {
+                Follower::Classes(experts) => {
+                    let mut dist = vec![0.0; self.verdict.classes.len()];
+                    learner(experts).predict_step(&row, &mut dist);
+                    self.push(self.seen, dist);
+                }
+                f => {
+                    let step = f.cluster_step(&row, false)?;
+                    if let Some(w) = f.steps().map(|s| s.winner()) {
+                        self.verdict.predicted = cluster_name(w);
+                    }
+                    if let Some(s) = step {
+                        self.push_novelty(s);
+                    }
+                }
+            }
             self.seen += 1;
         }
         Ok(())
+    }
+
+    /// DU/GU: the grasp so far's cluster and novelty into the verdict.
+    fn push_novelty(&mut self, s: NoveltyStep) {
+        let v = &mut self.verdict;
+        v.predicted = cluster_name(s.cluster);
+        if let Some((n, _)) = &mut v.novelty {
+            *n = s.novelty;
+        }
+        if v.novelty_steps.len() < EARLY_CAP {
+            v.novelty_steps.push(s);
+        }
     }
 
     fn row(

@@ -103,6 +103,29 @@ impl ClusterModel {
             .collect())
     }
 
+    /// The novelty of every grasp of `session` after each of its steps: the novelty of the
+    /// grasp so far against the clusters learned (the experts are not changed), what
+    /// assessing that prefix gives, bit for bit ([`NoveltyLearner::assess_steps`]). Empty
+    /// for a model without clusters yet.
+    pub fn novelty_steps(
+        &self,
+        session: &Session,
+        calibration: Calibration,
+    ) -> Result<Vec<Vec<f64>>, ModelError> {
+        let feats = self.inputs.read(session, Some(calibration))?;
+        Ok(feats
+            .sequences
+            .iter()
+            .map(|seq| {
+                let steps = match &self.clusterer {
+                    Clusterer::Du(l) => l.assess_steps(seq.view()),
+                    Clusterer::Gu(l) => l.assess_steps(seq.view()),
+                };
+                steps.into_iter().map(|(_, n)| n).collect()
+            })
+            .collect())
+    }
+
     /// Learn every grasp of `session` in a seeded random order, on the model's range.
     fn learn(&mut self, session: &Session) -> Result<(), ModelError> {
         let feats = self.inputs.read(session, None)?;

@@ -64,7 +64,7 @@ impl SequenceInputs {
 
     /// The session's sequences as the model reads them under `calibration` (None: on the
     /// model's own range, as when it learns further).
-    pub(super) fn read(
+    pub(crate) fn read(
         &self,
         session: &Session,
         calibration: Option<Calibration>,

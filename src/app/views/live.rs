@@ -751,6 +751,7 @@ impl Shown {
                 steps: v.steps.last().cloned().into_iter().collect(),
                 settled: v.settled,
                 novelty: v.novelty,
+                novelty_steps: v.novelty_steps.last().copied().into_iter().collect(),
             },
             steps: v.steps.len(),
             figure: v.figure(5),
@@ -775,6 +776,10 @@ fn verdict_ui(ui: &mut egui::Ui, shown: &Shown, open: bool, reserve: f32) {
         head += &format!(" · novelty {n:.3} (new cluster above {t:.3})");
     }
     ui.label(head);
+    if v.steps.is_empty() {
+        novelty_ui(ui, shown, open, reserve);
+        return;
+    }
     let Some(last) = v.steps.last() else { return };
     ui.small(format!("Class distribution at step {}", shown.steps));
     let text = ui.visuals().text_color();
@@ -822,6 +827,34 @@ fn verdict_ui(ui: &mut egui::Ui, shown: &Shown, open: bool, reserve: f32) {
             "live-steps-open"
         } else {
             "live-steps-last"
+        };
+        figure_view::show(
+            ui,
+            id,
+            figure,
+            ui.available_height() - reserve,
+            FigureSelection::None,
+        );
+    }
+}
+
+/// DU/GU: the cluster of the grasp so far and its novelty at every step, against the
+/// threshold (the chart's reference line).
+fn novelty_ui(ui: &mut egui::Ui, shown: &Shown, open: bool, reserve: f32) {
+    let Some(s) = shown.verdict.novelty_steps.last() else {
+        return;
+    };
+    let cluster = crate::models::clustering::cluster_name(s.cluster);
+    ui.small(format!(
+        "At step {}: novelty {:.3} of the grasp so far against {cluster}",
+        s.step + 1,
+        s.novelty
+    ));
+    if let Some(figure) = &shown.figure {
+        let id = if open {
+            "live-novelty-open"
+        } else {
+            "live-novelty-last"
         };
         figure_view::show(
             ui,
