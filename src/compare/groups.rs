@@ -4,6 +4,10 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::cluster::order_agreement::CHOSEN_THRESHOLD;
+use crate::experiments::figure_id::FigureId;
+use crate::experiments::result::AnalysisResult;
+use crate::figures::FigureKind;
 use crate::session::Session;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -23,6 +27,36 @@ impl Groups {
             names: vec!["all grasps".into()],
             of: vec![Some(0); session.grasps.len()],
         }
+    }
+
+    /// A clustering result's clusters at the threshold it chose without labels (at its
+    /// last threshold when it chose none), read from the grasps behind its class × cluster
+    /// contingency; None for a result without one. Grasps it did not cluster are in none.
+    pub fn by_result_clusters(result: &AnalysisResult, grasps: usize) -> Option<Groups> {
+        let figure = FigureId::ScoresVsThreshold;
+        let details = result.details.iter().find(|d| d.figure == figure)?;
+        let i = match result.score(CHOSEN_THRESHOLD) {
+            Some(t) => details.at(t)?,
+            None => details.items.len().checked_sub(1)?,
+        };
+        let (threshold, contingency) = &details.items[i];
+        let FigureKind::Heatmap(m) = &contingency.kind else {
+            return None;
+        };
+        let links = (result.links.iter()).find(|l| l.figure == figure && l.detail == Some(i))?;
+        let mut of = vec![None; grasps];
+        for item in &links.items {
+            for &g in &item.grasps {
+                if let Some(slot) = of.get_mut(g) {
+                    *slot = Some(item.at[1]);
+                }
+            }
+        }
+        Some(Groups {
+            title: format!("clusters at threshold {threshold}"),
+            names: (m.columns.iter()).map(|c| format!("cluster {c}")).collect(),
+            of,
+        })
     }
 
     /// The classes of label set `set` (none for an index the session lacks).
@@ -130,6 +164,44 @@ impl Groups {
 mod tests {
     use super::*;
     use crate::compare::tests::two_sensor_session;
+
+    /// A clustering result's groups are its first order's assignment at the threshold it
+    /// chose without labels: every grasp in the group of its own cluster, named by it.
+    #[test]
+    fn a_clustering_results_clusters_are_its_chosen_thresholds_assignment() {
+        use crate::experiments::clustering::report::clustering_report;
+        use crate::experiments::clustering::{
+            ClusteringParams, UnsupervisedLearner, run_clustering,
+        };
+        let s = crate::session::simulate::object_recognition(0);
+        let params = ClusteringParams {
+            reps: 2,
+            seed: 1,
+            thresholds: vec![0.02, 0.05, 0.1, 0.2],
+            choose_threshold: Some(
+                crate::cluster::order_agreement::ThresholdCriterion::OrderAgreement,
+            ),
+            ..ClusteringParams::for_learner(UnsupervisedLearner::Du)
+        };
+        let r = run_clustering(&s, &params, &crate::jobs::Progress::new()).unwrap();
+        let chosen = r.threshold_choice.as_ref().expect("a label-free choice");
+        let run = (r.runs.iter())
+            .find(|x| x.rep == 0 && x.threshold == chosen.threshold)
+            .unwrap();
+        let assignment = run.assignment.as_ref().unwrap();
+        let g = Groups::by_result_clusters(&clustering_report("s", &r), s.grasps.len()).unwrap();
+        assert!(
+            g.title.contains(&chosen.threshold.to_string()),
+            "{}",
+            g.title
+        );
+        for (k, a) in assignment.iter().enumerate() {
+            let name = &g.names[g.of[k].expect("every grasp clustered")];
+            assert_eq!(name, &format!("cluster {}", a + 1), "grasp {k}");
+        }
+        let distinct: std::collections::BTreeSet<_> = assignment.iter().collect();
+        assert_eq!(g.names.len(), distinct.len());
+    }
 
     #[test]
     fn labels_and_objects_give_each_grasp_its_group() {

@@ -21,6 +21,7 @@ use crate::compare::{
     self, ComparePlot, Comparison, Event, Groups, ModelReading, Request, Signal, Spread,
     StepOutputs, grasp_name,
 };
+use crate::experiments::result::{AnalysisKind, AnalysisResult};
 use crate::figures::{ColorMap, Figure, FigureKind};
 use crate::models::Model;
 use crate::session::Session;
@@ -39,6 +40,12 @@ pub enum Grouping {
     ConfusionCells,
     /// The chosen clustering model's clusters.
     Clusters,
+    /// A clustering result's clusters at its chosen threshold (the result by its creation
+    /// time and label, as a pinned tile names it).
+    ResultClusters {
+        created: u64,
+        label: String,
+    },
 }
 
 impl Grouping {
@@ -53,10 +60,16 @@ impl Grouping {
             Grouping::CorrectWrong => "correct vs wrong (model)".into(),
             Grouping::ConfusionCells => "confusion cells (model)".into(),
             Grouping::Clusters => "clusters (model)".into(),
+            Grouping::ResultClusters { label, .. } => format!("clusters of {label}"),
         }
     }
 
-    fn groups(&self, session: &Session, reading: Option<&ModelReading>) -> Groups {
+    fn groups(
+        &self,
+        session: &Session,
+        reading: Option<&ModelReading>,
+        results: &[AnalysisResult],
+    ) -> Groups {
         let labels = |set: Option<usize>| match set {
             Some(set) => Groups::by_label_set(session, set),
             None => Groups::all(session),
@@ -65,6 +78,10 @@ impl Grouping {
             (Grouping::FirstLabelSet, _) => labels((!session.label_sets.is_empty()).then_some(0)),
             (Grouping::LabelSet(name), _) => labels(session.label_set(name)),
             (Grouping::Object, _) => Groups::by_object(session),
+            (Grouping::ResultClusters { created, label }, _) => (results.iter())
+                .find(|r| r.created == *created && &r.label == label)
+                .and_then(|r| Groups::by_result_clusters(r, session.grasps.len()))
+                .unwrap_or_else(|| Groups::all(session)),
             (Grouping::CorrectWrong, Some(r)) => {
                 let mut g = Groups::correct_vs_wrong(&r.truth, &r.predicted);
                 g.title = format!("correct vs wrong ({})", r.model);
@@ -286,6 +303,7 @@ impl CompareRoom {
         let (tx, rx) = channel();
         let ctx = cx.ctx.clone();
         let k = key.clone();
+        let groups = (k.form.grouping).groups(&session, reading.as_deref(), &cx.analyses.results);
         std::thread::spawn(move || {
             let outputs: &[StepOutputs] = reading.as_ref().map_or(&[], |r| &r.outputs);
             let request = Request {
@@ -293,7 +311,7 @@ impl CompareRoom {
                 event: k.form.event,
                 spread: k.form.spread,
                 overlaid: k.overlaid.clone(),
-                groups: k.form.grouping.groups(&session, reading.as_deref()),
+                groups,
                 seed: 1,
             };
             let _ = tx.send(compare::compare(&session, outputs, &request));
@@ -357,6 +375,21 @@ impl CompareRoom {
         if reading.as_ref().is_some_and(|r| r.clusters.is_some()) {
             choices.push(Grouping::Clusters);
         }
+        // The clustering results of this session (not held-out ones: their grasps are
+        // another session's).
+        choices.extend(
+            (cx.analyses.results.iter())
+                .filter(|r| {
+                    r.kind == AnalysisKind::Clustering
+                        && r.session == session.meta.name
+                        && r.held_out.is_none()
+                        && Groups::by_result_clusters(r, session.grasps.len()).is_some()
+                })
+                .map(|r| Grouping::ResultClusters {
+                    created: r.created,
+                    label: r.label.clone(),
+                }),
+        );
         egui::ComboBox::from_id_salt("compare-groups")
             .selected_text(self.form.grouping.text(session))
             .show_ui(ui, |ui| {
