@@ -94,7 +94,7 @@ pub enum ClassifierError {
     /// A saved state that does not read back.
     #[error("saved state: {0}")]
     State(String),
-    #[error(transparent)]
+    #[error("{0}")]
     Svm(#[from] crate::svm::SvmError),
     #[error("cancelled")]
     Cancelled,

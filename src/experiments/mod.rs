@@ -20,16 +20,25 @@ use crate::features::sequence::SequenceError;
 use crate::jobs::Cancelled;
 use crate::learners::LearnerError;
 
+/// Why an experiment failed: its own parameters or data, a cancel, or a lower layer's error
+/// (kept as the source).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ExperimentError {
     #[error("invalid parameter `{name}`: {reason}")]
     InvalidParameter { name: &'static str, reason: String },
     #[error("invalid data: {0}")]
     Data(String),
-    #[error(transparent)]
+    #[error("{0}")]
     Features(#[from] SequenceError),
-    #[error(transparent)]
+    /// The Table I features or their normalisation.
+    #[error("{0}")]
+    FeatureTable(#[from] crate::features::FeatureError),
+    #[error("{0}")]
     Learner(#[from] LearnerError),
+    /// The stability pipeline (its patches, sparse coder or SVM); a cancel is
+    /// [`ExperimentError::Cancelled`].
+    #[error("{0}")]
+    Stability(#[source] stability::StabilityError),
     #[error("cancelled")]
     Cancelled,
 }
@@ -40,15 +49,13 @@ impl From<Cancelled> for ExperimentError {
     }
 }
 
-impl From<crate::sparse::SparseError> for ExperimentError {
-    fn from(e: crate::sparse::SparseError) -> Self {
-        stability::StabilityError::from(e).into()
-    }
-}
-
-impl From<crate::svm::SvmError> for ExperimentError {
-    fn from(e: crate::svm::SvmError) -> Self {
-        stability::StabilityError::from(e).into()
+impl From<stability::StabilityError> for ExperimentError {
+    fn from(e: stability::StabilityError) -> Self {
+        if e.is_cancelled() {
+            ExperimentError::Cancelled
+        } else {
+            ExperimentError::Stability(e)
+        }
     }
 }
 
@@ -58,11 +65,5 @@ impl ExperimentError {
             name,
             reason: reason.into(),
         }
-    }
-}
-
-impl From<crate::features::FeatureError> for ExperimentError {
-    fn from(e: crate::features::FeatureError) -> Self {
-        ExperimentError::Data(e.to_string())
     }
 }

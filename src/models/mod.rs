@@ -70,11 +70,11 @@ pub enum ModelError {
     /// A prediction that came out infinite or NaN: never reported as a class.
     #[error("{0}")]
     NotFinite(String),
-    #[error(transparent)]
+    #[error("{0}")]
     Stability(#[from] StabilityError),
-    #[error(transparent)]
+    #[error("{0}")]
     Learner(#[from] crate::learners::LearnerError),
-    #[error(transparent)]
+    #[error("{0}")]
     Experiment(#[from] crate::experiments::ExperimentError),
 }
 

@@ -81,16 +81,6 @@ impl From<PerturbError> for ExperimentError {
     }
 }
 
-impl From<StabilityError> for ExperimentError {
-    fn from(e: StabilityError) -> Self {
-        match e {
-            StabilityError::Cancelled => ExperimentError::Cancelled,
-            StabilityError::Data(d) => ExperimentError::Data(d),
-            e => ExperimentError::Data(e.to_string()),
-        }
-    }
-}
-
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Family {

@@ -17,7 +17,7 @@ pub(super) fn learn_dictionary(
         .map_err(|e| ExperimentError::param("dictionary", e.to_string()))?;
     let fit = params
         .fit_within(data.x.view(), progress)
-        .map_err(StabilityError::from)?;
+        .map_err(StabilityError::sparse)?;
     Ok(fit.dictionary)
 }
 
@@ -37,7 +37,7 @@ pub(super) fn features_of_images(
         .map_err(|e| ExperimentError::Data(e.to_string()))?;
     let codes = dictionary
         .encode(patches, gamma)
-        .map_err(StabilityError::from)?;
+        .map_err(StabilityError::sparse)?;
     Ok((concatenated_codes(codes, sensors), images))
 }
 
