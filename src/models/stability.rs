@@ -300,7 +300,7 @@ impl StabilityClassifier {
         let dim = images.ncols() / sensors;
         let x = images
             .into_shape_with_order((rows, dim))
-            .map_err(|e| ModelError::Mismatch(e.to_string()))?;
+            .map_err(ModelError::Shape)?;
         let coded = codes
             .dictionary
             .encode(x.view(), codes.gamma)
