@@ -63,6 +63,9 @@ pub enum MethodError {
     Param(String),
     #[error("invalid data: {0}")]
     Data(String),
+    /// Data that does not take the shape the method gives it (ndarray's error kept).
+    #[error("invalid data: {0}")]
+    Shape(#[from] ndarray::ShapeError),
     #[error("cancelled")]
     Cancelled,
 }

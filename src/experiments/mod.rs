@@ -26,8 +26,42 @@ use crate::learners::LearnerError;
 pub enum ExperimentError {
     #[error("invalid parameter `{name}`: {reason}")]
     InvalidParameter { name: &'static str, reason: String },
+    /// A named part of the parameters that its method refuses.
+    #[error("invalid parameter `{name}`: {source}")]
+    Parameter {
+        name: &'static str,
+        #[source]
+        source: crate::error::MethodError,
+    },
+    /// A named part of the parameters that the RBF SVM refuses.
+    #[error("invalid parameter `{name}`: {source}")]
+    KernelSvmParameter {
+        name: &'static str,
+        #[source]
+        source: crate::svm::kernel_svm::KernelSvmError,
+    },
+    /// A method's name that names none (`--methods`).
+    #[error("invalid parameter `{name}`: {source}")]
+    UnknownMethod {
+        name: &'static str,
+        #[source]
+        source: crate::catalogue::UnknownMethod,
+    },
     #[error("invalid data: {0}")]
     Data(String),
+    /// The RBF SVM's error on the data it was given.
+    #[error("{0}")]
+    KernelSvm(#[from] crate::svm::kernel_svm::KernelSvmError),
+    /// Data that does not take the shape the protocol gives it.
+    #[error("invalid data: {0}")]
+    Shape(#[from] ndarray::ShapeError),
+    /// A part of the experiment (`what` names it) that failed.
+    #[error("{what}: {source}")]
+    Within {
+        what: String,
+        #[source]
+        source: crate::error::Kept<ExperimentError>,
+    },
     #[error("{0}")]
     Features(#[from] SequenceError),
     /// The Table I features or their normalisation.
@@ -35,6 +69,12 @@ pub enum ExperimentError {
     FeatureTable(#[from] crate::features::FeatureError),
     #[error("{0}")]
     Learner(#[from] LearnerError),
+    #[error("{0}")]
+    Cluster(#[from] crate::cluster::ClusterError),
+    /// A registered method's error (its parameters are `InvalidParameter`, a cancel is
+    /// `Cancelled`).
+    #[error("{0}")]
+    Classifier(#[source] crate::catalogue::ClassifierError),
     /// The stability pipeline (its patches, sparse coder or SVM); a cancel is
     /// [`ExperimentError::Cancelled`].
     #[error("{0}")]

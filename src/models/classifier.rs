@@ -57,6 +57,10 @@ fn model_err(e: ClassifierError) -> ModelError {
     match e {
         ClassifierError::State(reason) => ModelError::field("model.state", reason),
         ClassifierError::Data(d) => ModelError::Mismatch(d),
+        e @ ClassifierError::StateJson(_) => ModelError::MethodCheck {
+            field: "model.state",
+            source: e,
+        },
         other => ModelError::Classifier(other),
     }
 }

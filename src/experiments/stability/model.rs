@@ -76,7 +76,7 @@ impl StabilityModel {
                 .for_each(|(o, v)| *o = *v),
         }
         let patches = ArrayView2::from_shape((self.sensors, self.dim), &img)
-            .map_err(|e| StabilityError::data(e.to_string()))?;
+            .map_err(|e| StabilityError::Method(e.into()))?;
         let codes = self
             .dictionary
             .encode(patches, self.config.gamma)
