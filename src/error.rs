@@ -23,7 +23,7 @@ use crate::jobs::Cancelled;
 /// keeps; and, as it derefs to that error, the `source()` of the error that holds it is the
 /// kept error itself (a `Box<E>` would hand on only `E`'s own source).
 #[derive(Debug)]
-pub struct Kept<E>(Arc<E>);
+pub struct Kept<E: ?Sized>(Arc<E>);
 
 impl<E> Kept<E> {
     pub fn new(e: E) -> Kept<E> {
@@ -31,26 +31,33 @@ impl<E> Kept<E> {
     }
 }
 
-impl<E> Deref for Kept<E> {
+impl Kept<dyn std::error::Error + Send + Sync> {
+    /// Any error, kept as it is (a session file's I/O or JSON error).
+    pub fn any(e: impl std::error::Error + Send + Sync + 'static) -> Self {
+        Kept(Arc::new(e))
+    }
+}
+
+impl<E: ?Sized> Deref for Kept<E> {
     type Target = E;
     fn deref(&self) -> &E {
         &self.0
     }
 }
 
-impl<E> Clone for Kept<E> {
+impl<E: ?Sized> Clone for Kept<E> {
     fn clone(&self) -> Self {
         Kept(Arc::clone(&self.0))
     }
 }
 
-impl<E: fmt::Display> PartialEq for Kept<E> {
+impl<E: fmt::Display + ?Sized> PartialEq for Kept<E> {
     fn eq(&self, other: &Self) -> bool {
         Arc::ptr_eq(&self.0, &other.0) || self.0.to_string() == other.0.to_string()
     }
 }
 
-impl<E: fmt::Display> fmt::Display for Kept<E> {
+impl<E: fmt::Display + ?Sized> fmt::Display for Kept<E> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         self.0.fmt(f)
     }
