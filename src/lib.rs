@@ -8,6 +8,7 @@ pub mod catalogue;
 pub mod cli;
 pub mod cluster;
 pub mod compare;
+pub mod error;
 pub mod experiments;
 pub mod features;
 pub mod figures;

@@ -33,16 +33,66 @@ pub struct Project {
     pub models: Vec<ModelFile>,
 }
 
+/// Why a project file did not open or save: the lower error (I/O, JSON, a figure, the
+/// links of a result, a model) is kept as the source.
 #[derive(Debug, thiserror::Error)]
 pub enum ProjectError {
     #[error("{path}: {message}")]
     Read { path: String, message: String },
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}: {source}")]
+    Json {
+        path: String,
+        #[source]
+        source: serde_json::Error,
+    },
     #[error(
         "{path}: unsupported project version {found}; this build reads version {PROJECT_VERSION}"
     )]
     Version { path: String, found: u64 },
-    #[error("{path}: could not write: {message}")]
-    Write { path: String, message: String },
+    /// A figure of a saved result that cannot be drawn.
+    #[error("{path}: `results[{index}]` ({label}): {source}")]
+    Figure {
+        path: String,
+        index: usize,
+        label: String,
+        #[source]
+        source: crate::figures::FigureError,
+    },
+    /// Links of a saved result that name no figure or part of it.
+    #[error("{path}: `results[{index}]` ({label}): {source}")]
+    Links {
+        path: String,
+        index: usize,
+        label: String,
+        #[source]
+        source: crate::experiments::links::LinkError,
+    },
+    /// A kept model that does not check.
+    #[error("{path}: `models[{index}]`: {source}")]
+    Model {
+        path: String,
+        index: usize,
+        #[source]
+        source: crate::models::ModelError,
+    },
+    #[error("{path}: could not write: {source}")]
+    Write {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}: could not write: {source}")]
+    Serialise {
+        path: String,
+        #[source]
+        source: serde_json::Error,
+    },
 }
 
 /// Whether `path` starts like a project file (its first field names the project format).
@@ -78,32 +128,32 @@ impl Project {
     }
 
     pub fn save(&self, path: &Path) -> Result<(), ProjectError> {
-        let text = serde_json::to_string(self).map_err(|e| ProjectError::Write {
+        let text = serde_json::to_string(self).map_err(|source| ProjectError::Serialise {
             path: path.display().to_string(),
-            message: e.to_string(),
+            source,
         })?;
-        fsutil::write_atomic(path, text.as_bytes()).map_err(|e| ProjectError::Write {
+        fsutil::write_atomic(path, text.as_bytes()).map_err(|source| ProjectError::Write {
             path: path.display().to_string(),
-            message: e.to_string(),
+            source,
         })
     }
 
     /// Read a project file as it is parsed (at most [`fsutil::max_bytes::PROJECT`]): the
     /// header first, then the whole, checked as [`Project::parse`] checks it.
     pub fn load(path: &Path) -> Result<Project, ProjectError> {
-        let read = |message: String| ProjectError::Read {
-            path: path.display().to_string(),
-            message,
-        };
         let open = || {
-            fsutil::open_json(path, fsutil::max_bytes::PROJECT, "project file")
-                .map_err(|e| read(e.to_string()))
+            fsutil::open_json(path, fsutil::max_bytes::PROJECT, "project file").map_err(|source| {
+                ProjectError::Io {
+                    path: path.display().to_string(),
+                    source,
+                }
+            })
         };
         check_header(
-            serde_json::from_reader(open()?).map_err(|e| read(e.to_string()))?,
+            serde_json::from_reader(open()?).map_err(json_err(path))?,
             path,
         )?;
-        let project = serde_json::from_reader(open()?).map_err(|e| read(e.to_string()))?;
+        let project = serde_json::from_reader(open()?).map_err(json_err(path))?;
         Project::checked(project, path)
     }
 
@@ -111,24 +161,14 @@ impl Project {
     /// damaged file is an error here and never a broken view later.
     pub fn parse(text: &str, path: &Path) -> Result<Project, ProjectError> {
         let text = fsutil::without_bom(text);
-        let read = |message: String| ProjectError::Read {
-            path: path.display().to_string(),
-            message,
-        };
-        check_header(
-            serde_json::from_str(text).map_err(|e| read(e.to_string()))?,
-            path,
-        )?;
-        let project = serde_json::from_str(text).map_err(|e| read(e.to_string()))?;
+        check_header(serde_json::from_str(text).map_err(json_err(path))?, path)?;
+        let project = serde_json::from_str(text).map_err(json_err(path))?;
         Project::checked(project, path)
     }
 
     /// Older results given their methods, every figure, link and model checked.
     fn checked(mut project: Project, path: &Path) -> Result<Project, ProjectError> {
-        let read = |message: String| ProjectError::Read {
-            path: path.display().to_string(),
-            message,
-        };
+        let p = || path.display().to_string();
         for r in &mut project.results {
             if r.methods.is_empty() {
                 r.methods = older_methods(r);
@@ -140,17 +180,35 @@ impl Project {
                 .iter()
                 .flat_map(|d| d.items.iter().map(|(_, f)| f));
             for f in r.figures.iter().map(|(_, f)| f).chain(details) {
-                f.validate()
-                    .map_err(|e| read(format!("`results[{i}]` ({}): {e}", r.label)))?;
+                f.validate().map_err(|source| ProjectError::Figure {
+                    path: p(),
+                    index: i,
+                    label: r.label.clone(),
+                    source,
+                })?;
             }
-            r.check_links()
-                .map_err(|e| read(format!("`results[{i}]` ({}): {e}", r.label)))?;
+            r.check_links().map_err(|source| ProjectError::Links {
+                path: p(),
+                index: i,
+                label: r.label.clone(),
+                source,
+            })?;
         }
         for (i, m) in project.models.iter().enumerate() {
-            m.validate()
-                .map_err(|e| read(format!("`models[{i}]`: {e}")))?;
+            m.validate().map_err(|source| ProjectError::Model {
+                path: p(),
+                index: i,
+                source,
+            })?;
         }
         Ok(project)
+    }
+}
+
+fn json_err(path: &Path) -> impl FnOnce(serde_json::Error) -> ProjectError + '_ {
+    move |source| ProjectError::Json {
+        path: path.display().to_string(),
+        source,
     }
 }
 

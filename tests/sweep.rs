@@ -544,3 +544,28 @@ fn a_shard_edited_by_hand_is_caught_by_its_checksum() {
     assert!(err.contains(&file) && err.contains("checksum"), "{err}");
     assert!(!merged.exists());
 }
+
+/// A plan's copy of the session that is not JSON (its hash made to match, as if the plan
+/// had been made for it): the sweep's error is the session's, whose source is the parser's.
+#[test]
+fn a_malformed_session_copy_keeps_the_import_error_as_the_source() {
+    use std::error::Error;
+    let (dir, _, _) = planned("sweep-bad-session", 1);
+    let copy = dir.join("session.json");
+    let bad = b"{\"format\": \"tactile-workbench-session\", \"version\": 1, \"session\": {";
+    fs::write(&copy, bad).unwrap();
+    let (mut plan, _) = sweep::read_plan(&dir).unwrap();
+    plan.session.hash = tactile_workbench::fsutil::content_hash(bad);
+    let err = sweep::read_session(&dir, &plan).expect_err("a truncated session is refused");
+    let msg = err.to_string();
+    assert!(msg.contains(&copy.display().to_string()), "{msg}");
+    let session = err
+        .source()
+        .and_then(|s| s.downcast_ref::<tactile_workbench::session::SessionError>())
+        .unwrap_or_else(|| panic!("the session's error is the source: {err:?}"));
+    let json = session
+        .source()
+        .and_then(|s| s.downcast_ref::<serde_json::Error>())
+        .unwrap_or_else(|| panic!("the parser's error is the session error's source: {session:?}"));
+    assert!(json.is_eof(), "{json}");
+}

@@ -91,13 +91,26 @@ pub enum ClassifierError {
     Param { knob: &'static str, reason: String },
     #[error("invalid data: {0}")]
     Data(String),
+    /// Data that does not take the shape the method gives it.
+    #[error("invalid data: {0}")]
+    Shape(#[from] ndarray::ShapeError),
     /// A saved state that does not read back.
     #[error("saved state: {0}")]
     State(String),
-    #[error(transparent)]
+    /// A saved state that is not the method's JSON (the parser's error kept).
+    #[error("saved state: {0}")]
+    StateJson(#[source] crate::error::Kept<serde_json::Error>),
+    #[error("{0}")]
     Svm(#[from] crate::svm::SvmError),
     #[error("cancelled")]
     Cancelled,
+}
+
+impl ClassifierError {
+    /// A saved state's JSON error.
+    pub fn state_json(e: serde_json::Error) -> ClassifierError {
+        ClassifierError::StateJson(crate::error::Kept::new(e))
+    }
 }
 
 impl From<Cancelled> for ClassifierError {

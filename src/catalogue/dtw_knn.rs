@@ -121,7 +121,7 @@ impl Classifier for DtwKnn {
 
     fn load(&self, state: &serde_json::Value) -> Result<Box<dyn Fitted>, ClassifierError> {
         let m: Model = serde_json::from_value(state.clone())
-            .map_err(|e| ClassifierError::State(e.to_string()))?;
+            .map_err(ClassifierError::state_json)?;
         let dim = m.sequences.first().map_or(0, |s| s.ncols());
         let bad = |why: &str| Err(ClassifierError::State(why.into()));
         if m.k == 0 || m.sequences.is_empty() || m.sequences.len() != m.labels.len() {

@@ -90,7 +90,7 @@ impl Classifier for TemporalSvm {
         let dim = data.check()?;
         let rows: Vec<Vec<f64>> = data.sequences.iter().map(|s| summarise(*s)).collect();
         let x = Array2::from_shape_vec((rows.len(), STATS * dim), rows.concat())
-            .map_err(|e| ClassifierError::Data(e.to_string()))?;
+?;
         let params = LinearSvmParams {
             c: size[0],
             seed: data.seed,
@@ -122,7 +122,7 @@ impl Classifier for TemporalSvm {
 
     fn load(&self, state: &serde_json::Value) -> Result<Box<dyn Fitted>, ClassifierError> {
         let m: Model = serde_json::from_value(state.clone())
-            .map_err(|e| ClassifierError::State(e.to_string()))?;
+            .map_err(ClassifierError::state_json)?;
         if m.majority >= m.machines.len() {
             return Err(ClassifierError::State(format!(
                 "majority class {} of {} classes",

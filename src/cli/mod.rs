@@ -165,3 +165,41 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Serve(a) => live::serve(a),
     }
 }
+
+/// The one line an error prints as: its message, then each cause in its chain that the
+/// message does not already say. The engine's errors show their source in their own message
+/// and keep it as the source too (`crate::error`), so a plain walk of the chain would repeat
+/// it; a context added here (`anyhow::Context`) does not say its cause, so it follows.
+pub fn error_line(e: &anyhow::Error) -> String {
+    let mut line = e.to_string();
+    for cause in e.chain().skip(1) {
+        let text = cause.to_string();
+        if !line.contains(&text) {
+            line.push_str(": ");
+            line.push_str(&text);
+        }
+    }
+    line
+}
+
+#[cfg(test)]
+mod error_line_tests {
+    use super::error_line;
+    use anyhow::Context;
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("lower")]
+    struct Lower;
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("upper: {0}")]
+    struct Upper(#[source] Lower);
+
+    #[test]
+    fn a_cause_already_in_the_message_is_not_repeated_and_a_context_keeps_its_cause() {
+        let e = anyhow::Error::from(Upper(Lower));
+        assert_eq!(error_line(&e), "upper: lower");
+        let e: anyhow::Error = Err::<(), _>(Upper(Lower)).context("reading x").unwrap_err();
+        assert_eq!(error_line(&e), "reading x: upper: lower");
+    }
+}

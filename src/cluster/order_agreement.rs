@@ -42,12 +42,17 @@ impl ThresholdCriterion {
     }
 }
 
+/// A threshold criterion's name that names none.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("`{0}` is not stability (order-agreement)")]
+pub struct UnknownCriterion(pub String);
+
 impl FromStr for ThresholdCriterion {
-    type Err = String;
+    type Err = UnknownCriterion;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s {
             "stability" | "order-agreement" => Ok(ThresholdCriterion::OrderAgreement),
-            other => Err(format!("`{other}` is not stability (order-agreement)")),
+            other => Err(UnknownCriterion(other.into())),
         }
     }
 }

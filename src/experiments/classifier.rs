@@ -36,7 +36,7 @@ pub fn classifier_err(e: ClassifierError) -> ExperimentError {
     match e {
         ClassifierError::Cancelled => ExperimentError::Cancelled,
         ClassifierError::Param { knob, reason } => ExperimentError::param(knob, reason),
-        other => ExperimentError::Data(other.to_string()),
+        other => ExperimentError::Classifier(other),
     }
 }
 

@@ -473,7 +473,11 @@ impl Experiment for FrontierSweep {
                         reason: format!("{}: {reason}", p.label()),
                     }
                 }
-                e => ExperimentError::Data(format!("{}: {e}", p.label())),
+                ExperimentError::Cancelled => ExperimentError::Cancelled,
+                e => ExperimentError::Within {
+                    what: p.label(),
+                    source: crate::error::Kept::new(e),
+                },
             })?;
             out.extend(
                 frontier_items(p)

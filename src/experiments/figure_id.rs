@@ -128,10 +128,15 @@ impl From<FigureId> for String {
     }
 }
 
+/// A saved figure key that no figure has.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("unknown figure `{0}`")]
+pub struct UnknownFigure(pub String);
+
 impl TryFrom<String> for FigureId {
-    type Error = String;
-    fn try_from(key: String) -> Result<FigureId, String> {
-        FigureId::from_key(&key).ok_or_else(|| format!("unknown figure `{key}`"))
+    type Error = UnknownFigure;
+    fn try_from(key: String) -> Result<FigureId, UnknownFigure> {
+        FigureId::from_key(&key).ok_or(UnknownFigure(key))
     }
 }
 

@@ -78,7 +78,7 @@ impl GraspLinks {
 
     /// Whether every item names a part that `figure` has: a cell of a heatmap or an image
     /// of an image grid (as [image, 0]).
-    pub fn check_against(&self, figure: &Figure) -> Result<(), String> {
+    pub fn check_against(&self, figure: &Figure) -> Result<(), LinkError> {
         for item in &self.items {
             let fits = match &figure.kind {
                 FigureKind::Heatmap(h) => h
@@ -89,14 +89,29 @@ impl GraspLinks {
                 _ => false,
             };
             if !fits {
-                return Err(format!(
-                    "links of `{}`: figure has no part {:?}",
-                    self.figure, item.at
-                ));
+                return Err(LinkError::NoPart {
+                    figure: self.figure,
+                    at: item.at,
+                });
             }
         }
         Ok(())
     }
+}
+
+/// Links that do not fit their result: a figure it lacks, or a part its figure lacks.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LinkError {
+    #[error(
+        "links name figure `{figure}`{} which the result does not have",
+        detail.map_or(String::new(), |i| format!(", detail {i}"))
+    )]
+    NoFigure {
+        figure: FigureId,
+        detail: Option<usize>,
+    },
+    #[error("links of `{figure}`: figure has no part {at:?}")]
+    NoPart { figure: FigureId, at: [usize; 2] },
 }
 
 /// A grasp-stability model's view of one grasp (for the replay of a focused grasp).

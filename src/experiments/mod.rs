@@ -20,16 +20,65 @@ use crate::features::sequence::SequenceError;
 use crate::jobs::Cancelled;
 use crate::learners::LearnerError;
 
+/// Why an experiment failed: its own parameters or data, a cancel, or a lower layer's error
+/// (kept as the source).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ExperimentError {
     #[error("invalid parameter `{name}`: {reason}")]
     InvalidParameter { name: &'static str, reason: String },
+    /// A named part of the parameters that its method refuses.
+    #[error("invalid parameter `{name}`: {source}")]
+    Parameter {
+        name: &'static str,
+        #[source]
+        source: crate::error::MethodError,
+    },
+    /// A named part of the parameters that the RBF SVM refuses.
+    #[error("invalid parameter `{name}`: {source}")]
+    KernelSvmParameter {
+        name: &'static str,
+        #[source]
+        source: crate::svm::kernel_svm::KernelSvmError,
+    },
+    /// A method's name that names none (`--methods`).
+    #[error("invalid parameter `{name}`: {source}")]
+    UnknownMethod {
+        name: &'static str,
+        #[source]
+        source: crate::catalogue::UnknownMethod,
+    },
     #[error("invalid data: {0}")]
     Data(String),
-    #[error(transparent)]
+    /// The RBF SVM's error on the data it was given.
+    #[error("{0}")]
+    KernelSvm(#[from] crate::svm::kernel_svm::KernelSvmError),
+    /// Data that does not take the shape the protocol gives it.
+    #[error("invalid data: {0}")]
+    Shape(#[from] ndarray::ShapeError),
+    /// A part of the experiment (`what` names it) that failed.
+    #[error("{what}: {source}")]
+    Within {
+        what: String,
+        #[source]
+        source: crate::error::Kept<ExperimentError>,
+    },
+    #[error("{0}")]
     Features(#[from] SequenceError),
-    #[error(transparent)]
+    /// The Table I features or their normalisation.
+    #[error("{0}")]
+    FeatureTable(#[from] crate::features::FeatureError),
+    #[error("{0}")]
     Learner(#[from] LearnerError),
+    #[error("{0}")]
+    Cluster(#[from] crate::cluster::ClusterError),
+    /// A registered method's error (its parameters are `InvalidParameter`, a cancel is
+    /// `Cancelled`).
+    #[error("{0}")]
+    Classifier(#[source] crate::catalogue::ClassifierError),
+    /// The stability pipeline (its patches, sparse coder or SVM); a cancel is
+    /// [`ExperimentError::Cancelled`].
+    #[error("{0}")]
+    Stability(#[source] stability::StabilityError),
     #[error("cancelled")]
     Cancelled,
 }
@@ -40,15 +89,13 @@ impl From<Cancelled> for ExperimentError {
     }
 }
 
-impl From<crate::sparse::SparseError> for ExperimentError {
-    fn from(e: crate::sparse::SparseError) -> Self {
-        stability::StabilityError::from(e).into()
-    }
-}
-
-impl From<crate::svm::SvmError> for ExperimentError {
-    fn from(e: crate::svm::SvmError) -> Self {
-        stability::StabilityError::from(e).into()
+impl From<stability::StabilityError> for ExperimentError {
+    fn from(e: stability::StabilityError) -> Self {
+        if e.is_cancelled() {
+            ExperimentError::Cancelled
+        } else {
+            ExperimentError::Stability(e)
+        }
     }
 }
 
@@ -58,11 +105,5 @@ impl ExperimentError {
             name,
             reason: reason.into(),
         }
-    }
-}
-
-impl From<crate::features::FeatureError> for ExperimentError {
-    fn from(e: crate::features::FeatureError) -> Self {
-        ExperimentError::Data(e.to_string())
     }
 }

@@ -218,7 +218,7 @@ impl AnalysisResult {
     }
 
     /// Whether every link names a figure (or detail item) of this result and a part it has.
-    pub(crate) fn check_links(&self) -> Result<(), String> {
+    pub(crate) fn check_links(&self) -> Result<(), super::links::LinkError> {
         for l in &self.links {
             let figure = match l.detail {
                 None => self.figure(l.figure),
@@ -228,11 +228,10 @@ impl AnalysisResult {
                     .map(|(_, f)| f),
             };
             let Some(figure) = figure else {
-                return Err(format!(
-                    "links name figure `{}`{} which the result does not have",
-                    l.figure,
-                    l.detail.map_or(String::new(), |i| format!(", detail {i}"))
-                ));
+                return Err(super::links::LinkError::NoFigure {
+                    figure: l.figure,
+                    detail: l.detail,
+                });
             };
             l.check_against(figure)?;
         }

@@ -12,6 +12,7 @@
 use ndarray::{Array2, ArrayView2};
 use serde::{Deserialize, Serialize};
 
+use super::FeatureError;
 use crate::jobs::Progress;
 use crate::rng::Rng;
 use crate::sparse::{Dictionary, DictionaryParams, SparseError};
@@ -128,20 +129,23 @@ impl FrameCodes {
 
     /// Every sensor's z-scoring and atoms agree in size and are finite, with a positive
     /// spread and a non-negative finite γ (a loaded model's).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), FeatureError> {
         if !(self.gamma >= 0.0 && self.gamma.is_finite()) {
-            return Err(format!("gamma must be finite and ≥ 0, got {}", self.gamma));
+            return Err(FeatureError::InvalidData(format!(
+                "gamma must be finite and ≥ 0, got {}",
+                self.gamma
+            )));
         }
         for (s, c) in self.sensors.iter().enumerate() {
             let n = c.mean.len();
             let d = &c.dictionary;
             if n == 0 || c.sd.len() != n || d.dim() != n || d.num_bases() == 0 {
-                return Err(format!(
+                return Err(FeatureError::InvalidData(format!(
                     "sensor {s}: {n} means, {} spreads and {} bases of {} taxels",
                     c.sd.len(),
                     d.num_bases(),
                     d.dim()
-                ));
+                )));
             }
             let finite = c
                 .mean
@@ -150,7 +154,9 @@ impl FrameCodes {
                 .chain(d.atoms.iter())
                 .all(|v| v.is_finite());
             if !finite || c.sd.iter().any(|&v| v <= 0.0) {
-                return Err(format!("sensor {s}: non-finite values or a spread ≤ 0"));
+                return Err(FeatureError::InvalidData(format!(
+                    "sensor {s}: non-finite values or a spread ≤ 0"
+                )));
             }
         }
         Ok(())

@@ -33,7 +33,7 @@ pub enum LearnerError {
     /// A saved state that no learner could have reached (a damaged or crafted file).
     #[error("invalid state `{field}`: {reason}")]
     InvalidState { field: String, reason: String },
-    #[error(transparent)]
+    #[error("{0}")]
     Gp(#[from] GpError),
 }
 

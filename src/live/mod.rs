@@ -192,10 +192,9 @@ impl Live {
             _ => Cutting::Contact(opts.spec.live.contact.clone()),
         };
         let model = match &opts.model {
-            Some((path, teach)) => Some(
-                LiveModel::load(path, *teach)
-                    .map_err(|e| SessionError::file(path, e.to_string()))?,
-            ),
+            Some((path, teach)) => {
+                Some(LiveModel::load(path, *teach).map_err(|e| SessionError::caused(path, e))?)
+            }
             None => None,
         };
         // Before the socket: a recording that cannot start stops the stream from starting.

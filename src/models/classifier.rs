@@ -57,7 +57,11 @@ fn model_err(e: ClassifierError) -> ModelError {
     match e {
         ClassifierError::State(reason) => ModelError::field("model.state", reason),
         ClassifierError::Data(d) => ModelError::Mismatch(d),
-        other => ModelError::Param(other.to_string()),
+        e @ ClassifierError::StateJson(_) => ModelError::MethodCheck {
+            field: "model.state",
+            source: e,
+        },
+        other => ModelError::Classifier(other),
     }
 }
 
@@ -150,11 +154,16 @@ impl ClassifierModel {
     }
 
     pub fn validate(&self) -> Result<(), ModelError> {
-        let method =
-            method_of(self.method).map_err(|e| ModelError::field("model.method", e.to_string()))?;
+        let method = method_of(self.method).map_err(|e| ModelError::FieldCheck {
+            field: "model.method",
+            source: crate::error::Kept::new(e),
+        })?;
         method
             .check(&self.size)
-            .map_err(|e| ModelError::field("model.size", e.to_string()))?;
+            .map_err(|source| ModelError::MethodCheck {
+                field: "model.size",
+                source,
+            })?;
         let fitted = self.fitted()?;
         self.inputs.validate(fitted.dim())?;
         if fitted.n_classes() != self.classes.len() {

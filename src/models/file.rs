@@ -242,14 +242,12 @@ impl ModelFile {
     /// Parse and check a model file's text (`path` names it in errors).
     pub fn from_json(text: &str, path: &str) -> Result<ModelFile, ModelError> {
         let text = crate::fsutil::without_bom(text);
-        let file_err = |message: String| ModelError::File {
-            path: path.into(),
-            message,
-        };
-        check_head(serde_json::from_str(text).map_err(|e| file_err(not_a_model(e)))?)
-            .map_err(file_err)?;
-        let file: ModelFile = serde_json::from_str(text).map_err(|e| file_err(format!("{e}")))?;
-        file.validate().map_err(|e| file_err(e.to_string()))?;
+        check_head(
+            serde_json::from_str(text).map_err(|e| not_a_model(path, e))?,
+            path,
+        )?;
+        let file: ModelFile = serde_json::from_str(text).map_err(|e| json_err(path, "", e))?;
+        file.validate().map_err(|e| invalid(path, e))?;
         Ok(file)
     }
 
@@ -265,54 +263,79 @@ struct Head {
     version: Option<serde_json::Value>,
 }
 
-fn not_a_model(e: serde_json::Error) -> String {
-    match e.classify() {
-        serde_json::error::Category::Syntax | serde_json::error::Category::Eof => {
-            format!("not JSON: {e}")
-        }
-        _ => format!("not a model file: {e}"),
+fn json_err(path: &str, what: &'static str, source: serde_json::Error) -> ModelError {
+    ModelError::Json {
+        path: path.into(),
+        what,
+        source,
     }
+}
+
+fn invalid(path: &str, e: ModelError) -> ModelError {
+    ModelError::Invalid {
+        path: path.into(),
+        source: crate::error::Kept::new(e),
+    }
+}
+
+fn not_a_model(path: &str, e: serde_json::Error) -> ModelError {
+    let what = match e.classify() {
+        serde_json::error::Category::Syntax | serde_json::error::Category::Eof => "not JSON: ",
+        _ => "not a model file: ",
+    };
+    json_err(path, what, e)
 }
 
 /// Format and version first, so that a newer or foreign file says so rather than failing
 /// on whichever field changed.
-fn check_head(head: Head) -> Result<(), String> {
+fn check_head(head: Head, path: &str) -> Result<(), ModelError> {
+    let file_err = |message: String| ModelError::File {
+        path: path.into(),
+        message,
+    };
     match head.format.as_ref().and_then(|v| v.as_str()) {
         Some(FORMAT) => {}
-        Some(other) => return Err(format!("format {other:?}: not a model file ({FORMAT:?})")),
-        None => return Err(format!("no \"format\": {FORMAT:?} field")),
+        Some(other) => {
+            return Err(file_err(format!(
+                "format {other:?}: not a model file ({FORMAT:?})"
+            )));
+        }
+        None => return Err(file_err(format!("no \"format\": {FORMAT:?} field"))),
     }
     match head.version.as_ref().and_then(|v| v.as_u64()) {
         Some(v) if v == u64::from(VERSION) => Ok(()),
-        Some(v) => Err(format!(
+        Some(v) => Err(file_err(format!(
             "model file version {v}; this build reads version {VERSION}"
-        )),
-        None => Err("no numeric \"version\" field".into()),
+        ))),
+        None => Err(file_err("no numeric \"version\" field".into())),
     }
 }
 
 /// Read and check a model file, parsed as it is read (at most
 /// [`crate::fsutil::max_bytes::MODEL`]; the head first, then the whole).
 pub fn load(path: &Path) -> Result<ModelFile, ModelError> {
-    let file_err = |message: String| ModelError::File {
-        path: path.display().to_string(),
-        message,
-    };
+    let name = path.display().to_string();
     let open = || {
-        crate::fsutil::open_json(path, crate::fsutil::max_bytes::MODEL, "model file")
-            .map_err(|e| file_err(e.to_string()))
+        crate::fsutil::open_json(path, crate::fsutil::max_bytes::MODEL, "model file").map_err(
+            |source| ModelError::Io {
+                path: name.clone(),
+                source,
+            },
+        )
     };
-    check_head(serde_json::from_reader(open()?).map_err(|e| file_err(not_a_model(e)))?)
-        .map_err(file_err)?;
-    let file: ModelFile = serde_json::from_reader(open()?).map_err(|e| file_err(format!("{e}")))?;
-    file.validate().map_err(|e| file_err(e.to_string()))?;
+    check_head(
+        serde_json::from_reader(open()?).map_err(|e| not_a_model(&name, e))?,
+        &name,
+    )?;
+    let file: ModelFile = serde_json::from_reader(open()?).map_err(|e| json_err(&name, "", e))?;
+    file.validate().map_err(|e| invalid(&name, e))?;
     Ok(file)
 }
 
 /// Write a model file atomically (a killed write leaves the old file or none).
 pub fn save(file: &ModelFile, path: &Path) -> Result<(), ModelError> {
-    crate::fsutil::write_atomic(path, file.to_json().as_bytes()).map_err(|e| ModelError::File {
+    crate::fsutil::write_atomic(path, file.to_json().as_bytes()).map_err(|source| ModelError::Io {
         path: path.display().to_string(),
-        message: e.to_string(),
+        source,
     })
 }

@@ -43,7 +43,7 @@ pub(super) fn sequences(
         range,
         codes,
     )
-    .map_err(|e| ModelError::Mismatch(e.to_string()))
+    .map_err(ModelError::Sequences)
 }
 
 impl SequenceInputs {
@@ -125,9 +125,12 @@ impl SequenceInputs {
                 "model.codes",
                 format!("dictionaries for features {} without codes", self.features),
             )),
-            Some(c) => c
-                .validate()
-                .map_err(|e| ModelError::field("model.codes", e)),
+            Some(c) => {
+                c.validate()
+                    .map_err(|crate::features::FeatureError::InvalidData(reason)| {
+                        ModelError::field("model.codes", reason)
+                    })
+            }
             None => Ok(()),
         }
     }

@@ -56,27 +56,92 @@ pub use table_one::{
 
 use crate::experiments::stability::StabilityError;
 
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+/// Why a model could not be read, written, fitted or applied. A lower layer's error is kept
+/// as the source: the file's I/O or JSON error, the field check that failed, the session's
+/// features, labels or shapes that do not fit, the stability pipeline, a learner, an
+/// experiment or a registered method.
+#[derive(Debug, thiserror::Error)]
 pub enum ModelError {
-    /// A model file that cannot be read or is not a model file.
+    /// A model file that is not a model file (its format or version).
     #[error("{path}: {message}")]
     File { path: String, message: String },
+    /// A model file that cannot be opened, read or written.
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A model file whose JSON does not read; `what` says so ("not JSON: ") where the head
+    /// is read.
+    #[error("{path}: {what}{source}")]
+    Json {
+        path: String,
+        what: &'static str,
+        #[source]
+        source: serde_json::Error,
+    },
+    /// A model file that parses but whose fields do not check.
+    #[error("{path}: {source}")]
+    Invalid {
+        path: String,
+        #[source]
+        source: crate::error::Kept<ModelError>,
+    },
     /// A field of a model file that is present but wrong.
     #[error("model field `{field}`: {reason}")]
     Field { field: String, reason: String },
+    /// A field of a model file that a method's own check refuses.
+    #[error("model field `{field}`: {source}")]
+    FieldCheck {
+        field: &'static str,
+        #[source]
+        source: crate::error::Kept<ModelError>,
+    },
+    /// A model file's method state or size that its method refuses.
+    #[error("model field `{field}`: {source}")]
+    MethodCheck {
+        field: &'static str,
+        #[source]
+        source: crate::catalogue::ClassifierError,
+    },
     /// A session that the model cannot read (other sensors, taxels, classes).
     #[error("the session does not fit the model: {0}")]
     Mismatch(String),
+    /// The session's feature sequences on the model's range.
+    #[error("the session does not fit the model: {0}")]
+    Sequences(#[source] crate::features::sequence::SequenceError),
+    /// The session's labels under the model's label set.
+    #[error("the session does not fit the model: {0}")]
+    Labels(#[source] crate::experiments::ExperimentError),
+    /// The session's Table I features or their normalisation.
+    #[error("the session does not fit the model: {0}")]
+    Features(#[source] crate::features::FeatureError),
+    /// The session's images in the model's sensor shape.
+    #[error("the session does not fit the model: {0}")]
+    Shape(#[source] ndarray::ShapeError),
+    /// The RBF SVM of a Table I model on the session's features.
+    #[error("the session does not fit the model: {0}")]
+    KernelSvm(#[source] crate::svm::kernel_svm::KernelSvmError),
+    /// k-means or the SOM of a Table I model on the session's features.
+    #[error("the session does not fit the model: {0}")]
+    Cluster(#[source] crate::cluster::ClusterError),
+    /// Fitting a Table I model (k-means, the SOM, the RBF SVM and its grid).
+    #[error("{0}")]
+    Baselines(#[source] crate::experiments::baselines::BaselinesError),
+    /// A registered method's error that is not the session's (its parameters, or a cancel).
+    #[error("{0}")]
+    Classifier(#[source] crate::catalogue::ClassifierError),
     #[error("{0}")]
     Param(String),
     /// A prediction that came out infinite or NaN: never reported as a class.
     #[error("{0}")]
     NotFinite(String),
-    #[error(transparent)]
+    #[error("{0}")]
     Stability(#[from] StabilityError),
-    #[error(transparent)]
+    #[error("{0}")]
     Learner(#[from] crate::learners::LearnerError),
-    #[error(transparent)]
+    #[error("{0}")]
     Experiment(#[from] crate::experiments::ExperimentError),
 }
 

@@ -91,7 +91,7 @@ pub(super) fn labels(
     session: &Session,
     label_set: &str,
 ) -> Result<(Vec<usize>, Vec<String>), ModelError> {
-    session_labels(session, label_set).map_err(|e| ModelError::Mismatch(e.to_string()))
+    session_labels(session, label_set).map_err(ModelError::Labels)
 }
 
 /// Teach `model` every grasp of `session` in the protocol's order (one grasp per class

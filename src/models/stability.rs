@@ -300,11 +300,11 @@ impl StabilityClassifier {
         let dim = images.ncols() / sensors;
         let x = images
             .into_shape_with_order((rows, dim))
-            .map_err(|e| ModelError::Mismatch(e.to_string()))?;
+            .map_err(ModelError::Shape)?;
         let coded = codes
             .dictionary
             .encode(x.view(), codes.gamma)
-            .map_err(stability::StabilityError::from)?;
+            .map_err(stability::StabilityError::sparse)?;
         Ok(codes.inputs.features(coded, x.view(), sensors))
     }
 
@@ -498,7 +498,7 @@ pub fn fit_stability(
             let svm = s
                 .svm
                 .fit(data.images().view(), &data.labels)
-                .map_err(stability::StabilityError::from)?;
+                .map_err(stability::StabilityError::svm)?;
             Ok(StabilityFit {
                 classifier: StabilityClassifier::new(data, session, None, svm),
                 selection: scores(&baseline.kfold, &baseline.objects),

@@ -43,10 +43,6 @@ pub struct TableOneModel {
     pub classes: Vec<String>,
 }
 
-fn err(e: impl std::fmt::Display) -> ModelError {
-    ModelError::Mismatch(e.to_string())
-}
-
 /// The session's Table I features, checked against the model's names.
 fn features(session: &Session, names: Option<&[String]>) -> Result<Array2<f64>, ModelError> {
     let found = feature_names(session);
@@ -61,7 +57,7 @@ fn features(session: &Session, names: Option<&[String]>) -> Result<Array2<f64>, 
             found.join(", ")
         )));
     }
-    session_features(session).map_err(err)
+    session_features(session).map_err(ModelError::Features)
 }
 
 /// The rows whose statistics stand for the session under `calibration` (None: the
@@ -104,19 +100,26 @@ impl TableOneModel {
             TableOneLearner::RbfSvm(svm) => {
                 let mut svm = svm.clone();
                 if let (Some(part), Some(own)) = (rows(x.view(), calibration)?, &svm.scaler) {
-                    svm.scaler = Some(Normaliser::fit(own.kind, part).map_err(err)?);
+                    svm.scaler =
+                        Some(Normaliser::fit(own.kind, part).map_err(ModelError::Features)?);
                 }
-                svm.predict(x.view()).map_err(err)
+                svm.predict(x.view()).map_err(ModelError::KernelSvm)
             }
             learner @ (TableOneLearner::KMeans(_) | TableOneLearner::Som(_)) => {
                 let normaliser = match rows(x.view(), calibration)? {
-                    Some(part) => Normaliser::fit(self.normaliser.kind, part).map_err(err)?,
+                    Some(part) => {
+                        Normaliser::fit(self.normaliser.kind, part).map_err(ModelError::Features)?
+                    }
                     None => self.normaliser.clone(),
                 };
-                let data = normaliser.transform(x.view()).map_err(err)?;
+                let data = normaliser
+                    .transform(x.view())
+                    .map_err(ModelError::Features)?;
                 match learner {
-                    TableOneLearner::KMeans(k) => k.assign(data.view()).map_err(err),
-                    TableOneLearner::Som(m) => m.assign(data.view()).map_err(err),
+                    TableOneLearner::KMeans(k) => {
+                        k.assign(data.view()).map_err(ModelError::Cluster)
+                    }
+                    TableOneLearner::Som(m) => m.assign(data.view()).map_err(ModelError::Cluster),
                     TableOneLearner::RbfSvm(_) => unreachable!("handled above"),
                 }
             }
@@ -317,8 +320,11 @@ pub fn fit_table_one(
     let params = &opts.params;
     let mut parameters = vec![("seed".to_string(), params.seed.to_string())];
     let x = features(session, None)?;
-    let normaliser = Normaliser::fit(params.normalisation, x.view()).map_err(err)?;
-    let data = normaliser.transform(x.view()).map_err(err)?;
+    let normaliser =
+        Normaliser::fit(params.normalisation, x.view()).map_err(ModelError::Features)?;
+    let data = normaliser
+        .transform(x.view())
+        .map_err(ModelError::Features)?;
     let (labels, classes) = super::recognition::labels(session, &opts.label_set)?;
     let mut selection = Vec::new();
     let learner = match opts.method {
@@ -329,22 +335,25 @@ pub fn fit_table_one(
                 seed: params.seed,
             }
             .fit(data.view())
-            .map_err(err)?,
+            .map_err(|e| ModelError::Baselines(e.into()))?,
         ),
         MethodId::Som => {
             let som = SomParams {
                 seed: params.seed,
                 ..params.som.clone()
             };
-            TableOneLearner::Som(som.fit(data.view()).map_err(err)?)
+            TableOneLearner::Som(
+                som.fit(data.view())
+                    .map_err(|e| ModelError::Baselines(e.into()))?,
+            )
         }
         MethodId::RbfSvm => {
             let searched;
             let grid = match grid {
                 Some(g) => g,
                 None => {
-                    searched =
-                        svm_grid(x.view(), &labels, params, &Progress::new()).map_err(err)?;
+                    searched = svm_grid(x.view(), &labels, params, &Progress::new())
+                        .map_err(ModelError::Baselines)?;
                     &searched
                 }
             };
@@ -359,7 +368,10 @@ pub fn fit_table_one(
                 gamma: grid.best.gamma,
                 ..Default::default()
             };
-            TableOneLearner::RbfSvm(p.fit(x.view(), &labels).map_err(err)?)
+            TableOneLearner::RbfSvm(
+                p.fit(x.view(), &labels)
+                    .map_err(|e| ModelError::Baselines(e.into()))?,
+            )
         }
         other @ (MethodId::SparseSvm
         | MethodId::RawSvm

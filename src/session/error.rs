@@ -3,6 +3,8 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use crate::error::Kept;
+
 /// Where in a file a problem is.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Location {
@@ -23,12 +25,24 @@ pub fn bag_time(ns: u64) -> String {
     format!("{}.{:09}", ns / 1_000_000_000, ns % 1_000_000_000)
 }
 
-#[derive(Debug, Clone, PartialEq, Eq)]
+/// A problem with a session file: the file, where in it, and what. When a lower error (the
+/// file system's, the JSON parser's) is the cause, its text is the message and it is kept
+/// as the `source()`; two errors are equal when they say the same (file, place, message).
+#[derive(Debug, Clone)]
 pub struct SessionError {
     pub path: PathBuf,
     pub location: Location,
     pub message: String,
+    pub source: Option<Kept<dyn std::error::Error + Send + Sync>>,
 }
+
+impl PartialEq for SessionError {
+    fn eq(&self, other: &Self) -> bool {
+        self.path == other.path && self.location == other.location && self.message == other.message
+    }
+}
+
+impl Eq for SessionError {}
 
 impl SessionError {
     pub fn file(path: &Path, message: impl Into<String>) -> Self {
@@ -36,6 +50,7 @@ impl SessionError {
             path: path.to_path_buf(),
             location: Location::File,
             message: message.into(),
+            source: None,
         }
     }
 
@@ -44,6 +59,7 @@ impl SessionError {
             path: path.to_path_buf(),
             location: Location::Line { line, field: None },
             message: message.into(),
+            source: None,
         }
     }
 
@@ -60,6 +76,7 @@ impl SessionError {
                 field: Some(field.into()),
             },
             message: message.into(),
+            source: None,
         }
     }
 
@@ -68,6 +85,7 @@ impl SessionError {
             path: path.to_path_buf(),
             location: Location::Field(field.into()),
             message: message.into(),
+            source: None,
         }
     }
 
@@ -84,11 +102,24 @@ impl SessionError {
                 time_ns,
             },
             message: message.into(),
+            source: None,
         }
     }
 
-    pub fn io(path: &Path, err: &std::io::Error) -> Self {
-        Self::file(path, err.to_string())
+    /// The file system's error, kept as the source.
+    pub fn io(path: &Path, err: std::io::Error) -> Self {
+        Self::caused(path, err)
+    }
+
+    /// A lower error about the file as a whole: its text is the message, and it is kept.
+    pub fn caused(path: &Path, source: impl std::error::Error + Send + Sync + 'static) -> Self {
+        Self::file(path, source.to_string()).with_source(source)
+    }
+
+    /// `self` with `source` kept as its cause.
+    pub fn with_source(mut self, source: impl std::error::Error + Send + Sync + 'static) -> Self {
+        self.source = Some(Kept::any(source));
+        self
     }
 }
 
@@ -123,7 +154,14 @@ impl fmt::Display for SessionError {
     }
 }
 
-impl std::error::Error for SessionError {}
+impl std::error::Error for SessionError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match &self.source {
+            Some(kept) => Some(&**kept),
+            None => None,
+        }
+    }
+}
 
 /// Parse one number of a text format: finite, or an error naming the field.
 pub(crate) fn parse_number(
@@ -155,7 +193,7 @@ pub(crate) fn parse_number(
 
 /// Read a text file, naming the line of the first byte that is not UTF-8.
 pub(crate) fn read_text(path: &Path) -> Result<String, SessionError> {
-    let bytes = std::fs::read(path).map_err(|e| SessionError::io(path, &e))?;
+    let bytes = std::fs::read(path).map_err(|e| SessionError::io(path, e))?;
     String::from_utf8(bytes).map_err(|e| {
         let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
         let line = valid.iter().filter(|&&c| c == b'\n').count() + 1;
@@ -173,7 +211,7 @@ pub(crate) fn open_json(
     what: &str,
 ) -> Result<std::io::BufReader<std::fs::File>, SessionError> {
     use std::io::BufRead;
-    let io = |e: std::io::Error| SessionError::io(path, &e);
+    let io = |e: std::io::Error| SessionError::io(path, e);
     let mut r = crate::fsutil::open_json(path, max_bytes, what).map_err(io)?;
     let block = r.capacity();
     let head = r.fill_buf().map_err(io)?;

@@ -55,7 +55,7 @@ impl Journal {
     /// and is refused, never overwritten.
     pub fn create(recording: &Path, header: &Session) -> Result<Journal, SessionError> {
         let path = journal_path(recording);
-        let io = |e: std::io::Error| SessionError::io(&path, &e);
+        let io = |e: std::io::Error| SessionError::io(&path, e);
         let file = OpenOptions::new()
             .write(true)
             .create_new(true)
@@ -98,7 +98,7 @@ impl Journal {
         self.file
             .write_all(&bytes)
             .and_then(|()| self.file.sync_data())
-            .map_err(|e| SessionError::io(&self.path, &e))?;
+            .map_err(|e| SessionError::io(&self.path, e))?;
         self.written += bytes.len() as u64;
         Ok(())
     }
@@ -124,13 +124,13 @@ pub fn check_free(recording: &Path) -> Result<(), SessionError> {
 /// The session a journal holds: the header and every complete grasp line, validated.
 pub fn read(journal: &Path) -> Result<(Session, u32), SessionError> {
     let mut reader = fsutil::open_json(journal, fsutil::max_bytes::SESSION, "recording journal")
-        .map_err(|e| SessionError::io(journal, &e))?;
+        .map_err(|e| SessionError::io(journal, e))?;
     let mut text = String::new();
     let mut next = |text: &mut String| -> Result<Option<bool>, SessionError> {
         text.clear();
         let n = reader
             .read_line(text)
-            .map_err(|e| SessionError::io(journal, &e))?;
+            .map_err(|e| SessionError::io(journal, e))?;
         Ok((n > 0).then(|| text.ends_with('\n')))
     };
     let json = |line: usize, e: serde_json::Error| SessionError::line(journal, line, e.to_string());
@@ -205,7 +205,7 @@ pub fn finalise(recording: &Path) -> Result<Session, SessionError> {
 fn settle(recording: &Path, session: Session) -> Result<Session, SessionError> {
     let journal = journal_path(recording);
     native::save(&session, recording)?;
-    fs::remove_file(&journal).map_err(|e| SessionError::io(&journal, &e))?;
+    fs::remove_file(&journal).map_err(|e| SessionError::io(&journal, e))?;
     Ok(session)
 }
 

@@ -46,7 +46,7 @@ struct File {
     session: Session,
 }
 
-pub(crate) fn json_error(path: &Path, e: &serde_json::Error) -> SessionError {
+pub(crate) fn json_error(path: &Path, e: serde_json::Error) -> SessionError {
     let message = match e.classify() {
         serde_json::error::Category::Eof => format!("the file ends too early (truncated?): {e}"),
         _ => e.to_string(),
@@ -67,7 +67,9 @@ pub(crate) fn json_error(path: &Path, e: &serde_json::Error) -> SessionError {
             Location::File
         },
         message,
+        source: None,
     }
+    .with_source(e)
 }
 
 /// Parse a native session from text (`path` names it in errors).
@@ -76,7 +78,7 @@ pub fn from_str(text: &str, path: &Path) -> Result<Session, SessionError> {
     if text.trim().is_empty() {
         return Err(SessionError::file(path, "the file is empty"));
     }
-    let json = |e: serde_json::Error| json_error(path, &e);
+    let json = |e: serde_json::Error| json_error(path, e);
     check_header(serde_json::from_str(text).map_err(json)?, path)?;
     let file: File = serde_json::from_str(text).map_err(json)?;
     validate(&file.session, path)?;
@@ -88,7 +90,7 @@ pub fn from_str(text: &str, path: &Path) -> Result<Session, SessionError> {
 pub fn load(path: &Path) -> Result<Session, SessionError> {
     fn parse<T: DeserializeOwned>(path: &Path) -> Result<T, SessionError> {
         let reader = open_json(path, crate::fsutil::max_bytes::SESSION, "session file")?;
-        serde_json::from_reader(reader).map_err(|e| json_error(path, &e))
+        serde_json::from_reader(reader).map_err(|e| json_error(path, e))
     }
     check_header(parse(path)?, path)?;
     let file: File = parse(path)?;
@@ -210,5 +212,5 @@ pub fn to_string(session: &Session) -> String {
 /// Write a session file atomically (temporary file, then rename).
 pub fn save(session: &Session, path: &Path) -> Result<(), SessionError> {
     fsutil::write_atomic_with(path, |w| to_writer(session, w))
-        .map_err(|e| SessionError::io(path, &e))
+        .map_err(|e| SessionError::io(path, e))
 }

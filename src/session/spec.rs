@@ -443,7 +443,7 @@ impl ImportSpec {
     /// Read a spec file as it is parsed (at most [`crate::fsutil::max_bytes::SPEC`]).
     pub fn load(path: &Path) -> Result<ImportSpec, SessionError> {
         let reader = open_json(path, crate::fsutil::max_bytes::SPEC, "spec")?;
-        let file = serde_json::from_reader(reader).map_err(|e| json_error(path, &e))?;
+        let file = serde_json::from_reader(reader).map_err(|e| json_error(path, e))?;
         Self::from_file(file, path)
     }
 
@@ -453,7 +453,7 @@ impl ImportSpec {
         if text.trim().is_empty() {
             return Err(SessionError::file(path, "the spec is empty"));
         }
-        let file = serde_json::from_str(text).map_err(|e| json_error(path, &e))?;
+        let file = serde_json::from_str(text).map_err(|e| json_error(path, e))?;
         Self::from_file(file, path)
     }
 

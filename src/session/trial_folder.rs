@@ -117,12 +117,12 @@ fn walk(
     limit: usize,
     out: &mut Vec<TrialFile>,
 ) -> Result<(), SessionError> {
-    let entries = std::fs::read_dir(dir).map_err(|e| SessionError::io(dir, &e))?;
+    let entries = std::fs::read_dir(dir).map_err(|e| SessionError::io(dir, e))?;
     for entry in entries {
         if out.len() >= limit {
             return Ok(());
         }
-        let entry = entry.map_err(|e| SessionError::io(dir, &e))?;
+        let entry = entry.map_err(|e| SessionError::io(dir, e))?;
         let path = entry.path();
         let name = entry.file_name();
         let Some(name) = name.to_str() else {
@@ -134,7 +134,7 @@ fn walk(
         if name.starts_with('.') {
             continue;
         }
-        let kind = entry.file_type().map_err(|e| SessionError::io(&path, &e))?;
+        let kind = entry.file_type().map_err(|e| SessionError::io(&path, e))?;
         let relative = format!("{prefix}{name}");
         if kind.is_dir() {
             if depth > 1 {

@@ -35,19 +35,6 @@ pub use eps_l1::{EpsL1Newton, eps_l1_objective};
 pub use feature_sign::{FeatureSign, FsStats, l1_objective, l1_optimality_violation};
 pub use init::DictInit;
 
-/// Errors of the sparse-coding engine: bad parameters or data, never a panic.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum SparseError {
-    #[error("invalid parameter: {0}")]
-    Param(String),
-    #[error("invalid data: {0}")]
-    Data(String),
-    #[error("cancelled")]
-    Cancelled,
-}
-
-impl From<crate::jobs::Cancelled> for SparseError {
-    fn from(_: crate::jobs::Cancelled) -> Self {
-        SparseError::Cancelled
-    }
-}
+/// Errors of the sparse-coding engine: bad parameters or data, or a cancelled run, never a
+/// panic (the numeric methods' shared error).
+pub type SparseError = crate::error::MethodError;

@@ -22,7 +22,7 @@ pub enum KernelSvmError {
     #[error("invalid data: {0}")]
     InvalidData(String),
     /// The scaling of the inputs failed (its source kept).
-    #[error(transparent)]
+    #[error("{0}")]
     Features(#[from] FeatureError),
 }
 

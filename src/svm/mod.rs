@@ -12,19 +12,6 @@ pub use eval::{
 };
 pub use linear::{ClassWeight, LinearSvm, LinearSvmParams, Loss, Solver, SvmWorkspace};
 
-/// Errors of the SVM engine: bad parameters or data, never a panic.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum SvmError {
-    #[error("invalid parameter: {0}")]
-    Param(String),
-    #[error("invalid data: {0}")]
-    Data(String),
-    #[error("cancelled")]
-    Cancelled,
-}
-
-impl From<crate::jobs::Cancelled> for SvmError {
-    fn from(_: crate::jobs::Cancelled) -> Self {
-        SvmError::Cancelled
-    }
-}
+/// Errors of the SVM engine: bad parameters or data, or a cancelled run, never a panic (the
+/// numeric methods' shared error).
+pub type SvmError = crate::error::MethodError;

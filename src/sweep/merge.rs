@@ -33,7 +33,7 @@ fn merge_with<E: Sweepable>(
     progress: &Progress,
 ) -> Result<(Value, Option<AnalysisResult>), SweepError> {
     fn parse<T: serde::de::DeserializeOwned>(i: usize, v: Value) -> Result<T, SweepError> {
-        serde_json::from_value(v).map_err(|err| SweepError::Experiment(format!("item {i}: {err}")))
+        serde_json::from_value(v).map_err(super::json_err(format!("item {i}")))
     }
     let items: Vec<E::Item> = items
         .iter()
@@ -46,9 +46,7 @@ fn merge_with<E: Sweepable>(
         .map(|(i, v)| parse(i, v))
         .collect::<Result<_, _>>()?;
     progress.set(0.0, format!("{}: merging", e.name()));
-    let result = e
-        .assemble(session, &items, outputs, time, progress)
-        .map_err(|e| SweepError::Experiment(e.to_string()))?;
+    let result = e.assemble(session, &items, outputs, time, progress)?;
     let analysis = e.analysis(session, &result);
     Ok((to_value(&result)?, analysis))
 }
@@ -81,11 +79,9 @@ pub fn merge(dir: &Path, progress: &Progress) -> Result<Merged, SweepError> {
         threads: 0,
     };
     for s in 0..plan.shard_count() {
-        let f = read_shard(dir, s, &plan, &plan_hash)
-            .map_err(|e| SweepError::Incomplete(e.to_string()))?
-            .ok_or_else(|| {
-                SweepError::Incomplete(format!("shard {s} vanished during the merge"))
-            })?;
+        let f = read_shard(dir, s, &plan, &plan_hash)?.ok_or_else(|| {
+            SweepError::Incomplete(format!("shard {s} vanished during the merge"))
+        })?;
         time.seconds += f.seconds;
         time.threads = time.threads.max(f.threads);
         for (i, v) in f.items.into_iter().zip(f.outputs) {

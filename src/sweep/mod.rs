@@ -85,27 +85,50 @@ impl Experiment {
     }
 }
 
+/// Why a sweep step failed: a file of the plan folder (its I/O, JSON or session error
+/// kept), a plan or shard that does not match, the experiment's own error, a bad parameter,
+/// or shards not done.
 #[derive(Debug, thiserror::Error)]
 pub enum SweepError {
-    #[error("{path}: {message}")]
-    Io { path: String, message: String },
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
     #[error("{path}: {message}")]
     Format { path: String, message: String },
+    /// A file of the plan folder, or an item or output in it, that is not the JSON it should
+    /// be (`what` says which and where).
+    #[error("{what}: {source}")]
+    Json {
+        what: String,
+        #[source]
+        source: serde_json::Error,
+    },
+    /// The plan's copy of the session does not read.
+    #[error("{0}")]
+    Session(#[from] crate::session::SessionError),
     #[error("{0}")]
     Mismatch(String),
     #[error("{0}")]
-    Experiment(String),
+    Experiment(#[from] crate::experiments::ExperimentError),
     #[error("{0}")]
     Param(String),
     #[error("{0}")]
     Incomplete(String),
 }
 
-fn io_err(path: &Path, e: impl std::fmt::Display) -> SweepError {
+fn io_err(path: &Path, e: std::io::Error) -> SweepError {
     SweepError::Io {
         path: path.display().to_string(),
-        message: e.to_string(),
+        source: e,
     }
+}
+
+fn json_err(what: impl Into<String>) -> impl FnOnce(serde_json::Error) -> SweepError {
+    let what = what.into();
+    move |source| SweepError::Json { what, source }
 }
 
 fn format_err(path: &Path, e: impl std::fmt::Display) -> SweepError {
@@ -218,11 +241,11 @@ fn read_bounded(path: &Path) -> std::io::Result<Vec<u8>> {
 }
 
 fn to_value<T: Serialize>(v: &T) -> Result<Value, SweepError> {
-    serde_json::to_value(v).map_err(|e| SweepError::Experiment(e.to_string()))
+    serde_json::to_value(v).map_err(json_err("a value of the experiment"))
 }
 
 fn write_json(path: &Path, v: &impl Serialize) -> Result<(), SweepError> {
-    let text = serde_json::to_string_pretty(v).map_err(|e| io_err(path, e))?;
+    let text = serde_json::to_string_pretty(v).map_err(json_err(path.display().to_string()))?;
     fsutil::write_atomic(path, text.as_bytes()).map_err(|e| io_err(path, e))
 }
 

@@ -10,7 +10,7 @@ use serde_json::Value;
 use super::sbatch::{Resources, check_script_text, sbatch_script};
 use super::{
     Experiment, PLAN_FILE, PLAN_TAG, Plan, PlanRequest, SBATCH_FILE, SESSION_FILE, SHARDS_DIR,
-    SWEEP_VERSION, SessionRef, SweepError, format_err, io_err, read_bounded, to_value,
+    SWEEP_VERSION, SessionRef, SweepError, format_err, io_err, json_err, read_bounded, to_value,
     with_experiment, write_json,
 };
 use crate::experiments::experiment::Experiment as Sweepable;
@@ -45,9 +45,7 @@ struct Split {
 }
 
 fn plan_items<E: Sweepable>(e: &E, session: &Session, shards: usize) -> Result<Split, SweepError> {
-    let items = e
-        .items(session)
-        .map_err(|e| SweepError::Experiment(e.to_string()))?;
+    let items = e.items(session)?;
     if items.is_empty() {
         return Err(SweepError::Param("the experiment has no work items".into()));
     }
@@ -137,7 +135,7 @@ pub fn read_plan(dir: &Path) -> Result<(Plan, String), SweepError> {
         format: Option<String>,
         version: Option<u64>,
     }
-    let h: Header = serde_json::from_slice(&bytes).map_err(|e| format_err(&path, e))?;
+    let h: Header = serde_json::from_slice(&bytes).map_err(json_err(path.display().to_string()))?;
     if h.format.as_deref() != Some(PLAN_TAG) {
         return Err(format_err(&path, "not a sweep plan"));
     }
@@ -150,7 +148,8 @@ pub fn read_plan(dir: &Path) -> Result<(Plan, String), SweepError> {
             ),
         ));
     }
-    let plan: Plan = serde_json::from_slice(&bytes).map_err(|e| format_err(&path, e))?;
+    let plan: Plan =
+        serde_json::from_slice(&bytes).map_err(json_err(path.display().to_string()))?;
     let n = plan.items.len();
     let mut seen = vec![false; n];
     for (s, items) in plan.shards.iter().enumerate() {
@@ -211,5 +210,5 @@ pub fn read_session(dir: &Path, plan: &Plan) -> Result<Session, SweepError> {
         )));
     }
     let text = String::from_utf8(bytes).map_err(|e| format_err(&path, e))?;
-    session::native::from_str(&text, &path).map_err(|e| format_err(&path, e))
+    Ok(session::native::from_str(&text, &path)?)
 }

@@ -10,7 +10,8 @@ use serde_json::Value;
 use super::plan::{read_plan, read_session, session_copy};
 use super::{
     Plan, SHARD_TAG, SHARDS_DIR, SWEEP_VERSION, ShardFailure, ShardFile, SweepError, failure_path,
-    format_err, host, io_err, read_bounded, shard_path, to_value, with_experiment, write_json,
+    format_err, host, io_err, json_err, read_bounded, shard_path, to_value, with_experiment,
+    write_json,
 };
 use crate::experiments::experiment::Experiment as Sweepable;
 use crate::experiments::parallel::compute_items;
@@ -43,7 +44,7 @@ pub(super) fn read_shard(
         Err(e) => return Err(io_err(&path, e)),
     };
     let f: ShardFile = serde_json::from_slice(&bytes)
-        .map_err(|e| format_err(&path, format!("not a shard result ({e})")))?;
+        .map_err(json_err(format!("{}: not a shard result", path.display())))?;
     if f.format != SHARD_TAG || f.version != SWEEP_VERSION {
         return Err(format_err(&path, "not a shard result of this version"));
     }
@@ -66,8 +67,7 @@ pub(super) fn read_shard(
             path.display()
         )));
     }
-    with_experiment!(&plan.experiment, e => outputs_fit(e, &f))
-        .map_err(|m| format_err(&path, m))?;
+    with_experiment!(&plan.experiment, e => outputs_fit(e, &f, &path))?;
     Ok(Some(f))
 }
 
@@ -75,16 +75,18 @@ pub(super) fn read_shard(
 /// as read back (a number reads back to the same value and prints the same), different
 /// once one is edited.
 fn outputs_checksum(outputs: &[Value]) -> Result<String, SweepError> {
-    let bytes = serde_json::to_vec(outputs).map_err(|e| SweepError::Experiment(e.to_string()))?;
+    let bytes = serde_json::to_vec(outputs).map_err(json_err("a shard's outputs"))?;
     Ok(fsutil::content_hash(&bytes))
 }
 
 /// Checks that every output of a shard has the experiment's output shape, so that a shard
 /// is only called done when the merge can read it.
-fn outputs_fit<E: Sweepable>(_: &E, f: &ShardFile) -> Result<(), String> {
+fn outputs_fit<E: Sweepable>(_: &E, f: &ShardFile, path: &Path) -> Result<(), SweepError> {
     for (item, v) in f.items.iter().zip(&f.outputs) {
-        serde_json::from_value::<E::Output>(v.clone())
-            .map_err(|err| format!("the output of item {item} is not of its shape ({err})"))?;
+        serde_json::from_value::<E::Output>(v.clone()).map_err(json_err(format!(
+            "{}: the output of item {item} is not of its shape",
+            path.display()
+        )))?;
     }
     Ok(())
 }
@@ -132,15 +134,10 @@ fn compute_shard<E: Sweepable>(
     let items: Vec<E::Item> = items
         .iter()
         .enumerate()
-        .map(|(i, v)| {
-            serde_json::from_value(v.clone())
-                .map_err(|err| SweepError::Experiment(format!("plan item {i}: {err}")))
-        })
+        .map(|(i, v)| serde_json::from_value(v.clone()).map_err(json_err(format!("plan item {i}"))))
         .collect::<Result<_, _>>()?;
     progress.set(0.0, format!("{}: preparing", e.name()));
-    let prep = e
-        .prepare(session, progress)
-        .map_err(|e| SweepError::Experiment(e.to_string()))?;
+    let prep = e.prepare(session, progress)?;
     progress.set(0.0, format!("{}: 0/{} items", e.name(), items.len()));
     // A shard's items are weighed alike: its progress is a count of them.
     let outputs = compute_items(
@@ -150,8 +147,7 @@ fn compute_shard<E: Sweepable>(
         "items",
         |_| 1.0,
         |item, part| e.compute(session, &prep, item, part),
-    )
-    .map_err(|e| SweepError::Experiment(e.to_string()))?;
+    )?;
     outputs.iter().map(to_value).collect()
 }
 

@@ -13,7 +13,7 @@ use crate::experiments::figure_id::FigureId;
 use crate::experiments::result::{AnalysisKind, SizeReason};
 use crate::experiments::stability::report::stability_report;
 use crate::experiments::stability::{
-    Config, DataOptions, GridSpec, PipelineInputs, StabilityData, StabilityError, StabilityOptions,
+    Config, DataOptions, GridSpec, PipelineInputs, StabilityData, StabilityOptions,
 };
 use crate::features::FeatureSet;
 use crate::jobs::JobError;
@@ -325,12 +325,13 @@ impl Room for StabilityRoom {
             work: Box::new(move |p| {
                 let data = StabilityData::from_session(&session, &DataOptions::default())
                     .map_err(JobError::failed)?;
-                let r = crate::experiments::stability::run(&data, &options, p).map_err(
-                    |e| match e {
-                        StabilityError::Cancelled => JobError::Cancelled,
-                        other => JobError::failed(other),
-                    },
-                )?;
+                let r =
+                    crate::experiments::stability::run(&data, &options, p).map_err(|e| match e
+                        .is_cancelled()
+                    {
+                        true => JobError::Cancelled,
+                        false => JobError::failed(e),
+                    })?;
                 // The recommended model leaves the session as a model file (Models list).
                 let model = StabilityFit::from_report(&session, &data, &options, &r)
                     .into_file(&session, &data);

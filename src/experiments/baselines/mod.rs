@@ -23,13 +23,13 @@ use crate::svm::kernel_svm::{KernelSvmError, KernelSvmParams, cross_validate};
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum BaselinesError {
-    #[error(transparent)]
+    #[error("{0}")]
     Cluster(#[from] ClusterError),
-    #[error(transparent)]
+    #[error("{0}")]
     Features(#[from] crate::features::FeatureError),
-    #[error(transparent)]
+    #[error("{0}")]
     Svm(#[from] KernelSvmError),
-    #[error(transparent)]
+    #[error("{0}")]
     Cancelled(#[from] Cancelled),
 }
 

@@ -462,10 +462,6 @@ pub struct ClusteringPrep {
     pub pairs: Option<Arc<PairDistances>>,
 }
 
-fn cluster_err(e: crate::cluster::ClusterError) -> ExperimentError {
-    ExperimentError::Data(e.to_string())
-}
-
 /// Check the parameters and prepare what every item shares.
 pub fn prepare_clustering(
     session: &Session,
@@ -583,12 +579,10 @@ pub fn clustering_item(
             let seed = baseline_seed(params.seed, k, rep);
             let km = SequentialKMeansParams { k, passes: 1, seed }
                 .fit(data.view())
-                .and_then(|m| m.assign(data.view()))
-                .map_err(cluster_err)?;
+                .and_then(|m| m.assign(data.view()))?;
             let som = som_setup(k, seed)
                 .fit(data.view())
-                .and_then(|m| m.assign(data.view()))
-                .map_err(cluster_err)?;
+                .and_then(|m| m.assign(data.view()))?;
             let (a, b) = (scores(&prep.labels, &km), scores(&prep.labels, &som));
             Ok(ClusteringOutput::Baseline {
                 kmeans: (distinct(&km), a.purity, a.ari, a.nmi),

@@ -103,14 +103,21 @@ pub(super) fn sparse_dictionary(
         beta,
         ..settings.dictionary.clone()
     }
-    .fit_within(data.x.view(), progress)?;
+    .fit_within(data.x.view(), progress)
+    .map_err(crate::experiments::stability::StabilityError::sparse)?;
     let mut out = Vec::with_capacity(params.gamma.len());
     for &gamma in &params.gamma {
         progress.checkpoint()?;
-        let codes = fit.dictionary.encode(data.x.view(), gamma)?;
+        let codes = fit
+            .dictionary
+            .encode(data.x.view(), gamma)
+            .map_err(crate::experiments::stability::StabilityError::sparse)?;
         let features = concatenated_codes(codes, data.sensor_count());
         let t1 = Instant::now();
-        let svm = settings.svm.fit(features.view(), &data.labels)?;
+        let svm = settings
+            .svm
+            .fit(features.view(), &data.labels)
+            .map_err(crate::experiments::stability::StabilityError::svm)?;
         let fit_secs = t1.elapsed().as_secs_f64();
         let mut scores = Vec::with_capacity(rep_seeds.len());
         let mut coding = Vec::with_capacity(rep_seeds.len());
@@ -119,17 +126,23 @@ pub(super) fn sparse_dictionary(
             // Coding and deciding are timed once per repetition; the median resists the
             // machine's load.
             let t0 = Instant::now();
-            std::hint::black_box(fit.dictionary.encode(data.x.view(), gamma)?);
+            std::hint::black_box(
+                fit.dictionary
+                    .encode(data.x.view(), gamma)
+                    .map_err(crate::experiments::stability::StabilityError::sparse)?,
+            );
             coding.push(t0.elapsed().as_secs_f64());
             let t2 = Instant::now();
             std::hint::black_box(svm.predict_all(features.view()));
             deciding.push(t2.elapsed().as_secs_f64());
-            let folds = stratified_k_fold(&data.labels, 10, seed)?;
+            let folds = stratified_k_fold(&data.labels, 10, seed)
+                .map_err(crate::experiments::stability::StabilityError::svm)?;
             let svm = crate::svm::LinearSvmParams {
                 seed,
                 ..settings.svm.clone()
             };
-            let cv = cross_validate(features.view(), &data.labels, &folds, &svm)?;
+            let cv = cross_validate(features.view(), &data.labels, &folds, &svm)
+                .map_err(crate::experiments::stability::StabilityError::svm)?;
             scores.push(cv.weighted_success_rate);
         }
         let grasps = data.grasp_count() as f64;

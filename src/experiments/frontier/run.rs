@@ -161,10 +161,6 @@ impl FrontierParams {
     }
 }
 
-pub(super) fn data_err(e: impl std::fmt::Display) -> ExperimentError {
-    ExperimentError::Data(e.to_string())
-}
-
 /// Check the parameters against the session and prepare what every item shares.
 pub fn prepare_frontier(
     session: &Session,
@@ -189,7 +185,7 @@ pub fn prepare_frontier(
         }
         MethodId::KMeans | MethodId::Som | MethodId::RbfSvm => {
             let (labels, _) = session_labels(session, "object")?;
-            let raw = session_features(session).map_err(data_err)?;
+            let raw = session_features(session)?;
             if let Some(k) = params.ks.iter().find(|&&k| k > raw.nrows())
                 && params.method != MethodId::RbfSvm
             {
@@ -202,8 +198,7 @@ pub fn prepare_frontier(
                 raw
             } else {
                 Normaliser::fit(Normalisation::ZScore, raw.view())
-                    .and_then(|n| n.transform(raw.view()))
-                    .map_err(data_err)?
+                    .and_then(|n| n.transform(raw.view()))?
             };
             FrontierPrep::Table { x, labels }
         }
@@ -364,16 +359,14 @@ pub fn frontier_item(
             let t0 = Instant::now();
             let (pred, train) = match params.method {
                 MethodId::KMeans => {
-                    let m = SequentialKMeansParams { k, passes: 1, seed }
-                        .fit(x.view())
-                        .map_err(data_err)?;
+                    let m = SequentialKMeansParams { k, passes: 1, seed }.fit(x.view())?;
                     let train = t0.elapsed().as_secs_f64();
-                    (m.assign(x.view()).map_err(data_err)?, train)
+                    (m.assign(x.view())?, train)
                 }
                 MethodId::Som => {
-                    let m = som_setup(k, seed).fit(x.view()).map_err(data_err)?;
+                    let m = som_setup(k, seed).fit(x.view())?;
                     let train = t0.elapsed().as_secs_f64();
-                    (m.assign(x.view()).map_err(data_err)?, train)
+                    (m.assign(x.view())?, train)
                 }
                 MethodId::SparseSvm
                 | MethodId::RawSvm
@@ -400,13 +393,12 @@ pub fn frontier_item(
             };
             // The fold seeds of the `baselines` grid search: the same cell scores alike.
             let seed = Rng::stream(params.seed, rep as u64).next_u64();
-            let cv = kernel_svm::cross_validate(&p, x.view(), labels, SVM_FOLDS, seed)
-                .map_err(data_err)?;
+            let cv = kernel_svm::cross_validate(&p, x.view(), labels, SVM_FOLDS, seed)?;
             let t0 = Instant::now();
-            let model = p.fit(x.view(), labels).map_err(data_err)?;
+            let model = p.fit(x.view(), labels)?;
             let train = t0.elapsed().as_secs_f64();
             let t1 = Instant::now();
-            std::hint::black_box(model.predict(x.view()).map_err(data_err)?);
+            std::hint::black_box(model.predict(x.view())?);
             let predict = t1.elapsed().as_secs_f64();
             Ok(FrontierOutput::Svm {
                 accuracy: cv.accuracy,

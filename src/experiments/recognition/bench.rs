@@ -344,7 +344,7 @@ pub fn anchor_steps(
         for rep in 0..orders {
             let mut experts = vec![
                 Sogp::new(dim, 1, &gp)
-                    .map_err(|e| ExperimentError::param("gp", e.to_string()))?;
+                    .map_err(|e| ExperimentError::Learner(e.into()))?;
                 classes.len()
             ];
             // Without adaptation the experts share their distinct inputs, as DS's do.

@@ -29,7 +29,6 @@ use ndarray::Array2;
 use serde::{Deserialize, Serialize};
 
 use crate::catalogue::{self, MethodId};
-use crate::cluster::ClusterError;
 use crate::cluster::kmeans::SequentialKMeansParams;
 use crate::cluster::scores::scores;
 use crate::experiments::ExperimentError;
@@ -77,16 +76,6 @@ impl From<PerturbError> for ExperimentError {
                 ExperimentError::InvalidParameter { name, reason }
             }
             PerturbError::Data(d) => ExperimentError::Data(d),
-        }
-    }
-}
-
-impl From<StabilityError> for ExperimentError {
-    fn from(e: StabilityError) -> Self {
-        match e {
-            StabilityError::Cancelled => ExperimentError::Cancelled,
-            StabilityError::Data(d) => ExperimentError::Data(d),
-            e => ExperimentError::Data(e.to_string()),
         }
     }
 }
@@ -140,8 +129,9 @@ impl Family {
 
 /// A method named by `--methods`, with the parameter's name in the error.
 pub fn parse_method(s: &str) -> Result<MethodId, ExperimentError> {
-    s.parse().map_err(|e: crate::catalogue::UnknownMethod| {
-        ExperimentError::param("methods", e.to_string())
+    s.parse().map_err(|source| ExperimentError::UnknownMethod {
+        name: "methods",
+        source,
     })
 }
 

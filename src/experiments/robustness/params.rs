@@ -185,7 +185,10 @@ impl RobustnessParams {
         st.settings
             .svm
             .validate()
-            .map_err(|e| ExperimentError::param("svm", e.to_string()))?;
+            .map_err(|source| ExperimentError::Parameter {
+                name: "svm",
+                source,
+            })?;
         let rc = &self.recognition;
         if !(rc.test_fraction > 0.0 && rc.test_fraction < 1.0) {
             return Err(ExperimentError::param(
@@ -220,7 +223,10 @@ impl RobustnessParams {
         }
         rc.svm
             .validate()
-            .map_err(|e| ExperimentError::param("svm", e.to_string()))?;
+            .map_err(|source| ExperimentError::KernelSvmParameter {
+                name: "svm",
+                source,
+            })?;
         Ok(())
     }
 }

@@ -269,8 +269,7 @@ fn baseline_nmi(
         som_setup(k, cluster_seed)
             .fit(data.view())
             .and_then(|m| m.assign(data.view()))
-    }
-    .map_err(cluster_err)?;
+    }?;
     Ok(scores(sub_labels, &pred).nmi)
 }
 
@@ -330,7 +329,6 @@ pub(super) fn rbf_accuracy(
     let fold_seed = Rng::stream(params.seed, rep as u64).next_u64();
     let fold_of = stratified_folds(labels, rc.svm_folds, fold_seed);
     let mut aux = Rng::stream(params.seed, SVM_STREAM + rep as u64);
-    let svm_err = |e: crate::svm::kernel_svm::KernelSvmError| ExperimentError::Data(e.to_string());
     let mut correct = 0usize;
     for f in 0..rc.svm_folds {
         let train: Vec<usize> = (0..labels.len()).filter(|&i| fold_of[i] != f).collect();
@@ -343,13 +341,8 @@ pub(super) fn rbf_accuracy(
             .map(|(&i, _)| i)
             .collect();
         let y: Vec<usize> = train.iter().map(|&i| labels[i]).collect();
-        let model = rc
-            .svm
-            .fit(gather(train_x.view(), &train).view(), &y)
-            .map_err(svm_err)?;
-        let pred = model
-            .predict(gather(test_x.view(), &test).view())
-            .map_err(svm_err)?;
+        let model = rc.svm.fit(gather(train_x.view(), &train).view(), &y)?;
+        let pred = model.predict(gather(test_x.view(), &test).view())?;
         correct += test
             .iter()
             .zip(&pred)

@@ -53,10 +53,6 @@ pub(super) const CLUSTER_STREAM: u64 = 3 << 40;
 pub(super) const SVM_STREAM: u64 = 4 << 40;
 pub(super) const CLASSIFIER_STREAM: u64 = 5 << 40;
 
-pub(super) fn cluster_err(e: ClusterError) -> ExperimentError {
-    ExperimentError::Data(e.to_string())
-}
-
 /// The run's tasks, in order: the clean protocol's repetitions, then every applicable
 /// sweep's strengths and repetitions. Checks the parameters against the session first.
 pub fn robustness_tasks(

@@ -14,10 +14,13 @@ pub(super) fn learn_dictionary(
     };
     params
         .validate()
-        .map_err(|e| ExperimentError::param("dictionary", e.to_string()))?;
+        .map_err(|source| ExperimentError::Parameter {
+            name: "dictionary",
+            source,
+        })?;
     let fit = params
         .fit_within(data.x.view(), progress)
-        .map_err(StabilityError::from)?;
+        .map_err(StabilityError::sparse)?;
     Ok(fit.dictionary)
 }
 
@@ -31,13 +34,10 @@ pub(super) fn features_of_images(
 ) -> Result<(Array2<f64>, Array2<f64>), ExperimentError> {
     let g = images.nrows();
     // One grasp's image is its sensors' patches side by side: a view, not a copy.
-    let patches = images
-        .view()
-        .into_shape_with_order((g * sensors, dim))
-        .map_err(|e| ExperimentError::Data(e.to_string()))?;
+    let patches = images.view().into_shape_with_order((g * sensors, dim))?;
     let codes = dictionary
         .encode(patches, gamma)
-        .map_err(StabilityError::from)?;
+        .map_err(StabilityError::sparse)?;
     Ok((concatenated_codes(codes, sensors), images))
 }
 
@@ -88,9 +88,7 @@ pub(super) fn svm_confusion(
 ) -> Result<Confusion, ExperimentError> {
     let xt = gather(train_x.view(), train);
     let yt: Vec<bool> = train.iter().map(|&i| labels[i]).collect();
-    let model = svm
-        .fit(xt.view(), &yt)
-        .map_err(|e| ExperimentError::Data(format!("SVM: {e}")))?;
+    let model = svm.fit(xt.view(), &yt).map_err(StabilityError::svm)?;
     let truth: Vec<bool> = test.iter().map(|&i| labels[i]).collect();
     let pred: Vec<bool> = test.iter().map(|&i| model.predict(test_x.row(i))).collect();
     Ok(Confusion::from_predictions(&truth, &pred))
@@ -186,8 +184,7 @@ pub(super) fn stability_task(
         let (train, test) = hold_out_objects(&prep.data, share, &mut rng)?;
         add(&train, &test)?;
     } else {
-        let folds = stratified_k_fold(labels, st.folds, rep_seed)
-            .map_err(|e| ExperimentError::Data(e.to_string()))?;
+        let folds = stratified_k_fold(labels, st.folds, rep_seed).map_err(StabilityError::svm)?;
         let classes: Vec<usize> = labels.iter().map(|&l| l as usize).collect();
         for f in 0..folds.count {
             let mut train = folds.train_indices(f);

@@ -156,13 +156,15 @@ pub fn reconstruct(
     sensor: usize,
 ) -> Result<Reconstruction, StabilityError> {
     if grasp >= data.grasp_count() || sensor >= data.sensor_count() {
-        return Err(StabilityError::Param(format!(
+        return Err(StabilityError::param(format!(
             "no patch for grasp {grasp}, sensor {sensor}"
         )));
     }
     let row = grasp * data.sensor_count() + sensor;
     let patch = data.x.row(row);
-    let code = dict.encode(data.x.slice(ndarray::s![row..row + 1, ..]), gamma)?;
+    let code = dict
+        .encode(data.x.slice(ndarray::s![row..row + 1, ..]), gamma)
+        .map_err(StabilityError::sparse)?;
     Ok(reconstruction_of(
         data,
         dict,
@@ -208,7 +210,9 @@ pub fn analyse(
     config: Config,
     dict: &Dictionary,
 ) -> Result<Analyses, StabilityError> {
-    let codes = dict.encode(data.x.view(), config.gamma)?;
+    let codes = dict
+        .encode(data.x.view(), config.gamma)
+        .map_err(StabilityError::sparse)?;
     let k = dict.num_bases();
     let s = data.sensor_count();
     let coords = data.layout.as_ref().map(taxel_coords);
@@ -341,12 +345,14 @@ pub fn grasp_codes(
 ) -> Result<Vec<GraspCode>, StabilityError> {
     let n = data.grasp_count();
     if cv.predictions.len() != n || cv.decisions.len() != n {
-        return Err(StabilityError::Data(format!(
+        return Err(StabilityError::data(format!(
             "a cross validation of {} grasps for {n} grasps",
             cv.predictions.len()
         )));
     }
-    let codes = dict.encode(data.x.view(), gamma)?;
+    let codes = dict
+        .encode(data.x.view(), gamma)
+        .map_err(StabilityError::sparse)?;
     let s = data.sensor_count();
     let class = |failure: bool| {
         if failure {

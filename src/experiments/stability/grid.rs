@@ -48,14 +48,14 @@ impl GridSpec {
 
     pub fn validate(&self) -> Result<(), StabilityError> {
         if self.cells() == 0 {
-            return Err(StabilityError::Param("the grid is empty".into()));
+            return Err(StabilityError::param("the grid is empty".into()));
         }
         if self.num_bases.contains(&0) {
-            return Err(StabilityError::Param("num_bases must be ≥ 1".into()));
+            return Err(StabilityError::param("num_bases must be ≥ 1".into()));
         }
         for (name, v) in [("beta", &self.beta), ("gamma", &self.gamma)] {
             if let Some(b) = v.iter().find(|b| !(**b > 0.0 && b.is_finite())) {
-                return Err(StabilityError::Param(format!(
+                return Err(StabilityError::param(format!(
                     "{name} must be finite and > 0, got {b}"
                 )));
             }
@@ -121,8 +121,11 @@ pub fn grid_folds(
     cv: CvScheme,
 ) -> Result<Folds, StabilityError> {
     spec.validate()?;
-    settings.dictionary.validate()?;
-    settings.svm.validate()?;
+    settings
+        .dictionary
+        .validate()
+        .map_err(StabilityError::sparse)?;
+    settings.svm.validate().map_err(StabilityError::svm)?;
     cv.folds(data, settings.cv_seed)
 }
 
@@ -145,7 +148,9 @@ pub fn grid_task(
         beta,
         ..settings.dictionary.clone()
     };
-    let fit = params.fit_within(data.x.view(), progress)?;
+    let fit = params
+        .fit_within(data.x.view(), progress)
+        .map_err(StabilityError::sparse)?;
     let mut cells = Vec::with_capacity(gamma.len());
     for &gamma in gamma {
         progress.checkpoint()?;

@@ -17,6 +17,7 @@ use ndarray::{Array2, ArrayView1, ArrayView2};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::error::MethodError;
 use crate::experiments::links::{GraspCode, PatchCode};
 use crate::experiments::result::SizeReason;
 use crate::features::{KeyFramePatches, PatchError, PatchScaling, Standardizer};
@@ -43,43 +44,54 @@ pub const CONVENTION: &str = "F = (1/N) Σ_i [0.5 ||x_i − a_i D||² + λ ||a_i
 λ = beta while learning the dictionary, λ = gamma when coding (scikit-learn's convention; \
 a penalty written without the 0.5, as in the paper's eqs. 2–3, is twice these values)";
 
+/// Why the stability pipeline failed: its patches, the sparse coder or the SVM (each error
+/// kept as the source), or the pipeline's own parameters, data or a cancel.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum StabilityError {
-    #[error(transparent)]
+    #[error("{0}")]
     Patch(#[from] PatchError),
     #[error("sparse coding: {0}")]
-    Sparse(SparseError),
+    Sparse(#[source] SparseError),
     #[error("SVM: {0}")]
-    Svm(SvmError),
-    #[error("invalid parameter: {0}")]
-    Param(String),
-    #[error("invalid data: {0}")]
-    Data(String),
-    #[error("cancelled")]
-    Cancelled,
+    Svm(#[source] SvmError),
+    /// The pipeline's own refusal (its parameters or data), or a cancel from any stage.
+    #[error("{0}")]
+    Method(#[source] MethodError),
 }
 
-impl From<SparseError> for StabilityError {
-    fn from(e: SparseError) -> Self {
+impl StabilityError {
+    pub(crate) fn param(reason: String) -> StabilityError {
+        StabilityError::Method(MethodError::Param(reason))
+    }
+
+    pub(crate) fn data(reason: String) -> StabilityError {
+        StabilityError::Method(MethodError::Data(reason))
+    }
+
+    /// A sparse coder's error; a cancel stays a cancel.
+    pub(crate) fn sparse(e: SparseError) -> StabilityError {
         match e {
-            SparseError::Cancelled => StabilityError::Cancelled,
+            MethodError::Cancelled => StabilityError::Method(e),
             e => StabilityError::Sparse(e),
         }
     }
-}
 
-impl From<SvmError> for StabilityError {
-    fn from(e: SvmError) -> Self {
+    /// An SVM's error; a cancel stays a cancel.
+    pub(crate) fn svm(e: SvmError) -> StabilityError {
         match e {
-            SvmError::Cancelled => StabilityError::Cancelled,
+            MethodError::Cancelled => StabilityError::Method(e),
             e => StabilityError::Svm(e),
         }
+    }
+
+    pub fn is_cancelled(&self) -> bool {
+        matches!(self, StabilityError::Method(MethodError::Cancelled))
     }
 }
 
 impl From<crate::jobs::Cancelled> for StabilityError {
     fn from(_: crate::jobs::Cancelled) -> Self {
-        StabilityError::Cancelled
+        StabilityError::Method(MethodError::Cancelled)
     }
 }
 
@@ -123,11 +135,11 @@ pub struct StabilityData {
 impl StabilityData {
     pub fn from_session(session: &Session, opts: &DataOptions) -> Result<Self, StabilityError> {
         if session.label_sets.is_empty() {
-            return Err(StabilityError::Data("the session has no label sets".into()));
+            return Err(StabilityError::data("the session has no label sets".into()));
         }
         let set = match &opts.label_set {
             Some(name) => session.label_set(name).ok_or_else(|| {
-                StabilityError::Param(format!(
+                StabilityError::param(format!(
                     "no label set {name:?}; the session has {:?}",
                     session
                         .label_sets
@@ -150,7 +162,7 @@ impl StabilityData {
         let ls = &session.label_sets[set];
         let failure = match &opts.failure_class {
             Some(name) => ls.classes.iter().position(|c| c == name).ok_or_else(|| {
-                StabilityError::Param(format!(
+                StabilityError::param(format!(
                     "label set {:?} has no class {name:?} (classes {:?})",
                     ls.name, ls.classes
                 ))
@@ -166,7 +178,7 @@ impl StabilityData {
                 })
                 .or((ls.classes.len() == 2).then_some(1))
                 .ok_or_else(|| {
-                    StabilityError::Param(format!(
+                    StabilityError::param(format!(
                         "cannot tell which class of {:?} {:?} is the failure: name it",
                         ls.name, ls.classes
                     ))
@@ -175,7 +187,7 @@ impl StabilityData {
         let mut labels = Vec::with_capacity(session.grasps.len());
         for (g, grasp) in session.grasps.iter().enumerate() {
             let l = *grasp.labels.get(set).ok_or_else(|| {
-                StabilityError::Data(format!("grasp {g} has no label in set {:?}", ls.name))
+                StabilityError::data(format!("grasp {g} has no label in set {:?}", ls.name))
             })?;
             labels.push(l == failure);
         }
@@ -216,7 +228,7 @@ impl StabilityData {
     fn check(&self) -> Result<(), StabilityError> {
         let failures = self.labels.iter().filter(|l| **l).count();
         if failures == 0 || failures == self.labels.len() {
-            return Err(StabilityError::Data(format!(
+            return Err(StabilityError::data(format!(
                 "all {} grasps have the same outcome; the classifier needs both",
                 self.labels.len()
             )));
@@ -357,8 +369,12 @@ pub enum CvScheme {
 impl CvScheme {
     pub fn folds(&self, data: &StabilityData, seed: u64) -> Result<Folds, StabilityError> {
         Ok(match *self {
-            CvScheme::KFold { k } => stratified_k_fold(&data.labels, k, seed)?,
-            CvScheme::LeaveObjectsOut { folds } => group_k_fold(&data.objects, folds, seed)?,
+            CvScheme::KFold { k } => {
+                stratified_k_fold(&data.labels, k, seed).map_err(StabilityError::svm)?
+            }
+            CvScheme::LeaveObjectsOut { folds } => {
+                group_k_fold(&data.objects, folds, seed).map_err(StabilityError::svm)?
+            }
         })
     }
 
@@ -468,12 +484,15 @@ fn score_codes(
     settings: &PipelineSettings,
 ) -> Result<ScoredCodes, StabilityError> {
     let t0 = Instant::now();
-    let codes = dict.encode(data.x.view(), gamma)?;
+    let codes = dict
+        .encode(data.x.view(), gamma)
+        .map_err(StabilityError::sparse)?;
     let coding_secs = t0.elapsed().as_secs_f64();
     let sparsity = sparsity_of(codes.view());
     let t1 = Instant::now();
     let features = data.features(codes, settings.inputs);
-    let cv = cross_validate(features.view(), &data.labels, folds, &settings.svm)?;
+    let cv = cross_validate(features.view(), &data.labels, folds, &settings.svm)
+        .map_err(StabilityError::svm)?;
     Ok(ScoredCodes {
         features,
         sparsity,

@@ -38,9 +38,14 @@ impl StabilityModel {
         dictionary: Dictionary,
         settings: &PipelineSettings,
     ) -> Result<Self, StabilityError> {
-        let codes = dictionary.encode(data.x.view(), config.gamma)?;
+        let codes = dictionary
+            .encode(data.x.view(), config.gamma)
+            .map_err(StabilityError::sparse)?;
         let features = data.features(codes, settings.inputs);
-        let svm = settings.svm.fit(features.view(), &data.labels)?;
+        let svm = settings
+            .svm
+            .fit(features.view(), &data.labels)
+            .map_err(StabilityError::svm)?;
         Ok(StabilityModel {
             config,
             scaler: data.patches.scaler.clone(),
@@ -57,7 +62,7 @@ impl StabilityModel {
     pub fn predict_failure(&self, pressures: ArrayView1<f64>) -> Result<bool, StabilityError> {
         let expected = self.sensors * self.dim;
         if pressures.len() != expected {
-            return Err(StabilityError::Data(format!(
+            return Err(StabilityError::data(format!(
                 "{} pressures where the model expects {expected}",
                 pressures.len()
             )));
@@ -71,8 +76,11 @@ impl StabilityModel {
                 .for_each(|(o, v)| *o = *v),
         }
         let patches = ArrayView2::from_shape((self.sensors, self.dim), &img)
-            .map_err(|e| StabilityError::Data(e.to_string()))?;
-        let codes = self.dictionary.encode(patches, self.config.gamma)?;
+            .map_err(|e| StabilityError::Method(e.into()))?;
+        let codes = self
+            .dictionary
+            .encode(patches, self.config.gamma)
+            .map_err(StabilityError::sparse)?;
         let features = self.inputs.features(codes, patches, self.sensors);
         Ok(self.svm.predict(features.row(0)))
     }
@@ -91,7 +99,9 @@ pub fn evaluate_config(
     let t0 = Instant::now();
     let (dict, objective, iterations) = match dictionary {
         Some(d) => {
-            let codes = d.encode(data.x.view(), config.beta)?;
+            let codes = d
+                .encode(data.x.view(), config.beta)
+                .map_err(StabilityError::sparse)?;
             let f = crate::sparse::objective(
                 data.x.view(),
                 d.atoms.view(),
@@ -107,7 +117,9 @@ pub fn evaluate_config(
                 beta: config.beta,
                 ..settings.dictionary.clone()
             };
-            let fit = params.fit_within(data.x.view(), progress)?;
+            let fit = params
+                .fit_within(data.x.view(), progress)
+                .map_err(StabilityError::sparse)?;
             (fit.dictionary, fit.objective, fit.iterations)
         }
     };
@@ -121,7 +133,8 @@ pub fn evaluate_config(
         ..
     } = score_codes(data, &dict, config.gamma, &kf, settings)?;
     let of = objects.folds(data, settings.cv_seed)?;
-    let ocv = cross_validate(features.view(), &data.labels, &of, &settings.svm)?;
+    let ocv = cross_validate(features.view(), &data.labels, &of, &settings.svm)
+        .map_err(StabilityError::svm)?;
     Ok((
         Evaluation {
             config,
@@ -157,7 +170,9 @@ pub fn baseline(
     let of = objects.folds(data, settings.cv_seed)?;
     Ok(Baseline {
         features: x.ncols(),
-        kfold: cross_validate(x.view(), &data.labels, &kf, &settings.svm)?,
-        objects: cross_validate(x.view(), &data.labels, &of, &settings.svm)?,
+        kfold: cross_validate(x.view(), &data.labels, &kf, &settings.svm)
+            .map_err(StabilityError::svm)?,
+        objects: cross_validate(x.view(), &data.labels, &of, &settings.svm)
+            .map_err(StabilityError::svm)?,
     })
 }

@@ -67,11 +67,11 @@ pub(super) fn inner_folds(
     Ok(match protocol {
         CvScheme::KFold { k } => {
             let y: Vec<bool> = train.iter().map(|&g| data.labels[g]).collect();
-            stratified_k_fold(&y, k, seed)?
+            stratified_k_fold(&y, k, seed).map_err(StabilityError::svm)?
         }
         CvScheme::LeaveObjectsOut { folds } => {
             let objects: Vec<usize> = train.iter().map(|&g| data.objects[g]).collect();
-            group_k_fold(&objects, folds, seed)?
+            group_k_fold(&objects, folds, seed).map_err(StabilityError::svm)?
         }
     })
 }
@@ -95,10 +95,13 @@ pub fn nested_cv_on(
     progress: &Progress,
 ) -> Result<NestedResult, StabilityError> {
     spec.validate()?;
-    settings.dictionary.validate()?;
-    settings.svm.validate()?;
+    settings
+        .dictionary
+        .validate()
+        .map_err(StabilityError::sparse)?;
+    settings.svm.validate().map_err(StabilityError::svm)?;
     if outer.fold_of.len() != data.grasp_count() {
-        return Err(StabilityError::Data(format!(
+        return Err(StabilityError::data(format!(
             "{} outer fold assignments for {} grasps",
             outer.fold_of.len(),
             data.grasp_count()
@@ -113,7 +116,8 @@ pub fn nested_cv_on(
         })
         .collect::<Result<_, StabilityError>>()?;
     let cells = nested_cells(data, spec, settings, protocol, &splits, progress)?;
-    let raw = cross_validate(data.images().view(), &data.labels, outer, &settings.svm)?;
+    let raw = cross_validate(data.images().view(), &data.labels, outer, &settings.svm)
+        .map_err(StabilityError::svm)?;
     let mut pooled = Confusion::default();
     let mut folds = Vec::with_capacity(splits.len());
     for (f, split) in splits.iter().enumerate() {
@@ -180,11 +184,15 @@ fn nested_cells(
                 beta,
                 ..settings.dictionary.clone()
             }
-            .fit_within(data.x.view(), progress)?;
+            .fit_within(data.x.view(), progress)
+            .map_err(StabilityError::sparse)?;
             let mut per_gamma = Vec::with_capacity(spec.gamma.len());
             for &gamma in &spec.gamma {
                 progress.checkpoint()?;
-                let codes = fit.dictionary.encode(data.x.view(), gamma)?;
+                let codes = fit
+                    .dictionary
+                    .encode(data.x.view(), gamma)
+                    .map_err(StabilityError::sparse)?;
                 let features = data.features(codes, settings.inputs);
                 let config = Config {
                     num_bases: k,
@@ -217,8 +225,12 @@ fn cell_on_splits(
     for (train, test, inner) in splits {
         let xt = crate::svm::gather(features.view(), train);
         let yt: Vec<bool> = train.iter().map(|&g| data.labels[g]).collect();
-        let cv = cross_validate(xt.view(), &yt, inner, &settings.svm)?;
-        let model = settings.svm.fit(xt.view(), &yt)?;
+        let cv =
+            cross_validate(xt.view(), &yt, inner, &settings.svm).map_err(StabilityError::svm)?;
+        let model = settings
+            .svm
+            .fit(xt.view(), &yt)
+            .map_err(StabilityError::svm)?;
         per_fold.push(NestedCell {
             config,
             inner: cv,

@@ -153,10 +153,12 @@ fn codes_book(
             }
             Ok(book.clone())
         }
-        None => learn_codes(session, params, taxel_counts).map_err(|e| SequenceError::Session {
-            set: set.to_string(),
-            reason: format!("learning the codes' dictionaries: {e}"),
-        }),
+        None => {
+            learn_codes(session, params, taxel_counts).map_err(|source| SequenceError::LearnCodes {
+                set: set.to_string(),
+                source,
+            })
+        }
     }
 }
 
@@ -305,14 +307,15 @@ impl Columns<'_> {
         by_sensor: Vec<Vec<f64>>,
         m: &mut Array2<f64>,
     ) -> Result<(), SequenceError> {
-        let failed = |e: String| SequenceError::Session {
-            set: self.set.clone(),
-            reason: format!("grasp {g}: {e}"),
-        };
         let mut col = self.codes_from;
         for (s, all) in by_sensor.into_iter().enumerate() {
-            let frames = Array2::from_shape_vec((m.nrows(), self.taxel_counts[s]), all)
-                .map_err(|e| failed(e.to_string()))?;
+            let frames = Array2::from_shape_vec((m.nrows(), self.taxel_counts[s]), all).map_err(
+                |source| SequenceError::Shape {
+                    set: self.set.clone(),
+                    grasp: g,
+                    source,
+                },
+            )?;
             let coded = book
                 .encode(s, frames.view())
                 .map_err(|source| SequenceError::Codes {
@@ -415,8 +418,7 @@ fn learn_codes(
         .into_iter()
         .zip(taxel_counts)
         .map(|(v, &n)| {
-            Array2::from_shape_vec((rows, n), v)
-                .map_err(|e| crate::sparse::SparseError::Data(e.to_string()))
+            Array2::from_shape_vec((rows, n), v).map_err(crate::sparse::SparseError::from)
         })
         .collect::<Result<_, _>>()?;
     FrameCodes::learn(&frames, params.seed)

@@ -271,6 +271,21 @@ pub enum SequenceError {
     Parameter { name: &'static str, reason: String },
     #[error("session cannot give {set} features: {reason}")]
     Session { set: String, reason: String },
+    /// The codes' dictionaries that could not be learned (the sparse coder's error kept).
+    #[error("session cannot give {set} features: learning the codes' dictionaries: {source}")]
+    LearnCodes {
+        set: String,
+        #[source]
+        source: crate::sparse::SparseError,
+    },
+    /// A grasp's frames that do not take the shape of its sensors' taxels.
+    #[error("session cannot give {set} features: grasp {grasp}: {source}")]
+    Shape {
+        set: String,
+        grasp: usize,
+        #[source]
+        source: ndarray::ShapeError,
+    },
     /// A grasp's frames the codes' dictionaries cannot code (the sparse coder's error kept).
     #[error("session cannot give {set} features: grasp {grasp}: {source}")]
     Codes {

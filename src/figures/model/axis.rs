@@ -2,6 +2,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::figures::FigureError;
+
 /// A categorical axis: only a title and a unit (empty for a dimensionless quantity).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AxisTitle {
@@ -107,22 +109,26 @@ impl Axis {
     }
 }
 
-pub(super) fn check_include(axis: &Axis) -> Result<(), String> {
+pub(super) fn check_include(axis: &Axis) -> Result<(), FigureError> {
     if !axis.categories.is_empty() && axis.scale == Scale::Log {
-        return Err(format!(
+        return Err(FigureError::Invalid(format!(
             "axis {:?}: a category axis cannot be logarithmic",
             axis.title
-        ));
+        )));
     }
     match axis.include {
-        Some([lo, hi]) if !(lo.is_finite() && hi.is_finite() && lo <= hi) => Err(format!(
-            "axis {:?}: the included range must be finite and ordered",
-            axis.title
-        )),
-        Some([lo, _]) if axis.scale == Scale::Log && lo <= 0.0 => Err(format!(
-            "axis {:?}: a log axis cannot include values ≤ 0",
-            axis.title
-        )),
+        Some([lo, hi]) if !(lo.is_finite() && hi.is_finite() && lo <= hi) => {
+            Err(FigureError::Invalid(format!(
+                "axis {:?}: the included range must be finite and ordered",
+                axis.title
+            )))
+        }
+        Some([lo, _]) if axis.scale == Scale::Log && lo <= 0.0 => {
+            Err(FigureError::Invalid(format!(
+                "axis {:?}: a log axis cannot include values ≤ 0",
+                axis.title
+            )))
+        }
         _ => Ok(()),
     }
 }

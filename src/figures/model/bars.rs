@@ -2,6 +2,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::figures::FigureError;
+
 use super::axis::{Axis, AxisTitle, Scale, check_include};
 use super::nan_serde::{nan_as_null, opt_nan_as_null};
 use crate::figures::colormap::Rgb;
@@ -50,31 +52,40 @@ impl BarGroup {
 
 impl BarChart {
     /// One value (and error) per category, a linear axis, sign colours for one group.
-    pub(super) fn validate(&self) -> Result<(), String> {
+    pub(super) fn validate(&self) -> Result<(), FigureError> {
         let b = self;
         if b.categories.is_empty() || b.groups.is_empty() {
-            return Err("a bar chart needs categories and at least one group".into());
+            return Err(FigureError::Invalid(
+                "a bar chart needs categories and at least one group".into(),
+            ));
         }
         if b.y.scale == Scale::Log {
-            return Err("bars start at 0 and cannot use a log axis".into());
+            return Err(FigureError::Invalid(
+                "bars start at 0 and cannot use a log axis".into(),
+            ));
         }
         if b.sign_colors && b.groups.len() > 1 {
-            return Err("sign colours need a single group".into());
+            return Err(FigureError::Invalid(
+                "sign colours need a single group".into(),
+            ));
         }
         for g in &b.groups {
             if g.values.len() != b.categories.len() {
-                return Err(format!(
+                return Err(FigureError::Invalid(format!(
                     "group {:?} has {} values for {} categories",
                     g.name,
                     g.values.len(),
                     b.categories.len()
-                ));
+                )));
             }
             if g.error
                 .as_ref()
                 .is_some_and(|e| e.len() != b.categories.len())
             {
-                return Err(format!("group {:?}: one error per category", g.name));
+                return Err(FigureError::Invalid(format!(
+                    "group {:?}: one error per category",
+                    g.name
+                )));
             }
         }
         check_include(&b.y)?;

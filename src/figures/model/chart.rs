@@ -3,6 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::figures::FigureError;
+
 use super::axis::{Axis, check_include};
 use super::nan_serde::nan_as_null;
 use crate::figures::colormap::Rgb;
@@ -166,27 +168,29 @@ pub fn pareto_front(x: &[f64], y: &[f64]) -> Vec<usize> {
 
 impl Chart {
     /// Series lengths agree with their points, error bounds and labels.
-    pub(super) fn validate(&self) -> Result<(), String> {
+    pub(super) fn validate(&self) -> Result<(), FigureError> {
         let c = self;
         if c.series.is_empty() {
-            return Err("a chart needs at least one series".into());
+            return Err(FigureError::Invalid(
+                "a chart needs at least one series".into(),
+            ));
         }
         for s in &c.series {
             if s.x.len() != s.y.len() {
-                return Err(format!(
+                return Err(FigureError::Invalid(format!(
                     "series {:?} has {} x values and {} y values",
                     s.name,
                     s.x.len(),
                     s.y.len()
-                ));
+                )));
             }
             if let Some(e) = &s.error
                 && (e.lower.len() != s.y.len() || e.upper.len() != s.y.len())
             {
-                return Err(format!(
+                return Err(FigureError::Invalid(format!(
                     "series {:?}: error bounds need one value per point",
                     s.name
-                ));
+                )));
             }
             if let Some(owner) = &s.part_of
                 && !c
@@ -194,27 +198,31 @@ impl Chart {
                     .iter()
                     .any(|o| &o.name == owner && o.part_of.is_none())
             {
-                return Err(format!(
+                return Err(FigureError::Invalid(format!(
                     "series {:?} is drawn for a series {owner:?} the chart does not have",
                     s.name
-                ));
+                )));
             }
             if !s.point_labels.is_empty() && s.point_labels.len() != s.x.len() {
-                return Err(format!(
+                return Err(FigureError::Invalid(format!(
                     "series {:?}: {} point labels for {} points",
                     s.name,
                     s.point_labels.len(),
                     s.x.len()
-                ));
+                )));
             }
         }
         if c.ref_lines.iter().any(|r| !r.value.is_finite()) {
-            return Err("a reference line needs a finite value".into());
+            return Err(FigureError::Invalid(
+                "a reference line needs a finite value".into(),
+            ));
         }
         check_include(&c.x)?;
         check_include(&c.y)?;
         if !c.y.categories.is_empty() {
-            return Err("only a chart's x axis can name categories".into());
+            return Err(FigureError::Invalid(
+                "only a chart's x axis can name categories".into(),
+            ));
         }
         Ok(())
     }

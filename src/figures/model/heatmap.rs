@@ -2,6 +2,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::figures::FigureError;
+
 use super::axis::{AxisTitle, axis_text};
 use super::nan_serde::matrix_nan_as_null;
 use crate::figures::colormap::ColorMap;
@@ -92,34 +94,38 @@ impl Heatmap {
     }
 }
 
-pub(super) fn check_limits(colors: &ColorScale) -> Result<(), String> {
+pub(super) fn check_limits(colors: &ColorScale) -> Result<(), FigureError> {
     match colors.limits {
-        Some([lo, hi]) if !(lo.is_finite() && hi.is_finite() && lo < hi) => {
-            Err("colour limits must be finite with low < high".into())
-        }
+        Some([lo, hi]) if !(lo.is_finite() && hi.is_finite() && lo < hi) => Err(
+            FigureError::Invalid("colour limits must be finite with low < high".into()),
+        ),
         _ => Ok(()),
     }
 }
 
 impl Heatmap {
     /// A row and a column label per value, marked cells inside the matrix.
-    pub(super) fn validate(&self) -> Result<(), String> {
+    pub(super) fn validate(&self) -> Result<(), FigureError> {
         let h = self;
         if h.rows.is_empty() || h.columns.is_empty() {
-            return Err("a heatmap needs at least one row and one column".into());
+            return Err(FigureError::Invalid(
+                "a heatmap needs at least one row and one column".into(),
+            ));
         }
         if h.values.len() != h.rows.len() || h.values.iter().any(|r| r.len() != h.columns.len()) {
-            return Err(format!(
+            return Err(FigureError::Invalid(format!(
                 "the values must be {} rows of {} columns",
                 h.rows.len(),
                 h.columns.len()
-            ));
+            )));
         }
         if h.marked
             .iter()
             .any(|&[r, c]| r >= h.rows.len() || c >= h.columns.len())
         {
-            return Err("a marked cell lies outside the matrix".into());
+            return Err(FigureError::Invalid(
+                "a marked cell lies outside the matrix".into(),
+            ));
         }
         check_limits(&h.colors)?;
         Ok(())

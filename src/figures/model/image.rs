@@ -65,21 +65,25 @@ impl GridImage {
 
 impl ImageGrid {
     /// Images of one shape with at least one cell.
-    pub(super) fn validate(&self) -> Result<(), String> {
+    pub(super) fn validate(&self) -> Result<(), FigureError> {
         let g = self;
         let Some(first) = g.images.first() else {
-            return Err("an image grid needs at least one image".into());
+            return Err(FigureError::Invalid(
+                "an image grid needs at least one image".into(),
+            ));
         };
         let shape = (first.values.len(), first.values.first().map_or(0, Vec::len));
         if shape.0 == 0 || shape.1 == 0 {
-            return Err("images need at least one row and one column".into());
+            return Err(FigureError::Invalid(
+                "images need at least one row and one column".into(),
+            ));
         }
         for (i, im) in g.images.iter().enumerate() {
             if im.values.len() != shape.0 || im.values.iter().any(|r| r.len() != shape.1) {
-                return Err(format!(
+                return Err(FigureError::Invalid(format!(
                     "image {i} is not {}×{} like the first image",
                     shape.0, shape.1
-                ));
+                )));
             }
         }
         check_limits(&g.colors)?;

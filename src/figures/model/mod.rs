@@ -194,7 +194,10 @@ impl Figure {
             FigureKind::Heatmap(h) => h.validate(),
             FigureKind::ImageGrid(g) => g.validate(),
         };
-        checked.or_else(invalid)
+        checked.or_else(|e| match e {
+            FigureError::Invalid(msg) => invalid(msg),
+            other => Err(other),
+        })
     }
 }
 

@@ -40,7 +40,7 @@ pub(super) fn read_file(
     bag: &mut Bag,
     seen: &mut Vec<(String, String)>,
 ) -> Result<(), SessionError> {
-    let io = |e: std::io::Error| SessionError::io(file, &e);
+    let io = |e: std::io::Error| SessionError::io(file, e);
     let f = File::open(file).map_err(io)?;
     let len = f.metadata().map_err(io)?.len();
     let mut input = BufReader::with_capacity(1 << 16, f);
@@ -105,7 +105,7 @@ impl FileReader<'_> {
         len: u64,
     ) -> Result<Option<Vec<ChunkAt>>, SessionError> {
         let file = self.file;
-        let io = |e: std::io::Error| SessionError::io(file, &e);
+        let io = |e: std::io::Error| SessionError::io(file, e);
         // The footer: opcode, length 20, summary start, summary offset start, CRC.
         const FOOTER_LEN: u64 = 9 + 20;
         if len < 16 + FOOTER_LEN {
@@ -171,7 +171,7 @@ impl FileReader<'_> {
                 }
                 _ => input
                     .seek_relative(len as i64)
-                    .map_err(|e| SessionError::io(file, &e))?,
+                    .map_err(|e| SessionError::io(file, e))?,
             }
         }
         chunks.sort_by_key(|c| c.offset);
@@ -186,7 +186,7 @@ impl FileReader<'_> {
         chunks: &[ChunkAt],
     ) -> Result<(), SessionError> {
         let file = self.file;
-        let io = |e: std::io::Error| SessionError::io(file, &e);
+        let io = |e: std::io::Error| SessionError::io(file, e);
         for chunk in chunks {
             // A chunk without message indexes may hold anything: it is read.
             let wanted = chunk.channels.is_empty()
@@ -209,7 +209,7 @@ impl FileReader<'_> {
     /// record), reading what the spec needs and seeking past the rest.
     fn linear(&mut self, input: &mut BufReader<File>, end: u64) -> Result<(), SessionError> {
         let file = self.file;
-        let io = |e: std::io::Error| SessionError::io(file, &e);
+        let io = |e: std::io::Error| SessionError::io(file, e);
         input.seek(SeekFrom::Start(8)).map_err(io)?;
         let mut pos = 8;
         while pos < end {
@@ -237,7 +237,7 @@ impl FileReader<'_> {
         body.resize(len as usize, 0);
         input
             .read_exact(&mut body)
-            .map_err(|e| SessionError::io(self.file, &e))?;
+            .map_err(|e| SessionError::io(self.file, e))?;
         Ok(body)
     }
 
@@ -266,7 +266,7 @@ impl FileReader<'_> {
         }
         input
             .read_exact(&mut head)
-            .map_err(|e| SessionError::io(file, &e))?;
+            .map_err(|e| SessionError::io(file, e))?;
         let word = |at: usize| u64::from_le_bytes(head[at..at + 8].try_into().unwrap_or_default());
         let header = mcap::records::MessageHeader {
             channel_id: u16::from_le_bytes([head[0], head[1]]),
@@ -283,7 +283,7 @@ impl FileReader<'_> {
             self.bag.span = Some(widen(self.bag.span, header.log_time, header.log_time));
             input
                 .seek_relative((len - 22) as i64)
-                .map_err(|e| SessionError::io(file, &e))
+                .map_err(|e| SessionError::io(file, e))
         }
     }
 
