@@ -14,7 +14,7 @@ use std::sync::mpsc::{Receiver, channel};
 use std::time::Duration;
 
 use egui::{Color32, Sense, Vec2};
-use egui_plot::{Legend, Line, Plot, PlotPoints};
+use egui_plot::{Line, Plot, PlotPoints};
 use serde::{Deserialize, Serialize};
 
 use super::pane::{LivePane, Pane};
@@ -582,12 +582,19 @@ impl LiveRoom {
             })
             .unwrap_or_default();
         ui.small("Total reading per sensor over the last seconds (s before the latest frame)");
+        // The legend a row of names above the plot, as the replay's traces have it: inside,
+        // it would cover the newest readings.
+        let ctx = ui.ctx().clone();
+        let color = |j: usize| figure_view::series_rgb(&ctx, None, j);
+        let entries: Vec<(String, Color32)> = (names.iter().enumerate())
+            .map(|(j, name)| (name.clone(), color(j)))
+            .collect();
+        figure_view::legend_row(ui, &entries);
         Plot::new("live-traces")
             .allow_scroll(false)
-            .legend(Legend::default())
             .show(ui, |p| {
-                for (name, pts) in names.iter().zip(lines) {
-                    p.line(Line::new(name.clone(), PlotPoints::new(pts)));
+                for (j, (name, pts)) in names.iter().zip(lines).enumerate() {
+                    p.line(Line::new(name.clone(), PlotPoints::new(pts)).color(color(j)));
                 }
             });
     }
