@@ -22,7 +22,7 @@ use super::{Cx, Room};
 use crate::app::View;
 use crate::app::figure_view::{self, Selection as FigureSelection};
 use crate::app::heatmap::{colour_bar, sensor_heatmap};
-use crate::figures::ColorMap;
+use crate::figures::{ColorMap, Scale};
 use crate::live::client::{State, lock};
 use crate::live::discover::{self, Found};
 use crate::live::model::Verdict;
@@ -590,8 +590,21 @@ impl LiveRoom {
             .map(|(j, name)| (name.clone(), color(j)))
             .collect();
         figure_view::legend_row(ui, &entries);
+        // Ticks as every chart's: at least three distinct labels on each axis.
         Plot::new("live-traces")
             .allow_scroll(false)
+            .x_grid_spacer(figure_view::tick_spacer(
+                Scale::Linear,
+                70.0,
+                figure_view::X_EDGE,
+                figure_view::x_label_room(ui),
+            ))
+            .y_grid_spacer(figure_view::tick_spacer(
+                Scale::Linear,
+                36.0,
+                figure_view::Y_EDGE,
+                figure_view::y_label_room(ui),
+            ))
             .show(ui, |p| {
                 for (j, (name, pts)) in names.iter().zip(lines).enumerate() {
                     p.line(Line::new(name.clone(), PlotPoints::new(pts)).color(color(j)));
