@@ -136,13 +136,8 @@ impl Verdict {
     /// (a reference line), as a chart of the figure model. None without steps.
     pub fn novelty_figure(&self) -> Option<Figure> {
         let last = self.novelty_steps.last()?;
-        let n = self.novelty_steps.len();
-        let every = n.div_ceil(CHART_STEPS).max(1);
-        let shown: Vec<&NoveltyStep> = self
-            .novelty_steps
-            .iter()
-            .step_by(every)
-            .chain((!(n - 1).is_multiple_of(every)).then_some(last))
+        let shown: Vec<&NoveltyStep> = (chart_steps(self.novelty_steps.len()).into_iter())
+            .map(|i| &self.novelty_steps[i])
             .collect();
         let x = shown.iter().map(|s| (s.step + 1) as f64).collect();
         let y = shown.iter().map(|s| s.novelty).collect();
@@ -170,6 +165,16 @@ impl Verdict {
 /// last step always kept), since a tile has fewer pixels than a 1 kHz grasp has steps.
 pub const CHART_STEPS: usize = 600;
 
+/// The steps of `n` (at least one) a chart draws: every k-th, at most [`CHART_STEPS`], and
+/// the last.
+fn chart_steps(n: usize) -> Vec<usize> {
+    let every = n.div_ceil(CHART_STEPS).max(1);
+    (0..n)
+        .step_by(every)
+        .chain((!(n - 1).is_multiple_of(every)).then_some(n - 1))
+        .collect()
+}
+
 impl Verdict {
     /// The `top` classes' probability at every step (the classes most probable at the
     /// latest step): how the decision formed, as a chart of the figure model, with the
@@ -181,11 +186,7 @@ impl Verdict {
         let mut order: Vec<usize> = (0..last.len()).collect();
         order.sort_by(|&a, &b| last[b].total_cmp(&last[a]));
         let n = self.steps.len();
-        let every = n.div_ceil(CHART_STEPS).max(1);
-        let shown: Vec<usize> = (0..n)
-            .step_by(every)
-            .chain((!(n - 1).is_multiple_of(every)).then_some(n - 1))
-            .collect();
+        let shown = chart_steps(n);
         let series = order
             .into_iter()
             .take(top)

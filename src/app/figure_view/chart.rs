@@ -47,7 +47,7 @@ pub(super) fn show_chart(
     chart: &figures::Chart,
     size: Vec2,
     selection: Selection,
-    in_plot: bool,
+    legend_corner: Option<Corner>,
     link: Option<egui::Id>,
     interaction: &mut Interaction,
 ) {
@@ -94,8 +94,7 @@ pub(super) fn show_chart(
         )])
         .x_grid_spacer(category_spacer(ui, &chart.x.categories))
     };
-    let corner = legend_corner(ui, chart, &entries, size).0;
-    if in_plot {
+    if let Some(corner) = legend_corner {
         plot = plot.legend(legend(corner));
     }
     if let Some(link) = link {
@@ -168,7 +167,7 @@ pub(super) fn show_chart(
             }
         })
     });
-    let legend_box = in_plot.then_some((corner, entries.as_slice()));
+    let legend_box = legend_corner.map(|corner| (corner, entries.as_slice()));
     paint_point_labels(ui, chart, &shown.transform, legend_box);
     let r = &shown.response;
     ui.ctx()
@@ -307,7 +306,8 @@ fn paint_point_labels(
     let (xs, ys) = (chart.x.scale, chart.y.scale);
     let frame = *t.frame();
     let painter = ui.painter_at(frame);
-    let legend = legend.map(|(corner, entries)| legend_rect(ui, frame, corner, entries));
+    let legend =
+        legend.map(|(corner, entries)| legend_rect(frame, corner, legend_size(ui, entries)));
     let font = FontId::proportional(11.0);
     let color = ui.visuals().text_color();
     let on_screen =
@@ -420,20 +420,34 @@ pub(super) fn legend_corner(
             }
         }
     }
+    let size = legend_size(ui, entries);
     corners
         .into_iter()
         .map(|c| {
-            let r = legend_rect(ui, frame, c, entries);
+            let r = legend_rect(frame, c, size);
             (c, points.iter().filter(|p| r.contains(**p)).count())
         })
         .min_by_key(|&(_, n)| n)
         .unwrap_or((Corner::RightTop, 0))
 }
 
-/// Where egui_plot draws its legend of `entries` in `corner` of `frame`: 4 points in from
-/// the corner, a frame with margins of 8 × 4, and one row of the body font per entry with
-/// a swatch a row high (and a fifth of it apart) before each name.
-fn legend_rect(ui: &egui::Ui, frame: Rect, corner: Corner, entries: &[(String, Color32)]) -> Rect {
+/// Where egui_plot draws a legend of `size` in `corner` of `frame`: 4 points in from the
+/// corner.
+fn legend_rect(frame: Rect, corner: Corner, size: Vec2) -> Rect {
+    let inner = frame.shrink(4.0);
+    let min = match corner {
+        Corner::LeftTop => inner.left_top(),
+        Corner::RightTop => Pos2::new(inner.right() - size.x, inner.top()),
+        Corner::LeftBottom => Pos2::new(inner.left(), inner.bottom() - size.y),
+        Corner::RightBottom => inner.right_bottom() - size,
+    };
+    Rect::from_min_size(min, size)
+}
+
+/// The size of egui_plot's legend of `entries`: a frame with margins of 8 × 4, and one
+/// row of the body font per entry with a swatch a row high (and a fifth of it apart)
+/// before each name.
+fn legend_size(ui: &egui::Ui, entries: &[(String, Color32)]) -> Vec2 {
     let font = egui::TextStyle::Body.resolve(ui.style());
     let galleys: Vec<_> = (entries.iter())
         .map(|(name, _)| {
@@ -444,18 +458,10 @@ fn legend_rect(ui: &egui::Ui, frame: Rect, corner: Corner, entries: &[(String, C
     let row = galleys.first().map_or(0.0, |g| g.size().y);
     let width = galleys.iter().map(|g| g.size().x).fold(0.0f32, f32::max);
     let gaps = galleys.len().saturating_sub(1) as f32 * ui.spacing().item_spacing.y;
-    let size = Vec2::new(
+    Vec2::new(
         width + 1.2 * row + 16.0,
         galleys.len() as f32 * row + gaps + 8.0,
-    );
-    let inner = frame.shrink(4.0);
-    let min = match corner {
-        Corner::LeftTop => inner.left_top(),
-        Corner::RightTop => Pos2::new(inner.right() - size.x, inner.top()),
-        Corner::LeftBottom => Pos2::new(inner.left(), inner.bottom() - size.y),
-        Corner::RightBottom => inner.right_bottom() - size,
-    };
-    Rect::from_min_size(min, size)
+    )
 }
 
 /// Where each label (its point and size) goes: beside its point, above right, above left,

@@ -64,8 +64,8 @@ const MIN_BODY: f32 = 150.0;
 enum LegendPlace {
     /// No legend: one series, hidden by the user, or folded for want of room.
     None,
-    /// Inside the plot, in its emptiest corner.
-    InPlot,
+    /// Inside the plot, in the corner where it covers no point.
+    InPlot(Corner),
     /// A row of names above the plot, this tall.
     Row(f32),
 }
@@ -116,11 +116,11 @@ fn header(ui: &mut egui::Ui, id: &str, figure: &Figure, height: f32) -> LegendPl
     // corner: a row above the plot instead.
     let wanted = match &figure.kind {
         _ if entries.is_empty() || hidden => LegendPlace::None,
-        FigureKind::Chart(c)
-            if entries.len() as f32 * 18.0 <= (body - 40.0) / 3.0
-                && chart::legend_corner(ui, c, &entries, Vec2::new(width, body)).1 == 0 =>
-        {
-            LegendPlace::InPlot
+        FigureKind::Chart(c) if entries.len() as f32 * 18.0 <= (body - 40.0) / 3.0 => {
+            match chart::legend_corner(ui, c, &entries, Vec2::new(width, body)) {
+                (corner, 0) => LegendPlace::InPlot(corner),
+                _ => LegendPlace::Row(legend_row_height(ui, &entries, width)),
+            }
         }
         _ => LegendPlace::Row(legend_row_height(ui, &entries, width)),
     };
@@ -251,7 +251,10 @@ pub fn show_linked(
                     chart,
                     body,
                     selection,
-                    legend == LegendPlace::InPlot,
+                    match legend {
+                        LegendPlace::InPlot(corner) => Some(corner),
+                        _ => None,
+                    },
                     link,
                     &mut interaction,
                 );

@@ -64,12 +64,18 @@ impl Grouping {
         }
     }
 
-    fn groups(
-        &self,
-        session: &Session,
-        reading: Option<&ModelReading>,
-        results: &[AnalysisResult],
-    ) -> Groups {
+    /// A clustering result's clusters, read where the results are (the window's thread);
+    /// None for every other grouping.
+    fn of_result(&self, results: &[AnalysisResult], grasps: usize) -> Option<Groups> {
+        let Grouping::ResultClusters { created, label } = self else {
+            return None;
+        };
+        (results.iter())
+            .find(|r| r.created == *created && &r.label == label)
+            .and_then(|r| Groups::by_result_clusters(r, grasps))
+    }
+
+    fn groups(&self, session: &Session, reading: Option<&ModelReading>) -> Groups {
         let labels = |set: Option<usize>| match set {
             Some(set) => Groups::by_label_set(session, set),
             None => Groups::all(session),
@@ -78,10 +84,6 @@ impl Grouping {
             (Grouping::FirstLabelSet, _) => labels((!session.label_sets.is_empty()).then_some(0)),
             (Grouping::LabelSet(name), _) => labels(session.label_set(name)),
             (Grouping::Object, _) => Groups::by_object(session),
-            (Grouping::ResultClusters { created, label }, _) => (results.iter())
-                .find(|r| r.created == *created && &r.label == label)
-                .and_then(|r| Groups::by_result_clusters(r, session.grasps.len()))
-                .unwrap_or_else(|| Groups::all(session)),
             (Grouping::CorrectWrong, Some(r)) => {
                 let mut g = Groups::correct_vs_wrong(&r.truth, &r.predicted);
                 g.title = format!("correct vs wrong ({})", r.model);
@@ -98,9 +100,15 @@ impl Grouping {
             ) => c.clone(),
             // A model's groups without a model read yet (or of another kind of model):
             // everything in one.
-            (Grouping::CorrectWrong | Grouping::ConfusionCells | Grouping::Clusters, _) => {
-                Groups::all(session)
-            }
+            // (A result's clusters are read beforehand, by `of_result`; here the result is
+            // gone.)
+            (
+                Grouping::CorrectWrong
+                | Grouping::ConfusionCells
+                | Grouping::Clusters
+                | Grouping::ResultClusters { .. },
+                _,
+            ) => Groups::all(session),
         }
     }
 }
@@ -303,8 +311,10 @@ impl CompareRoom {
         let (tx, rx) = channel();
         let ctx = cx.ctx.clone();
         let k = key.clone();
-        let groups = (k.form.grouping).groups(&session, reading.as_deref(), &cx.analyses.results);
+        let of_result = (k.form.grouping).of_result(&cx.analyses.results, session.grasps.len());
         std::thread::spawn(move || {
+            let groups =
+                of_result.unwrap_or_else(|| k.form.grouping.groups(&session, reading.as_deref()));
             let outputs: &[StepOutputs] = reading.as_ref().map_or(&[], |r| &r.outputs);
             let request = Request {
                 signal: k.form.signal,

@@ -95,9 +95,8 @@ impl Layout {
                 .collect();
             tiles.insert_vertical_tile(rows)
         } else {
-            let n = cells.len();
             let mut grid = egui_tiles::Grid::new(cells);
-            grid.layout = GridLayout::Columns(if n <= 4 { 2 } else { 3 });
+            grid.layout = GridLayout::Columns(3);
             tiles.insert_new(Tile::Container(Container::Grid(grid)))
         };
         Layout {
