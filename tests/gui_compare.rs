@@ -608,8 +608,10 @@ fn a_clustering_models_clusters_are_offered_as_groups() {
     assert!(finite > 0);
 }
 
-/// The replay beside the plots keeps its controls and every fingertip inside its tile, at
-/// both window sizes: the fingertips wrap onto another row rather than run past its edge.
+/// The replay beside the plots keeps its controls, every fingertip and both traces inside
+/// its tile, at both window sizes: the fingertips wrap onto another row rather than run
+/// past its edge, and where the tile is too short the column scrolls to each, the traces'
+/// plots at least 80 points tall (never squeezed flat or cut at the tile's bottom).
 #[test]
 fn the_replay_tile_keeps_its_controls_and_fingertips_inside() {
     use tactile_workbench::app::View;
@@ -633,22 +635,45 @@ fn the_replay_tile_keeps_its_controls_and_fingertips_inside() {
             .find_pane(&Pane::Replay)
             .expect("a replay tile");
         let tile = layout.tree.tiles.rect(id).expect("shown");
-        let mut inside = vec![
-            h.get_by_label("Show the recognition as the hand closes")
-                .rect(),
+        // Where the tile is too short for the whole replay, each is scrolled to first.
+        let mut inside = Vec::new();
+        let mut traces = Vec::new();
+        let labels = [
+            "Show the recognition as the hand closes",
+            "(12 taxels)",
+            "Step forward",
+            "Joint encoders trace",
+            "Per-finger feature trace",
         ];
-        inside.extend(h.get_all_by_label_contains("(12 taxels)").map(|n| n.rect()));
-        inside.push(h.get_by_label("Step forward").rect());
+        for label in labels {
+            let n = h.get_all_by_label_contains(label).count();
+            for k in 0..n {
+                h.get_all_by_label_contains(label)
+                    .nth(k)
+                    .unwrap()
+                    .scroll_to_me();
+                h.run_ok();
+                let r = h.get_all_by_label_contains(label).nth(k).unwrap().rect();
+                if label.ends_with("trace") {
+                    traces.push(r);
+                } else {
+                    inside.push(r);
+                }
+            }
+        }
+        let slider = h.get_by_role_and_label(Role::Slider, "frame");
+        slider.scroll_to_me();
+        h.run_ok();
         inside.push(h.get_by_role_and_label(Role::Slider, "frame").rect());
-        inside.push(h.get_by_label("Joint encoders trace").rect());
-        assert_eq!(
-            inside.len(),
-            9,
-            "five fingertips, three controls and a trace"
-        );
-        for r in inside {
+        assert_eq!(inside.len(), 8, "five fingertips and three controls");
+        assert_eq!(traces.len(), 2, "the joint and finger traces");
+        for r in &traces {
+            // Room for three y ticks at the charts' 36-point spacing.
+            assert!(r.height() >= 80.0, "a trace squeezed to {r:?} in {w}×{hgt}");
+        }
+        for r in inside.into_iter().chain(traces) {
             assert!(
-                r.right() <= tile.right() + 1.0,
+                r.right() <= tile.right() + 1.0 && r.bottom() <= tile.bottom() + 1.0,
                 "{r:?} runs past the replay tile {tile:?} in {w}×{hgt}"
             );
         }

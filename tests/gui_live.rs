@@ -12,6 +12,8 @@ use std::time::{Duration, Instant};
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
+use tactile_workbench::app::views::pane::LivePane;
+use tactile_workbench::app::views::{Pane, layout_key};
 use tactile_workbench::app::{View, WorkbenchApp};
 use tactile_workbench::catalogue::MethodId;
 use tactile_workbench::experiments::recognition::RecognitionParams;
@@ -191,11 +193,60 @@ fn the_live_view_shows_a_served_stream_with_ds_at_work() {
     let now = engine_grasps(h.state());
     h.get_by_label_contains(&format!("· {now} grasps ·"));
 
+    // At 1000 × 700, with four grasps listed below it, the model's chart keeps three y
+    // labels: the list gives way to the chart, not the chart to the list.
+    step_until(&mut h, Duration::from_secs(30), |app| {
+        engine_grasps(app) >= 5
+    });
+    h.set_size(egui::Vec2::new(1000.0, 700.0));
+    h.run_steps(4);
+    let layout = &h.state().layouts[&layout_key(View::Live)];
+    let id = (layout.tree.tiles)
+        .find_pane(&Pane::Live(LivePane::Model))
+        .expect("a model tile");
+    let tile = layout.tree.tiles.rect(id).expect("shown");
+    let labels = y_labels(&h.output().shapes, tile);
+    assert!(
+        labels >= 3,
+        "the model's chart shows {labels} y labels in {tile:?}"
+    );
+
     h.get_all_by_label("Disconnect").next().unwrap().click();
     h.run_ok();
     assert!(!h.state().rooms.live.is_connected());
     stop.store(true, std::sync::atomic::Ordering::Relaxed);
     server.join().unwrap();
+}
+
+/// The most numbers painted in one right-aligned column in the left half of `tile`: a
+/// chart's y tick labels (the class bars' values stand at the tile's right edge).
+fn y_labels(shapes: &[egui::epaint::ClippedShape], tile: egui::Rect) -> usize {
+    fn numbers(shape: &egui::Shape, out: &mut Vec<egui::Rect>) {
+        match shape {
+            egui::Shape::Vec(v) => v.iter().for_each(|s| numbers(s, out)),
+            egui::Shape::Text(t) if t.galley.text().trim().parse::<f64>().is_ok() => {
+                out.push(t.galley.rect.translate(t.pos.to_vec2()));
+            }
+            _ => {}
+        }
+    }
+    let mut rects = Vec::new();
+    for s in shapes.iter().filter(|s| tile.contains_rect(s.clip_rect)) {
+        numbers(&s.shape, &mut rects);
+    }
+    let mut columns: std::collections::BTreeMap<i32, Vec<i32>> = Default::default();
+    for r in rects.iter().filter(|r| r.right() < tile.center().x) {
+        let ys = columns.entry(r.right().round() as i32).or_default();
+        ys.push(r.center().y.round() as i32);
+    }
+    (columns.into_values())
+        .map(|mut ys| {
+            ys.sort();
+            ys.dedup();
+            ys.len()
+        })
+        .max()
+        .unwrap_or(0)
 }
 
 /// A DU model at work on an open grasp: the running cluster, and the novelty of the grasp

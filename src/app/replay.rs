@@ -6,8 +6,8 @@ use egui::{ComboBox, Vec2};
 use egui_plot::{Line, Plot, PlotPoints, VLine};
 
 use super::figure_view::{
-    self, Selection, X_EDGE, Y_EDGE, legend_row, series_rgb, tick_spacer, x_label_room,
-    y_label_room,
+    self, Selection, X_EDGE, Y_EDGE, legend_row, legend_row_height, series_rgb, tick_spacer,
+    x_label_room, y_label_room,
 };
 use crate::figures::{Axis, AxisTitle, BarGroup, Figure, Scale};
 
@@ -407,34 +407,65 @@ impl Replay {
     }
 
     /// The encoder and per-finger traces with the current frame's cursor; the time a click
-    /// or drag on either points at.
+    /// or drag on either points at. Their plots share what the tile has left after their
+    /// titles and legends, each at least [`MIN_TRACE_PLOT`] tall: in a shorter tile the
+    /// replay's column scrolls to them rather than squeezing them flat.
     fn traces(&mut self, ui: &mut egui::Ui, session: &Session, g: &Grasp) -> Option<f64> {
         let t_now = g.frames[self.frame].t;
-        let mut seek_to: Option<f64> = None;
-        // The traces share what the tile has left (less their titles, legends and the
-        // feature's choice), and the last one ends at the tile's bottom edge.
-        let traces = if session.encoders.is_empty() {
-            1.0
-        } else {
-            2.0
-        };
-        let height = ((ui.available_height() - 90.0) / traces).max(60.0);
-        if !session.encoders.is_empty() {
-            ui.label("Joint encoders");
-            let lines = (session.encoders.iter().enumerate())
+        if g.frames.len() == 1 {
+            // One frame has no time axis: its values, a bar per finger.
+            self.finger_feature(ui);
+            let figure = finger_values_figure(session, g, self.stat);
+            let height = ui.available_height().max(MIN_TRACE_PLOT);
+            figure_view::show(ui, "finger_values", &figure, height, Selection::None);
+            return None;
+        }
+        let joints = (!session.encoders.is_empty()).then(|| Trace {
+            id: "encoder_trace",
+            label: "Joint encoders trace",
+            y_title: "angle (degrees)".into(),
+            lines: (session.encoders.iter().enumerate())
                 .map(|(j, name)| {
                     let pts = g.frames.iter().map(|fr| [fr.t, fr.encoders[j]]).collect();
                     (name.clone(), pts)
                 })
-                .collect();
-            let trace = Trace {
-                id: "encoder_trace",
-                label: "Joint encoders trace",
-                y_title: "angle (degrees)".into(),
-                lines,
-            };
-            seek_to = seek_to.or(trace.show(ui, t_now, height));
+                .collect(),
+        });
+        let fingers = Trace {
+            id: "finger_trace",
+            label: "Per-finger feature trace",
+            y_title: format!("{} of pressure", FingerStats::NAMES[self.stat]),
+            lines: (session.sensors.iter().enumerate())
+                .map(|(k, sensor)| {
+                    let pts = (g.frames.iter())
+                        .map(|fr| {
+                            let stats = FingerStats::of(&session.frame_pressures(fr, k));
+                            [fr.t, stats.to_array()[self.stat]]
+                        })
+                        .collect();
+                    (sensor.name.clone(), pts)
+                })
+                .collect(),
+        };
+        // Each trace's title (or feature picker) row and legend, then the plots' share.
+        let row = ui.spacing().interact_size.y + ui.spacing().item_spacing.y;
+        let width = ui.available_width();
+        let chrome: f32 = (joints.iter().chain([&fingers]))
+            .map(|t| row + t.legend_height(ui, width))
+            .sum();
+        let plots = if joints.is_some() { 2.0 } else { 1.0 };
+        let plot = ((ui.available_height() - chrome) / plots).max(MIN_TRACE_PLOT);
+        let mut seek_to = None;
+        if let Some(joints) = joints {
+            ui.label("Joint encoders");
+            seek_to = joints.show(ui, t_now, plot);
         }
+        self.finger_feature(ui);
+        seek_to.or(fingers.show(ui, t_now, plot))
+    }
+
+    /// The per-finger statistic the finger trace shows.
+    fn finger_feature(&mut self, ui: &mut egui::Ui) {
         ComboBox::from_label("Per-finger feature")
             .selected_text(FingerStats::NAMES[self.stat])
             .show_ui(ui, |ui| {
@@ -442,33 +473,12 @@ impl Replay {
                     ui.selectable_value(&mut self.stat, i, *name);
                 }
             });
-        if g.frames.len() == 1 {
-            // One frame has no time axis: its values, a bar per finger.
-            let figure = finger_values_figure(session, g, self.stat);
-            let height = ui.available_height().max(120.0);
-            figure_view::show(ui, "finger_values", &figure, height, Selection::None);
-            return seek_to;
-        }
-        let lines = (session.sensors.iter().enumerate())
-            .map(|(k, sensor)| {
-                let pts = (g.frames.iter())
-                    .map(|fr| {
-                        let stats = FingerStats::of(&session.frame_pressures(fr, k));
-                        [fr.t, stats.to_array()[self.stat]]
-                    })
-                    .collect();
-                (sensor.name.clone(), pts)
-            })
-            .collect();
-        let trace = Trace {
-            id: "finger_trace",
-            label: "Per-finger feature trace",
-            y_title: format!("{} of pressure", FingerStats::NAMES[self.stat]),
-            lines,
-        };
-        seek_to.or(trace.show(ui, t_now, height))
     }
 }
+
+/// The least height a trace's plot is drawn at: three ticks on its y axis and the time
+/// axis's labels and title below them.
+const MIN_TRACE_PLOT: f32 = 110.0;
 
 /// A trace of a grasp over time: one line per joint or finger, its legend a row of names
 /// above the plot (in the lines' colours) so that it never covers the lines or the cursor.
@@ -481,6 +491,14 @@ struct Trace {
 }
 
 impl Trace {
+    /// How tall its legend's row of names is in `width`.
+    fn legend_height(&self, ui: &egui::Ui, width: f32) -> f32 {
+        let names: Vec<(String, egui::Color32)> = (self.lines.iter())
+            .map(|(name, _)| (name.clone(), egui::Color32::WHITE))
+            .collect();
+        legend_row_height(ui, &names, width)
+    }
+
     /// Draw it with the current frame's cursor at `t_now`; the time a click or drag points at.
     fn show(self, ui: &mut egui::Ui, t_now: f64, height: f32) -> Option<f64> {
         let ctx = ui.ctx().clone();
@@ -489,7 +507,6 @@ impl Trace {
             .map(|(j, (name, _))| (name.clone(), color(j)))
             .collect();
         legend_row(ui, &entries);
-        let height = height.min(ui.available_height()).max(0.0);
         let cursor = ui.visuals().selection.bg_fill;
         let shown = Plot::new(self.id)
             .allow_scroll(false)

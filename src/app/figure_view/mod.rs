@@ -83,7 +83,7 @@ fn legend_entries(ctx: &egui::Context, figure: &Figure) -> Vec<(String, Color32)
 }
 
 /// How tall a row of legend entries is when wrapped into `width`.
-fn legend_row_height(ui: &egui::Ui, entries: &[(String, Color32)], width: f32) -> f32 {
+pub(crate) fn legend_row_height(ui: &egui::Ui, entries: &[(String, Color32)], width: f32) -> f32 {
     let font = egui::TextStyle::Body.resolve(ui.style());
     let gap = ui.spacing().item_spacing;
     let (mut rows, mut x) = (1, 0.0);

@@ -627,7 +627,7 @@ impl LiveRoom {
             return;
         };
         let (open, last, early_error, in_progress, recent) = view;
-        // The latest grasps' lines stay in sight below the chart.
+        // The latest grasps' lines stay in sight below the chart where it has its minimum.
         let reserve = if recent.is_empty() {
             0.0
         } else {
@@ -654,10 +654,15 @@ impl LiveRoom {
                 });
             }
         }
-        if !recent.is_empty() {
+        // As many of the latest grasps as the chart leaves room for, the newest first.
+        let line = ui.text_style_height(&egui::TextStyle::Small) + ui.spacing().item_spacing.y;
+        let fit = ((ui.available_height() - 12.0) / line - 1.0)
+            .floor()
+            .max(0.0) as usize;
+        if fit > 0 && !recent.is_empty() {
             ui.separator();
             ui.small("Latest grasps");
-            for line in recent {
+            for line in recent.into_iter().take(fit) {
                 // The CLI's arrow is not in the window's font; one line each (a cut line
                 // shows whole on hover).
                 let line = line.replace('→', "->");
@@ -779,8 +784,15 @@ impl Shown {
     }
 }
 
-/// The height the model's chart keeps before class bars give way.
+/// The height the model's chart keeps before class bars and the latest grasps give way.
 const CHART_MIN: f32 = 150.0;
+
+/// The chart's height: what is left less the latest grasps' `reserve`, but never less
+/// than [`CHART_MIN`] where the tile has that (the grasps' lines then give way).
+fn chart_height(ui: &egui::Ui, reserve: f32) -> f32 {
+    let avail = ui.available_height();
+    (avail - reserve).max(CHART_MIN.min(avail))
+}
 
 fn verdict_ui(ui: &mut egui::Ui, shown: &Shown, open: bool, reserve: f32) {
     let v = &shown.verdict;
@@ -852,7 +864,7 @@ fn verdict_ui(ui: &mut egui::Ui, shown: &Shown, open: bool, reserve: f32) {
             ui,
             id,
             figure,
-            ui.available_height() - reserve,
+            chart_height(ui, reserve),
             FigureSelection::None,
         );
     }
@@ -880,7 +892,7 @@ fn novelty_ui(ui: &mut egui::Ui, shown: &Shown, open: bool, reserve: f32) {
             ui,
             id,
             figure,
-            ui.available_height() - reserve,
+            chart_height(ui, reserve),
             FigureSelection::None,
         );
     }

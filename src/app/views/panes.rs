@@ -539,9 +539,14 @@ pub fn replay_pane(ui: &mut egui::Ui, cx: &mut Cx) {
         ));
         return;
     };
-    let action = cx
-        .replay
-        .ui(ui, &cx.sessions[s], g, cx.analyses.trace.as_ref());
+    // A tile too short for the controls, the fingertips and the recognition scrolls them;
+    // the traces fold to what is visible (they never stretch down the scrolled column).
+    let action = egui::ScrollArea::vertical()
+        .auto_shrink([false, false])
+        .show(ui, |ui| {
+            (cx.replay).ui(ui, &cx.sessions[s], g, cx.analyses.trace.as_ref())
+        })
+        .inner;
     match action {
         ReplayAction::Trace(learner) => {
             let ctx = cx.ctx.clone();
