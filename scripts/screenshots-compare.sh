@@ -50,9 +50,11 @@ shot() { # NAME FILE [ACTIONS: a function of xdotool steps]
     kill $pid
     wait $pid 2>/dev/null || true
 }
-# The positions are those of the form at 1400x900.
-at() { # X Y: click there
-    xdotool mousemove "$1" "$2" click 1
+# The form panel is min(250, 22 % of the width) wide at the right; its fields' heights do
+# not move with the window's size, so a click is placed from the panel's left edge.
+panel=$((w * 22 / 100 < 250 ? w * 22 / 100 : 250))
+at() { # X Y: click X points into the form panel, Y from the window's top
+    xdotool mousemove $((w - panel + $1)) "$2" click 1
     sleep 2
 }
 search() { # TEXT: into the signal tree's search field
@@ -61,19 +63,19 @@ search() { # TEXT: into the signal tree's search field
 }
 # BTS3: electrode 7 of the middle finger, searched for in the tree and clicked.
 electrode() {
-    at 1275 364
+    at 125 364
     search "mf taxel 7"
-    at 1190 413
+    at 40 413
 }
 # iCub: the DS model's outputs, grouped correct vs wrong, its true class probability.
 ds() {
-    at 1209 196
-    at 1255 246
-    at 1239 114
-    at 1248 187
-    at 1270 390
+    at 59 196
+    at 105 246
+    at 89 114
+    at 98 187
+    at 120 390
     search "true class"
-    at 1250 437
+    at 100 437
 }
 shot compare-icub "$data/icub-grasp"
 shot compare-bts3-electrode "$data/bts3/biotac-palmdown-grasps.csv" electrode
