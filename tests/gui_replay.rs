@@ -95,6 +95,21 @@ fn filters_and_replays_an_object_recognition_grasp() {
     }
     h.get_by_label("Joint encoders");
     h.get_by_label("Per-finger feature");
+    // Both traces' time axes are painted whole, at both window sizes (the last trace ends
+    // at the tile's bottom edge, not under it).
+    for size in [
+        egui::Vec2::new(1400.0, 900.0),
+        egui::Vec2::new(1000.0, 700.0),
+    ] {
+        h.set_size(size);
+        h.run_steps(3);
+        let titles = whole_texts(&h.output().shapes, "time (s)");
+        assert_eq!(
+            titles,
+            (2, 2),
+            "time axis titles (painted, whole) at {size:?}"
+        );
+    }
 
     // The recognition forms as the hand closes: DS's class distribution at each step.
     h.get_by_label("Show the recognition as the hand closes")
@@ -274,4 +289,27 @@ fn a_single_frame_grasp_shows_its_values_not_an_empty_trace() {
         "a one-frame grasp drew a trace over time"
     );
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// How many texts reading `text` were painted, and how many of them lie whole within the
+/// rectangle they were clipped to.
+fn whole_texts(shapes: &[egui::epaint::ClippedShape], text: &str) -> (usize, usize) {
+    fn walk(shape: &egui::Shape, clip: egui::Rect, text: &str, out: &mut (usize, usize)) {
+        match shape {
+            egui::Shape::Vec(v) => v.iter().for_each(|s| walk(s, clip, text, out)),
+            egui::Shape::Text(t) if t.galley.text().trim() == text => {
+                let rect = (t.galley.rect)
+                    .rotate_bb(egui::emath::Rot2::from_angle(t.angle))
+                    .translate(t.pos.to_vec2());
+                out.0 += 1;
+                out.1 += usize::from(clip.expand(1.0).contains_rect(rect));
+            }
+            _ => {}
+        }
+    }
+    let mut out = (0, 0);
+    for s in shapes {
+        walk(&s.shape, s.clip_rect, text, &mut out);
+    }
+    out
 }

@@ -458,10 +458,10 @@ impl Replay {
         let mut seek_to = None;
         if let Some(joints) = joints {
             ui.label("Joint encoders");
-            seek_to = joints.show(ui, t_now, plot);
+            seek_to = joints.show(ui, t_now, Some(plot));
         }
         self.finger_feature(ui);
-        seek_to.or(fingers.show(ui, t_now, plot))
+        seek_to.or(fingers.show(ui, t_now, None))
     }
 
     /// The per-finger statistic the finger trace shows.
@@ -499,14 +499,17 @@ impl Trace {
         legend_row_height(ui, &names, width)
     }
 
-    /// Draw it with the current frame's cursor at `t_now`; the time a click or drag points at.
-    fn show(self, ui: &mut egui::Ui, t_now: f64, height: f32) -> Option<f64> {
+    /// Draw it with the current frame's cursor at `t_now`, its plot `height` tall or, with
+    /// none, down to the tile's bottom edge (at least [`MIN_TRACE_PLOT`]); the time a click
+    /// or drag points at.
+    fn show(self, ui: &mut egui::Ui, t_now: f64, height: Option<f32>) -> Option<f64> {
         let ctx = ui.ctx().clone();
         let color = |j: usize| series_rgb(&ctx, None, j);
         let entries: Vec<(String, egui::Color32)> = (self.lines.iter().enumerate())
             .map(|(j, (name, _))| (name.clone(), color(j)))
             .collect();
         legend_row(ui, &entries);
+        let height = height.unwrap_or_else(|| ui.available_height().max(MIN_TRACE_PLOT));
         let cursor = ui.visuals().selection.bg_fill;
         let shown = Plot::new(self.id)
             .allow_scroll(false)
