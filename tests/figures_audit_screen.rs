@@ -155,7 +155,8 @@ fn plot_frames(p: &Painted, bg: Color32) -> Vec<Rect> {
 }
 
 /// Colour bars: columns of at least 16 slices (far wider than tall, unlike the square
-/// cells of a matrix or an image), equally wide and stacked on each other.
+/// cells of a matrix or an image), equally wide and stacked on each other. A matrix's
+/// stretched cells stack so too; the heatmap's audit leaves out those within its cells.
 fn colour_bars(p: &Painted) -> Vec<Rect> {
     let mut bars: Vec<(Rect, usize)> = Vec::new();
     for (r, _, _) in &p.rects {
@@ -329,11 +330,16 @@ fn audit(figure: &Figure, size: Vec2) -> Vec<String> {
             .collect()
     };
     let bars_of = colour_bars(&p);
-    let colour_bar_ticks = |problems: &mut Vec<String>| {
-        if bars_of.is_empty() {
+    // A heatmap's stretched cells stack like a bar's slices: those within `cells` are not
+    // a colour bar.
+    let colour_bar_ticks = |problems: &mut Vec<String>, cells: Option<Rect>| {
+        let bars: Vec<&Rect> = (bars_of.iter())
+            .filter(|b| cells.is_none_or(|m| !within(**b, m)))
+            .collect();
+        if bars.is_empty() {
             problems.push("no colour bar painted".into());
         }
-        for b in &bars_of {
+        for b in bars {
             let labels: Vec<&Text> = (p.texts.iter())
                 .filter(numeric)
                 .filter(|t| {
@@ -377,13 +383,18 @@ fn audit(figure: &Figure, size: Vec2) -> Vec<String> {
             None => problems.push("no plot frame painted".into()),
         },
         FigureKind::Heatmap(h) => {
-            colour_bar_ticks(&mut problems);
-            match matrix(&p, h.rows.len(), h.columns.len()) {
+            let cells = matrix(&p, h.rows.len(), h.columns.len());
+            // Only a column of 16 cells or more can pass for a bar.
+            colour_bar_ticks(&mut problems, cells.filter(|_| h.rows.len() >= 16));
+            match cells {
+                Some(m) if !within(m, area) => {
+                    problems.push(format!("the matrix's cells {m:?} run past the pane"));
+                }
                 Some(m) => matrix_categories(&mut pane, &p, m, &h.rows, &h.columns, &mut problems),
                 None => problems.push("the matrix's cells are not all painted".into()),
             }
         }
-        FigureKind::ImageGrid(_) => colour_bar_ticks(&mut problems),
+        FigureKind::ImageGrid(_) => colour_bar_ticks(&mut problems, None),
     }
     problems
 }
@@ -703,7 +714,8 @@ fn compare_figures(objects: &Session, stab: &Session) -> Vec<(String, Figure)> {
         signal: Signal::HandTotal,
         event: Event::ContactOnset,
         spread: Spread::MeanSd,
-        overlaid: (0..s.grasps.len().min(40)).collect(),
+        // Every grasp, as the window overlays them: the heatmap's 200 rows of the sample.
+        overlaid: (0..s.grasps.len()).collect(),
         groups,
         seed: 1,
     };

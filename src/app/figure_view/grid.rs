@@ -10,8 +10,12 @@ use egui::Galley;
 use super::*;
 use crate::figures::legibility::{decimals_for, thin_categories, tick_count, value_text};
 
-/// The smallest cell a matrix is drawn with, in points.
-const MIN_CELL: f32 = 2.0;
+/// The smallest pixel of an image grid's images, in points.
+const MIN_IMAGE_CELL: f32 = 1.0;
+/// The smallest square cell; below it, cells stretch to fill the body.
+const MIN_SQUARE: f32 = 8.0;
+/// The thinnest stretched cell: a body less than half a point per row runs past its edge.
+const MIN_STRIP: f32 = 0.5;
 /// Room between the parts of a matrix (labels, cells, colour bar).
 const GAP: f32 = 4.0;
 
@@ -70,28 +74,36 @@ pub(super) fn show_heatmap(
     let col_w = (h.columns.iter())
         .map(|c| fitted(ui, c, &font, size.y * 0.25).size().x)
         .fold(0.0f32, f32::max);
+    // Square cells while they stay at least MIN_SQUARE; a matrix of more rows or columns
+    // than that holds (a strip of two hundred grasps × time) stretches its cells to fill
+    // the body instead, as an image would, rather than running past it.
     let cell_for = |col_h: f32| {
         let w = size.x - line - row_w - bar_w - 3.0 * GAP;
         // Half a line above the cells, for the first row's name and the bar's top tick.
         let ht = size.y - col_h - 1.5 * line - 2.0 * GAP;
-        (w / cols as f32).min(ht / rows as f32).max(MIN_CELL)
+        let fill = Vec2::new(w / cols as f32, ht / rows as f32).max(Vec2::ZERO);
+        if fill.min_elem() >= MIN_SQUARE {
+            Vec2::splat(fill.min_elem())
+        } else {
+            fill.max(Vec2::splat(MIN_STRIP))
+        }
     };
     let mut cell = cell_for(line);
-    let rotated = col_w + GAP > cell;
+    let rotated = col_w + GAP > cell.x;
     if rotated {
         cell = cell_for(col_w);
     }
     let col_h = if rotated { col_w } else { line };
-    let row_thin = thin_categories(rows, cell as f64, line as f64);
+    let row_thin = thin_categories(rows, cell.y as f64, line as f64);
     let col_thin = thin_categories(
         cols,
-        cell as f64,
+        cell.x as f64,
         if rotated { line } else { col_w + GAP } as f64,
     );
     let (rect, response) = ui.allocate_exact_size(size, Sense::hover());
     let painter = ui.painter_at(rect);
     let origin = rect.min + Vec2::new(line + row_w + GAP, line / 2.0);
-    let grid = Rect::from_min_size(origin, Vec2::new(cell * cols as f32, cell * rows as f32));
+    let grid = Rect::from_min_size(origin, cell * Vec2::new(cols as f32, rows as f32));
     let decimals = decimals_for(&values);
     let annotations: Vec<Option<Arc<Galley>>> = (values.iter())
         .map(|v| {
@@ -105,14 +117,11 @@ pub(super) fn show_heatmap(
     let annotate = annotations
         .iter()
         .flatten()
-        .all(|g| g.size().x + GAP <= cell && g.size().y <= cell);
+        .all(|g| g.size().x + GAP <= cell.x && g.size().y <= cell.y);
     let mut hover = None;
     for (r, row) in h.values.iter().enumerate() {
         for (c, &v) in row.iter().enumerate() {
-            let cr = Rect::from_min_size(
-                origin + Vec2::new(c as f32 * cell, r as f32 * cell),
-                Vec2::splat(cell),
-            );
+            let cr = Rect::from_min_size(origin + Vec2::new(c as f32, r as f32) * cell, cell);
             let fill = if v.is_finite() {
                 rgb(h.colors.map.color(v, limits))
             } else {
@@ -178,14 +187,14 @@ pub(super) fn show_heatmap(
         .filter(|(r, _)| row_thin.shows(*r))
     {
         let g = fitted(ui, name, &row_font, row_w);
-        let y = origin.y + (r as f32 + 0.5) * cell - g.size().y / 2.0;
+        let y = origin.y + (r as f32 + 0.5) * cell.y - g.size().y / 2.0;
         painter.galley(Pos2::new(origin.x - GAP - g.size().x, y), g, text);
     }
     let col_font = FontId::new(font.size * col_thin.scale as f32, font.family.clone());
     for (c, name) in (h.columns.iter().enumerate()).filter(|(c, _)| col_thin.shows(*c)) {
         // Standing names have their cell's width; turned ones the height below the grid.
-        let g = fitted(ui, name, &col_font, if rotated { col_h } else { cell });
-        let centre = origin.x + (c as f32 + 0.5) * cell;
+        let g = fitted(ui, name, &col_font, if rotated { col_h } else { cell.x });
+        let centre = origin.x + (c as f32 + 0.5) * cell.x;
         let top = grid.bottom() + GAP;
         let size = g.size();
         let pos = if rotated {
@@ -344,7 +353,7 @@ impl GridLayout {
                 }
             }
         }
-        best.cell = best.cell.max(MIN_CELL / 2.0);
+        best.cell = best.cell.max(MIN_IMAGE_CELL);
         best
     }
 }
