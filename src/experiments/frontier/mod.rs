@@ -13,6 +13,10 @@
 //! the Table I features; the RBF SVM — C × gamma, scored by repeated stratified 5-fold
 //! accuracy on the Table I features.
 //!
+//! Each method answers through its object (`method::FrontierMethod`, one per family in a
+//! module of its own; `registry::frontier_method` says which): its knobs, its items, one
+//! item, its points.
+//!
 //! A frontier is computed as work items (one repetition at one size, or one dictionary)
 //! whose seeds follow from the run's seed and the item alone, so a sharded sweep
 //! (`crate::sweep`) merges into exactly the local result.
@@ -24,48 +28,41 @@
 
 use std::time::Instant;
 
-use ndarray::Array2;
 use serde::{Deserialize, Serialize};
 
-use crate::catalogue::{Classifier, MethodId};
-use crate::cluster::{SequentialKMeansParams, scores};
+use crate::catalogue::MethodId;
 use crate::experiments::ExperimentError;
-use crate::experiments::classifier::{
-    ClassifierPrep, ClassifierScorer, classifier_err, cv_repetition, prepare_classifier,
-};
-use crate::experiments::clustering::{
-    ClusteringParams, ClusteringPrep, ClusteringRun, UnsupervisedLearner, baseline_seed, distinct,
-    one_run, prepare_clustering, som_setup,
-};
-use crate::experiments::feature_choice::{AUTO_FOLDS, FeatureChoice, FoldScorer, choose_features};
-use crate::experiments::labels::session_labels;
+use crate::experiments::clustering::{ClusteringRun, UnsupervisedLearner};
+use crate::experiments::feature_choice::FeatureChoice;
 use crate::experiments::parallel::compute_items;
-use crate::experiments::recognition::{
-    ExpertsScorer, RecognitionParams, RecognitionPrep, SupervisedLearner, prepare_recognition,
-    recognition_repetition,
-};
-use crate::experiments::stability::{
-    DataOptions, PipelineSettings, StabilityData, concatenated_codes,
-};
 use crate::features::FeatureSet;
-use crate::features::{Normalisation, Normaliser, table_one::session_features};
 use crate::jobs::Progress;
 use crate::rng::Rng;
 use crate::session::Session;
-use crate::sparse::DictionaryParams;
-use crate::svm::kernel_svm::{self, KernelSvmParams};
-use crate::svm::{cross_validate, mean_se, stratified_k_fold};
+use crate::svm::mean_se;
 
+mod method;
 mod points;
+mod registered;
+mod registry;
 pub mod report;
 mod run;
+mod sparse;
+mod supervised;
+mod table_one;
+mod unsupervised;
 
+pub use method::{FrontierItem, FrontierOutput, FrontierPrep, SparseCell};
+use method::{
+    FrontierMethod, MethodPoints, no_sequences, plain_label, plain_short_label, wrong_item,
+};
 use points::*;
+use registry::frontier_method;
 pub use run::*;
 
 /// The methods a frontier can sweep: every method of the catalogue with a size knob.
 pub fn methods() -> impl Iterator<Item = MethodId> {
-    MethodId::all().filter(|m| !m.info().size_knobs.is_empty())
+    MethodId::all().filter(|&m| frontier_method(m).is_some())
 }
 
 /// Which time defines the cheapest model.
@@ -198,103 +195,31 @@ impl FrontierParams {
             .collect()
     }
 
-    /// A registered method's sizes: the given ones, else its own list.
-    pub fn classifier_sizes(&self, c: &dyn Classifier) -> Vec<Vec<f64>> {
-        if self.sizes.is_empty() {
-            c.sizes()
-        } else {
-            self.sizes.clone()
-        }
+    /// "DS, all features", "sparse coding + SVM", "sequential k-means".
+    pub fn label(&self) -> String {
+        frontier_method(self.method).map_or_else(|| plain_label(self), |m| m.label(self))
     }
 
     pub fn validate(&self) -> Result<(), ExperimentError> {
-        if self.method.info().size_knobs.is_empty() {
+        self.checked().map(|_| ())
+    }
+
+    /// The method's frontier object, once the parameters are valid.
+    fn checked(&self) -> Result<&'static dyn FrontierMethod, ExperimentError> {
+        let Some(method) = frontier_method(self.method) else {
             return Err(ExperimentError::param(
                 "method",
                 format!("{} has no size to sweep", self.method.key()),
             ));
-        }
+        };
         if self.reps < 2 {
             return Err(ExperimentError::param(
                 "reps",
                 "a standard error needs at least 2 repetitions",
             ));
         }
-        match self.method {
-            // Rejected above: nothing to sweep.
-            MethodId::RawSvm => {}
-            MethodId::Ds | MethodId::Gs => {
-                if self.capacities.is_empty() || self.taus.is_empty() {
-                    return Err(ExperimentError::param(
-                        "capacities",
-                        "DS/GS need at least one capacity and one tau",
-                    ));
-                }
-                if self.capacities.contains(&0) || self.taus.contains(&0) {
-                    return Err(ExperimentError::param(
-                        "capacities",
-                        "capacity and tau must be ≥ 1",
-                    ));
-                }
-            }
-            MethodId::SparseSvm => {
-                if self.num_bases.is_empty() || self.beta.is_empty() || self.gamma.is_empty() {
-                    return Err(ExperimentError::param(
-                        "num_bases",
-                        "sparse coding needs num_bases, beta and gamma values",
-                    ));
-                }
-                if self.num_bases.contains(&0) {
-                    return Err(ExperimentError::param("num_bases", "must be ≥ 1"));
-                }
-                positive("beta", &self.beta)?;
-                positive("gamma", &self.gamma)?;
-            }
-            MethodId::Du | MethodId::Gu => {
-                if self.thresholds.is_empty() {
-                    return Err(ExperimentError::param(
-                        "thresholds",
-                        "DU/GU need at least one threshold",
-                    ));
-                }
-                if let Some(t) = self.thresholds.iter().find(|t| !(0.0..=1.0).contains(*t)) {
-                    return Err(ExperimentError::param(
-                        "thresholds",
-                        format!("{t} is not in [0, 1]"),
-                    ));
-                }
-                if self.expert_capacity == Some(0) || self.expert_tau == Some(0) {
-                    return Err(ExperimentError::param(
-                        "expert_capacity",
-                        "the experts' capacity and tau must be ≥ 1",
-                    ));
-                }
-            }
-            MethodId::KMeans | MethodId::Som => {
-                if self.ks.is_empty() || self.ks.contains(&0) {
-                    return Err(ExperimentError::param(
-                        "ks",
-                        "k-means and the SOM need cluster counts ≥ 1",
-                    ));
-                }
-            }
-            MethodId::RbfSvm => {
-                if self.svm_c.is_empty() || self.svm_gamma.is_empty() {
-                    return Err(ExperimentError::param(
-                        "svm_c",
-                        "the RBF SVM needs at least one C and one gamma",
-                    ));
-                }
-                positive("svm_c", &self.svm_c)?;
-                positive("svm_gamma", &self.svm_gamma)?;
-            }
-            MethodId::Classifier(c) => {
-                for size in self.classifier_sizes(c.method()) {
-                    c.method().check(&size).map_err(classifier_err)?;
-                }
-            }
-        }
-        Ok(())
+        method.validate(self)?;
+        Ok(method)
     }
 }
 
@@ -373,14 +298,8 @@ impl Frontier {
 
     /// A short name for a chart legend: "DS all", "GU encoder", "SC+SVM", "SOM".
     pub fn short_label(&self) -> String {
-        let m = self.params.method;
-        if m == MethodId::SparseSvm {
-            "SC+SVM".into()
-        } else if m.uses_features() {
-            format!("{} {}", m.title(), self.params.features.name())
-        } else {
-            m.title().to_string()
-        }
+        let p = &self.params;
+        frontier_method(p.method).map_or_else(|| plain_short_label(p), |m| m.short_label(p))
     }
 }
 
@@ -407,12 +326,6 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// Folds of the RBF SVM's cross validation (the second paper's "SVM 5-fold").
 pub const SVM_FOLDS: usize = 5;
-
-/// The papers' k of the clustering baselines (Table IV: 10 clusters, the SOM 2 × 5).
-const PAPER_K: usize = 10;
-
-/// The paper's model size of sparse coding + SVM (the pipeline's default configuration).
-const SPARSE_PAPER_NUM_BASES: usize = 29;
 
 #[cfg(test)]
 mod tests {
