@@ -334,7 +334,7 @@ impl LiveModel {
                 Vec::new(),
                 Some(m.threshold),
             ),
-            _ => return None,
+            Model::Stability(_) | Model::TableOne(_) | Model::Classifier(_) => return None,
         };
         Some(Early {
             sums: vec![0.0; classes.len()],
@@ -370,7 +370,7 @@ fn taught(file: &ModelFile, session: &Session) -> Result<Option<ModelFile>, Mode
             let (next, secs) = continue_clusters(m, session)?;
             cluster_file(next, session, secs, Some(previous))
         }
-        _ => return Ok(None),
+        Model::Stability(_) | Model::TableOne(_) | Model::Classifier(_) => return Ok(None),
     }))
 }
 
