@@ -21,7 +21,8 @@ use tactile_workbench::live::discover;
 use tactile_workbench::live::protocol::{self, Channel};
 use tactile_workbench::models::{self, ModelError, ModelFile};
 use tactile_workbench::project::{Project, ProjectError};
-use tactile_workbench::session::ImportSpec;
+use tactile_workbench::session::cdr::CdrError;
+use tactile_workbench::session::{ImportSpec, Location};
 
 /// Every error of the chain below `e`, top first.
 fn chain<'a>(e: &'a (dyn Error + 'static)) -> Vec<&'a (dyn Error + 'static)> {
@@ -226,4 +227,57 @@ fn malformed_live_messages_keep_the_parser_error() {
         .and_then(|s| s.downcast_ref::<serde_json::Error>())
         .unwrap_or_else(|| panic!("the parser's error is the source: {err:?}"));
     assert!(json.is_eof(), "{json}");
+}
+
+/// A bag whose tactile topic's definition only borrows the standard name: the session
+/// error names the bag and the topic, and keeps the CDR check's own error as its source.
+#[test]
+fn a_bag_with_a_look_alike_definition_keeps_the_cdr_error() {
+    let dir = common::temp_dir("error-sources-cdr");
+    let bag = dir.join("look-alike.mcap");
+    let mut w = mcap::WriteOptions::new()
+        .create(std::io::BufWriter::new(
+            std::fs::File::create(&bag).unwrap(),
+        ))
+        .unwrap();
+    let schema = w
+        .add_schema(
+            "std_msgs/msg/Float64MultiArray",
+            "ros2msg",
+            b"std_msgs/MultiArrayLayout layout\nfloat64[] data\nint32 extra\n",
+        )
+        .unwrap();
+    let channel = w
+        .add_channel(schema, "/a", "cdr", &std::collections::BTreeMap::new())
+        .unwrap();
+    let header = mcap::records::MessageHeader {
+        channel_id: channel,
+        sequence: 0,
+        log_time: 1,
+        publish_time: 1,
+    };
+    w.write_to_known_channel(&header, &[0, 1, 0, 0]).unwrap();
+    w.finish().unwrap();
+    drop(w);
+    let spec = ImportSpec::from_str(
+        r#"{"sensors": [{"name": "a", "topic": "/a", "layout": "grid 1x2", "unit": "raw"}],
+            "grasps": {"events": "/ev"}}"#,
+        Path::new("spec.json"),
+    )
+    .unwrap();
+    let err = tactile_workbench::session::ros2::import_bag(&bag, &spec)
+        .expect_err("a look-alike definition is refused");
+    assert!(
+        matches!(&err.location, Location::Topic { topic, .. } if topic == "/a"),
+        "{err:?}"
+    );
+    let cdr = err
+        .source()
+        .and_then(|s| s.downcast_ref::<CdrError>())
+        .unwrap_or_else(|| panic!("the CDR check's error is the source: {err:?}"));
+    assert!(
+        matches!(cdr, CdrError::NotStandard { inside: None, got, .. } if got.contains("int32 extra")),
+        "{cdr:?}"
+    );
+    assert!(err.to_string().contains(&cdr.to_string()), "{err}");
 }

@@ -37,11 +37,6 @@ const ALLOWED: &[(&str, usize, &str)] = &[
         "a bag's zstd or record error placed in `SessionError`'s message (it keeps no source yet)",
     ),
     (
-        "src/session/cdr.rs",
-        14,
-        "a reason the caller places, with the file and line or topic, in `SessionError`'s message",
-    ),
-    (
         "src/session/long_csv.rs",
         4,
         "a reason the caller places, with the file and line or topic, in `SessionError`'s message",

@@ -82,10 +82,10 @@ impl Plan {
         let json = match channel.encoding.as_str() {
             "cdr" => {
                 let encoding = channel.schema_encoding.as_deref().unwrap_or("");
-                cdr::check_schema(ty, encoding, channel.schema.as_bytes()).map_err(|reason| {
+                cdr::check_schema(ty, encoding, channel.schema.as_bytes()).map_err(|source| {
                     LiveError::Definition {
                         topic: topic(),
-                        reason,
+                        source,
                     }
                 })?;
                 false
@@ -111,7 +111,7 @@ impl Plan {
                 if route.json {
                     values = json_numbers(payload, "data")?;
                 } else {
-                    cdr::decode_multiarray(payload, kind, &mut values).map_err(LiveError::Cdr)?;
+                    cdr::decode_multiarray(payload, kind, &mut values)?;
                 }
                 self.check_row(i, &values, kind)?;
                 Ok(Sample::Tactile { topic: i, values })
@@ -125,7 +125,7 @@ impl Plan {
                         .ok_or_else(|| json_field("name", "a list of strings"))?;
                     (names, json_numbers(payload, "position")?)
                 } else {
-                    let js = cdr::decode_joint_state(payload).map_err(LiveError::Cdr)?;
+                    let js = cdr::decode_joint_state(payload)?;
                     let names = js.names.iter().map(|n| n.to_string()).collect();
                     (names, js.positions)
                 };
@@ -162,9 +162,7 @@ impl Plan {
                         .map(str::to_string)
                         .ok_or_else(|| json_field("data", "a string"))?
                 } else {
-                    cdr::decode_string(payload)
-                        .map_err(LiveError::Cdr)?
-                        .to_string()
+                    cdr::decode_string(payload)?.to_string()
                 };
                 Ok(Sample::Event(text))
             }
@@ -398,8 +396,8 @@ mod tests {
             ))
             .unwrap_err();
         assert!(
-            matches!(&err, LiveError::Definition { topic, reason }
-                if topic == "/a" && reason.contains("not the standard")),
+            matches!(&err, LiveError::Definition { topic, source: crate::session::cdr::CdrError::NotStandard { .. } }
+                if topic == "/a"),
             "{err:?}"
         );
         let err = p

@@ -10,7 +10,7 @@ use std::time::Duration;
 use crate::error::Kept;
 use crate::models::ModelError;
 use crate::session::SessionError;
-use crate::session::cdr::ArrayKind;
+use crate::session::cdr::{ArrayKind, CdrError};
 use crate::session::shorten;
 
 use super::protocol::SUBPROTOCOLS;
@@ -106,9 +106,13 @@ pub enum LiveError {
         reads: &'static str,
     },
     /// A CDR channel whose message definition is not the one its type has (the bag
-    /// importer's check, which gives its reason as text).
-    #[error("channel `{topic}`: {reason}")]
-    Definition { topic: String, reason: String },
+    /// importer's check).
+    #[error("channel `{topic}`: {source}")]
+    Definition {
+        topic: String,
+        #[source]
+        source: CdrError,
+    },
     #[error(
         "channel `{topic}`: messages are encoded as `{}`, not cdr or json",
         shorten(encoding)
@@ -124,9 +128,9 @@ pub enum LiveError {
         field: String,
         expected: &'static str,
     },
-    /// A CDR message that does not decode (the bag importer's reason, as text).
+    /// A CDR message that does not decode (the bag importer's decoder).
     #[error("{0}")]
-    Cdr(String),
+    Cdr(#[from] CdrError),
     #[error("{names} joint names but {positions} positions")]
     JointCount { names: usize, positions: usize },
     #[error("joint `{joint}` is not in the message (it has: {})", has.join(", "))]
