@@ -6,6 +6,8 @@
 mod common;
 
 use std::error::Error;
+use std::path::Path;
+use std::time::Duration;
 
 use tactile_workbench::catalogue::MethodId;
 use tactile_workbench::error::MethodError;
@@ -13,8 +15,14 @@ use tactile_workbench::experiments::stability::{
     Config, DataOptions, StabilityData, StabilityError, StabilityOptions,
 };
 use tactile_workbench::jobs::Progress;
+use tactile_workbench::live::LiveError;
+use tactile_workbench::live::channels::Plan;
+use tactile_workbench::live::discover;
+use tactile_workbench::live::protocol::{self, Channel};
 use tactile_workbench::models::{self, ModelError, ModelFile};
 use tactile_workbench::project::{Project, ProjectError};
+use tactile_workbench::session::cdr::CdrError;
+use tactile_workbench::session::{ImportSpec, Location};
 
 /// Every error of the chain below `e`, top first.
 fn chain<'a>(e: &'a (dyn Error + 'static)) -> Vec<&'a (dyn Error + 'static)> {
@@ -141,4 +149,135 @@ fn a_bad_model_field_is_the_source_of_the_file_and_project_errors() {
         .and_then(|s| s.downcast_ref::<ModelError>())
         .expect("the model's error is the source");
     assert!(matches!(model, ModelError::Field { .. }), "{model:?}");
+}
+
+/// A stream whose port is closed: the socket's own error is the source of the live error,
+/// whose message names the address.
+#[test]
+fn a_refused_connection_keeps_the_socket_error() {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let url = format!("ws://127.0.0.1:{port}");
+    let err = discover::discover(&url, Duration::from_millis(200))
+        .expect_err("nothing listens on a port just freed");
+    assert!(matches!(err, LiveError::Socket { .. }), "{err:?}");
+    assert!(
+        err.to_string().contains(&format!("127.0.0.1:{port}")),
+        "{err}"
+    );
+    let io = err
+        .source()
+        .and_then(|s| s.downcast_ref::<std::io::Error>())
+        .unwrap_or_else(|| panic!("the socket's error is the source: {err:?}"));
+    assert_eq!(io.kind(), std::io::ErrorKind::ConnectionRefused, "{io}");
+}
+
+/// A peer that accepts the connection and hangs up: the WebSocket library's error is the
+/// source of the failed handshake.
+#[test]
+fn a_failed_handshake_keeps_the_websocket_error() {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = listener.local_addr().unwrap().port();
+    let peer = std::thread::spawn(move || drop(listener.accept()));
+    let err = discover::discover(&format!("ws://127.0.0.1:{port}"), Duration::from_secs(1))
+        .expect_err("a peer that hangs up is no server");
+    peer.join().unwrap();
+    assert!(matches!(err, LiveError::Handshake { .. }), "{err:?}");
+    let ws = chain(&err)[1]
+        .downcast_ref::<tungstenite::Error>()
+        .unwrap_or_else(|| panic!("the WebSocket error is the source: {err:?}"));
+    assert!(err.to_string().contains(&ws.to_string()), "{err}");
+}
+
+/// A server's text that is not JSON, and a JSON channel's message that is not: the parser's
+/// error is the source.
+#[test]
+fn malformed_live_messages_keep_the_parser_error() {
+    let err = protocol::parse_text("{\"op\": ").expect_err("a truncated op is refused");
+    assert!(matches!(err, LiveError::NotAnOp(_)), "{err:?}");
+    let json = err
+        .source()
+        .and_then(|s| s.downcast_ref::<serde_json::Error>())
+        .unwrap_or_else(|| panic!("the parser's error is the source: {err:?}"));
+    assert!(json.is_eof(), "{json}");
+
+    let spec = ImportSpec::from_str(
+        r#"{"sensors": [{"name": "a", "topic": "/a", "layout": "grid 1x2", "unit": "raw"}]}"#,
+        Path::new("spec.json"),
+    )
+    .unwrap();
+    let plan = Plan::of(&spec).unwrap();
+    let channel = Channel {
+        id: 1,
+        topic: "/a".into(),
+        encoding: "json".into(),
+        schema_name: "std_msgs/msg/Float64MultiArray".into(),
+        schema_encoding: None,
+        schema: String::new(),
+    };
+    let route = plan.route(&channel).unwrap().expect("the spec reads `/a`");
+    let err = plan
+        .decode(&route, b"{\"data\": [1, 2")
+        .expect_err("a truncated message is refused");
+    let json = err
+        .source()
+        .and_then(|s| s.downcast_ref::<serde_json::Error>())
+        .unwrap_or_else(|| panic!("the parser's error is the source: {err:?}"));
+    assert!(json.is_eof(), "{json}");
+}
+
+/// A bag whose tactile topic's definition only borrows the standard name: the session
+/// error names the bag and the topic, and keeps the CDR check's own error as its source.
+#[test]
+fn a_bag_with_a_look_alike_definition_keeps_the_cdr_error() {
+    let dir = common::temp_dir("error-sources-cdr");
+    let bag = dir.join("look-alike.mcap");
+    let mut w = mcap::WriteOptions::new()
+        .create(std::io::BufWriter::new(
+            std::fs::File::create(&bag).unwrap(),
+        ))
+        .unwrap();
+    let schema = w
+        .add_schema(
+            "std_msgs/msg/Float64MultiArray",
+            "ros2msg",
+            b"std_msgs/MultiArrayLayout layout\nfloat64[] data\nint32 extra\n",
+        )
+        .unwrap();
+    let channel = w
+        .add_channel(schema, "/a", "cdr", &std::collections::BTreeMap::new())
+        .unwrap();
+    let header = mcap::records::MessageHeader {
+        channel_id: channel,
+        sequence: 0,
+        log_time: 1,
+        publish_time: 1,
+    };
+    w.write_to_known_channel(&header, &[0, 1, 0, 0]).unwrap();
+    w.finish().unwrap();
+    drop(w);
+    let spec = ImportSpec::from_str(
+        r#"{"sensors": [{"name": "a", "topic": "/a", "layout": "grid 1x2", "unit": "raw"}],
+            "grasps": {"events": "/ev"}}"#,
+        Path::new("spec.json"),
+    )
+    .unwrap();
+    let err = tactile_workbench::session::ros2::import_bag(&bag, &spec)
+        .expect_err("a look-alike definition is refused");
+    assert!(
+        matches!(&err.location, Location::Topic { topic, .. } if topic == "/a"),
+        "{err:?}"
+    );
+    let cdr = err
+        .source()
+        .and_then(|s| s.downcast_ref::<CdrError>())
+        .unwrap_or_else(|| panic!("the CDR check's error is the source: {err:?}"));
+    assert!(
+        matches!(cdr, CdrError::NotStandard { inside: None, got, .. } if got.contains("int32 extra")),
+        "{cdr:?}"
+    );
+    assert!(err.to_string().contains(&cdr.to_string()), "{err}");
 }

@@ -18,7 +18,8 @@ use tactile_workbench::app::{View, WorkbenchApp};
 use tactile_workbench::catalogue::MethodId;
 use tactile_workbench::experiments::recognition::RecognitionParams;
 use tactile_workbench::features::FeatureSet;
-// `serve` reads `publish` from the crate root.
+// `serve` reads `publish` and `LiveError` from the crate root.
+use tactile_workbench::live::LiveError;
 use tactile_workbench::live::publish::{self, Stream};
 use tactile_workbench::models::{self, SequenceFitOptions};
 use tactile_workbench::session::{self, ImportSpec, Session};

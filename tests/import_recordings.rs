@@ -889,5 +889,14 @@ fn chunks_without_the_specs_channels_are_never_read() {
     bag_with_a_damaged_chunk(&tactile, false);
     let e = error_of(&tactile, &spec);
     assert_has(&e, &[&tactile.display().to_string(), "damaged"]);
+    // The decompressor's own error is kept as the source, and said in the message.
+    let err = session::import_with_spec(&tactile, &spec).expect_err("a damaged chunk");
+    let source = std::error::Error::source(&err)
+        .unwrap_or_else(|| panic!("the decompressor's error is kept: {err:?}"));
+    assert!(
+        source.downcast_ref::<std::io::Error>().is_some(),
+        "{source:?}"
+    );
+    assert_has(&e, &[&source.to_string()]);
     let _ = std::fs::remove_dir_all(dir);
 }

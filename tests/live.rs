@@ -15,8 +15,9 @@ use tactile_workbench::experiments::recognition::RecognitionParams;
 use tactile_workbench::features::FeatureSet;
 use tactile_workbench::live::client::State;
 use tactile_workbench::live::model::LiveModel;
+// `serve` reads `publish` and `LiveError` from the crate root.
 use tactile_workbench::live::publish::{self, Stream};
-use tactile_workbench::live::{GraspReport, Live, LiveOptions, Snapshot};
+use tactile_workbench::live::{GraspReport, Live, LiveError, LiveOptions, Snapshot};
 use tactile_workbench::models::{self, Calibration, SequenceFitOptions};
 use tactile_workbench::session::{self, ImportSpec, Session, SubsetSpec, import_icub, subset};
 

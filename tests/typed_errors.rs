@@ -27,64 +27,9 @@ const ALLOWED: &[(&str, usize, &str)] = &[
         "a serde `Deserialize` impl: serde's errors carry text only (`serde::de::Error::custom`)",
     ),
     (
-        "src/live/channels.rs",
-        6,
-        "the live client's and server's errors are still text (a `LiveError` is the next step; `live/model.rs` is another engineer's, #43)",
-    ),
-    (
-        "src/live/client.rs",
-        10,
-        "the live client's and server's errors are still text (a `LiveError` is the next step; `live/model.rs` is another engineer's, #43)",
-    ),
-    (
-        "src/live/cut.rs",
-        4,
-        "the live client's and server's errors are still text (a `LiveError` is the next step; `live/model.rs` is another engineer's, #43)",
-    ),
-    (
-        "src/live/discover.rs",
-        2,
-        "the live client's and server's errors are still text (a `LiveError` is the next step; `live/model.rs` is another engineer's, #43)",
-    ),
-    (
-        "src/live/mod.rs",
-        7,
-        "the live client's and server's errors are still text (a `LiveError` is the next step; `live/model.rs` is another engineer's, #43)",
-    ),
-    (
-        "src/live/model.rs",
-        2,
-        "the live client's and server's errors are still text (a `LiveError` is the next step; `live/model.rs` is another engineer's, #43)",
-    ),
-    (
-        "src/live/protocol.rs",
-        3,
-        "the live client's and server's errors are still text (a `LiveError` is the next step; `live/model.rs` is another engineer's, #43)",
-    ),
-    (
-        "src/live/publish.rs",
-        1,
-        "the live client's and server's errors are still text (a `LiveError` is the next step; `live/model.rs` is another engineer's, #43)",
-    ),
-    (
-        "src/live/serve.rs",
-        3,
-        "the live client's and server's errors are still text (a `LiveError` is the next step; `live/model.rs` is another engineer's, #43)",
-    ),
-    (
         "src/session/bag/file.rs",
         1,
-        "a bag's zstd or record error placed in `SessionError`'s message (it keeps no source yet)",
-    ),
-    (
-        "src/session/bag/records.rs",
-        1,
-        "a bag's zstd or record error placed in `SessionError`'s message (it keeps no source yet)",
-    ),
-    (
-        "src/session/cdr.rs",
-        14,
-        "a reason the caller places, with the file and line or topic, in `SessionError`'s message",
+        "not an error: the name of the record's field that does not fit (`fields_fit`), placed in the message",
     ),
     (
         "src/session/long_csv.rs",

@@ -171,13 +171,13 @@ pub fn serve(a: ServeArgs) -> anyhow::Result<()> {
     }
     let session = crate::session::open(&a.session)
         .with_context(|| format!("opening {}", a.session.display()))?;
-    let stream = Stream::new(&session, a.rate).map_err(anyhow::Error::msg)?;
+    let stream = Stream::new(&session, a.rate)?;
     if let Some(out) = &a.write_spec {
         let text = serde_json::to_string_pretty(&stream.spec())?;
         crate::fsutil::write_atomic(out, text.as_bytes())?;
         println!("wrote {}", out.display());
     }
-    let mut server = Server::start(&a.host, a.port, &stream.topics).map_err(anyhow::Error::msg)?;
+    let mut server = Server::start(&a.host, a.port, &stream.topics)?;
     println!(
         "serving {} grasps of {} on ws://{}:{} at {}×; waiting for a client",
         session.grasps.len(),

@@ -3,12 +3,13 @@
 //! same CDR decoder; `json` channels carry the same messages as ROS 2's JSON form
 //! (`{"data": [...]}`, `{"name": [...], "position": [...]}`, `{"data": "text"}`).
 
+use crate::error::Kept;
 use crate::session::bag::{Role, allowed, roles, type_fits};
 use crate::session::cdr::{self, ArrayKind, MsgType};
-use crate::session::shorten;
 use crate::session::spec::{GraspCut, ImportSpec};
 use crate::session::{Sensor, SessionError};
 
+use super::LiveError;
 use super::protocol::Channel;
 
 /// The spec's topics and what each message of them must hold.
@@ -65,31 +66,36 @@ impl Plan {
 
     /// How a channel's messages are read: `Ok(None)` when the spec does not read its topic,
     /// an error naming the topic when its type or definition does not fit.
-    pub fn route(&self, channel: &Channel) -> Result<Option<Route>, String> {
+    pub fn route(&self, channel: &Channel) -> Result<Option<Route>, LiveError> {
         let Some(&(_, role)) = self.roles.iter().find(|(t, _)| *t == channel.topic) else {
             return Ok(None);
         };
-        let at = |m: String| format!("channel `{}`: {m}", channel.topic);
+        let topic = || channel.topic.clone();
         let ty = MsgType::from_name(&channel.schema_name).filter(|&ty| type_fits(role, ty));
         let Some(ty) = ty else {
-            return Err(at(format!(
-                "its schema is `{}`; the spec reads it as {}",
-                shorten(&channel.schema_name),
-                allowed(role)
-            )));
+            return Err(LiveError::Schema {
+                topic: topic(),
+                schema: channel.schema_name.clone(),
+                reads: allowed(role),
+            });
         };
         let json = match channel.encoding.as_str() {
             "cdr" => {
                 let encoding = channel.schema_encoding.as_deref().unwrap_or("");
-                cdr::check_schema(ty, encoding, channel.schema.as_bytes()).map_err(at)?;
+                cdr::check_schema(ty, encoding, channel.schema.as_bytes()).map_err(|source| {
+                    LiveError::Definition {
+                        topic: topic(),
+                        source,
+                    }
+                })?;
                 false
             }
             "json" => true,
             other => {
-                return Err(at(format!(
-                    "messages are encoded as `{}`, not cdr or json",
-                    shorten(other)
-                )));
+                return Err(LiveError::Encoding {
+                    topic: topic(),
+                    encoding: other.to_string(),
+                });
             }
         };
         Ok(Some(Route { role, ty, json }))
@@ -98,7 +104,7 @@ impl Plan {
     /// A message of a routed channel, checked as a bag's: a tactile row of the topic's
     /// width with every value finite and in its sensor's range, the named joints' finite
     /// positions, or an event's text.
-    pub fn decode(&self, route: &Route, payload: &[u8]) -> Result<Sample, String> {
+    pub fn decode(&self, route: &Route, payload: &[u8]) -> Result<Sample, LiveError> {
         match (route.role, route.ty) {
             (Role::Tactile(i), MsgType::MultiArray(kind)) => {
                 let mut values = Vec::new();
@@ -116,7 +122,7 @@ impl Plan {
                     let names: Vec<String> = v
                         .get("name")
                         .and_then(|n| serde_json::from_value(n.clone()).ok())
-                        .ok_or("`name` is not a list of strings")?;
+                        .ok_or_else(|| json_field("name", "a list of strings"))?;
                     (names, json_numbers(payload, "position")?)
                 } else {
                     let js = cdr::decode_joint_state(payload)?;
@@ -124,23 +130,25 @@ impl Plan {
                     (names, js.positions)
                 };
                 if names.len() != positions.len() {
-                    return Err(format!(
-                        "{} joint names but {} positions",
-                        names.len(),
-                        positions.len()
-                    ));
+                    return Err(LiveError::JointCount {
+                        names: names.len(),
+                        positions: positions.len(),
+                    });
                 }
                 let mut out = Vec::with_capacity(self.joint_names.len());
                 for name in &self.joint_names {
                     let Some(k) = names.iter().position(|n| n == name) else {
-                        return Err(format!(
-                            "joint `{name}` is not in the message (it has: {})",
-                            names.join(", ")
-                        ));
+                        return Err(LiveError::MissingJoint {
+                            joint: name.clone(),
+                            has: names,
+                        });
                     };
                     let v = positions[k];
                     if !v.is_finite() {
-                        return Err(format!("joint `{name}` is at {v}, not a finite number"));
+                        return Err(LiveError::JointNotFinite {
+                            joint: name.clone(),
+                            value: v,
+                        });
                     }
                     out.push(v);
                 }
@@ -152,17 +160,17 @@ impl Plan {
                         .get("data")
                         .and_then(|d| d.as_str())
                         .map(str::to_string)
-                        .ok_or("`data` is not a string")?
+                        .ok_or_else(|| json_field("data", "a string"))?
                 } else {
                     cdr::decode_string(payload)?.to_string()
                 };
                 Ok(Sample::Event(text))
             }
-            _ => Err("the channel's type does not fit its role".into()),
+            _ => Err(LiveError::RoleMismatch),
         }
     }
 
-    fn check_row(&self, topic: usize, values: &[f64], kind: ArrayKind) -> Result<(), String> {
+    fn check_row(&self, topic: usize, values: &[f64], kind: ArrayKind) -> Result<(), LiveError> {
         let tt = &self.tactile[topic];
         if values.len() != tt.width {
             let parts: Vec<String> = tt
@@ -170,15 +178,18 @@ impl Plan {
                 .iter()
                 .map(|(s, r)| format!("`{}` at {}..{}", self.sensors[*s].name, r.start, r.end))
                 .collect();
-            return Err(format!(
-                "the {kind:?} array holds {} values, but the spec's layouts ({}) read {}",
-                values.len(),
-                parts.join(", "),
-                tt.width
-            ));
+            return Err(LiveError::RowWidth {
+                kind,
+                got: values.len(),
+                layouts: parts.join(", "),
+                width: tt.width,
+            });
         }
         if let Some(k) = values.iter().position(|v| !v.is_finite()) {
-            return Err(format!("value {k} is {}, not a finite number", values[k]));
+            return Err(LiveError::NotFinite {
+                index: k,
+                value: values[k],
+            });
         }
         for (s, range) in &tt.sensors {
             let sensor = &self.sensors[*s];
@@ -186,12 +197,12 @@ impl Plan {
                 .iter()
                 .position(|&v| !sensor.in_range(v))
             {
-                return Err(format!(
-                    "sensor `{}` taxel {k} reads {}, outside its range {}",
-                    sensor.name,
-                    values[range.start + k],
-                    sensor.range_text()
-                ));
+                return Err(LiveError::OutOfRange {
+                    sensor: sensor.name.clone(),
+                    taxel: k,
+                    value: values[range.start + k],
+                    range: sensor.range_text(),
+                });
             }
         }
         Ok(())
@@ -219,21 +230,28 @@ pub enum Sample {
     Event(String),
 }
 
-fn json_value(payload: &[u8]) -> Result<serde_json::Value, String> {
-    serde_json::from_slice(payload).map_err(|e| format!("the JSON message does not parse: {e}"))
+fn json_value(payload: &[u8]) -> Result<serde_json::Value, LiveError> {
+    serde_json::from_slice(payload).map_err(|e| LiveError::Json(Kept::new(e)))
 }
 
-fn json_numbers(payload: &[u8], field: &str) -> Result<Vec<f64>, String> {
+fn json_field(field: impl Into<String>, expected: &'static str) -> LiveError {
+    LiveError::JsonField {
+        field: field.into(),
+        expected,
+    }
+}
+
+fn json_numbers(payload: &[u8], field: &str) -> Result<Vec<f64>, LiveError> {
     let v = json_value(payload)?;
     let list = v
         .get(field)
         .and_then(|d| d.as_array())
-        .ok_or_else(|| format!("`{field}` is not a list"))?;
+        .ok_or_else(|| json_field(field, "a list"))?;
     list.iter()
         .enumerate()
         .map(|(k, x)| {
             x.as_f64()
-                .ok_or_else(|| format!("`{field}[{k}]` is not a number"))
+                .ok_or_else(|| json_field(format!("{field}[{k}]"), "a number"))
         })
         .collect()
 }
@@ -286,17 +304,33 @@ mod tests {
         );
         let err = p.decode(&r, &multiarray(&[1.0, 2.0, 3.0])).unwrap_err();
         assert!(
-            err.contains("3 values") && err.contains("`b` at 2..4"),
-            "{err}"
+            matches!(
+                err,
+                LiveError::RowWidth {
+                    got: 3,
+                    width: 4,
+                    ..
+                }
+            ),
+            "{err:?}"
+        );
+        let text = err.to_string();
+        assert!(
+            text.contains("3 values") && text.contains("`b` at 2..4"),
+            "{text}"
         );
         let err = p
             .decode(&r, &multiarray(&[1.0, 300.0, 3.0, 4.0]))
             .unwrap_err();
-        assert!(err.contains("sensor `a` taxel 1"), "{err}");
         assert!(
-            p.decode(&r, &multiarray(&[1.0, 2.0, 3.0, 4.0])[..20])
-                .is_err()
+            matches!(&err, LiveError::OutOfRange { sensor, taxel: 1, .. } if sensor == "a"),
+            "{err:?}"
         );
+        assert!(err.to_string().contains("sensor `a` taxel 1"), "{err}");
+        assert!(matches!(
+            p.decode(&r, &multiarray(&[1.0, 2.0, 3.0, 4.0])[..20]),
+            Err(LiveError::Cdr(_))
+        ));
         let js = "sensor_msgs/msg/JointState";
         let r = p
             .route(&channel("/js", "cdr", js, JOINT_STATE))
@@ -315,7 +349,14 @@ mod tests {
                 values: vec![0.0, 1.0, 2.0, 3.0]
             }
         );
-        assert!(p.decode(&r, b"{not json").is_err());
+        assert!(matches!(
+            p.decode(&r, b"{not json"),
+            Err(LiveError::Json(_))
+        ));
+        assert_eq!(
+            p.decode(&r, br#"{"data": [0, "x"]}"#),
+            Err(json_field("data[1]", "a number"))
+        );
         let r = p
             .route(&channel("/ev", "json", "std_msgs/String", ""))
             .unwrap()
@@ -339,7 +380,12 @@ mod tests {
             "sensor_msgs/msg/JointState",
             JOINT_STATE,
         ));
-        assert!(err.unwrap_err().contains("channel `/a`"));
+        let err = err.unwrap_err();
+        assert!(
+            matches!(&err, LiveError::Schema { topic, .. } if topic == "/a"),
+            "{err:?}"
+        );
+        assert!(err.to_string().contains("channel `/a`"), "{err}");
         let custom = "std_msgs/MultiArrayLayout layout\nfloat64[] data\nint32 extra\n";
         let err = p
             .route(&channel(
@@ -349,7 +395,11 @@ mod tests {
                 custom,
             ))
             .unwrap_err();
-        assert!(err.contains("not the standard"), "{err}");
+        assert!(
+            matches!(&err, LiveError::Definition { topic, source: crate::session::cdr::CdrError::NotStandard { .. } }
+                if topic == "/a"),
+            "{err:?}"
+        );
         let err = p
             .route(&channel(
                 "/a",
@@ -358,6 +408,13 @@ mod tests {
                 "",
             ))
             .unwrap_err();
-        assert!(err.contains("protobuf"), "{err}");
+        assert_eq!(
+            err,
+            LiveError::Encoding {
+                topic: "/a".into(),
+                encoding: "protobuf".into()
+            }
+        );
+        assert!(err.to_string().contains("protobuf"), "{err}");
     }
 }

@@ -18,11 +18,15 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use tungstenite::client::IntoClientRequest;
+use tungstenite::handshake::HandshakeError;
 use tungstenite::http::HeaderValue;
 use tungstenite::{Message, WebSocket};
 
+use crate::error::Kept;
+
+use super::LiveError;
 use super::channels::{Plan, Route, Sample};
-use super::protocol::{self, Channel, SUBPROTOCOLS, ServerText};
+use super::protocol::{self, Channel, OFFERED, SUBPROTOCOLS, ServerText};
 
 /// Messages the queue holds before the socket thread waits.
 pub const QUEUE: usize = 4096;
@@ -30,6 +34,8 @@ pub const QUEUE: usize = 4096;
 const POLL: Duration = Duration::from_millis(20);
 /// Reconnect back-off: from the first to the last, doubling.
 const BACKOFF: (Duration, Duration) = (Duration::from_millis(50), Duration::from_millis(800));
+/// How long the handshake waits for the server's answer.
+const HANDSHAKE: Duration = Duration::from_secs(2);
 
 /// A decoded message of a subscribed channel, at its log time (ns).
 #[derive(Clone, Debug, PartialEq)]
@@ -51,7 +57,7 @@ pub enum State {
     /// Lost (or never made); the next attempt is under way after back-off.
     Reconnecting {
         attempt: u32,
-        error: String,
+        error: LiveError,
     },
     Stopped,
 }
@@ -63,9 +69,9 @@ pub struct ClientStatus {
     /// Messages of subscribed channels decoded, malformed, and refused channels.
     pub messages: u64,
     pub malformed: u64,
-    pub last_malformed: Option<String>,
+    pub last_malformed: Option<LiveError>,
     /// Channels of the spec's topics whose type or definition does not fit.
-    pub refused: Vec<String>,
+    pub refused: Vec<LiveError>,
     /// Times the queue was full and the thread waited for the engine.
     pub waits: u64,
     pub reconnects: u64,
@@ -154,7 +160,10 @@ fn run(
                     };
                     s.subscribed.clear();
                 }
-                Connection::new(ws, plan).read(tx, status, stop)
+                match Connection::new(ws, plan).read(tx, status, stop) {
+                    Ok(()) => break,
+                    Err(e) => e,
+                }
             }
             Err(e) => e,
         };
@@ -174,35 +183,52 @@ fn run(
 
 /// The handshake, both subprotocols offered; the socket then reads with a short timeout so
 /// that the thread sees its stop flag.
-pub(crate) fn connect(url: &str) -> Result<(WebSocket<TcpStream>, String), String> {
-    let mut request = url
-        .into_client_request()
-        .map_err(|e| format!("`{url}` is not a WebSocket address: {e}"))?;
-    let offered = HeaderValue::from_str(&SUBPROTOCOLS.join(", "))
-        .map_err(|e| format!("subprotocol header: {e}"))?;
+pub(crate) fn connect(url: &str) -> Result<(WebSocket<TcpStream>, String), LiveError> {
+    let mut request = url.into_client_request().map_err(|e| LiveError::Address {
+        url: url.to_string(),
+        source: Kept::new(e),
+    })?;
     request
         .headers_mut()
-        .insert("Sec-WebSocket-Protocol", offered);
+        .insert("Sec-WebSocket-Protocol", HeaderValue::from_static(OFFERED));
     let uri = request.uri();
     if uri.scheme_str() != Some("ws") {
-        return Err(format!("`{url}`: only ws:// is supported (no TLS)"));
+        return Err(LiveError::NotWs {
+            url: url.to_string(),
+        });
     }
     let host = uri.host().unwrap_or_default().trim_matches(['[', ']']);
     let port = uri.port_u16().unwrap_or(80);
     let addr: SocketAddr = (host, port)
         .to_socket_addrs()
-        .map_err(|e| format!("{host}:{port}: {e}"))?
+        .map_err(|e| LiveError::Resolve {
+            host: host.to_string(),
+            port,
+            source: Kept::new(e),
+        })?
         .next()
-        .ok_or_else(|| format!("{host}:{port} resolves to no address"))?;
-    let stream = TcpStream::connect_timeout(&addr, Duration::from_secs(1))
-        .map_err(|e| format!("{addr}: {e}"))?;
-    let io = |e: std::io::Error| format!("{addr}: {e}");
+        .ok_or_else(|| LiveError::NoAddress {
+            host: host.to_string(),
+            port,
+        })?;
+    let io = |e: std::io::Error| LiveError::Socket {
+        addr,
+        source: Kept::new(e),
+    };
+    let stream = TcpStream::connect_timeout(&addr, Duration::from_secs(1)).map_err(io)?;
     stream.set_nodelay(true).map_err(io)?;
-    stream
-        .set_read_timeout(Some(Duration::from_secs(2)))
-        .map_err(io)?;
-    let (ws, response) = tungstenite::client(request, stream)
-        .map_err(|e| format!("the WebSocket handshake with {addr} failed: {e}"))?;
+    stream.set_read_timeout(Some(HANDSHAKE)).map_err(io)?;
+    let (ws, response) = tungstenite::client(request, stream).map_err(|e| match e {
+        HandshakeError::Failure(e) => LiveError::Handshake {
+            addr,
+            source: Kept::new(e),
+        },
+        // The blocking socket's read timeout, mid-handshake.
+        HandshakeError::Interrupted(_) => LiveError::HandshakeTimeout {
+            addr,
+            waited: HANDSHAKE,
+        },
+    })?;
     let subprotocol = response
         .headers()
         .get("Sec-WebSocket-Protocol")
@@ -210,10 +236,10 @@ pub(crate) fn connect(url: &str) -> Result<(WebSocket<TcpStream>, String), Strin
         .unwrap_or("")
         .to_string();
     if !SUBPROTOCOLS.contains(&subprotocol.as_str()) {
-        return Err(format!(
-            "the server at {addr} chose subprotocol `{subprotocol}`, not one offered ({})",
-            SUBPROTOCOLS.join(", ")
-        ));
+        return Err(LiveError::Subprotocol {
+            addr,
+            chosen: subprotocol,
+        });
     }
     ws.get_ref().set_read_timeout(Some(POLL)).map_err(io)?;
     Ok((ws, subprotocol))
@@ -241,13 +267,13 @@ impl<'p> Connection<'p> {
         }
     }
 
-    /// Read until the connection ends or the thread is stopped; the reason it ended.
+    /// Read until the thread is stopped, or the connection ends (why it ended).
     fn read(
         mut self,
         tx: &SyncSender<Incoming>,
         status: &Mutex<ClientStatus>,
         stop: &AtomicBool,
-    ) -> String {
+    ) -> Result<(), LiveError> {
         while !stop.load(Ordering::Relaxed) {
             let message = match self.ws.read() {
                 Ok(m) => m,
@@ -256,31 +282,28 @@ impl<'p> Connection<'p> {
                 {
                     continue;
                 }
-                Err(e) => return format!("the connection ended: {e}"),
+                Err(e) => return Err(LiveError::Ended(Kept::new(e))),
             };
-            let outcome = match message {
-                Message::Text(text) => self.text(text.as_str(), status),
-                Message::Binary(bytes) => self.binary(&bytes, tx, status, stop),
-                Message::Close(_) => return "the server closed the connection".into(),
-                _ => Ok(()),
-            };
-            if let Err(e) = outcome {
-                return e;
+            match message {
+                Message::Text(text) => self.text(text.as_str(), status)?,
+                Message::Binary(bytes) => self.binary(&bytes, tx, status, stop)?,
+                Message::Close(_) => return Err(LiveError::Closed),
+                _ => {}
             }
         }
         let _ = self.ws.close(None);
         let _ = self.ws.flush();
-        "stopped".into()
+        Ok(())
     }
 
-    fn malformed(status: &Mutex<ClientStatus>, why: String) {
+    fn malformed(status: &Mutex<ClientStatus>, why: LiveError) {
         let mut s = lock(status);
         s.malformed += 1;
         s.last_malformed = Some(why);
     }
 
     /// A JSON op: channels advertised are subscribed when the spec reads their topic.
-    fn text(&mut self, text: &str, status: &Mutex<ClientStatus>) -> Result<(), String> {
+    fn text(&mut self, text: &str, status: &Mutex<ClientStatus>) -> Result<(), LiveError> {
         match protocol::parse_text(text) {
             Err(why) => Self::malformed(status, why),
             Ok(ServerText::ServerInfo { name }) => {
@@ -311,7 +334,7 @@ impl<'p> Connection<'p> {
         &mut self,
         channels: &[Channel],
         status: &Mutex<ClientStatus>,
-    ) -> Result<(), String> {
+    ) -> Result<(), LiveError> {
         let mut pairs = Vec::new();
         for channel in channels {
             if self.by_channel.contains_key(&channel.id) {
@@ -340,7 +363,7 @@ impl<'p> Connection<'p> {
         }
         self.ws
             .send(Message::text(protocol::subscribe(&pairs)))
-            .map_err(|e| format!("subscribing failed: {e}"))?;
+            .map_err(|e| LiveError::Subscribe(Kept::new(e)))?;
         let mut s = lock(status);
         for (id, _) in pairs {
             if let Some((topic, _)) = self.subscriptions.get(&id) {
@@ -357,7 +380,7 @@ impl<'p> Connection<'p> {
         tx: &SyncSender<Incoming>,
         status: &Mutex<ClientStatus>,
         stop: &AtomicBool,
-    ) -> Result<(), String> {
+    ) -> Result<(), LiveError> {
         let data = match protocol::parse_binary(frame) {
             Ok(Some(d)) => d,
             Ok(None) => return Ok(()),
@@ -373,7 +396,13 @@ impl<'p> Connection<'p> {
         let sample = match self.plan.decode(route, data.payload) {
             Ok(s) => s,
             Err(why) => {
-                Self::malformed(status, format!("channel `{topic}`: {why}"));
+                Self::malformed(
+                    status,
+                    LiveError::Message {
+                        topic: topic.clone(),
+                        source: Kept::new(why),
+                    },
+                );
                 return Ok(());
             }
         };
@@ -393,7 +422,7 @@ impl<'p> Connection<'p> {
                     }
                     std::thread::sleep(Duration::from_millis(1));
                 }
-                Err(TrySendError::Disconnected(_)) => return Err("the engine has stopped".into()),
+                Err(TrySendError::Disconnected(_)) => return Err(LiveError::EngineStopped),
             }
         }
     }

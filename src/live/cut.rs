@@ -14,8 +14,9 @@
 
 use crate::session::ros2::event_classes;
 use crate::session::spec::{ContactParams, ImportSpec, RawGrasp};
-use crate::session::{Frame, Sensor, shorten};
+use crate::session::{Frame, Sensor};
 
+use super::LiveError;
 use super::frames::StreamFrame;
 
 /// The object of a contact grasp nobody labelled.
@@ -117,33 +118,31 @@ impl Cutter {
     }
 
     /// An event of the events topic at `t`.
-    pub fn event(&mut self, t: u64, text: &str) -> Result<Option<Completed>, String> {
+    pub fn event(&mut self, t: u64, text: &str) -> Result<Option<Completed>, LiveError> {
         if self.cutting != Cutting::Events {
-            return Err(format!(
-                "`{}`: the stream's events are not used (grasps are cut by {})",
-                shorten(text),
-                self.describe()
-            ));
+            return Err(LiveError::EventsUnused {
+                event: text.to_string(),
+                cutting: self.describe(),
+            });
         }
         self.command(t, text)
     }
 
     /// A command by hand (`start:OBJECT`, `key`, `end:LABELS`) at the latest frame's time;
     /// under contact cutting, `label:OBJECT[:LABELS]` labels the next grasp instead.
-    pub fn by_hand(&mut self, text: &str) -> Result<Option<Completed>, String> {
+    pub fn by_hand(&mut self, text: &str) -> Result<Option<Completed>, LiveError> {
         if let Cutting::Contact(_) = self.cutting {
             let Some(rest) = text.trim().strip_prefix("label:") else {
-                return Err(format!(
-                    "`{}`: grasps are cut by contact; give `label:OBJECT[:LABELS]`",
-                    shorten(text)
-                ));
+                return Err(LiveError::NotALabel {
+                    command: text.to_string(),
+                });
             };
             let (object, labels) = rest.split_once(':').unwrap_or((rest, ""));
             self.label = Some(self.labels(object.trim(), labels)?);
             return Ok(None);
         }
         let Some(t) = self.now else {
-            return Err("no frame has arrived yet".into());
+            return Err(LiveError::NoFrameYet);
         };
         self.command(t, text)
     }
@@ -158,25 +157,24 @@ impl Cutter {
 
     /// The object checked and the classes of `labels` (comma-separated, one per recorded
     /// label set).
-    fn labels(&self, object: &str, labels: &str) -> Result<(String, Vec<usize>), String> {
-        self.spec.check_object(object)?;
+    fn labels(&self, object: &str, labels: &str) -> Result<(String, Vec<usize>), LiveError> {
+        self.spec.check_object(object).map_err(LiveError::Spec)?;
         let sets = self.spec.recorded_label_sets();
-        let classes = event_classes(&self.spec, &sets, labels, labels)?;
+        let classes = event_classes(&self.spec, &sets, labels, labels).map_err(LiveError::Spec)?;
         Ok((object.to_string(), classes))
     }
 
     /// The events grammar of the bag importer.
-    fn command(&mut self, t: u64, text: &str) -> Result<Option<Completed>, String> {
+    fn command(&mut self, t: u64, text: &str) -> Result<Option<Completed>, LiveError> {
         let text = text.trim();
         let (word, arg) = text.split_once(':').unwrap_or((text, ""));
         match (word.trim(), &mut self.open) {
-            ("start", Some(o)) => Err(format!(
-                "a grasp starts while the one started at {} s has not ended",
-                crate::session::bag_time(o.start)
-            )),
+            ("start", Some(o)) => Err(LiveError::StartWhileOpen {
+                open_since: o.start,
+            }),
             ("start", None) => {
                 let object = arg.trim();
-                self.spec.check_object(object)?;
+                self.spec.check_object(object).map_err(LiveError::Spec)?;
                 self.open = Some(Open {
                     start: t,
                     object: object.to_string(),
@@ -188,7 +186,7 @@ impl Cutter {
             }
             ("key", Some(o)) => {
                 if o.key.is_some() {
-                    return Err("a second `key` event in one grasp".into());
+                    return Err(LiveError::SecondKey);
                 }
                 o.key = Some(t);
                 Ok(None)
@@ -204,18 +202,16 @@ impl Cutter {
                 o.frames.truncate(keep);
                 o.stamps.truncate(keep);
                 if o.frames.is_empty() {
-                    return Err(format!(
-                        "the grasp of `{}` ended without a frame",
-                        shorten(&o.object)
-                    ));
+                    return Err(LiveError::EmptyGrasp { object: o.object });
                 }
                 Ok(Some(finish(o, t, classes, true)))
             }
-            ("key" | "end", None) => Err(format!("`{}` comes before any `start`", shorten(text))),
-            _ => Err(format!(
-                "`{}` is not an event: expected start:OBJECT, key or end:LABELS",
-                shorten(text)
-            )),
+            ("key" | "end", None) => Err(LiveError::BeforeStart {
+                event: text.to_string(),
+            }),
+            _ => Err(LiveError::NotAnEvent {
+                event: text.to_string(),
+            }),
         }
     }
 
@@ -361,7 +357,7 @@ mod tests {
             assert!(c.frame(frame(10 * MS * k, k as f64)).is_none());
         }
         c.event(30 * MS, "key").unwrap();
-        assert!(c.event(35 * MS, "key").is_err(), "a second key");
+        assert_eq!(c.event(35 * MS, "key"), Err(LiveError::SecondKey));
         let done = c.event(40 * MS, "end:slip").unwrap().unwrap();
         // Frames from the start to the end, both included; times from the start.
         let ts: Vec<f64> = done.grasp.frames.iter().map(|f| f.t).collect();
@@ -369,14 +365,20 @@ mod tests {
         assert_eq!(done.grasp.key_frame, Some(2));
         assert_eq!(done.grasp.classes, [1]);
         assert!(done.labelled);
-        assert!(
-            c.event(50 * MS, "end:ok")
-                .unwrap_err()
-                .contains("before any")
+        let err = c.event(50 * MS, "end:ok").unwrap_err();
+        assert_eq!(
+            err,
+            LiveError::BeforeStart {
+                event: "end:ok".into()
+            }
         );
-        assert!(c.event(50 * MS, "start:").is_err());
+        assert!(err.to_string().contains("before any"), "{err}");
+        assert!(matches!(
+            c.event(50 * MS, "start:"),
+            Err(LiveError::Spec(_))
+        ));
         c.event(60 * MS, "start:cup").unwrap();
-        let err = c.event(70 * MS, "end:wobbly").unwrap_err();
+        let err = c.event(70 * MS, "end:wobbly").unwrap_err().to_string();
         assert!(err.contains("wobbly") && err.contains("outcome"), "{err}");
         assert!(c.in_progress().is_some(), "a refused end keeps the grasp");
     }
@@ -448,7 +450,7 @@ mod tests {
     #[test]
     fn by_hand_uses_the_latest_frame_time() {
         let mut c = Cutter::new(&spec(""), Cutting::Hand);
-        assert!(c.by_hand("start:mug").is_err(), "no frame yet");
+        assert_eq!(c.by_hand("start:mug"), Err(LiveError::NoFrameYet));
         c.frame(frame(10 * MS, 1.0));
         c.by_hand("start:mug").unwrap();
         c.frame(frame(20 * MS, 2.0));
@@ -456,7 +458,10 @@ mod tests {
         assert_eq!(g.grasp.frames.len(), 1);
         assert_eq!((g.start, g.end), (10 * MS, 20 * MS));
         assert!(
-            c.event(30 * MS, "start:mug").is_err(),
+            matches!(
+                c.event(30 * MS, "start:mug"),
+                Err(LiveError::EventsUnused { .. })
+            ),
             "events are not used"
         );
     }

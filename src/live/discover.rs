@@ -11,8 +11,10 @@ use std::time::{Duration, Instant};
 
 use tungstenite::Message;
 
+use super::LiveError;
 use super::client::connect;
 use super::protocol::{self, Channel, ServerText};
+use crate::error::Kept;
 use crate::session::cdr::{self, MsgType};
 
 /// An advertised channel, and what one of its messages showed.
@@ -48,7 +50,11 @@ impl Found {
 
 /// Connect to `url`, list the advertised channels, and read one message of each numeric
 /// array and JointState channel (within `wait`).
-pub fn discover(url: &str, wait: Duration) -> Result<Vec<Found>, String> {
+pub fn discover(url: &str, wait: Duration) -> Result<Vec<Found>, LiveError> {
+    let at = |e: LiveError| LiveError::Discovery {
+        url: url.to_string(),
+        source: Kept::new(e),
+    };
     let (mut ws, _) = connect(url)?;
     let until = Instant::now() + wait;
     let mut found: Vec<Found> = Vec::new();
@@ -74,7 +80,7 @@ pub fn discover(url: &str, wait: Duration) -> Result<Vec<Found>, String> {
                 }
                 continue;
             }
-            Err(e) => return Err(format!("{url}: the connection ended: {e}")),
+            Err(e) => return Err(at(LiveError::Ended(Kept::new(e)))),
         };
         match message {
             Message::Text(text) => {
@@ -105,7 +111,7 @@ pub fn discover(url: &str, wait: Duration) -> Result<Vec<Found>, String> {
                 }
                 if !pairs.is_empty() {
                     ws.send(Message::text(protocol::subscribe(&pairs)))
-                        .map_err(|e| format!("{url}: subscribing failed: {e}"))?;
+                        .map_err(|e| at(LiveError::Subscribe(Kept::new(e))))?;
                 }
             }
             Message::Binary(bytes) => {
@@ -156,7 +162,10 @@ pub fn discover(url: &str, wait: Duration) -> Result<Vec<Found>, String> {
     let _ = ws.close(None);
     let _ = ws.flush();
     if found.is_empty() {
-        return Err(format!("{url} advertised no channel within {wait:?}"));
+        return Err(LiveError::NoChannel {
+            url: url.to_string(),
+            wait,
+        });
     }
     Ok(found)
 }

@@ -21,6 +21,7 @@ pub mod channels;
 pub mod client;
 pub mod cut;
 pub mod discover;
+mod error;
 pub mod frames;
 pub mod model;
 pub mod protocol;
@@ -33,6 +34,8 @@ use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
+
+pub use error::LiveError;
 
 use channels::Plan;
 use client::{Client, ClientStatus, lock};
@@ -75,13 +78,13 @@ pub struct GraspReport {
     pub frames: usize,
     pub seconds: f64,
     /// The model's verdict, or why it could not give one.
-    pub verdict: Option<Result<Verdict, String>>,
+    pub verdict: Option<Result<Verdict, LiveError>>,
     /// DS/GS's early classification as the grasp went on, frame by frame.
     pub early: Option<Verdict>,
     /// Whether the grasp taught the model (and the file was saved), or why not.
-    pub taught: Result<bool, String>,
+    pub taught: Result<bool, LiveError>,
     /// Whether the grasp is in the recording, or why not.
-    pub recorded: Result<bool, String>,
+    pub recorded: Result<bool, LiveError>,
     /// The grasp as a session of one grasp (what the model read and the recording holds).
     pub session: Option<Session>,
 }
@@ -143,12 +146,12 @@ pub struct Snapshot {
     pub left_out: u64,
     pub taps: u64,
     pub refused_events: u64,
-    pub last_refused: Option<String>,
+    pub last_refused: Option<LiveError>,
     pub last_verdict: Option<Verdict>,
     /// DS/GS on the grasp still open: the distribution at every step so far.
     pub open_verdict: Option<Verdict>,
     /// Why the model could not follow the open grasp.
-    pub early_error: Option<String>,
+    pub early_error: Option<LiveError>,
     /// The latest completed grasps' lines, oldest first.
     pub recent: VecDeque<String>,
     /// From a frame's log time to the model's step on it (DS/GS following an open grasp).
@@ -252,7 +255,7 @@ impl Live {
 
     /// A command by hand: `start:OBJECT`, `key`, `end:LABELS`, or under contact cutting
     /// `label:OBJECT[:LABELS]` for the next grasp.
-    pub fn by_hand(&mut self, text: &str) -> Result<Option<GraspReport>, String> {
+    pub fn by_hand(&mut self, text: &str) -> Result<Option<GraspReport>, LiveError> {
         let done = self.cutter.by_hand(text)?;
         Ok(done.map(|c| self.completed(c)))
     }
@@ -365,7 +368,7 @@ impl Live {
             }
             Err(e) => {
                 // Said once per grasp: the model is not asked again until it ends.
-                view.early_error = Some(e.to_string());
+                view.early_error = Some(e.into());
                 view.open_verdict = None;
                 self.early_failed = true;
             }
@@ -405,13 +408,13 @@ impl Live {
         let one = match grasp_session(&self.spec, Path::new(&self.source), c.grasp) {
             Ok(s) => s,
             Err(e) => {
-                report.recorded = Err(e.to_string());
+                report.recorded = Err(e.into());
                 self.remember(&report);
                 return report;
             }
         };
         if let Some(r) = &mut self.recorder {
-            report.recorded = r.append(&one).map(|()| true).map_err(|e| e.to_string());
+            report.recorded = r.append(&one).map(|()| true).map_err(LiveError::from);
             lock(&self.snapshot).recorded = r.grasps();
         }
         if let Some(m) = &mut self.model {
@@ -425,12 +428,12 @@ impl Live {
                 .filter(|e| e.steps.len() == report.frames);
             let verdict = match followed {
                 Some(e) => Ok(e.clone()),
-                None => m.verdict(&one).map_err(|e| e.to_string()),
+                None => m.verdict(&one).map_err(LiveError::from),
             };
             lock(&self.snapshot).last_verdict = verdict.as_ref().ok().cloned();
             report.verdict = Some(verdict);
             if c.labelled {
-                report.taught = m.teach(&one).map_err(|e| e.to_string());
+                report.taught = m.teach(&one).map_err(LiveError::from);
             }
         }
         report.session = Some(one);

@@ -21,6 +21,7 @@ use std::path::{Path, PathBuf};
 use ndarray::ArrayView2;
 
 use crate::catalogue::MethodId;
+use crate::error::Kept;
 use crate::features::feature_sequences_in;
 use crate::features::sequence::{FeatureSequences, SequenceParams, SequenceRange};
 use crate::figures::{Axis, Figure, FigureKind, Orientation, RefLine, Series};
@@ -423,8 +424,7 @@ fn features(inputs: &SequenceInputs, one: &Session) -> Result<FeatureSequences, 
         min: &inputs.min,
         max: &inputs.max,
     };
-    feature_sequences_in(one, &params, range, inputs.codes.as_ref())
-        .map_err(|e| ModelError::Mismatch(e.to_string()))
+    feature_sequences_in(one, &params, range, inputs.codes.as_ref()).map_err(ModelError::Sequences)
 }
 
 /// The novelty of `seq` against the clusters learned (None before the first).
@@ -576,7 +576,7 @@ impl Early {
                     trial: None,
                 };
                 let s = super::record::grasp_session(spec, Path::new("live"), raw)
-                    .map_err(|e| ModelError::Mismatch(e.to_string()))?;
+                    .map_err(|e| ModelError::Template(Kept::new(e)))?;
                 self.template.insert(s)
             }
         };

@@ -10,9 +10,15 @@
 
 use serde::Deserialize;
 
+use super::LiveError;
+use crate::error::Kept;
+
 /// The subprotocols the client offers: the SDK and foxglove_bridge ≥ 3.2 accept only the
 /// first, older servers only the second.
 pub const SUBPROTOCOLS: [&str; 2] = ["foxglove.sdk.v1", "foxglove.websocket.v1"];
+/// The subprotocols as the handshake's header offers them (a constant header cannot be
+/// malformed).
+pub const OFFERED: &str = "foxglove.sdk.v1, foxglove.websocket.v1";
 
 /// A channel as the server advertises it.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -75,10 +81,12 @@ struct Status {
 }
 
 /// Parse a text frame; the error says which op was malformed and why.
-pub fn parse_text(text: &str) -> Result<ServerText, String> {
-    let op: Op =
-        serde_json::from_str(text).map_err(|e| format!("a text message is not an op: {e}"))?;
-    let bad = |e: serde_json::Error| format!("a malformed `{}` message: {e}", op.op);
+pub fn parse_text(text: &str) -> Result<ServerText, LiveError> {
+    let op: Op = serde_json::from_str(text).map_err(|e| LiveError::NotAnOp(Kept::new(e)))?;
+    let bad = |e: serde_json::Error| LiveError::MalformedOp {
+        op: op.op.clone(),
+        source: Kept::new(e),
+    };
     Ok(match op.op.as_str() {
         "serverInfo" => ServerText::ServerInfo {
             name: serde_json::from_str::<ServerInfo>(text).map_err(bad)?.name,
@@ -116,18 +124,15 @@ pub struct MessageData<'a> {
 }
 
 /// Parse a binary frame: `Ok(None)` for an opcode other than message data.
-pub fn parse_binary(frame: &[u8]) -> Result<Option<MessageData<'_>>, String> {
+pub fn parse_binary(frame: &[u8]) -> Result<Option<MessageData<'_>>, LiveError> {
     let Some((&opcode, rest)) = frame.split_first() else {
-        return Err("an empty binary message".into());
+        return Err(LiveError::EmptyBinary);
     };
     if opcode != MESSAGE_DATA {
         return Ok(None);
     }
     let (Some((id, rest)), true) = (rest.split_first_chunk::<4>(), rest.len() >= 12) else {
-        return Err(format!(
-            "message data of {} bytes, too short for its subscription id and log time",
-            frame.len()
-        ));
+        return Err(LiveError::ShortMessageData { len: frame.len() });
     };
     let (time, payload) = rest.split_first_chunk::<8>().unwrap_or((&[0; 8], &[]));
     Ok(Some(MessageData {
@@ -185,8 +190,12 @@ mod tests {
             ServerText::Other("time".into())
         );
         let err = parse_text(r#"{"op":"advertise","channels":[{"id":"x"}]}"#).unwrap_err();
-        assert!(err.contains("`advertise`"), "{err}");
-        assert!(parse_text("not json").is_err());
+        assert!(
+            matches!(&err, LiveError::MalformedOp { op, .. } if op == "advertise"),
+            "{err:?}"
+        );
+        assert!(err.to_string().contains("`advertise`"), "{err}");
+        assert!(matches!(parse_text("not json"), Err(LiveError::NotAnOp(_))));
     }
 
     #[test]
@@ -199,9 +208,17 @@ mod tests {
         assert_eq!(m.subscription, 7);
         assert_eq!(m.log_time, 1_700_000_000_123_456_789);
         assert_eq!(m.payload, &[9, 8, 7]);
-        assert!(parse_binary(&frame[..12]).is_err());
-        assert!(parse_binary(&[]).is_err());
+        assert_eq!(
+            parse_binary(&frame[..12]),
+            Err(LiveError::ShortMessageData { len: 12 })
+        );
+        assert_eq!(parse_binary(&[]), Err(LiveError::EmptyBinary));
         assert_eq!(parse_binary(&[0x02, 0, 0]).unwrap(), None);
+    }
+
+    #[test]
+    fn the_header_offers_every_subprotocol() {
+        assert_eq!(OFFERED, SUBPROTOCOLS.join(", "));
     }
 
     #[test]

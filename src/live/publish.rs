@@ -9,7 +9,9 @@
 //! sensor (the first), whose message makes the frame; a grasp's `start` comes before its
 //! first frame, `key` right after its key frame and `end` right after its last frame.
 
-use crate::session::{Session, shorten};
+use crate::session::Session;
+
+use super::LiveError;
 
 /// The topics of a served session.
 pub const EVENTS_TOPIC: &str = "/grasp_events";
@@ -147,18 +149,16 @@ fn sensor_topic(name: &str) -> String {
 impl<'s> Stream<'s> {
     /// The stream of `session` at `rate` times its speed (its frame times divided by
     /// `rate`); refused when a class or object name could not travel in an event.
-    pub fn new(session: &'s Session, rate: f64) -> Result<Stream<'s>, String> {
+    pub fn new(session: &'s Session, rate: f64) -> Result<Stream<'s>, LiveError> {
         if !(rate.is_finite() && rate > 0.0) {
-            return Err(format!("--rate {rate} is not a positive speed-up"));
+            return Err(LiveError::Rate { rate });
         }
         for set in &session.label_sets {
             if let Some(c) = set.classes.iter().find(|c| c.contains([',', ':', '\n'])) {
-                return Err(format!(
-                    "class `{}` of label set `{}` holds `,` `:` or a line break, which an \
-                     event cannot carry",
-                    shorten(c),
-                    set.name
-                ));
+                return Err(LiveError::EventUnsafeClass {
+                    class: c.clone(),
+                    set: set.name.clone(),
+                });
             }
         }
         let mut topics: Vec<Topic> = session
@@ -172,10 +172,9 @@ impl<'s> Stream<'s> {
             .collect();
         for (i, t) in topics.iter().enumerate() {
             if topics[..i].iter().any(|o| o.name == t.name) {
-                return Err(format!(
-                    "two sensors share the topic `{}`; rename one",
-                    t.name
-                ));
+                return Err(LiveError::SharedTopic {
+                    topic: t.name.clone(),
+                });
             }
         }
         if !session.encoders.is_empty() {

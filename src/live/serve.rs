@@ -10,6 +10,7 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use foxglove::websocket::{ChannelView, Client, ServerListener};
 use foxglove::{ChannelBuilder, Context, PartialMetadata, RawChannel, Schema, WebSocketServer};
 
+use super::LiveError;
 use super::publish::{Message, Stream, Topic};
 
 /// Counts the channels clients subscribe to, so that playing waits for a subscriber.
@@ -38,7 +39,7 @@ pub struct Server {
 
 impl Server {
     /// Start on 127.0.0.1 (or `host`) at `port` (0: any free port).
-    pub fn start(host: &str, port: u16, topics: &[Topic]) -> Result<Server, String> {
+    pub fn start(host: &str, port: u16, topics: &[Topic]) -> Result<Server, LiveError> {
         let ctx = Context::new();
         let channels = topics
             .iter()
@@ -52,7 +53,7 @@ impl Server {
                         t.definition.as_bytes().to_vec(),
                     ))
                     .build_raw()
-                    .map_err(|e| format!("channel `{}`: {e}", t.name))
+                    .map_err(|e| LiveError::serve_channel(&t.name, e))
             })
             .collect::<Result<Vec<_>, _>>()?;
         let subscriptions = Arc::new(Subscriptions::default());
@@ -62,7 +63,7 @@ impl Server {
             .listener(subscriptions.clone())
             .bind(host, port)
             .start_blocking()
-            .map_err(|e| format!("the server on {host}:{port} did not start: {e}"))?;
+            .map_err(|e| LiveError::serve_start(host, port, e))?;
         Ok(Server {
             handle: Some(handle),
             channels,

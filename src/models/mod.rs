@@ -111,6 +111,9 @@ pub enum ModelError {
     /// The session's feature sequences on the model's range.
     #[error("the session does not fit the model: {0}")]
     Sequences(#[source] crate::features::sequence::SequenceError),
+    /// The one-grasp session a live model builds from the frames of an open grasp.
+    #[error("the session does not fit the model: {0}")]
+    Template(#[source] crate::error::Kept<crate::session::SessionError>),
     /// The session's labels under the model's label set.
     #[error("the session does not fit the model: {0}")]
     Labels(#[source] crate::experiments::ExperimentError),

@@ -9,6 +9,59 @@
 //! is checked to declare exactly the fields decoded here, so a custom message that only
 //! borrows a standard name is refused rather than misread.
 
+/// Why a message definition is not the standard one, or a message does not decode.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum CdrError {
+    #[error("the bag's definition of {ty} is not UTF-8")]
+    DefinitionNotUtf8 { ty: &'static str },
+    /// A line of the definition of message `ty` that is not `TYPE NAME`.
+    #[error("{ty}: `{line}` is not a field")]
+    NotAField { ty: String, line: String },
+    /// A definition of `ty` (a message nested `inside` another) with other fields.
+    #[error(
+        "the bag defines {ty}{} as `{got}`, not the standard `{want}`",
+        inside.map(|o| format!(" (inside {o})")).unwrap_or_default()
+    )]
+    NotStandard {
+        ty: String,
+        inside: Option<&'static str>,
+        got: String,
+        want: String,
+    },
+    #[error("the bag's IDL definition of {ty} does not declare `{field}`")]
+    IdlUndeclared {
+        ty: &'static str,
+        field: &'static str,
+    },
+    #[error(
+        "{ty} is stored with schema encoding `{encoding}`, not a ROS 2 message definition \
+         (ros2msg or ros2idl)"
+    )]
+    SchemaEncoding { ty: &'static str, encoding: String },
+    #[error("the message has {len} bytes, too few for a CDR header")]
+    NoHeader { len: usize },
+    #[error("CDR encapsulation 0x{:02x}{:02x} is not plain CDR (0x0000 or 0x0001)", .0[0], .0[1])]
+    Encapsulation([u8; 2]),
+    #[error("the message ends inside `{field}` (byte {at} of {len})")]
+    EndsInside {
+        field: &'static str,
+        at: usize,
+        len: usize,
+    },
+    #[error("`{field}` claims {count} elements but only {left} bytes are left")]
+    Overlong {
+        field: &'static str,
+        count: usize,
+        left: usize,
+    },
+    #[error("`{field}` is not NUL-terminated")]
+    NotNulTerminated { field: &'static str },
+    #[error("`{field}` is not UTF-8")]
+    NotUtf8 { field: &'static str },
+    #[error("layout.data_offset is {offset} but the array holds {len} values")]
+    DataOffset { offset: usize, len: usize },
+}
+
 /// Element type of a MultiArray's `data`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ArrayKind {
@@ -122,7 +175,8 @@ fn short_type(t: &str) -> &str {
 }
 
 /// The (type, name) of each field of one `.msg` section, constants left out.
-fn msg_fields(section: &str) -> Result<Vec<(String, String)>, String> {
+/// The fields of the definition of message `ty`.
+fn msg_fields(ty: &str, section: &str) -> Result<Vec<(String, String)>, CdrError> {
     let mut out = Vec::new();
     for line in section.lines() {
         let line = line.split('#').next().unwrap_or("").trim();
@@ -131,7 +185,10 @@ fn msg_fields(section: &str) -> Result<Vec<(String, String)>, String> {
         }
         let tokens: Vec<&str> = line.split_whitespace().collect();
         if tokens.len() < 2 {
-            return Err(format!("`{line}` is not a field"));
+            return Err(CdrError::NotAField {
+                ty: ty.to_string(),
+                line: line.to_string(),
+            });
         }
         if tokens[1].contains('=') || tokens.get(2).is_some_and(|t| t.starts_with('=')) {
             continue;
@@ -150,9 +207,9 @@ fn describe(fields: &[(impl AsRef<str>, impl AsRef<str>)]) -> String {
 }
 
 /// Check the definition a bag stores for `ty` against the fields the decoder reads.
-pub fn check_schema(ty: MsgType, encoding: &str, text: &[u8]) -> Result<(), String> {
-    let text = std::str::from_utf8(text)
-        .map_err(|_| format!("the bag's definition of {} is not UTF-8", ty.name()))?;
+pub fn check_schema(ty: MsgType, encoding: &str, text: &[u8]) -> Result<(), CdrError> {
+    let text =
+        std::str::from_utf8(text).map_err(|_| CdrError::DefinitionNotUtf8 { ty: ty.name() })?;
     match encoding {
         "ros2msg" => {
             // Sections: the message itself, then `MSG: pkg/Type` blocks separated by lines
@@ -168,16 +225,16 @@ pub fn check_schema(ty: MsgType, encoding: &str, text: &[u8]) -> Result<(), Stri
             });
             let main = sections.remove(0);
             let want = ty.fields();
-            let got = msg_fields(&main).map_err(|e| format!("{}: {e}", ty.name()))?;
+            let got = msg_fields(ty.name(), &main)?;
             let same = got.len() == want.len()
                 && got.iter().zip(&want).all(|(g, w)| g.0 == w.0 && g.1 == w.1);
             if !same {
-                return Err(format!(
-                    "the bag defines {} as `{}`, not the standard `{}`",
-                    ty.name(),
-                    describe(&got),
-                    describe(&want)
-                ));
+                return Err(CdrError::NotStandard {
+                    ty: ty.name().to_string(),
+                    inside: None,
+                    got: describe(&got),
+                    want: describe(&want),
+                });
             }
             for section in &sections {
                 let mut lines = section.lines().skip_while(|l| l.trim().is_empty());
@@ -192,19 +249,19 @@ pub fn check_schema(ty: MsgType, encoding: &str, text: &[u8]) -> Result<(), Stri
                     continue;
                 };
                 let body: String = lines.map(|l| format!("{l}\n")).collect();
-                let got = msg_fields(&body).map_err(|e| format!("{name}: {e}"))?;
+                let got = msg_fields(&name, &body)?;
                 let same = got.len() == nested.len()
                     && got
                         .iter()
                         .zip(nested.iter())
                         .all(|(g, w)| g.0 == w.0 && g.1 == w.1);
                 if !same {
-                    return Err(format!(
-                        "the bag defines {name} (inside {}) as `{}`, not the standard `{}`",
-                        ty.name(),
-                        describe(&got),
-                        describe(nested)
-                    ));
+                    return Err(CdrError::NotStandard {
+                        ty: name,
+                        inside: Some(ty.name()),
+                        got: describe(&got),
+                        want: describe(nested),
+                    });
                 }
             }
             Ok(())
@@ -216,19 +273,18 @@ pub fn check_schema(ty: MsgType, encoding: &str, text: &[u8]) -> Result<(), Stri
                     .split(|c: char| !(c.is_alphanumeric() || c == '_' || c == ';'))
                     .any(|w| w == format!("{name};"));
                 if !declared {
-                    return Err(format!(
-                        "the bag's IDL definition of {} does not declare `{name}`",
-                        ty.name()
-                    ));
+                    return Err(CdrError::IdlUndeclared {
+                        ty: ty.name(),
+                        field: name,
+                    });
                 }
             }
             Ok(())
         }
-        other => Err(format!(
-            "{} is stored with schema encoding `{other}`, not a ROS 2 message definition \
-             (ros2msg or ros2idl)",
-            ty.name()
-        )),
+        other => Err(CdrError::SchemaEncoding {
+            ty: ty.name(),
+            encoding: other.to_string(),
+        }),
     }
 }
 
@@ -242,21 +298,14 @@ struct Reader<'a> {
 const HEADER: usize = 4;
 
 impl<'a> Reader<'a> {
-    fn new(buf: &'a [u8]) -> Result<Self, String> {
+    fn new(buf: &'a [u8]) -> Result<Self, CdrError> {
         if buf.len() < HEADER {
-            return Err(format!(
-                "the message has {} bytes, too few for a CDR header",
-                buf.len()
-            ));
+            return Err(CdrError::NoHeader { len: buf.len() });
         }
         let little = match [buf[0], buf[1]] {
             [0, 0] => false,
             [0, 1] => true,
-            [a, b] => {
-                return Err(format!(
-                    "CDR encapsulation 0x{a:02x}{b:02x} is not plain CDR (0x0000 or 0x0001)"
-                ));
-            }
+            [a, b] => return Err(CdrError::Encapsulation([a, b])),
         };
         Ok(Reader {
             buf,
@@ -265,7 +314,7 @@ impl<'a> Reader<'a> {
         })
     }
 
-    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
+    fn take(&mut self, n: usize, what: &'static str) -> Result<&'a [u8], CdrError> {
         let end = self.pos.checked_add(n).filter(|&e| e <= self.buf.len());
         match end {
             Some(end) => {
@@ -273,11 +322,11 @@ impl<'a> Reader<'a> {
                 self.pos = end;
                 Ok(s)
             }
-            None => Err(format!(
-                "the message ends inside `{what}` (byte {} of {})",
-                self.pos,
-                self.buf.len()
-            )),
+            None => Err(CdrError::EndsInside {
+                field: what,
+                at: self.pos,
+                len: self.buf.len(),
+            }),
         }
     }
 
@@ -286,7 +335,7 @@ impl<'a> Reader<'a> {
         self.pos += (n - rel % n) % n;
     }
 
-    fn u32(&mut self, what: &str) -> Result<u32, String> {
+    fn u32(&mut self, what: &'static str) -> Result<u32, CdrError> {
         self.align(4);
         let b: [u8; 4] = self.take(4, what)?.try_into().unwrap_or_default();
         Ok(if self.little {
@@ -298,30 +347,32 @@ impl<'a> Reader<'a> {
 
     /// A sequence length, checked against the bytes left so a damaged length cannot
     /// ask for a huge allocation.
-    fn len(&mut self, elem: usize, what: &str) -> Result<usize, String> {
+    fn len(&mut self, elem: usize, what: &'static str) -> Result<usize, CdrError> {
         let n = self.u32(what)? as usize;
         let left = self.buf.len().saturating_sub(self.pos);
         if n.saturating_mul(elem) > left {
-            return Err(format!(
-                "`{what}` claims {n} elements but only {left} bytes are left"
-            ));
+            return Err(CdrError::Overlong {
+                field: what,
+                count: n,
+                left,
+            });
         }
         Ok(n)
     }
 
-    fn string(&mut self, what: &str) -> Result<&'a str, String> {
+    fn string(&mut self, what: &'static str) -> Result<&'a str, CdrError> {
         let n = self.len(1, what)?;
         let bytes = self.take(n, what)?;
         // The length counts the terminating NUL; an empty string may still be length 0.
         let bytes = match bytes.split_last() {
             Some((0, rest)) => rest,
-            Some(_) => return Err(format!("`{what}` is not NUL-terminated")),
+            Some(_) => return Err(CdrError::NotNulTerminated { field: what }),
             None => bytes,
         };
-        std::str::from_utf8(bytes).map_err(|_| format!("`{what}` is not UTF-8"))
+        std::str::from_utf8(bytes).map_err(|_| CdrError::NotUtf8 { field: what })
     }
 
-    fn skip_sequence(&mut self, elem: usize, what: &str) -> Result<(), String> {
+    fn skip_sequence(&mut self, elem: usize, what: &'static str) -> Result<(), CdrError> {
         let n = self.len(elem, what)?;
         if n > 0 {
             self.align(elem);
@@ -329,7 +380,7 @@ impl<'a> Reader<'a> {
         self.take(n * elem, what).map(|_| ())
     }
 
-    fn f64_sequence(&mut self, what: &str) -> Result<Vec<f64>, String> {
+    fn f64_sequence(&mut self, what: &'static str) -> Result<Vec<f64>, CdrError> {
         let n = self.len(8, what)?;
         if n > 0 {
             self.align(8);
@@ -351,7 +402,7 @@ impl<'a> Reader<'a> {
 
 /// Decode a MultiArray, putting its values after `layout.data_offset` into `out`
 /// (cleared first).
-pub fn decode_multiarray(data: &[u8], kind: ArrayKind, out: &mut Vec<f64>) -> Result<(), String> {
+pub fn decode_multiarray(data: &[u8], kind: ArrayKind, out: &mut Vec<f64>) -> Result<(), CdrError> {
     let mut r = Reader::new(data)?;
     let dims = r.len(12, "layout.dim")?;
     for _ in 0..dims {
@@ -367,9 +418,7 @@ pub fn decode_multiarray(data: &[u8], kind: ArrayKind, out: &mut Vec<f64>) -> Re
     }
     let bytes = r.take(n * size, "data")?;
     if offset > n {
-        return Err(format!(
-            "layout.data_offset is {offset} but the array holds {n} values"
-        ));
+        return Err(CdrError::DataOffset { offset, len: n });
     }
     out.clear();
     out.reserve(n - offset);
@@ -402,7 +451,7 @@ pub struct JointState<'a> {
     pub positions: Vec<f64>,
 }
 
-pub fn decode_joint_state(data: &[u8]) -> Result<JointState<'_>, String> {
+pub fn decode_joint_state(data: &[u8]) -> Result<JointState<'_>, CdrError> {
     let mut r = Reader::new(data)?;
     r.u32("header.stamp.sec")?;
     r.u32("header.stamp.nanosec")?;
@@ -417,7 +466,7 @@ pub fn decode_joint_state(data: &[u8]) -> Result<JointState<'_>, String> {
     Ok(JointState { names, positions })
 }
 
-pub fn decode_string(data: &[u8]) -> Result<&str, String> {
+pub fn decode_string(data: &[u8]) -> Result<&str, CdrError> {
     Reader::new(data)?.string("data")
 }
 
@@ -467,6 +516,10 @@ mod tests {
         assert_eq!(check_schema(ty, "ros2msg", std.as_bytes()), Ok(()));
         let other = "MultiArrayLayout layout\nfloat64[] data\n";
         let e = check_schema(ty, "ros2msg", other.as_bytes()).unwrap_err();
-        assert!(e.contains("float64[] data"), "{e}");
+        assert!(
+            matches!(&e, CdrError::NotStandard { got, inside: None, .. } if got.contains("float64[] data")),
+            "{e:?}"
+        );
+        assert!(e.to_string().contains("float64[] data"), "{e}");
     }
 }

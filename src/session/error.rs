@@ -116,6 +116,17 @@ impl SessionError {
         Self::file(path, source.to_string()).with_source(source)
     }
 
+    /// A lower error about a topic of a bag, or its message at `time_ns` (a definition or
+    /// message that does not decode): its text is the message, and it is kept.
+    pub fn topic_caused(
+        path: &Path,
+        topic: &str,
+        time_ns: Option<u64>,
+        source: impl std::error::Error + Send + Sync + 'static,
+    ) -> Self {
+        Self::topic(path, topic, time_ns, source.to_string()).with_source(source)
+    }
+
     /// `self` with `source` kept as its cause.
     pub fn with_source(mut self, source: impl std::error::Error + Send + Sync + 'static) -> Self {
         self.source = Some(Kept::any(source));

@@ -231,7 +231,8 @@ impl LiveRoom {
         let url = self.form.url.trim().to_string();
         let ctx = ctx.clone();
         std::thread::spawn(move || {
-            let _ = tx.send(discover::discover(&url, Duration::from_secs(3)));
+            let _ = tx
+                .send(discover::discover(&url, Duration::from_secs(3)).map_err(|e| e.to_string()));
             ctx.request_repaint();
         });
         self.discovering = Some(rx);

@@ -47,7 +47,7 @@ pub(super) fn read_file(
     let magic = mcap::MAGIC;
     let mut head = [0u8; 8];
     if len < 8 || input.read_exact(&mut head).is_err() || head != *magic {
-        return Err(mcap_error(file, &mcap::McapError::BadMagic));
+        return Err(mcap_error(file, mcap::McapError::BadMagic));
     }
     let ends_with_magic = len >= 16
         && input.seek(SeekFrom::Start(len - 8)).is_ok()
@@ -346,7 +346,7 @@ impl FileReader<'_> {
     fn records_in(&mut self, opcode: u8, body: &[u8], in_chunk: bool) -> Result<(), SessionError> {
         use mcap::records::Record;
         let file = self.file;
-        let damaged = |e: mcap::McapError| mcap_error(file, &e);
+        let damaged = |e: mcap::McapError| mcap_error(file, e);
         let Some(&(_, fields)) = FIELDS.iter().find(|(op, _)| *op == opcode) else {
             return Ok(());
         };

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use super::{JointTopic, TactileTopic};
 use crate::session::SessionError;
-use crate::session::cdr::{self, ArrayKind};
+use crate::session::cdr::{self, ArrayKind, CdrError};
 use crate::session::spec::ImportSpec;
 
 /// Where a message is, for its errors: its file, topic and bag time.
@@ -20,6 +20,11 @@ impl At<'_> {
         SessionError::topic(self.file, self.topic, Some(self.t), m)
     }
 
+    /// The message does not decode: the decoder's error is kept.
+    fn undecoded(&self, e: CdrError) -> SessionError {
+        SessionError::topic_caused(self.file, self.topic, Some(self.t), e)
+    }
+
     /// A MultiArray of a tactile topic: one row of the topic's width, every value finite
     /// and in its sensor's range.
     pub(super) fn tactile(
@@ -32,7 +37,7 @@ impl At<'_> {
     ) -> Result<(), SessionError> {
         let (file, topic, t) = (self.file, self.topic, self.t);
         let at = |m: String| self.error(m);
-        cdr::decode_multiarray(data, kind, scratch).map_err(at)?;
+        cdr::decode_multiarray(data, kind, scratch).map_err(|e| self.undecoded(e))?;
         if tt.stamps.last().is_some_and(|&last| t < last) {
             return Err(backwards(file, topic, t, tt.stamps[tt.stamps.len() - 1]));
         }
@@ -76,7 +81,7 @@ impl At<'_> {
     ) -> Result<(), SessionError> {
         let (file, topic, t) = (self.file, self.topic, self.t);
         let at = |m: String| self.error(m);
-        let js = cdr::decode_joint_state(data).map_err(at)?;
+        let js = cdr::decode_joint_state(data).map_err(|e| self.undecoded(e))?;
         if js.positions.len() != js.names.len() {
             return Err(at(format!(
                 "{} joint names but {} positions",
@@ -114,7 +119,7 @@ impl At<'_> {
         data: &[u8],
     ) -> Result<(), SessionError> {
         let (file, topic, t) = (self.file, self.topic, self.t);
-        let text = cdr::decode_string(data).map_err(|m| self.error(m))?;
+        let text = cdr::decode_string(data).map_err(|e| self.undecoded(e))?;
         if events.last().is_some_and(|&(last, _)| t < last) {
             let last = events[events.len() - 1].0;
             return Err(backwards(file, topic, t, last));

@@ -21,7 +21,7 @@ pub(super) const CHUNK_INDEX: u8 = 0x08;
 pub(super) const DATA_END: u8 = 0x0F;
 
 /// The MCAP library's error, in words about the file.
-pub(super) fn mcap_error(file: &Path, e: &mcap::McapError) -> SessionError {
+pub(super) fn mcap_error(file: &Path, e: mcap::McapError) -> SessionError {
     use mcap::McapError as E;
     let what = match e {
         E::BadMagic => "not an MCAP file, or its start or end is missing (bad magic bytes)".into(),
@@ -30,7 +30,16 @@ pub(super) fn mcap_error(file: &Path, e: &mcap::McapError) -> SessionError {
         }
         _ => format!("the bag is damaged: {e}"),
     };
-    SessionError::file(file, what)
+    SessionError::file(file, what).with_source(e)
+}
+
+/// A zstd chunk that does not decompress: the decoder's error is kept.
+fn undecompressed(file: &Path, e: std::io::Error) -> SessionError {
+    SessionError::file(
+        file,
+        format!("the bag is damaged: a zstd chunk does not decompress ({e})"),
+    )
+    .with_source(e)
 }
 
 /// Where a chunk is, which channels it holds messages of, and their time span, from the
@@ -217,7 +226,7 @@ pub(super) fn chunk_records<'c>(
             let mut out = Vec::with_capacity(claim.min(CHUNK_RESERVE) as usize);
             zstd::stream::read::Decoder::with_buffer(data)
                 .and_then(|d| d.take(claim.saturating_add(1)).read_to_end(&mut out))
-                .map_err(|e| damaged(format!("a zstd chunk does not decompress ({e})")))?;
+                .map_err(|e| undecompressed(file, e))?;
             if out.len() as u64 != claim {
                 return Err(damaged(format!(
                     "a zstd chunk of {} bytes claims {claim} bytes uncompressed but holds {}",

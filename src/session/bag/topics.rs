@@ -144,7 +144,8 @@ pub(super) fn check_channel(
         )));
     }
     if let Some(schema) = &channel.schema {
-        cdr::check_schema(ty, &schema.encoding, &schema.data).map_err(err)?;
+        cdr::check_schema(ty, &schema.encoding, &schema.data)
+            .map_err(|e| SessionError::topic_caused(file, &channel.topic, None, e))?;
     }
     Ok(Some(Checked {
         role,
