@@ -186,6 +186,18 @@ pub(super) fn wrong_item(item: &FrontierItem, params: &FrontierParams) -> Experi
     )
 }
 
+/// One item per size and repetition, size-major (the order the items' seeds follow).
+pub(super) fn each_rep<S: Copy>(
+    sizes: impl IntoIterator<Item = S>,
+    reps: usize,
+    item: impl Fn(S, usize) -> FrontierItem,
+) -> Vec<FrontierItem> {
+    (sizes.into_iter())
+        .flat_map(|size| (0..reps).map(move |rep| (size, rep)))
+        .map(|(size, rep)| item(size, rep))
+        .collect()
+}
+
 pub(super) fn micros(secs: f64, units: usize) -> f64 {
     1e6 * secs / units.max(1) as f64
 }

@@ -2,7 +2,7 @@
 //! repeated stratified 10-fold cross validation on the feature sequences.
 
 use super::method::{
-    FrontierItem, FrontierMethod, FrontierOutput, FrontierPrep, MethodPoints, wrong_item,
+    FrontierItem, FrontierMethod, FrontierOutput, FrontierPrep, MethodPoints, each_rep, wrong_item,
 };
 use super::*;
 use crate::catalogue::{Classifier, ClassifierId, Size};
@@ -44,13 +44,11 @@ impl FrontierMethod for ClassifierId {
     }
 
     fn items(&self, params: &FrontierParams) -> Vec<FrontierItem> {
-        let reps = 0..params.reps;
-        (0..sizes(params, self.method()).len())
-            .flat_map(|size| {
-                reps.clone()
-                    .map(move |rep| FrontierItem::Classifier { size, rep })
-            })
-            .collect()
+        let sizes = 0..sizes(params, self.method()).len();
+        each_rep(sizes, params.reps, |size, rep| FrontierItem::Classifier {
+            size,
+            rep,
+        })
     }
 
     fn item(

@@ -1,7 +1,8 @@
 //! DS and GS: capacity × tau of every expert, scored by the supervised protocol.
 
 use super::method::{
-    FrontierItem, FrontierMethod, FrontierOutput, FrontierPrep, MethodPoints, micros, wrong_item,
+    FrontierItem, FrontierMethod, FrontierOutput, FrontierPrep, MethodPoints, each_rep, micros,
+    wrong_item,
 };
 use super::*;
 use crate::experiments::feature_choice::{AUTO_FOLDS, choose_features};
@@ -98,14 +99,9 @@ impl FrontierMethod for Supervised {
     }
 
     fn items(&self, params: &FrontierParams) -> Vec<FrontierItem> {
-        let reps = 0..params.reps;
-        sizes(params)
-            .into_iter()
-            .flat_map(|(capacity, tau)| {
-                reps.clone()
-                    .map(move |rep| FrontierItem::Recognition { capacity, tau, rep })
-            })
-            .collect()
+        each_rep(sizes(params), params.reps, |(capacity, tau), rep| {
+            FrontierItem::Recognition { capacity, tau, rep }
+        })
     }
 
     fn item(

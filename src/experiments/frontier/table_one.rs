@@ -3,8 +3,8 @@
 //! scored by repeated stratified 5-fold accuracy).
 
 use super::method::{
-    FrontierItem, FrontierMethod, FrontierOutput, FrontierPrep, MethodPoints, micros, plain_label,
-    wrong_item,
+    FrontierItem, FrontierMethod, FrontierOutput, FrontierPrep, MethodPoints, each_rep, micros,
+    plain_label, wrong_item,
 };
 use super::*;
 use crate::cluster::{SequentialKMeansParams, scores};
@@ -69,15 +69,9 @@ impl FrontierMethod for TableClusterer {
     }
 
     fn items(&self, params: &FrontierParams) -> Vec<FrontierItem> {
-        let reps = 0..params.reps;
-        params
-            .ks
-            .iter()
-            .flat_map(|&k| {
-                reps.clone()
-                    .map(move |rep| FrontierItem::Clusters { k, rep })
-            })
-            .collect()
+        each_rep(params.ks.iter().copied(), params.reps, |k, rep| {
+            FrontierItem::Clusters { k, rep }
+        })
     }
 
     fn item(
@@ -213,14 +207,9 @@ impl FrontierMethod for RbfSvm {
     }
 
     fn items(&self, params: &FrontierParams) -> Vec<FrontierItem> {
-        let reps = 0..params.reps;
-        svm_cells(params)
-            .into_iter()
-            .flat_map(|(c, gamma)| {
-                reps.clone()
-                    .map(move |rep| FrontierItem::Svm { c, gamma, rep })
-            })
-            .collect()
+        each_rep(svm_cells(params), params.reps, |(c, gamma), rep| {
+            FrontierItem::Svm { c, gamma, rep }
+        })
     }
 
     fn item(

@@ -2,7 +2,7 @@
 //! clusters it leaves (the runs of [`crate::experiments::clustering`]).
 
 use super::method::{
-    FrontierItem, FrontierMethod, FrontierOutput, FrontierPrep, MethodPoints, wrong_item,
+    FrontierItem, FrontierMethod, FrontierOutput, FrontierPrep, MethodPoints, each_rep, wrong_item,
 };
 use super::supervised::choose_by_experts;
 use super::*;
@@ -73,15 +73,11 @@ impl FrontierMethod for Unsupervised {
     }
 
     fn items(&self, params: &FrontierParams) -> Vec<FrontierItem> {
-        let reps = 0..params.reps;
-        params
-            .thresholds
-            .iter()
-            .flat_map(|&threshold| {
-                reps.clone()
-                    .map(move |rep| FrontierItem::Threshold { threshold, rep })
-            })
-            .collect()
+        each_rep(
+            params.thresholds.iter().copied(),
+            params.reps,
+            |threshold, rep| FrontierItem::Threshold { threshold, rep },
+        )
     }
 
     fn item(
