@@ -10,8 +10,8 @@ use std::time::Duration;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use tactile_workbench::app::{View, WorkbenchApp, figure_view};
-use tactile_workbench::experiments::frontier::Frontier;
 use tactile_workbench::experiments::frontier::report::frontier_figures;
+use tactile_workbench::experiments::frontier::{self, Frontier, FrontierParams};
 use tactile_workbench::experiments::result::{AnalysisResult, SizeReason};
 use tactile_workbench::features::FeatureSet;
 use tactile_workbench::figures::FigureKind;
@@ -56,6 +56,19 @@ fn click_size(
     h.run_ok();
 }
 
+/// Choose `method` (its title) in the frontier form.
+fn choose_method(h: &mut Harness<'static, WorkbenchApp>, method: &str) {
+    h.get_by_role_and_label(egui::accesskit::Role::ComboBox, "Frontier method")
+        .click();
+    h.run_ok();
+    // The list scrolls: the registry's methods come last.
+    h.get_by_label(method).scroll_to_me();
+    h.run_ok();
+    h.get_by_label(method).click();
+    h.run_ok();
+    assert_eq!(h.state().rooms.speed.frontier.method.title(), method);
+}
+
 /// Set the frontier form to `method` (its first method: DS) with the knob lists `knobs`
 /// (field label, text), two repetitions, and compute it.
 fn compute_frontier(
@@ -64,11 +77,7 @@ fn compute_frontier(
     knobs: &[(&str, &str)],
 ) {
     if let Some(method) = method {
-        h.get_by_role_and_label(egui::accesskit::Role::ComboBox, "Frontier method")
-            .click();
-        h.run_ok();
-        h.get_by_label(method).click();
-        h.run_ok();
+        choose_method(h, method);
     }
     for (field, text) in knobs {
         h.get_by_label(field).set_text_value_accesskit(text);
@@ -264,4 +273,197 @@ fn clusterer_sizes_train_in_their_views() {
     wait_for_jobs(&mut h);
     let results = results_now(&h, 3);
     assert_eq!(results[2].parameters["k"], "7");
+}
+
+/// One knob field of a method's frontier form: its label, the values it shows at first, a
+/// list typed into it and where the parameters must hold that list.
+struct KnobField {
+    label: &'static str,
+    default: &'static str,
+    typed: &'static str,
+    values: &'static [f64],
+    param: fn(&FrontierParams) -> Vec<f64>,
+}
+
+fn counts(v: &[usize]) -> Vec<f64> {
+    v.iter().map(|&v| v as f64).collect()
+}
+
+/// Knob `k` of a registered method's sizes.
+fn knob_of_sizes(p: &FrontierParams, k: usize) -> Vec<f64> {
+    FrontierParams::lists_of_sizes(&p.sizes)[k].clone()
+}
+
+/// Every method's knob fields as the form showed them before the fields were read from the
+/// frontier's registry (DU's thresholds: its own list, not GU's).
+fn knob_fields() -> Vec<(&'static str, Vec<KnobField>)> {
+    let capacities = || KnobField {
+        label: "capacities",
+        default: "2, 5, 10, 20, 50, 100",
+        typed: "3, 7",
+        values: &[3.0, 7.0],
+        param: |p| counts(&p.capacities),
+    };
+    let taus = || KnobField {
+        label: "taus",
+        default: "1, 2, 5, 15, 30",
+        typed: "4",
+        values: &[4.0],
+        param: |p| counts(&p.taus),
+    };
+    let ks = || KnobField {
+        label: "numbers of clusters k",
+        default: "2, 4, 6, 8, 10, 12, 16, 20",
+        typed: "3 5",
+        values: &[3.0, 5.0],
+        param: |p| counts(&p.ks),
+    };
+    vec![
+        (
+            "sparse coding + SVM",
+            vec![KnobField {
+                label: "numbers of bases (each with its best β, γ)",
+                default: "2, 3, 5, 10, 15, 20, 29, 40, 60",
+                typed: "4, 8",
+                values: &[4.0, 8.0],
+                param: |p| counts(&p.num_bases),
+            }],
+        ),
+        ("DS", vec![capacities(), taus()]),
+        ("GS", vec![capacities(), taus()]),
+        (
+            "DU",
+            vec![KnobField {
+                label: "novelty thresholds",
+                default: "0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8",
+                typed: "0.35, 0.45",
+                values: &[0.35, 0.45],
+                param: |p| p.thresholds.clone(),
+            }],
+        ),
+        (
+            "GU",
+            vec![KnobField {
+                label: "novelty thresholds",
+                default: "0.05, 0.08, 0.1, 0.12, 0.15, 0.2, 0.3",
+                typed: "0.07",
+                values: &[0.07],
+                param: |p| p.thresholds.clone(),
+            }],
+        ),
+        ("k-means", vec![ks()]),
+        ("SOM", vec![ks()]),
+        (
+            "RBF SVM",
+            vec![
+                KnobField {
+                    label: "penalties C",
+                    default: "1, 10, 100, 1000",
+                    typed: "5, 50",
+                    values: &[5.0, 50.0],
+                    param: |p| p.svm_c.clone(),
+                },
+                KnobField {
+                    label: "kernel widths γ",
+                    default: "0.001, 0.003, 0.01, 0.03, 0.1",
+                    typed: "0.02",
+                    values: &[0.02],
+                    param: |p| p.svm_gamma.clone(),
+                },
+            ],
+        ),
+        (
+            "temporal-feature SVM",
+            vec![KnobField {
+                label: "c: box constraint of each one-vs-rest machine",
+                default: "0.01, 0.1, 1, 10, 100",
+                typed: "0.5, 2",
+                values: &[0.5, 2.0],
+                param: |p| knob_of_sizes(p, 0),
+            }],
+        ),
+        (
+            "DTW k-NN",
+            vec![
+                KnobField {
+                    label: "k: neighbours that vote",
+                    default: "1, 3, 5",
+                    typed: "1, 7",
+                    values: &[1.0, 7.0],
+                    param: |p| knob_of_sizes(p, 0),
+                },
+                KnobField {
+                    label: "band: Sakoe–Chiba band: steps a path may stray from the diagonal",
+                    default: "0, 5, 15",
+                    typed: "2",
+                    values: &[2.0],
+                    param: |p| knob_of_sizes(p, 1),
+                },
+            ],
+        ),
+    ]
+}
+
+/// Every frontier method's form has a field for each of its knobs, with the method's own
+/// values, and a list typed there reaches that knob's parameters (what Compute frontier
+/// runs); a list that is not numbers, or that the method refuses, is named under the form.
+#[test]
+fn every_methods_knob_fields_reach_their_parameters() {
+    let mut h = common::gui::workbench(1400.0, 1000.0);
+    h.get_by_label("Simulated object recognition").click();
+    h.run_ok();
+    h.get_by_label("Speed vs accuracy").click();
+    h.run_ok();
+    let fields = knob_fields();
+    let titles: Vec<&str> = fields.iter().map(|(m, _)| *m).collect();
+    let offered: Vec<&str> = frontier::methods().map(|m| m.title()).collect();
+    assert_eq!(titles, offered, "a knob table for every frontier method");
+    for (method, knobs) in &fields {
+        choose_method(&mut h, method);
+        let form = &h.state().rooms.speed.frontier;
+        assert_eq!(
+            frontier::size_knobs(form.method).len(),
+            knobs.len(),
+            "{method}'s fields"
+        );
+        for k in knobs {
+            assert_eq!(
+                h.get_by_label(k.label).value().as_deref(),
+                Some(k.default),
+                "{method}: {}",
+                k.label
+            );
+            h.get_by_label(k.label).set_text_value_accesskit(k.typed);
+            h.run_ok();
+        }
+        let p = h.state().rooms.speed.frontier.params();
+        let p = p.unwrap_or_else(|e| panic!("{method}: {e}"));
+        for k in knobs {
+            assert_eq!((k.param)(&p), k.values, "{method}: {}", k.label);
+        }
+    }
+
+    // Typed values stay with their method; bad ones are named under the form.
+    choose_method(&mut h, "DS");
+    assert_eq!(
+        h.get_by_label("capacities").value().as_deref(),
+        Some("3, 7")
+    );
+    for (typed, says) in [
+        ("5, 2.5", "capacities: `5, 2.5` is not a list of numbers"),
+        (" ,", "capacities: give at least one value"),
+        (
+            "0, 5",
+            "invalid parameter `capacities`: capacity and tau must be ≥ 1",
+        ),
+    ] {
+        h.get_by_label("capacities").set_text_value_accesskit(typed);
+        h.run_ok();
+        h.get_by_label(says);
+    }
+    choose_method(&mut h, "GU");
+    h.get_by_label("novelty thresholds")
+        .set_text_value_accesskit("0.1, 1.5");
+    h.run_ok();
+    h.get_by_label("invalid parameter `thresholds`: 1.5 is not in [0, 1]");
 }

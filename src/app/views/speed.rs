@@ -15,8 +15,8 @@ use crate::catalogue::{MethodId, Task};
 use crate::experiments::clustering::UnsupervisedLearner;
 use crate::experiments::frontier::report::frontier_figures;
 use crate::experiments::frontier::{
-    CostAxis, Frontier, FrontierItem, FrontierParams, frontier_items,
-    item_cost as frontier_item_cost,
+    CostAxis, Frontier, FrontierItem, FrontierParams, SweepKnob, frontier_items,
+    item_cost as frontier_item_cost, size_knobs,
 };
 use crate::experiments::recognition::SupervisedLearner;
 use crate::experiments::result::{self, TimeAxis, date_text};
@@ -33,54 +33,45 @@ pub struct FrontierForm {
     pub features: FeatureSet,
     /// Fewer than the CLI's 10, so the view answers in minutes.
     pub reps: usize,
-    pub capacities: String,
-    pub taus: String,
-    pub num_bases: String,
-    pub thresholds: String,
-    pub ks: String,
-    pub svm_c: String,
-    pub svm_gamma: String,
-    /// A registered method's values of each knob, as typed (by method key and knob name).
+    /// Each method's values of each size knob, as typed (by method key and knob name); a
+    /// knob not typed in sweeps its method's default values.
     pub knobs: std::collections::BTreeMap<(&'static str, &'static str), String>,
 }
 
-fn list_text<T: ToString>(v: &[T]) -> String {
-    v.iter().map(T::to_string).collect::<Vec<_>>().join(", ")
+fn list_text(v: &[f64]) -> String {
+    v.iter().map(f64::to_string).collect::<Vec<_>>().join(", ")
 }
 
 impl Default for FrontierForm {
     fn default() -> Self {
-        let d = FrontierParams::for_method(MethodId::Ds);
-        let threshold_default = FrontierParams::for_method(MethodId::Gu);
-        let k_default = FrontierParams::for_method(MethodId::KMeans);
-        let svm_default = FrontierParams::for_method(MethodId::RbfSvm);
         FrontierForm {
             method: MethodId::Ds,
             features: FeatureSet::ALL,
             reps: 3,
-            capacities: list_text(&d.capacities),
-            taus: list_text(&d.taus),
-            num_bases: list_text(&d.num_bases),
-            thresholds: list_text(&threshold_default.thresholds),
-            ks: list_text(&k_default.ks),
-            svm_c: list_text(&svm_default.svm_c),
-            svm_gamma: list_text(&svm_default.svm_gamma),
             knobs: Default::default(),
         }
     }
 }
 
-/// "2, 5, 10" as numbers; the error names the field.
-fn parse_list<T: std::str::FromStr>(text: &str, field: &str) -> Result<Vec<T>, String> {
-    let v: Result<Vec<T>, _> = text
+/// "2, 5, 10" as numbers (counts for a whole knob); the error names the knob.
+fn parse_list(text: &str, knob: &SweepKnob) -> Result<Vec<f64>, String> {
+    let number = |t: &str| {
+        if knob.whole {
+            t.parse::<usize>().map(|v| v as f64).ok()
+        } else {
+            t.parse::<f64>().ok()
+        }
+    };
+    let field = knob.name;
+    let v: Option<Vec<f64>> = text
         .split([',', ' '])
         .filter(|t| !t.is_empty())
-        .map(|t| t.parse::<T>())
+        .map(number)
         .collect();
     match v {
-        Ok(v) if !v.is_empty() => Ok(v),
-        Ok(_) => Err(format!("{field}: give at least one value")),
-        Err(_) => Err(format!("{field}: `{text}` is not a list of numbers")),
+        Some(v) if !v.is_empty() => Ok(v),
+        Some(_) => Err(format!("{field}: give at least one value")),
+        None => Err(format!("{field}: `{text}` is not a list of numbers")),
     }
 }
 
@@ -92,46 +83,15 @@ impl FrontierForm {
         if self.method.uses_features() {
             p.features = self.features;
         }
-        match self.method {
-            MethodId::RawSvm => {}
-            MethodId::Ds | MethodId::Gs => {
-                p.capacities = parse_list(&self.capacities, "capacities")?;
-                p.taus = parse_list(&self.taus, "taus")?;
-            }
-            MethodId::SparseSvm => {
-                p.num_bases = parse_list(&self.num_bases, "num_bases")?;
-            }
-            MethodId::Du | MethodId::Gu => {
-                p.thresholds = parse_list(&self.thresholds, "thresholds")?;
-            }
-            MethodId::KMeans | MethodId::Som => {
-                p.ks = parse_list(&self.ks, "k")?;
-            }
-            MethodId::RbfSvm => {
-                p.svm_c = parse_list(&self.svm_c, "C")?;
-                p.svm_gamma = parse_list(&self.svm_gamma, "γ")?;
-            }
-            MethodId::Classifier(c) => {
-                let lists = (self.knob_texts(c.method()).iter())
-                    .map(|(name, text)| parse_list(text, name))
-                    .collect::<Result<Vec<_>, _>>()?;
-                p.sizes = FrontierParams::sizes_of_lists(&lists);
-            }
-        }
+        let lists = (size_knobs(self.method).iter())
+            .map(|k| match self.knobs.get(&(self.method.key(), k.name)) {
+                Some(typed) => parse_list(typed, k),
+                None => Ok(k.values.clone()),
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        p.set_size_knobs(&lists).map_err(|e| e.to_string())?;
         p.validate().map_err(|e| e.to_string())?;
         Ok(p)
-    }
-
-    /// A registered method's knobs with their typed values (its own lists until edited).
-    fn knob_texts(&self, c: &dyn crate::catalogue::Classifier) -> Vec<(&'static str, String)> {
-        let defaults = FrontierParams::lists_of_sizes(&c.sizes());
-        let info = c.info();
-        (info.size_knobs.iter().zip(defaults))
-            .map(|(k, d)| {
-                let typed = self.knobs.get(&(info.key, k.name));
-                (k.name, typed.cloned().unwrap_or_else(|| list_text(&d)))
-            })
-            .collect()
     }
 
     fn ready(&self, s: &Session) -> bool {
@@ -177,35 +137,12 @@ impl FrontierForm {
                     }
                 });
         }
-        match self.method {
-            MethodId::RawSvm => {}
-            MethodId::Ds | MethodId::Gs => {
-                text_field(ui, "capacities", &mut self.capacities);
-                text_field(ui, "taus", &mut self.taus);
-            }
-            MethodId::SparseSvm => text_field(
-                ui,
-                "numbers of bases (each with its best β, γ)",
-                &mut self.num_bases,
-            ),
-            MethodId::Du | MethodId::Gu => {
-                text_field(ui, "novelty thresholds", &mut self.thresholds)
-            }
-            MethodId::KMeans | MethodId::Som => {
-                text_field(ui, "numbers of clusters k", &mut self.ks)
-            }
-            MethodId::RbfSvm => {
-                text_field(ui, "penalties C", &mut self.svm_c);
-                text_field(ui, "kernel widths γ", &mut self.svm_gamma);
-            }
-            MethodId::Classifier(c) => {
-                let info = c.method().info();
-                for (k, (name, mut text)) in info.size_knobs.iter().zip(self.knob_texts(c.method()))
-                {
-                    text_field(ui, &format!("{name}: {}", k.meaning), &mut text);
-                    self.knobs.insert((info.key, name), text);
-                }
-            }
+        for k in size_knobs(self.method) {
+            let text = self
+                .knobs
+                .entry((self.method.key(), k.name))
+                .or_insert_with(|| list_text(&k.values));
+            text_field(ui, &k.label, text);
         }
         ui.add(
             egui::DragValue::new(&mut self.reps)

@@ -118,6 +118,11 @@ pub(super) trait FrontierMethod: Sync {
     ) -> Result<FeatureChoice, ExperimentError> {
         Err(no_sequences(params.method))
     }
+    /// The knobs it sweeps, in order, with the values `params` sweeps.
+    fn size_knobs(&self, params: &FrontierParams) -> Vec<SweepKnob>;
+    /// Sweeps `lists` instead: one list per knob of [`Self::size_knobs`], in order (counted
+    /// and checked for whole numbers before).
+    fn set_size_knobs(&self, params: &mut FrontierParams, lists: &[Vec<f64>]);
     /// "DS, all features", "sparse coding + SVM".
     fn label(&self, params: &FrontierParams) -> String {
         plain_label(params)
@@ -126,6 +131,39 @@ pub(super) trait FrontierMethod: Sync {
     fn short_label(&self, params: &FrontierParams) -> String {
         plain_short_label(params)
     }
+}
+
+/// A knob a frontier sweeps, as a form asks for its values.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepKnob {
+    /// What errors call it ("capacities", "C").
+    pub name: &'static str,
+    /// What a form's field says ("numbers of clusters k").
+    pub label: String,
+    /// Only whole numbers (counts such as capacities and k).
+    pub whole: bool,
+    pub values: Vec<f64>,
+}
+
+impl SweepKnob {
+    pub(super) fn new(name: &'static str, label: &str, whole: bool, values: Vec<f64>) -> Self {
+        SweepKnob {
+            name,
+            label: label.into(),
+            whole,
+            values,
+        }
+    }
+}
+
+/// Counts as a knob's values.
+pub(super) fn reals(v: &[usize]) -> Vec<f64> {
+    v.iter().map(|&v| v as f64).collect()
+}
+
+/// A whole knob's values as counts (checked whole before).
+pub(super) fn wholes(v: &[f64]) -> Vec<usize> {
+    v.iter().map(|&v| v as usize).collect()
 }
 
 /// A method's points, the papers' size among them, and what they are scored and timed by.

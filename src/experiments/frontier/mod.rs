@@ -52,7 +52,7 @@ mod supervised;
 mod table_one;
 mod unsupervised;
 
-pub use method::{FrontierItem, FrontierOutput, FrontierPrep, SparseCell};
+pub use method::{FrontierItem, FrontierOutput, FrontierPrep, SparseCell, SweepKnob};
 use method::{
     FrontierMethod, MethodPoints, no_sequences, plain_label, plain_short_label, wrong_item,
 };
@@ -63,6 +63,13 @@ pub use run::*;
 /// The methods a frontier can sweep: every method of the catalogue with a size knob.
 pub fn methods() -> impl Iterator<Item = MethodId> {
     MethodId::all().filter(|&m| frontier_method(m).is_some())
+}
+
+/// The knobs a frontier of `method` sweeps, in order, with its default values (none for a
+/// method without a frontier): what a form asks for, whatever the method.
+pub fn size_knobs(method: MethodId) -> Vec<SweepKnob> {
+    let params = FrontierParams::for_method(method);
+    frontier_method(method).map_or_else(Vec::new, |m| m.size_knobs(&params))
 }
 
 /// Which time defines the cheapest model.
@@ -200,18 +207,52 @@ impl FrontierParams {
         frontier_method(self.method).map_or_else(|| plain_label(self), |m| m.label(self))
     }
 
+    /// Sweeps `lists` instead: one list per knob of [`size_knobs`], in order.
+    pub fn set_size_knobs(&mut self, lists: &[Vec<f64>]) -> Result<(), ExperimentError> {
+        let method = self.object()?;
+        let knobs = method.size_knobs(self);
+        if lists.len() != knobs.len() {
+            return Err(ExperimentError::param(
+                "sizes",
+                format!(
+                    "{} has {} size knobs, not {}",
+                    self.method.key(),
+                    knobs.len(),
+                    lists.len()
+                ),
+            ));
+        }
+        for (k, list) in knobs.iter().zip(lists) {
+            if k.whole
+                && let Some(v) = list.iter().find(|v| !(v.fract() == 0.0 && **v >= 0.0))
+            {
+                return Err(ExperimentError::param(
+                    k.name,
+                    format!("{v} is not a whole number"),
+                ));
+            }
+        }
+        method.set_size_knobs(self, lists);
+        Ok(())
+    }
+
     pub fn validate(&self) -> Result<(), ExperimentError> {
         self.checked().map(|_| ())
     }
 
-    /// The method's frontier object, once the parameters are valid.
-    fn checked(&self) -> Result<&'static dyn FrontierMethod, ExperimentError> {
-        let Some(method) = frontier_method(self.method) else {
-            return Err(ExperimentError::param(
+    /// The method's frontier object.
+    fn object(&self) -> Result<&'static dyn FrontierMethod, ExperimentError> {
+        frontier_method(self.method).ok_or_else(|| {
+            ExperimentError::param(
                 "method",
                 format!("{} has no size to sweep", self.method.key()),
-            ));
-        };
+            )
+        })
+    }
+
+    /// The method's frontier object, once the parameters are valid.
+    fn checked(&self) -> Result<&'static dyn FrontierMethod, ExperimentError> {
+        let method = self.object()?;
         if self.reps < 2 {
             return Err(ExperimentError::param(
                 "reps",
@@ -360,5 +401,27 @@ mod tests {
         wide[0].score_se = 0.5;
         assert_eq!(recommend(&wide, CostAxis::Prediction), Some((2, 1)));
         assert_eq!(recommend(&[], CostAxis::Prediction), None);
+    }
+
+    #[test]
+    fn every_method_sweeps_the_knob_values_it_is_given() {
+        for m in methods() {
+            let knobs = size_knobs(m);
+            assert!(!knobs.is_empty(), "{m}");
+            let firsts: Vec<Vec<f64>> = knobs.iter().map(|k| vec![k.values[0]]).collect();
+            let mut p = FrontierParams::for_method(m);
+            p.set_size_knobs(&firsts).unwrap();
+            p.validate().unwrap();
+            let swept = frontier_method(m).unwrap().size_knobs(&p);
+            let swept: Vec<Vec<f64>> = swept.into_iter().map(|k| k.values).collect();
+            assert_eq!(swept, firsts, "{m}");
+        }
+        // A count refuses a fraction, by the knob's name; every knob needs its list.
+        let mut ds = FrontierParams::for_method(MethodId::Ds);
+        let err = ds.set_size_knobs(&[vec![2.5], vec![1.0]]).unwrap_err();
+        assert!(err.to_string().contains("`capacities`"), "{err}");
+        assert!(ds.set_size_knobs(&[vec![2.0]]).is_err());
+        let mut raw = FrontierParams::for_method(MethodId::RawSvm);
+        assert!(raw.set_size_knobs(&[]).is_err());
     }
 }

@@ -2,7 +2,8 @@
 //! repeated stratified 10-fold cross validation on the feature sequences.
 
 use super::method::{
-    FrontierItem, FrontierMethod, FrontierOutput, FrontierPrep, MethodPoints, each_rep, wrong_item,
+    FrontierItem, FrontierMethod, FrontierOutput, FrontierPrep, MethodPoints, SweepKnob, each_rep,
+    wrong_item,
 };
 use super::*;
 use crate::catalogue::{Classifier, ClassifierId, Size};
@@ -29,6 +30,25 @@ impl FrontierMethod for ClassifierId {
             self.method().check(&size).map_err(classifier_err)?;
         }
         Ok(())
+    }
+
+    /// The catalogue's knobs, each with its values over the sizes swept.
+    fn size_knobs(&self, params: &FrontierParams) -> Vec<SweepKnob> {
+        let lists = FrontierParams::lists_of_sizes(&sizes(params, self.method()));
+        (self.method().info().size_knobs.iter().zip(lists))
+            .map(|(k, values)| SweepKnob {
+                name: k.name,
+                label: format!("{}: {}", k.name, k.meaning),
+                // The method's own check says which knobs count.
+                whole: false,
+                values,
+            })
+            .collect()
+    }
+
+    /// Every combination of one value per knob.
+    fn set_size_knobs(&self, params: &mut FrontierParams, lists: &[Vec<f64>]) {
+        params.sizes = FrontierParams::sizes_of_lists(lists);
     }
 
     fn prepare(

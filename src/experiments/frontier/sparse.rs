@@ -3,7 +3,7 @@
 
 use super::method::{
     FrontierItem, FrontierMethod, FrontierOutput, FrontierPrep, MethodPoints, SparseCell,
-    wrong_item,
+    SweepKnob, reals, wholes, wrong_item,
 };
 use super::*;
 use crate::experiments::stability::{
@@ -30,6 +30,20 @@ impl FrontierMethod for SparseSvm {
         }
         positive("beta", &params.beta)?;
         positive("gamma", &params.gamma)
+    }
+
+    /// beta and gamma are searched at every num_bases, not swept.
+    fn size_knobs(&self, params: &FrontierParams) -> Vec<SweepKnob> {
+        vec![SweepKnob::new(
+            "num_bases",
+            "numbers of bases (each with its best β, γ)",
+            true,
+            reals(&params.num_bases),
+        )]
+    }
+
+    fn set_size_knobs(&self, params: &mut FrontierParams, lists: &[Vec<f64>]) {
+        params.num_bases = wholes(&lists[0]);
     }
 
     fn prepare(

@@ -1,8 +1,8 @@
 //! DS and GS: capacity × tau of every expert, scored by the supervised protocol.
 
 use super::method::{
-    FrontierItem, FrontierMethod, FrontierOutput, FrontierPrep, MethodPoints, each_rep, micros,
-    wrong_item,
+    FrontierItem, FrontierMethod, FrontierOutput, FrontierPrep, MethodPoints, SweepKnob, each_rep,
+    micros, reals, wholes, wrong_item,
 };
 use super::*;
 use crate::experiments::feature_choice::{AUTO_FOLDS, choose_features};
@@ -86,6 +86,18 @@ impl FrontierMethod for Supervised {
             ));
         }
         Ok(())
+    }
+
+    fn size_knobs(&self, params: &FrontierParams) -> Vec<SweepKnob> {
+        vec![
+            SweepKnob::new("capacities", "capacities", true, reals(&params.capacities)),
+            SweepKnob::new("taus", "taus", true, reals(&params.taus)),
+        ]
+    }
+
+    fn set_size_knobs(&self, params: &mut FrontierParams, lists: &[Vec<f64>]) {
+        params.capacities = wholes(&lists[0]);
+        params.taus = wholes(&lists[1]);
     }
 
     fn prepare(

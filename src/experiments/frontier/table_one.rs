@@ -3,8 +3,8 @@
 //! scored by repeated stratified 5-fold accuracy).
 
 use super::method::{
-    FrontierItem, FrontierMethod, FrontierOutput, FrontierPrep, MethodPoints, each_rep, micros,
-    plain_label, wrong_item,
+    FrontierItem, FrontierMethod, FrontierOutput, FrontierPrep, MethodPoints, SweepKnob, each_rep,
+    micros, plain_label, reals, wholes, wrong_item,
 };
 use super::*;
 use crate::cluster::{SequentialKMeansParams, scores};
@@ -58,6 +58,19 @@ impl FrontierMethod for TableClusterer {
             ));
         }
         Ok(())
+    }
+
+    fn size_knobs(&self, params: &FrontierParams) -> Vec<SweepKnob> {
+        vec![SweepKnob::new(
+            "k",
+            "numbers of clusters k",
+            true,
+            reals(&params.ks),
+        )]
+    }
+
+    fn set_size_knobs(&self, params: &mut FrontierParams, lists: &[Vec<f64>]) {
+        params.ks = wholes(&lists[0]);
     }
 
     fn prepare(
@@ -196,6 +209,18 @@ impl FrontierMethod for RbfSvm {
         }
         positive("svm_c", &params.svm_c)?;
         positive("svm_gamma", &params.svm_gamma)
+    }
+
+    fn size_knobs(&self, params: &FrontierParams) -> Vec<SweepKnob> {
+        vec![
+            SweepKnob::new("C", "penalties C", false, params.svm_c.clone()),
+            SweepKnob::new("γ", "kernel widths γ", false, params.svm_gamma.clone()),
+        ]
+    }
+
+    fn set_size_knobs(&self, params: &mut FrontierParams, lists: &[Vec<f64>]) {
+        params.svm_c = lists[0].clone();
+        params.svm_gamma = lists[1].clone();
     }
 
     fn prepare(

@@ -2,7 +2,8 @@
 //! clusters it leaves (the runs of [`crate::experiments::clustering`]).
 
 use super::method::{
-    FrontierItem, FrontierMethod, FrontierOutput, FrontierPrep, MethodPoints, each_rep, wrong_item,
+    FrontierItem, FrontierMethod, FrontierOutput, FrontierPrep, MethodPoints, SweepKnob, each_rep,
+    wrong_item,
 };
 use super::supervised::choose_by_experts;
 use super::*;
@@ -60,6 +61,20 @@ impl FrontierMethod for Unsupervised {
             ));
         }
         Ok(())
+    }
+
+    /// The experts' capacity and tau are fixed for the run (the command line sets them).
+    fn size_knobs(&self, params: &FrontierParams) -> Vec<SweepKnob> {
+        vec![SweepKnob::new(
+            "thresholds",
+            "novelty thresholds",
+            false,
+            params.thresholds.clone(),
+        )]
+    }
+
+    fn set_size_knobs(&self, params: &mut FrontierParams, lists: &[Vec<f64>]) {
+        params.thresholds = lists[0].clone();
     }
 
     fn prepare(
