@@ -22,6 +22,7 @@ use tactile_workbench::live::protocol::{self, Channel};
 use tactile_workbench::models::{self, ModelError, ModelFile};
 use tactile_workbench::project::{Project, ProjectError};
 use tactile_workbench::session::cdr::CdrError;
+use tactile_workbench::session::long_csv::{self, CsvError};
 use tactile_workbench::session::{ImportSpec, Location};
 
 /// Every error of the chain below `e`, top first.
@@ -280,4 +281,38 @@ fn a_bag_with_a_look_alike_definition_keeps_the_cdr_error() {
         "{cdr:?}"
     );
     assert!(err.to_string().contains(&cdr.to_string()), "{err}");
+}
+
+/// A long CSV whose header names a column twice: the session error names the file and the
+/// header's line, and keeps the CSV reader's own error as its source.
+#[test]
+fn a_long_csv_header_naming_a_column_twice_keeps_the_csv_error() {
+    let spec = ImportSpec::from_str(
+        r#"{"sensors": [{"name": "a", "layout": "grid 1x2", "unit": "raw"}]}"#,
+        Path::new("spec.json"),
+    )
+    .unwrap();
+    let text = "grasp,time,object,a_1,a_2,a_1\ng1,0,cup,1,2,3\n";
+    let err = long_csv::parse_long_csv(text, Path::new("long.csv"), &spec)
+        .expect_err("a column named twice is refused");
+    assert_eq!(
+        err.location,
+        Location::Line {
+            line: 1,
+            field: None
+        }
+    );
+    let csv = err
+        .source()
+        .and_then(|s| s.downcast_ref::<CsvError>())
+        .unwrap_or_else(|| panic!("the CSV reader's error is the source: {err:?}"));
+    assert_eq!(
+        csv,
+        &CsvError::DuplicateColumn {
+            first: 4,
+            second: 6,
+            name: "a_1".into()
+        }
+    );
+    assert!(err.to_string().contains(&csv.to_string()), "{err}");
 }

@@ -106,6 +106,16 @@ impl SessionError {
         }
     }
 
+    /// A lower error about a line as a whole (one that does not split, a header missing a
+    /// column): its text is the message, and it is kept.
+    pub fn line_caused(
+        path: &Path,
+        line: usize,
+        source: impl std::error::Error + Send + Sync + 'static,
+    ) -> Self {
+        Self::line(path, line, source.to_string()).with_source(source)
+    }
+
     /// The file system's error, kept as the source.
     pub fn io(path: &Path, err: std::io::Error) -> Self {
         Self::caused(path, err)

@@ -132,9 +132,9 @@ fn read_windows(csv: &Path, spec: &ImportSpec) -> Result<Vec<Window>, SessionErr
     };
     let header_line = text.lines().position(|l| !l.trim().is_empty()).unwrap_or(0) + 1;
     let names = split_line(header.trim_start_matches('\u{feff}'))
-        .map_err(|m| SessionError::line(csv, header_line, m))?;
+        .map_err(|e| SessionError::line_caused(csv, header_line, e))?;
     let index = super::long_csv::column_index(&names)
-        .map_err(|m| SessionError::line(csv, header_line, m))?;
+        .map_err(|e| SessionError::line_caused(csv, header_line, e))?;
     let col = |name: &str| index.find(name);
     let need = |name: &str| {
         col(name).ok_or_else(|| {
@@ -165,7 +165,7 @@ fn read_windows(csv: &Path, spec: &ImportSpec) -> Result<Vec<Window>, SessionErr
         if line.trim().is_empty() {
             continue;
         }
-        let fields = split_line(line).map_err(|m| SessionError::line(csv, no, m))?;
+        let fields = split_line(line).map_err(|e| SessionError::line_caused(csv, no, e))?;
         if fields.len() != names.len() {
             return Err(SessionError::line(
                 csv,

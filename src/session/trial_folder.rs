@@ -44,8 +44,8 @@ pub fn parse_trial(text: &str, path: &Path, spec: &ImportSpec) -> Result<Trial, 
         names,
         rows,
     } = table(text, path)?;
-    let cols =
-        FrameColumns::find(&names, spec).map_err(|m| SessionError::line(path, header_no, m))?;
+    let cols = FrameColumns::find(&names, spec)
+        .map_err(|e| SessionError::line_caused(path, header_no, e))?;
     let period = match (cols.time, spec.frame_rate_hz) {
         (Some(_), _) => 0.0,
         (None, Some(hz)) => 1.0 / hz,
