@@ -23,6 +23,7 @@ use tactile_workbench::models::{self, ModelError, ModelFile};
 use tactile_workbench::project::{Project, ProjectError};
 use tactile_workbench::session::cdr::CdrError;
 use tactile_workbench::session::long_csv::{self, CsvError};
+use tactile_workbench::session::spec::LabelError;
 use tactile_workbench::session::{ImportSpec, Location};
 
 /// Every error of the chain below `e`, top first.
@@ -315,4 +316,35 @@ fn a_long_csv_header_naming_a_column_twice_keeps_the_csv_error() {
         }
     );
     assert!(err.to_string().contains(&csv.to_string()), "{err}");
+}
+
+/// A long CSV row whose label is not one of its label set's classes: the session error
+/// names the file, line and column, and keeps the spec's refusal as its source.
+#[test]
+fn a_class_the_spec_does_not_have_keeps_the_label_error() {
+    let spec = ImportSpec::from_str(
+        r#"{"sensors": [{"name": "a", "layout": "grid 1x2", "unit": "raw"}],
+            "label_sets": [{"name": "outcome", "classes": ["ok", "slip"]}]}"#,
+        Path::new("spec.json"),
+    )
+    .unwrap();
+    let text = "grasp,time,object,outcome,a_1,a_2\ng1,0,cup,wobbly,1,2\n";
+    let err = long_csv::parse_long_csv(text, Path::new("long.csv"), &spec)
+        .expect_err("a class the spec does not have is refused");
+    assert_eq!(
+        err.location,
+        Location::Line {
+            line: 2,
+            field: Some("outcome".into())
+        }
+    );
+    let label = err
+        .source()
+        .and_then(|s| s.downcast_ref::<LabelError>())
+        .unwrap_or_else(|| panic!("the spec's refusal is the source: {err:?}"));
+    assert!(
+        matches!(label, LabelError::NotAClass { class, set, .. } if class == "wobbly" && set == "outcome"),
+        "{label:?}"
+    );
+    assert!(err.to_string().contains(&label.to_string()), "{err}");
 }

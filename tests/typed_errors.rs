@@ -32,13 +32,8 @@ const ALLOWED: &[(&str, usize, &str)] = &[
         "not an error: the name of the record's field that does not fit (`fields_fit`), placed in the message",
     ),
     (
-        "src/session/ros2.rs",
-        1,
-        "a reason the caller places, with the file and line or topic, in `SessionError`'s message",
-    ),
-    (
         "src/session/spec.rs",
-        6,
+        4,
         "a reason the caller places, with the file and line or topic, in `SessionError`'s message",
     ),
     (

@@ -116,6 +116,17 @@ impl SessionError {
         Self::line(path, line, source.to_string()).with_source(source)
     }
 
+    /// A lower error about a field of a line (a class the spec does not have): its text is
+    /// the message, and it is kept.
+    pub fn line_field_caused(
+        path: &Path,
+        line: usize,
+        field: impl Into<String>,
+        source: impl std::error::Error + Send + Sync + 'static,
+    ) -> Self {
+        Self::line_field(path, line, field, source.to_string()).with_source(source)
+    }
+
     /// The file system's error, kept as the source.
     pub fn io(path: &Path, err: std::io::Error) -> Self {
         Self::caused(path, err)

@@ -451,7 +451,7 @@ pub fn parse_long_csv(text: &str, path: &Path, spec: &ImportSpec) -> Result<Sess
             .zip(&label_cols)
             .map(|(set, &c)| {
                 spec.class_index(set, field(c))
-                    .map_err(|m| SessionError::line_field(path, no, &set.name, m))
+                    .map_err(|e| SessionError::line_field_caused(path, no, &set.name, e))
             })
             .collect::<Result<Vec<_>, _>>()?;
         let row = cols.read(path, no, &names, &fields, spec)?;
@@ -469,7 +469,7 @@ pub fn parse_long_csv(text: &str, path: &Path, spec: &ImportSpec) -> Result<Sess
                 ));
             }
             spec.check_object(object)
-                .map_err(|m| SessionError::line_field(path, no, "object", m))?;
+                .map_err(|e| SessionError::line_field_caused(path, no, "object", e))?;
             if let Some(o) = open.take() {
                 done_ids.insert(o.id.clone());
                 done.push(o.close());

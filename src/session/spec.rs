@@ -170,6 +170,45 @@ impl ContactParams {
     }
 }
 
+/// Why the spec refuses a recording's object or classes (a CSV row's, a bag window's or
+/// event's, a trial file path's, a live stream's). The caller names where they were.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum LabelError {
+    #[error("an empty object name")]
+    EmptyObject,
+    /// An object the spec's `object` label set does not list.
+    #[error(
+        "object `{}` is not a class of label set `object` ({})",
+        super::error::shorten(object),
+        classes.join(", ")
+    )]
+    UnknownObject {
+        object: String,
+        classes: Vec<String>,
+    },
+    #[error(
+        "`{}` is not a class of label set `{set}` ({})",
+        super::error::shorten(class),
+        classes.join(", ")
+    )]
+    NotAClass {
+        class: String,
+        set: String,
+        classes: Vec<String>,
+    },
+    /// An `end` event (quoted as `shown`) whose labels are not one per recorded label set.
+    #[error(
+        "`{}` gives {given} labels; the spec's label sets ({}) need one each",
+        super::error::shorten(shown),
+        sets.join(", ")
+    )]
+    LabelCount {
+        shown: String,
+        given: usize,
+        sets: Vec<String>,
+    },
+}
+
 /// One sensor of the spec: the session's sensor, and where its values are in a bag.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SensorSpec {
@@ -557,23 +596,20 @@ impl ImportSpec {
     }
 
     /// Index of `class` in recorded label set `set` (of [`Self::recorded_label_sets`]), or
-    /// a message naming the classes.
-    pub fn class_index(&self, set: &LabelSet, class: &str) -> Result<usize, String> {
+    /// an error naming the classes.
+    pub fn class_index(&self, set: &LabelSet, class: &str) -> Result<usize, LabelError> {
         let found = self.class_indices.get(&set.name).and_then(|c| c.get(class));
-        found.copied().ok_or_else(|| {
-            format!(
-                "`{}` is not a class of label set `{}` ({})",
-                super::error::shorten(class),
-                set.name,
-                set.classes.join(", ")
-            )
+        found.copied().ok_or_else(|| LabelError::NotAClass {
+            class: class.to_string(),
+            set: set.name.clone(),
+            classes: set.classes.clone(),
         })
     }
 
     /// Check an object name: any non-empty name, or one of the spec's `object` classes.
-    pub fn check_object(&self, object: &str) -> Result<(), String> {
+    pub fn check_object(&self, object: &str) -> Result<(), LabelError> {
         if object.trim().is_empty() {
-            return Err("an empty object name".into());
+            return Err(LabelError::EmptyObject);
         }
         let known = |set: &LabelSet| {
             self.class_indices
@@ -581,11 +617,10 @@ impl ImportSpec {
                 .is_some_and(|c| c.contains_key(object))
         };
         match self.label_sets.iter().find(|l| l.name == OBJECT) {
-            Some(set) if !known(set) => Err(format!(
-                "object `{}` is not a class of label set `object` ({})",
-                super::error::shorten(object),
-                set.classes.join(", ")
-            )),
+            Some(set) if !known(set) => Err(LabelError::UnknownObject {
+                object: object.to_string(),
+                classes: set.classes.clone(),
+            }),
             _ => Ok(()),
         }
     }
