@@ -23,7 +23,8 @@ use tactile_workbench::models::{self, ModelError, ModelFile};
 use tactile_workbench::project::{Project, ProjectError};
 use tactile_workbench::session::cdr::CdrError;
 use tactile_workbench::session::long_csv::{self, CsvError};
-use tactile_workbench::session::spec::LabelError;
+use tactile_workbench::session::spec::{LabelError, SpecError};
+use tactile_workbench::session::trial_pattern::PatternError;
 use tactile_workbench::session::{ImportSpec, Location};
 
 /// Every error of the chain below `e`, top first.
@@ -347,4 +348,54 @@ fn a_class_the_spec_does_not_have_keeps_the_label_error() {
         "{label:?}"
     );
     assert!(err.to_string().contains(&label.to_string()), "{err}");
+}
+
+/// A spec whose layout object does not parse: the session error names the spec and the
+/// field, and keeps the spec's error, whose source is the JSON parser's.
+#[test]
+fn a_layout_object_that_does_not_parse_keeps_the_parser_error() {
+    let err = ImportSpec::from_str(
+        r#"{"sensors": [{"name": "a", "layout": {"kind": "hexagon"}, "unit": "raw"}]}"#,
+        Path::new("spec.json"),
+    )
+    .expect_err("a layout object that does not parse is refused");
+    assert_eq!(err.location, Location::Field("sensors[0].layout".into()));
+    let chain = chain(&err);
+    let spec = chain
+        .get(1)
+        .and_then(|e| e.downcast_ref::<SpecError>())
+        .unwrap_or_else(|| panic!("the spec's error is the source: {chain:?}"));
+    assert!(matches!(spec, SpecError::LayoutObject(_)), "{spec:?}");
+    let json = chain
+        .get(2)
+        .and_then(|e| e.downcast_ref::<serde_json::Error>())
+        .unwrap_or_else(|| panic!("the parser's error is the spec error's source: {chain:?}"));
+    assert!(err.to_string().contains(&json.to_string()), "{err}");
+}
+
+/// A spec whose trial pattern does not parse: the session error names the field, and keeps
+/// the spec's error, whose source is the pattern parser's.
+#[test]
+fn a_trial_pattern_that_does_not_parse_keeps_the_pattern_error() {
+    let err = ImportSpec::from_str(
+        r#"{"sensors": [{"name": "a", "layout": "grid 1x2", "unit": "raw"}],
+            "trials": {"pattern": "{object.csv"}}"#,
+        Path::new("spec.json"),
+    )
+    .expect_err("a pattern whose brace is not closed is refused");
+    assert_eq!(err.location, Location::Field("trials.pattern".into()));
+    let chain = chain(&err);
+    assert!(
+        matches!(
+            chain.get(1).and_then(|e| e.downcast_ref::<SpecError>()),
+            Some(SpecError::Pattern(_))
+        ),
+        "the spec's error is the source: {chain:?}"
+    );
+    let pattern = chain
+        .get(2)
+        .and_then(|e| e.downcast_ref::<PatternError>())
+        .unwrap_or_else(|| panic!("the pattern's error is the spec error's source: {chain:?}"));
+    assert_eq!(pattern, &PatternError::Unclosed);
+    assert!(err.to_string().contains("a `{` is not closed"), "{err}");
 }

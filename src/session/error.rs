@@ -127,6 +127,16 @@ impl SessionError {
         Self::line_field(path, line, field, source.to_string()).with_source(source)
     }
 
+    /// A lower error about a field of a JSON file (a spec's layout that does not parse): its
+    /// text is the message, and it is kept.
+    pub fn field_caused(
+        path: &Path,
+        field: impl Into<String>,
+        source: impl std::error::Error + Send + Sync + 'static,
+    ) -> Self {
+        Self::field(path, field, source.to_string()).with_source(source)
+    }
+
     /// The file system's error, kept as the source.
     pub fn io(path: &Path, err: std::io::Error) -> Self {
         Self::caused(path, err)

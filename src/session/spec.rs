@@ -28,12 +28,13 @@ use serde::Deserialize;
 
 use super::error::open_json;
 use super::native::json_error;
-use super::trial_pattern::{TRIAL, TrialPattern};
+use super::trial_pattern::{PatternError, TRIAL, TrialPattern};
 use super::validate::{MAX_SENSORS, check_layout};
 use super::{
     Frame, Grasp, LabelSet, Layout, Sensor, Session, SessionError, SessionMeta, ValueTransform,
     bts3, file_name, file_stem, icub, key_frame_by_pressure, validate,
 };
+use crate::error::Kept;
 
 /// The largest `sync_tolerance_s`: an hour, far beyond any two topics of one recording.
 const MAX_SYNC_TOLERANCE_S: f64 = 3600.0;
@@ -170,6 +171,46 @@ impl ContactParams {
     }
 }
 
+/// What is wrong with a spec's layout or trial pattern. The caller names the spec and the
+/// field.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SpecError {
+    #[error(
+        "`{}` is not a layout: use icub-fingertip, biotac-sp, grid RxC (e.g. grid 4x4) or a \
+         layout object",
+        super::error::shorten(name)
+    )]
+    UnknownLayout { name: String },
+    /// A layout object that does not parse (the JSON parser's error kept).
+    #[error("{0}")]
+    LayoutObject(#[source] Kept<serde_json::Error>),
+    #[error("expected a layout name or a layout object")]
+    NotALayout,
+    #[error("{0}")]
+    Pattern(#[from] PatternError),
+    /// A capture that is neither the object, the trial nor a label set.
+    #[error(
+        "`{{{}}}` is neither `{{object}}`, `{{trial}}` nor a label set of the spec",
+        super::error::shorten(name)
+    )]
+    UnknownCapture { name: String },
+    /// A pattern that does not capture the object or a label set.
+    #[error(
+        "`{pattern}` does not capture `{{{name}}}`: a trial's object and classes come from \
+         its path"
+    )]
+    Uncaptured { pattern: String, name: String },
+    #[error("`{pattern}` does not end in `.csv`: trial files are CSVs")]
+    NotCsv { pattern: String },
+    /// No `trials.pattern`, and the one made of the label sets' names is not one.
+    #[error("no `trials.pattern`, and the default `{pattern}` is not one: {source}")]
+    DefaultPattern {
+        pattern: String,
+        #[source]
+        source: Kept<SpecError>,
+    },
+}
+
 /// Why the spec refuses a recording's object or classes (a CSV row's, a bag window's or
 /// event's, a trial file path's, a live stream's). The caller names where they were.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -288,19 +329,15 @@ pub fn layout_by_name(name: &str) -> Option<Layout> {
     Some(Layout::Grid { rows, cols })
 }
 
-fn layout_of(value: &serde_json::Value) -> Result<Layout, String> {
+fn layout_of(value: &serde_json::Value) -> Result<Layout, SpecError> {
     match value {
-        serde_json::Value::String(name) => layout_by_name(name).ok_or_else(|| {
-            format!(
-                "`{}` is not a layout: use icub-fingertip, biotac-sp, grid RxC (e.g. grid 4x4) \
-                 or a layout object",
-                super::error::shorten(name)
-            )
-        }),
-        serde_json::Value::Object(_) => {
-            serde_json::from_value(value.clone()).map_err(|e| format!("{e}"))
+        serde_json::Value::String(name) => {
+            layout_by_name(name).ok_or_else(|| SpecError::UnknownLayout { name: name.clone() })
         }
-        _ => Err("expected a layout name or a layout object".into()),
+        serde_json::Value::Object(_) => {
+            serde_json::from_value(value.clone()).map_err(|e| SpecError::LayoutObject(Kept::new(e)))
+        }
+        _ => Err(SpecError::NotALayout),
     }
 }
 
@@ -345,7 +382,8 @@ fn sensor_spec(s: usize, f: SensorFile, path: &Path) -> Result<SensorSpec, Sessi
     if f.name.trim().is_empty() {
         return Err(err(at(".name"), "an empty sensor name".into()));
     }
-    let layout = layout_of(&f.layout).map_err(|m| err(at(".layout"), m))?;
+    let layout =
+        layout_of(&f.layout).map_err(|e| SessionError::field_caused(path, at(".layout"), e))?;
     // The spec is where a layout is wrong: its errors name the spec, not the recording.
     check_layout(s, &f.name, &layout, path)?;
     let n = layout.taxel_count();
@@ -536,7 +574,7 @@ impl ImportSpec {
             None => None,
             Some(t) => Some(
                 trial_pattern(&t.pattern, &file.label_sets)
-                    .map_err(|m| err("trials.pattern".into(), m))?,
+                    .map_err(|e| SessionError::field_caused(path, "trials.pattern", e))?,
             ),
         };
         let class_indices = file
@@ -577,12 +615,12 @@ impl ImportSpec {
             text.push_str(&format!("{{{}}}/", set.name));
         }
         text.push_str("*.csv");
-        trial_pattern(&text, &self.label_sets).map_err(|m| {
-            SessionError::field(
-                &self.path,
-                "trials",
-                format!("no `trials.pattern`, and the default `{text}` is not one: {m}"),
-            )
+        trial_pattern(&text, &self.label_sets).map_err(|e| {
+            let e = SpecError::DefaultPattern {
+                pattern: text.clone(),
+                source: Kept::new(e),
+            };
+            SessionError::field_caused(&self.path, "trials", e)
         })
     }
 
@@ -636,17 +674,16 @@ impl ImportSpec {
 
 /// Parse a trial pattern whose captures are `object`, `trial` or a label set, and that
 /// captures the object and every other label set (a grasp's labels come from its path).
-fn trial_pattern(text: &str, label_sets: &[LabelSet]) -> Result<TrialPattern, String> {
+fn trial_pattern(text: &str, label_sets: &[LabelSet]) -> Result<TrialPattern, SpecError> {
     let pattern = TrialPattern::parse(text)?;
     let names: Vec<&str> = pattern.names().collect();
     if let Some(n) = names
         .iter()
         .find(|n| **n != OBJECT && **n != TRIAL && !label_sets.iter().any(|l| l.name == **n))
     {
-        return Err(format!(
-            "`{{{}}}` is neither `{{object}}`, `{{trial}}` nor a label set of the spec",
-            super::error::shorten(n)
-        ));
+        return Err(SpecError::UnknownCapture {
+            name: n.to_string(),
+        });
     }
     let needed = std::iter::once(OBJECT).chain(
         label_sets
@@ -656,16 +693,16 @@ fn trial_pattern(text: &str, label_sets: &[LabelSet]) -> Result<TrialPattern, St
     );
     for n in needed {
         if !names.contains(&n) {
-            return Err(format!(
-                "`{text}` does not capture `{{{n}}}`: a trial's object and classes come from \
-                 its path"
-            ));
+            return Err(SpecError::Uncaptured {
+                pattern: text.to_string(),
+                name: n.to_string(),
+            });
         }
     }
     if !text.to_ascii_lowercase().ends_with(".csv") {
-        return Err(format!(
-            "`{text}` does not end in `.csv`: trial files are CSVs"
-        ));
+        return Err(SpecError::NotCsv {
+            pattern: text.to_string(),
+        });
     }
     Ok(pattern)
 }
