@@ -137,9 +137,33 @@ impl Default for ContactParams {
     }
 }
 
+/// Why the spec's contact parameters cannot cut grasps; [`ContactError::field`] names the
+/// spec field at fault.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ContactError {
+    /// A parameter that is not finite, or below 0.
+    #[error("{value} is not a finite number ≥ 0")]
+    NotNonNegative { field: &'static str, value: f64 },
+    #[error("the time constant must be > 0")]
+    ZeroBaseline,
+    #[error("{offset} is above the onset's {onset}: the offset must be the lower threshold")]
+    OffsetAboveOnset { offset: f64, onset: f64 },
+}
+
+impl ContactError {
+    /// The spec field at fault, e.g. `live.contact.offset_sigma`.
+    pub fn field(&self) -> &'static str {
+        match self {
+            ContactError::NotNonNegative { field, .. } => field,
+            ContactError::ZeroBaseline => "live.contact.baseline_s",
+            ContactError::OffsetAboveOnset { .. } => "live.contact.offset_sigma",
+        }
+    }
+}
+
 impl ContactParams {
     /// Each parameter finite and of its sign, the offset below the onset.
-    pub fn check(&self) -> Result<(), (&'static str, String)> {
+    pub fn check(&self) -> Result<(), ContactError> {
         let fields = [
             ("live.contact.onset_sigma", self.onset_sigma),
             ("live.contact.offset_sigma", self.offset_sigma),
@@ -149,23 +173,17 @@ impl ContactParams {
         ];
         for (field, v) in fields {
             if !(v.is_finite() && v >= 0.0) {
-                return Err((field, format!("{v} is not a finite number ≥ 0")));
+                return Err(ContactError::NotNonNegative { field, value: v });
             }
         }
         if self.baseline_s == 0.0 {
-            return Err((
-                "live.contact.baseline_s",
-                "the time constant must be > 0".into(),
-            ));
+            return Err(ContactError::ZeroBaseline);
         }
         if self.offset_sigma > self.onset_sigma {
-            return Err((
-                "live.contact.offset_sigma",
-                format!(
-                    "{} is above the onset's {}: the offset must be the lower threshold",
-                    self.offset_sigma, self.onset_sigma
-                ),
-            ));
+            return Err(ContactError::OffsetAboveOnset {
+                offset: self.offset_sigma,
+                onset: self.onset_sigma,
+            });
         }
         Ok(())
     }
@@ -588,7 +606,7 @@ impl ImportSpec {
         let live = file.live.unwrap_or_default();
         live.contact
             .check()
-            .map_err(|(field, m)| err(field.into(), m))?;
+            .map_err(|e| SessionError::field_caused(path, e.field(), e))?;
         Ok(ImportSpec {
             path: path.to_path_buf(),
             name: file.name,
@@ -854,5 +872,48 @@ mod tests {
         assert_eq!(layout_by_name("biotac-sp").unwrap().taxel_count(), 24);
         assert_eq!(layout_by_name("icub-fingertip").unwrap().taxel_count(), 12);
         assert_eq!(layout_by_name("grid 3by4"), None);
+    }
+
+    /// Each contact parameter at fault is named by its field, and kept as the source.
+    #[test]
+    fn contact_parameters_that_cannot_cut_name_their_field() {
+        let spec = |live: &str| {
+            let text = format!(
+                r#"{{"sensors": [{{"name": "a", "layout": "grid 1x2", "unit": "raw"}}],
+                    "live": {{"contact": {live}}}}}"#
+            );
+            ImportSpec::from_str(&text, Path::new("spec.json")).unwrap_err()
+        };
+        for (live, field, why) in [
+            (
+                r#"{"min_rise": -1}"#,
+                "live.contact.min_rise",
+                ContactError::NotNonNegative {
+                    field: "live.contact.min_rise",
+                    value: -1.0,
+                },
+            ),
+            (
+                r#"{"baseline_s": 0}"#,
+                "live.contact.baseline_s",
+                ContactError::ZeroBaseline,
+            ),
+            (
+                r#"{"onset_sigma": 2, "offset_sigma": 3}"#,
+                "live.contact.offset_sigma",
+                ContactError::OffsetAboveOnset {
+                    offset: 3.0,
+                    onset: 2.0,
+                },
+            ),
+        ] {
+            let err = spec(live);
+            assert_eq!(err.location, crate::session::Location::Field(field.into()));
+            let kept = std::error::Error::source(&err)
+                .and_then(|s| s.downcast_ref::<ContactError>())
+                .unwrap_or_else(|| panic!("the contact error is the source: {err:?}"));
+            assert_eq!(kept, &why);
+            assert!(err.to_string().ends_with(&why.to_string()), "{err}");
+        }
     }
 }
