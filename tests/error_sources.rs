@@ -22,6 +22,9 @@ use tactile_workbench::live::protocol::{self, Channel};
 use tactile_workbench::models::{self, ModelError, ModelFile};
 use tactile_workbench::project::{Project, ProjectError};
 use tactile_workbench::session::cdr::CdrError;
+use tactile_workbench::session::long_csv::{self, CsvError};
+use tactile_workbench::session::spec::{LabelError, SpecError};
+use tactile_workbench::session::trial_pattern::PatternError;
 use tactile_workbench::session::{ImportSpec, Location};
 
 /// Every error of the chain below `e`, top first.
@@ -280,4 +283,119 @@ fn a_bag_with_a_look_alike_definition_keeps_the_cdr_error() {
         "{cdr:?}"
     );
     assert!(err.to_string().contains(&cdr.to_string()), "{err}");
+}
+
+/// A long CSV whose header names a column twice: the session error names the file and the
+/// header's line, and keeps the CSV reader's own error as its source.
+#[test]
+fn a_long_csv_header_naming_a_column_twice_keeps_the_csv_error() {
+    let spec = ImportSpec::from_str(
+        r#"{"sensors": [{"name": "a", "layout": "grid 1x2", "unit": "raw"}]}"#,
+        Path::new("spec.json"),
+    )
+    .unwrap();
+    let text = "grasp,time,object,a_1,a_2,a_1\ng1,0,cup,1,2,3\n";
+    let err = long_csv::parse_long_csv(text, Path::new("long.csv"), &spec)
+        .expect_err("a column named twice is refused");
+    assert_eq!(
+        err.location,
+        Location::Line {
+            line: 1,
+            field: None
+        }
+    );
+    let csv = err
+        .source()
+        .and_then(|s| s.downcast_ref::<CsvError>())
+        .unwrap_or_else(|| panic!("the CSV reader's error is the source: {err:?}"));
+    assert_eq!(
+        csv,
+        &CsvError::DuplicateColumn {
+            first: 4,
+            second: 6,
+            name: "a_1".into()
+        }
+    );
+    assert!(err.to_string().contains(&csv.to_string()), "{err}");
+}
+
+/// A long CSV row whose label is not one of its label set's classes: the session error
+/// names the file, line and column, and keeps the spec's refusal as its source.
+#[test]
+fn a_class_the_spec_does_not_have_keeps_the_label_error() {
+    let spec = ImportSpec::from_str(
+        r#"{"sensors": [{"name": "a", "layout": "grid 1x2", "unit": "raw"}],
+            "label_sets": [{"name": "outcome", "classes": ["ok", "slip"]}]}"#,
+        Path::new("spec.json"),
+    )
+    .unwrap();
+    let text = "grasp,time,object,outcome,a_1,a_2\ng1,0,cup,wobbly,1,2\n";
+    let err = long_csv::parse_long_csv(text, Path::new("long.csv"), &spec)
+        .expect_err("a class the spec does not have is refused");
+    assert_eq!(
+        err.location,
+        Location::Line {
+            line: 2,
+            field: Some("outcome".into())
+        }
+    );
+    let label = err
+        .source()
+        .and_then(|s| s.downcast_ref::<LabelError>())
+        .unwrap_or_else(|| panic!("the spec's refusal is the source: {err:?}"));
+    assert!(
+        matches!(label, LabelError::NotAClass { class, set, .. } if class == "wobbly" && set == "outcome"),
+        "{label:?}"
+    );
+    assert!(err.to_string().contains(&label.to_string()), "{err}");
+}
+
+/// A spec whose layout object does not parse: the session error names the spec and the
+/// field, and keeps the spec's error, whose source is the JSON parser's.
+#[test]
+fn a_layout_object_that_does_not_parse_keeps_the_parser_error() {
+    let err = ImportSpec::from_str(
+        r#"{"sensors": [{"name": "a", "layout": {"kind": "hexagon"}, "unit": "raw"}]}"#,
+        Path::new("spec.json"),
+    )
+    .expect_err("a layout object that does not parse is refused");
+    assert_eq!(err.location, Location::Field("sensors[0].layout".into()));
+    let chain = chain(&err);
+    let spec = chain
+        .get(1)
+        .and_then(|e| e.downcast_ref::<SpecError>())
+        .unwrap_or_else(|| panic!("the spec's error is the source: {chain:?}"));
+    assert!(matches!(spec, SpecError::LayoutObject(_)), "{spec:?}");
+    let json = chain
+        .get(2)
+        .and_then(|e| e.downcast_ref::<serde_json::Error>())
+        .unwrap_or_else(|| panic!("the parser's error is the spec error's source: {chain:?}"));
+    assert!(err.to_string().contains(&json.to_string()), "{err}");
+}
+
+/// A spec whose trial pattern does not parse: the session error names the field, and keeps
+/// the spec's error, whose source is the pattern parser's.
+#[test]
+fn a_trial_pattern_that_does_not_parse_keeps_the_pattern_error() {
+    let err = ImportSpec::from_str(
+        r#"{"sensors": [{"name": "a", "layout": "grid 1x2", "unit": "raw"}],
+            "trials": {"pattern": "{object.csv"}}"#,
+        Path::new("spec.json"),
+    )
+    .expect_err("a pattern whose brace is not closed is refused");
+    assert_eq!(err.location, Location::Field("trials.pattern".into()));
+    let chain = chain(&err);
+    assert!(
+        matches!(
+            chain.get(1).and_then(|e| e.downcast_ref::<SpecError>()),
+            Some(SpecError::Pattern(_))
+        ),
+        "the spec's error is the source: {chain:?}"
+    );
+    let pattern = chain
+        .get(2)
+        .and_then(|e| e.downcast_ref::<PatternError>())
+        .unwrap_or_else(|| panic!("the pattern's error is the spec error's source: {chain:?}"));
+    assert_eq!(pattern, &PatternError::Unclosed);
+    assert!(err.to_string().contains("a `{` is not closed"), "{err}");
 }

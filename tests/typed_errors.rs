@@ -31,26 +31,6 @@ const ALLOWED: &[(&str, usize, &str)] = &[
         1,
         "not an error: the name of the record's field that does not fit (`fields_fit`), placed in the message",
     ),
-    (
-        "src/session/long_csv.rs",
-        4,
-        "a reason the caller places, with the file and line or topic, in `SessionError`'s message",
-    ),
-    (
-        "src/session/ros2.rs",
-        1,
-        "a reason the caller places, with the file and line or topic, in `SessionError`'s message",
-    ),
-    (
-        "src/session/spec.rs",
-        6,
-        "a reason the caller places, with the file and line or topic, in `SessionError`'s message",
-    ),
-    (
-        "src/session/trial_pattern.rs",
-        1,
-        "a reason the caller places, with the file and line or topic, in `SessionError`'s message",
-    ),
 ];
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {

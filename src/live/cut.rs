@@ -158,9 +158,9 @@ impl Cutter {
     /// The object checked and the classes of `labels` (comma-separated, one per recorded
     /// label set).
     fn labels(&self, object: &str, labels: &str) -> Result<(String, Vec<usize>), LiveError> {
-        self.spec.check_object(object).map_err(LiveError::Spec)?;
+        self.spec.check_object(object)?;
         let sets = self.spec.recorded_label_sets();
-        let classes = event_classes(&self.spec, &sets, labels, labels).map_err(LiveError::Spec)?;
+        let classes = event_classes(&self.spec, &sets, labels, labels)?;
         Ok((object.to_string(), classes))
     }
 
@@ -174,7 +174,7 @@ impl Cutter {
             }),
             ("start", None) => {
                 let object = arg.trim();
-                self.spec.check_object(object).map_err(LiveError::Spec)?;
+                self.spec.check_object(object)?;
                 self.open = Some(Open {
                     start: t,
                     object: object.to_string(),
@@ -328,6 +328,7 @@ fn finish(open: Open, end: u64, classes: Vec<usize>, labelled: bool) -> Complete
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::session::spec::LabelError;
     use std::path::Path;
 
     const MS: u64 = 1_000_000;
@@ -375,7 +376,7 @@ mod tests {
         assert!(err.to_string().contains("before any"), "{err}");
         assert!(matches!(
             c.event(50 * MS, "start:"),
-            Err(LiveError::Spec(_))
+            Err(LiveError::Spec(LabelError::EmptyObject))
         ));
         c.event(60 * MS, "start:cup").unwrap();
         let err = c.event(70 * MS, "end:wobbly").unwrap_err().to_string();

@@ -12,6 +12,7 @@ use crate::models::ModelError;
 use crate::session::SessionError;
 use crate::session::cdr::{ArrayKind, CdrError};
 use crate::session::shorten;
+use crate::session::spec::LabelError;
 
 use super::protocol::SUBPROTOCOLS;
 
@@ -182,9 +183,9 @@ pub enum LiveError {
     NotALabel { command: String },
     #[error("no frame has arrived yet")]
     NoFrameYet,
-    /// An object or labels the import spec refuses (the spec's reason, as text).
+    /// An object or labels the import spec refuses.
     #[error("{0}")]
-    Spec(String),
+    Spec(#[from] LabelError),
     #[error(
         "a grasp starts while the one started at {} s has not ended",
         crate::session::bag_time(*open_since)

@@ -106,6 +106,37 @@ impl SessionError {
         }
     }
 
+    /// A lower error about a line as a whole (one that does not split, a header missing a
+    /// column): its text is the message, and it is kept.
+    pub fn line_caused(
+        path: &Path,
+        line: usize,
+        source: impl std::error::Error + Send + Sync + 'static,
+    ) -> Self {
+        Self::line(path, line, source.to_string()).with_source(source)
+    }
+
+    /// A lower error about a field of a line (a class the spec does not have): its text is
+    /// the message, and it is kept.
+    pub fn line_field_caused(
+        path: &Path,
+        line: usize,
+        field: impl Into<String>,
+        source: impl std::error::Error + Send + Sync + 'static,
+    ) -> Self {
+        Self::line_field(path, line, field, source.to_string()).with_source(source)
+    }
+
+    /// A lower error about a field of a JSON file (a spec's layout that does not parse): its
+    /// text is the message, and it is kept.
+    pub fn field_caused(
+        path: &Path,
+        field: impl Into<String>,
+        source: impl std::error::Error + Send + Sync + 'static,
+    ) -> Self {
+        Self::field(path, field, source.to_string()).with_source(source)
+    }
+
     /// The file system's error, kept as the source.
     pub fn io(path: &Path, err: std::io::Error) -> Self {
         Self::caused(path, err)

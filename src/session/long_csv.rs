@@ -23,16 +23,46 @@ use super::{Frame, Session, SessionError};
 /// refused before its fields are kept.
 pub const MAX_COLUMNS: usize = 2 * super::validate::MAX_TAXELS;
 
+/// Why a CSV line does not split, or a header does not name the columns a reader needs.
+/// The caller names the file and line (a [`SessionError`] keeping this as its source).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum CsvError {
+    #[error("more than {MAX_COLUMNS} columns, the most a CSV line may hold")]
+    TooManyColumns,
+    #[error("a quoted field is not closed")]
+    UnclosedQuote,
+    #[error("text after a closing quote")]
+    AfterQuote,
+    /// Columns `first` and `second` (1-based) of the header share a name.
+    #[error("columns {first} and {second} are both named `{}`", shorten(name))]
+    DuplicateColumn {
+        first: usize,
+        second: usize,
+        name: String,
+    },
+    #[error("no `{0}` column")]
+    MissingColumn(String),
+    /// A column named like taxel `column` of a sensor whose layout has `taxels`.
+    #[error(
+        "column `{}` is not a taxel of sensor `{sensor}`, whose layout has {taxels} \
+         (`{sensor}_1` … `{sensor}_{taxels}`)",
+        shorten(column)
+    )]
+    NotATaxel {
+        column: String,
+        sensor: String,
+        taxels: usize,
+    },
+}
+
 /// Split one CSV line into fields: commas separate, a field in double quotes may hold
 /// commas and doubled quotes (`""`). More than [`MAX_COLUMNS`] fields are an error.
-pub fn split_line(line: &str) -> Result<Vec<Cow<'_, str>>, String> {
+pub fn split_line(line: &str) -> Result<Vec<Cow<'_, str>>, CsvError> {
     let mut fields = Vec::new();
     let mut rest = line;
     loop {
         if fields.len() == MAX_COLUMNS {
-            return Err(format!(
-                "more than {MAX_COLUMNS} columns, the most a CSV line may hold"
-            ));
+            return Err(CsvError::TooManyColumns);
         }
         let trimmed = rest.trim_start();
         if let Some(quoted) = trimmed.strip_prefix('"') {
@@ -49,7 +79,7 @@ pub fn split_line(line: &str) -> Result<Vec<Cow<'_, str>>, String> {
                         }
                     }
                     Some((_, c)) => value.push(c),
-                    None => return Err("a quoted field is not closed".into()),
+                    None => return Err(CsvError::UnclosedQuote),
                 }
             };
             fields.push(Cow::Owned(value));
@@ -57,7 +87,7 @@ pub fn split_line(line: &str) -> Result<Vec<Cow<'_, str>>, String> {
             match after.strip_prefix(',') {
                 Some(next) => rest = next,
                 None if after.is_empty() => return Ok(fields),
-                None => return Err("text after a closing quote".into()),
+                None => return Err(CsvError::AfterQuote),
             }
         } else {
             match rest.split_once(',') {
@@ -84,15 +114,16 @@ impl ColumnIndex<'_> {
     }
 
     /// The column index of `name`, or an error saying it is missing.
-    pub(crate) fn need(&self, name: &str) -> Result<usize, String> {
-        self.find(name).ok_or_else(|| format!("no `{name}` column"))
+    pub(crate) fn need(&self, name: &str) -> Result<usize, CsvError> {
+        self.find(name)
+            .ok_or_else(|| CsvError::MissingColumn(name.to_string()))
     }
 }
 
 /// Index a header's columns by name. A header naming one column twice is an error (found
 /// by name, the second would be silently ignored): it names both columns (1-based) of the
 /// first repeated name; empty names are not compared.
-pub(crate) fn column_index<S: AsRef<str>>(names: &[S]) -> Result<ColumnIndex<'_>, String> {
+pub(crate) fn column_index<S: AsRef<str>>(names: &[S]) -> Result<ColumnIndex<'_>, CsvError> {
     let mut index = HashMap::with_capacity(names.len());
     for (j, b) in names.iter().enumerate() {
         let b = b.as_ref().trim();
@@ -100,12 +131,11 @@ pub(crate) fn column_index<S: AsRef<str>>(names: &[S]) -> Result<ColumnIndex<'_>
             continue;
         }
         if let Some(i) = index.insert(b, j) {
-            return Err(format!(
-                "columns {} and {} are both named `{}`",
-                i + 1,
-                j + 1,
-                shorten(b)
-            ));
+            return Err(CsvError::DuplicateColumn {
+                first: i + 1,
+                second: j + 1,
+                name: b.to_string(),
+            });
         }
     }
     Ok(ColumnIndex(index))
@@ -139,7 +169,7 @@ pub(crate) fn table<'a>(text: &'a str, path: &Path) -> Result<Table<'a>, Session
         return Err(SessionError::file(path, "the file is empty"));
     };
     let names = split_line(header.trim_start_matches('\u{feff}'))
-        .map_err(|m| SessionError::line(path, header_line, m))?;
+        .map_err(|e| SessionError::line_caused(path, header_line, e))?;
     Ok(Table {
         header_line,
         names,
@@ -154,7 +184,7 @@ pub(crate) fn row_fields<'a>(
     line: &'a str,
     columns: usize,
 ) -> Result<Vec<Cow<'a, str>>, SessionError> {
-    let fields = split_line(line).map_err(|m| SessionError::line(path, no, m))?;
+    let fields = split_line(line).map_err(|e| SessionError::line_caused(path, no, e))?;
     if fields.len() != columns {
         return Err(SessionError::line(
             path,
@@ -188,7 +218,7 @@ impl FrameColumns {
     /// Find the spec's columns. A column named like a taxel of a spec sensor that the
     /// layout does not have (`ff_7` for six taxels) is an error: a recording with more
     /// taxels than the spec says would otherwise lose them silently.
-    pub(crate) fn find(names: &[Cow<'_, str>], spec: &ImportSpec) -> Result<Self, String> {
+    pub(crate) fn find(names: &[Cow<'_, str>], spec: &ImportSpec) -> Result<Self, CsvError> {
         let index = column_index(names)?;
         let taxel_counts: HashMap<&str, usize> = spec
             .sensors
@@ -206,11 +236,11 @@ impl FrameColumns {
             let is_taxel = k.parse::<usize>().is_ok_and(|k| (1..=n).contains(&k))
                 && !k.starts_with(['0', '+']);
             if !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()) && !is_taxel {
-                return Err(format!(
-                    "column `{}` is not a taxel of sensor `{sensor}`, whose layout has {n} \
-                     (`{sensor}_1` … `{sensor}_{n}`)",
-                    shorten(name)
-                ));
+                return Err(CsvError::NotATaxel {
+                    column: name.to_string(),
+                    sensor: sensor.to_string(),
+                    taxels: n,
+                });
             }
         }
         let need = |name: &str| index.need(name);
@@ -399,7 +429,7 @@ pub fn parse_long_csv(text: &str, path: &Path, spec: &ImportSpec) -> Result<Sess
             .collect::<Result<Vec<_>, _>>()?;
         Ok((grasp, object, labels, FrameColumns::find(&names, spec)?))
     })()
-    .map_err(|m: String| SessionError::line(path, header_no, m))?;
+    .map_err(|e: CsvError| SessionError::line_caused(path, header_no, e))?;
     let mut done: Vec<RawGrasp> = Vec::new();
     let mut done_ids: HashSet<String> = HashSet::new();
     let mut open: Option<Open> = None;
@@ -421,7 +451,7 @@ pub fn parse_long_csv(text: &str, path: &Path, spec: &ImportSpec) -> Result<Sess
             .zip(&label_cols)
             .map(|(set, &c)| {
                 spec.class_index(set, field(c))
-                    .map_err(|m| SessionError::line_field(path, no, &set.name, m))
+                    .map_err(|e| SessionError::line_field_caused(path, no, &set.name, e))
             })
             .collect::<Result<Vec<_>, _>>()?;
         let row = cols.read(path, no, &names, &fields, spec)?;
@@ -439,7 +469,7 @@ pub fn parse_long_csv(text: &str, path: &Path, spec: &ImportSpec) -> Result<Sess
                 ));
             }
             spec.check_object(object)
-                .map_err(|m| SessionError::line_field(path, no, "object", m))?;
+                .map_err(|e| SessionError::line_field_caused(path, no, "object", e))?;
             if let Some(o) = open.take() {
                 done_ids.insert(o.id.clone());
                 done.push(o.close());
@@ -505,7 +535,7 @@ mod tests {
     fn quoted_fields_may_hold_commas_and_quotes() {
         let f = split_line(r#"a, "b, c" ,"say ""hi""",,d"#).unwrap();
         assert_eq!(f, vec!["a", "b, c", "say \"hi\"", "", "d"]);
-        assert!(split_line(r#"a,"open"#).is_err());
-        assert!(split_line(r#""x"y"#).is_err());
+        assert_eq!(split_line(r#"a,"open"#), Err(CsvError::UnclosedQuote));
+        assert_eq!(split_line(r#""x"y"#), Err(CsvError::AfterQuote));
     }
 }

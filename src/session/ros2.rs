@@ -22,7 +22,7 @@ use super::align;
 use super::bag::{self, Bag};
 use super::error::{bag_time, read_text, shorten};
 use super::long_csv::split_line;
-use super::spec::{GraspCut, ImportSpec, RawGrasp, assemble};
+use super::spec::{GraspCut, ImportSpec, LabelError, RawGrasp, assemble};
 use super::{Frame, Session, SessionError};
 
 /// A grasp's window in bag time (ns), where it came from, its labels and key time.
@@ -132,9 +132,9 @@ fn read_windows(csv: &Path, spec: &ImportSpec) -> Result<Vec<Window>, SessionErr
     };
     let header_line = text.lines().position(|l| !l.trim().is_empty()).unwrap_or(0) + 1;
     let names = split_line(header.trim_start_matches('\u{feff}'))
-        .map_err(|m| SessionError::line(csv, header_line, m))?;
+        .map_err(|e| SessionError::line_caused(csv, header_line, e))?;
     let index = super::long_csv::column_index(&names)
-        .map_err(|m| SessionError::line(csv, header_line, m))?;
+        .map_err(|e| SessionError::line_caused(csv, header_line, e))?;
     let col = |name: &str| index.find(name);
     let need = |name: &str| {
         col(name).ok_or_else(|| {
@@ -165,7 +165,7 @@ fn read_windows(csv: &Path, spec: &ImportSpec) -> Result<Vec<Window>, SessionErr
         if line.trim().is_empty() {
             continue;
         }
-        let fields = split_line(line).map_err(|m| SessionError::line(csv, no, m))?;
+        let fields = split_line(line).map_err(|e| SessionError::line_caused(csv, no, e))?;
         if fields.len() != names.len() {
             return Err(SessionError::line(
                 csv,
@@ -200,14 +200,14 @@ fn read_windows(csv: &Path, spec: &ImportSpec) -> Result<Vec<Window>, SessionErr
         }
         let object = fields[c_object].trim().to_string();
         spec.check_object(&object)
-            .map_err(|m| SessionError::line_field(csv, no, "object", m))?;
+            .map_err(|e| SessionError::line_field_caused(csv, no, "object", e))?;
         let classes = spec
             .recorded_label_sets()
             .iter()
             .zip(&c_labels)
             .map(|(set, &c)| {
                 spec.class_index(set, fields[c].trim())
-                    .map_err(|m| SessionError::line_field(csv, no, &set.name, m))
+                    .map_err(|e| SessionError::line_field_caused(csv, no, &set.name, e))
             })
             .collect::<Result<Vec<_>, _>>()?;
         let key = match c_key {
@@ -276,6 +276,7 @@ fn events_to_windows(
     let mut open: Option<(u64, String, Option<u64>)> = None;
     for (t, text) in &bag.events {
         let at = |m: String| SessionError::topic(path, topic, Some(*t), m);
+        let refused = |e: LabelError| SessionError::topic_caused(path, topic, Some(*t), e);
         let text = text.trim();
         let (word, arg) = text.split_once(':').unwrap_or((text, ""));
         match (word.trim(), &mut open) {
@@ -287,7 +288,7 @@ fn events_to_windows(
             }
             ("start", None) => {
                 let object = arg.trim().to_string();
-                spec.check_object(&object).map_err(at)?;
+                spec.check_object(&object).map_err(refused)?;
                 open = Some((*t, object, None));
             }
             ("key", Some((_, _, key))) => {
@@ -297,7 +298,7 @@ fn events_to_windows(
                 *key = Some(*t);
             }
             ("end", Some(_)) => {
-                let classes = event_classes(spec, &sets, arg, text).map_err(at)?;
+                let classes = event_classes(spec, &sets, arg, text).map_err(refused)?;
                 if let Some((start, object, key)) = open.take() {
                     windows.push(Window {
                         start,
@@ -525,22 +526,18 @@ pub(crate) fn event_classes(
     sets: &[&LabelSet],
     labels: &str,
     shown: &str,
-) -> Result<Vec<usize>, String> {
+) -> Result<Vec<usize>, LabelError> {
     let values: Vec<&str> = if labels.trim().is_empty() {
         Vec::new()
     } else {
         labels.split(',').map(str::trim).collect()
     };
     if values.len() != sets.len() {
-        return Err(format!(
-            "`{}` gives {} labels; the spec's label sets ({}) need one each",
-            shorten(shown),
-            values.len(),
-            sets.iter()
-                .map(|l| l.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ));
+        return Err(LabelError::LabelCount {
+            shown: shown.to_string(),
+            given: values.len(),
+            sets: sets.iter().map(|l| l.name.clone()).collect(),
+        });
     }
     sets.iter()
         .zip(&values)

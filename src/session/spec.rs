@@ -28,12 +28,13 @@ use serde::Deserialize;
 
 use super::error::open_json;
 use super::native::json_error;
-use super::trial_pattern::{TRIAL, TrialPattern};
+use super::trial_pattern::{PatternError, TRIAL, TrialPattern};
 use super::validate::{MAX_SENSORS, check_layout};
 use super::{
     Frame, Grasp, LabelSet, Layout, Sensor, Session, SessionError, SessionMeta, ValueTransform,
     bts3, file_name, file_stem, icub, key_frame_by_pressure, validate,
 };
+use crate::error::Kept;
 
 /// The largest `sync_tolerance_s`: an hour, far beyond any two topics of one recording.
 const MAX_SYNC_TOLERANCE_S: f64 = 3600.0;
@@ -136,9 +137,33 @@ impl Default for ContactParams {
     }
 }
 
+/// Why the spec's contact parameters cannot cut grasps; [`ContactError::field`] names the
+/// spec field at fault.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ContactError {
+    /// A parameter that is not finite, or below 0.
+    #[error("{value} is not a finite number ≥ 0")]
+    NotNonNegative { field: &'static str, value: f64 },
+    #[error("the time constant must be > 0")]
+    ZeroBaseline,
+    #[error("{offset} is above the onset's {onset}: the offset must be the lower threshold")]
+    OffsetAboveOnset { offset: f64, onset: f64 },
+}
+
+impl ContactError {
+    /// The spec field at fault, e.g. `live.contact.offset_sigma`.
+    pub fn field(&self) -> &'static str {
+        match self {
+            ContactError::NotNonNegative { field, .. } => field,
+            ContactError::ZeroBaseline => "live.contact.baseline_s",
+            ContactError::OffsetAboveOnset { .. } => "live.contact.offset_sigma",
+        }
+    }
+}
+
 impl ContactParams {
     /// Each parameter finite and of its sign, the offset below the onset.
-    pub fn check(&self) -> Result<(), (&'static str, String)> {
+    pub fn check(&self) -> Result<(), ContactError> {
         let fields = [
             ("live.contact.onset_sigma", self.onset_sigma),
             ("live.contact.offset_sigma", self.offset_sigma),
@@ -148,26 +173,99 @@ impl ContactParams {
         ];
         for (field, v) in fields {
             if !(v.is_finite() && v >= 0.0) {
-                return Err((field, format!("{v} is not a finite number ≥ 0")));
+                return Err(ContactError::NotNonNegative { field, value: v });
             }
         }
         if self.baseline_s == 0.0 {
-            return Err((
-                "live.contact.baseline_s",
-                "the time constant must be > 0".into(),
-            ));
+            return Err(ContactError::ZeroBaseline);
         }
         if self.offset_sigma > self.onset_sigma {
-            return Err((
-                "live.contact.offset_sigma",
-                format!(
-                    "{} is above the onset's {}: the offset must be the lower threshold",
-                    self.offset_sigma, self.onset_sigma
-                ),
-            ));
+            return Err(ContactError::OffsetAboveOnset {
+                offset: self.offset_sigma,
+                onset: self.onset_sigma,
+            });
         }
         Ok(())
     }
+}
+
+/// What is wrong with a spec's layout or trial pattern. The caller names the spec and the
+/// field.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SpecError {
+    #[error(
+        "`{}` is not a layout: use icub-fingertip, biotac-sp, grid RxC (e.g. grid 4x4) or a \
+         layout object",
+        super::error::shorten(name)
+    )]
+    UnknownLayout { name: String },
+    /// A layout object that does not parse (the JSON parser's error kept).
+    #[error("{0}")]
+    LayoutObject(#[source] Kept<serde_json::Error>),
+    #[error("expected a layout name or a layout object")]
+    NotALayout,
+    #[error("{0}")]
+    Pattern(#[from] PatternError),
+    /// A capture that is neither the object, the trial nor a label set.
+    #[error(
+        "`{{{}}}` is neither `{{object}}`, `{{trial}}` nor a label set of the spec",
+        super::error::shorten(name)
+    )]
+    UnknownCapture { name: String },
+    /// A pattern that does not capture the object or a label set.
+    #[error(
+        "`{pattern}` does not capture `{{{name}}}`: a trial's object and classes come from \
+         its path"
+    )]
+    Uncaptured { pattern: String, name: String },
+    #[error("`{pattern}` does not end in `.csv`: trial files are CSVs")]
+    NotCsv { pattern: String },
+    /// No `trials.pattern`, and the one made of the label sets' names is not one.
+    #[error("no `trials.pattern`, and the default `{pattern}` is not one: {source}")]
+    DefaultPattern {
+        pattern: String,
+        #[source]
+        source: Kept<SpecError>,
+    },
+}
+
+/// Why the spec refuses a recording's object or classes (a CSV row's, a bag window's or
+/// event's, a trial file path's, a live stream's). The caller names where they were.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum LabelError {
+    #[error("an empty object name")]
+    EmptyObject,
+    /// An object the spec's `object` label set does not list.
+    #[error(
+        "object `{}` is not a class of label set `object` ({})",
+        super::error::shorten(object),
+        classes.join(", ")
+    )]
+    UnknownObject {
+        object: String,
+        classes: Vec<String>,
+    },
+    #[error(
+        "`{}` is not a class of label set `{set}` ({})",
+        super::error::shorten(class),
+        classes.join(", ")
+    )]
+    NotAClass {
+        class: String,
+        set: String,
+        classes: Vec<String>,
+    },
+    /// An `end` event (quoted as `shown`) whose labels are not one per recorded label set.
+    #[error(
+        "`{}` gives {given} labels; the spec's label sets ({}) need one each",
+        super::error::shorten(shown),
+        sets.join(", ")
+    )]
+    LabelCount {
+        shown: String,
+        given: usize,
+        sets: Vec<String>,
+    },
 }
 
 /// One sensor of the spec: the session's sensor, and where its values are in a bag.
@@ -249,19 +347,15 @@ pub fn layout_by_name(name: &str) -> Option<Layout> {
     Some(Layout::Grid { rows, cols })
 }
 
-fn layout_of(value: &serde_json::Value) -> Result<Layout, String> {
+fn layout_of(value: &serde_json::Value) -> Result<Layout, SpecError> {
     match value {
-        serde_json::Value::String(name) => layout_by_name(name).ok_or_else(|| {
-            format!(
-                "`{}` is not a layout: use icub-fingertip, biotac-sp, grid RxC (e.g. grid 4x4) \
-                 or a layout object",
-                super::error::shorten(name)
-            )
-        }),
-        serde_json::Value::Object(_) => {
-            serde_json::from_value(value.clone()).map_err(|e| format!("{e}"))
+        serde_json::Value::String(name) => {
+            layout_by_name(name).ok_or_else(|| SpecError::UnknownLayout { name: name.clone() })
         }
-        _ => Err("expected a layout name or a layout object".into()),
+        serde_json::Value::Object(_) => {
+            serde_json::from_value(value.clone()).map_err(|e| SpecError::LayoutObject(Kept::new(e)))
+        }
+        _ => Err(SpecError::NotALayout),
     }
 }
 
@@ -306,7 +400,8 @@ fn sensor_spec(s: usize, f: SensorFile, path: &Path) -> Result<SensorSpec, Sessi
     if f.name.trim().is_empty() {
         return Err(err(at(".name"), "an empty sensor name".into()));
     }
-    let layout = layout_of(&f.layout).map_err(|m| err(at(".layout"), m))?;
+    let layout =
+        layout_of(&f.layout).map_err(|e| SessionError::field_caused(path, at(".layout"), e))?;
     // The spec is where a layout is wrong: its errors name the spec, not the recording.
     check_layout(s, &f.name, &layout, path)?;
     let n = layout.taxel_count();
@@ -497,7 +592,7 @@ impl ImportSpec {
             None => None,
             Some(t) => Some(
                 trial_pattern(&t.pattern, &file.label_sets)
-                    .map_err(|m| err("trials.pattern".into(), m))?,
+                    .map_err(|e| SessionError::field_caused(path, "trials.pattern", e))?,
             ),
         };
         let class_indices = file
@@ -511,7 +606,7 @@ impl ImportSpec {
         let live = file.live.unwrap_or_default();
         live.contact
             .check()
-            .map_err(|(field, m)| err(field.into(), m))?;
+            .map_err(|e| SessionError::field_caused(path, e.field(), e))?;
         Ok(ImportSpec {
             path: path.to_path_buf(),
             name: file.name,
@@ -538,12 +633,12 @@ impl ImportSpec {
             text.push_str(&format!("{{{}}}/", set.name));
         }
         text.push_str("*.csv");
-        trial_pattern(&text, &self.label_sets).map_err(|m| {
-            SessionError::field(
-                &self.path,
-                "trials",
-                format!("no `trials.pattern`, and the default `{text}` is not one: {m}"),
-            )
+        trial_pattern(&text, &self.label_sets).map_err(|e| {
+            let e = SpecError::DefaultPattern {
+                pattern: text.clone(),
+                source: Kept::new(e),
+            };
+            SessionError::field_caused(&self.path, "trials", e)
         })
     }
 
@@ -557,23 +652,20 @@ impl ImportSpec {
     }
 
     /// Index of `class` in recorded label set `set` (of [`Self::recorded_label_sets`]), or
-    /// a message naming the classes.
-    pub fn class_index(&self, set: &LabelSet, class: &str) -> Result<usize, String> {
+    /// an error naming the classes.
+    pub fn class_index(&self, set: &LabelSet, class: &str) -> Result<usize, LabelError> {
         let found = self.class_indices.get(&set.name).and_then(|c| c.get(class));
-        found.copied().ok_or_else(|| {
-            format!(
-                "`{}` is not a class of label set `{}` ({})",
-                super::error::shorten(class),
-                set.name,
-                set.classes.join(", ")
-            )
+        found.copied().ok_or_else(|| LabelError::NotAClass {
+            class: class.to_string(),
+            set: set.name.clone(),
+            classes: set.classes.clone(),
         })
     }
 
     /// Check an object name: any non-empty name, or one of the spec's `object` classes.
-    pub fn check_object(&self, object: &str) -> Result<(), String> {
+    pub fn check_object(&self, object: &str) -> Result<(), LabelError> {
         if object.trim().is_empty() {
-            return Err("an empty object name".into());
+            return Err(LabelError::EmptyObject);
         }
         let known = |set: &LabelSet| {
             self.class_indices
@@ -581,11 +673,10 @@ impl ImportSpec {
                 .is_some_and(|c| c.contains_key(object))
         };
         match self.label_sets.iter().find(|l| l.name == OBJECT) {
-            Some(set) if !known(set) => Err(format!(
-                "object `{}` is not a class of label set `object` ({})",
-                super::error::shorten(object),
-                set.classes.join(", ")
-            )),
+            Some(set) if !known(set) => Err(LabelError::UnknownObject {
+                object: object.to_string(),
+                classes: set.classes.clone(),
+            }),
             _ => Ok(()),
         }
     }
@@ -601,17 +692,16 @@ impl ImportSpec {
 
 /// Parse a trial pattern whose captures are `object`, `trial` or a label set, and that
 /// captures the object and every other label set (a grasp's labels come from its path).
-fn trial_pattern(text: &str, label_sets: &[LabelSet]) -> Result<TrialPattern, String> {
+fn trial_pattern(text: &str, label_sets: &[LabelSet]) -> Result<TrialPattern, SpecError> {
     let pattern = TrialPattern::parse(text)?;
     let names: Vec<&str> = pattern.names().collect();
     if let Some(n) = names
         .iter()
         .find(|n| **n != OBJECT && **n != TRIAL && !label_sets.iter().any(|l| l.name == **n))
     {
-        return Err(format!(
-            "`{{{}}}` is neither `{{object}}`, `{{trial}}` nor a label set of the spec",
-            super::error::shorten(n)
-        ));
+        return Err(SpecError::UnknownCapture {
+            name: n.to_string(),
+        });
     }
     let needed = std::iter::once(OBJECT).chain(
         label_sets
@@ -621,16 +711,16 @@ fn trial_pattern(text: &str, label_sets: &[LabelSet]) -> Result<TrialPattern, St
     );
     for n in needed {
         if !names.contains(&n) {
-            return Err(format!(
-                "`{text}` does not capture `{{{n}}}`: a trial's object and classes come from \
-                 its path"
-            ));
+            return Err(SpecError::Uncaptured {
+                pattern: text.to_string(),
+                name: n.to_string(),
+            });
         }
     }
     if !text.to_ascii_lowercase().ends_with(".csv") {
-        return Err(format!(
-            "`{text}` does not end in `.csv`: trial files are CSVs"
-        ));
+        return Err(SpecError::NotCsv {
+            pattern: text.to_string(),
+        });
     }
     Ok(pattern)
 }
@@ -782,5 +872,48 @@ mod tests {
         assert_eq!(layout_by_name("biotac-sp").unwrap().taxel_count(), 24);
         assert_eq!(layout_by_name("icub-fingertip").unwrap().taxel_count(), 12);
         assert_eq!(layout_by_name("grid 3by4"), None);
+    }
+
+    /// Each contact parameter at fault is named by its field, and kept as the source.
+    #[test]
+    fn contact_parameters_that_cannot_cut_name_their_field() {
+        let spec = |live: &str| {
+            let text = format!(
+                r#"{{"sensors": [{{"name": "a", "layout": "grid 1x2", "unit": "raw"}}],
+                    "live": {{"contact": {live}}}}}"#
+            );
+            ImportSpec::from_str(&text, Path::new("spec.json")).unwrap_err()
+        };
+        for (live, field, why) in [
+            (
+                r#"{"min_rise": -1}"#,
+                "live.contact.min_rise",
+                ContactError::NotNonNegative {
+                    field: "live.contact.min_rise",
+                    value: -1.0,
+                },
+            ),
+            (
+                r#"{"baseline_s": 0}"#,
+                "live.contact.baseline_s",
+                ContactError::ZeroBaseline,
+            ),
+            (
+                r#"{"onset_sigma": 2, "offset_sigma": 3}"#,
+                "live.contact.offset_sigma",
+                ContactError::OffsetAboveOnset {
+                    offset: 3.0,
+                    onset: 2.0,
+                },
+            ),
+        ] {
+            let err = spec(live);
+            assert_eq!(err.location, crate::session::Location::Field(field.into()));
+            let kept = std::error::Error::source(&err)
+                .and_then(|s| s.downcast_ref::<ContactError>())
+                .unwrap_or_else(|| panic!("the contact error is the source: {err:?}"));
+            assert_eq!(kept, &why);
+            assert!(err.to_string().ends_with(&why.to_string()), "{err}");
+        }
     }
 }

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 use super::error::{read_text, shorten};
 use super::long_csv::{FrameColumns, GraspRows, Table, row_fields, table};
-use super::spec::{ImportSpec, OBJECT, RawGrasp, assemble};
+use super::spec::{ImportSpec, LabelError, OBJECT, RawGrasp, assemble};
 use super::trial_pattern::TRIAL;
 use super::{Frame, Session, SessionError};
 
@@ -44,8 +44,8 @@ pub fn parse_trial(text: &str, path: &Path, spec: &ImportSpec) -> Result<Trial, 
         names,
         rows,
     } = table(text, path)?;
-    let cols =
-        FrameColumns::find(&names, spec).map_err(|m| SessionError::line(path, header_no, m))?;
+    let cols = FrameColumns::find(&names, spec)
+        .map_err(|e| SessionError::line_caused(path, header_no, e))?;
     let period = match (cols.time, spec.frame_rate_hz) {
         (Some(_), _) => 0.0,
         (None, Some(hz)) => 1.0 / hz,
@@ -188,6 +188,7 @@ pub fn import_trial_folder(dir: &Path, spec: &ImportSpec) -> Result<Session, Ses
     for f in &files {
         let from_path =
             |m: String| SessionError::file(&f.path, format!("from its path `{}`: {m}", f.relative));
+        let refused = |e: LabelError| from_path(e.to_string()).with_source(e);
         let captures = pattern.captures(&f.relative).ok_or_else(|| {
             from_path(format!(
                 "does not match the spec's trial pattern `{}`",
@@ -202,10 +203,10 @@ pub fn import_trial_folder(dir: &Path, spec: &ImportSpec) -> Result<Session, Ses
                 .map_or("", |(_, v)| *v)
         };
         let object = value(OBJECT);
-        spec.check_object(object).map_err(from_path)?;
+        spec.check_object(object).map_err(refused)?;
         let classes = sets
             .iter()
-            .map(|set| spec.class_index(set, value(&set.name)).map_err(from_path))
+            .map(|set| spec.class_index(set, value(&set.name)).map_err(refused))
             .collect::<Result<Vec<_>, _>>()?;
         let trial = match captures.iter().find(|(n, _)| *n == TRIAL) {
             None => None,

@@ -13,6 +13,26 @@ use std::collections::HashSet;
 /// The capture holding a grasp's trial number: digits only.
 pub const TRIAL: &str = "trial";
 
+/// What is wrong with a trial pattern's text.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum PatternError {
+    #[error("an empty pattern")]
+    Empty,
+    #[error("the pattern is a path below the folder: it cannot start with `/`")]
+    Absolute,
+    /// A `{` or `/` between a capture's braces.
+    #[error("`{0}` inside a capture's braces")]
+    InsideBraces(char),
+    #[error("a `{{` is not closed")]
+    Unclosed,
+    #[error("a capture without a name (`{{}}`)")]
+    Unnamed,
+    #[error("`{{{0}}}` is captured twice")]
+    Twice(String),
+    #[error("a `}}` without its `{{`")]
+    Unopened,
+}
+
 #[derive(Clone, Debug, PartialEq)]
 enum Part {
     Literal(String),
@@ -28,12 +48,12 @@ pub struct TrialPattern {
 
 impl TrialPattern {
     /// Parse a pattern, or say what is wrong with it.
-    pub fn parse(text: &str) -> Result<TrialPattern, String> {
+    pub fn parse(text: &str) -> Result<TrialPattern, PatternError> {
         if text.trim().is_empty() {
-            return Err("an empty pattern".into());
+            return Err(PatternError::Empty);
         }
         if text.starts_with('/') {
-            return Err("the pattern is a path below the folder: it cannot start with `/`".into());
+            return Err(PatternError::Absolute);
         }
         let mut parts = Vec::new();
         let mut literal = String::new();
@@ -46,24 +66,24 @@ impl TrialPattern {
                         match chars.next() {
                             Some('}') => break,
                             Some(c @ ('{' | '/')) => {
-                                return Err(format!("`{c}` inside a capture's braces"));
+                                return Err(PatternError::InsideBraces(c));
                             }
                             Some(c) => name.push(c),
-                            None => return Err("a `{` is not closed".into()),
+                            None => return Err(PatternError::Unclosed),
                         }
                     }
                     if name.trim().is_empty() {
-                        return Err("a capture without a name (`{}`)".into());
+                        return Err(PatternError::Unnamed);
                     }
                     if parts.iter().any(|p| *p == Part::Capture(name.clone())) {
-                        return Err(format!("`{{{name}}}` is captured twice"));
+                        return Err(PatternError::Twice(name));
                     }
                     if !literal.is_empty() {
                         parts.push(Part::Literal(std::mem::take(&mut literal)));
                     }
                     parts.push(Part::Capture(name));
                 }
-                '}' => return Err("a `}` without its `{`".into()),
+                '}' => return Err(PatternError::Unopened),
                 '*' => {
                     if !literal.is_empty() {
                         parts.push(Part::Literal(std::mem::take(&mut literal)));
@@ -218,16 +238,30 @@ mod tests {
 
     #[test]
     fn malformed_patterns_are_refused() {
-        for bad in [
-            "",
-            "/{object}.csv",
-            "{object",
-            "{}.csv",
-            "a}.csv",
-            "{a/b}.csv",
-            "{a}_{a}.csv",
+        for (bad, why, says) in [
+            ("", PatternError::Empty, "an empty pattern"),
+            (
+                "/{object}.csv",
+                PatternError::Absolute,
+                "cannot start with `/`",
+            ),
+            ("{object", PatternError::Unclosed, "a `{` is not closed"),
+            (
+                "{}.csv",
+                PatternError::Unnamed,
+                "a capture without a name (`{}`)",
+            ),
+            ("a}.csv", PatternError::Unopened, "a `}` without its `{`"),
+            ("{a/b}.csv", PatternError::InsideBraces('/'), "`/` inside"),
+            (
+                "{a}_{a}.csv",
+                PatternError::Twice("a".into()),
+                "`{a}` is captured twice",
+            ),
         ] {
-            assert!(TrialPattern::parse(bad).is_err(), "{bad}");
+            let err = TrialPattern::parse(bad).unwrap_err();
+            assert_eq!(err, why, "{bad}");
+            assert!(err.to_string().contains(says), "{bad}: {err}");
         }
     }
 }
