@@ -294,8 +294,8 @@ fn knob_of_sizes(p: &FrontierParams, k: usize) -> Vec<f64> {
     FrontierParams::lists_of_sizes(&p.sizes)[k].clone()
 }
 
-/// Every method's knob fields as the form showed them before the fields were read from the
-/// frontier's registry (DU's thresholds: its own list, not GU's).
+/// Every method's knob fields as the form must show them: the labels it has always shown,
+/// each method's own default values (DU's thresholds: its own list, not GU's).
 fn knob_fields() -> Vec<(&'static str, Vec<KnobField>)> {
     let capacities = || KnobField {
         label: "capacities",

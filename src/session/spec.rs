@@ -915,5 +915,18 @@ mod tests {
             assert_eq!(kept, &why);
             assert!(err.to_string().ends_with(&why.to_string()), "{err}");
         }
+        // The wording a user reads, as it was before the reasons were typed.
+        assert_eq!(
+            ContactError::ZeroBaseline.to_string(),
+            "the time constant must be > 0"
+        );
+        assert_eq!(
+            ContactError::OffsetAboveOnset {
+                offset: 3.0,
+                onset: 2.0
+            }
+            .to_string(),
+            "3 is above the onset's 2: the offset must be the lower threshold"
+        );
     }
 }

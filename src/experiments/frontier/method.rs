@@ -136,7 +136,9 @@ pub(super) trait FrontierMethod: Sync {
 /// A knob a frontier sweeps, as a form asks for its values.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweepKnob {
-    /// What errors call it ("capacities", "C").
+    /// The short name messages about its values use, the form's and
+    /// [`FrontierParams::set_size_knobs`]'s ("capacities", "C"); `validate` names the
+    /// parameter's field instead (`svm_c`).
     pub name: &'static str,
     /// What a form's field says ("numbers of clusters k").
     pub label: String,
@@ -161,7 +163,7 @@ pub(super) fn reals(v: &[usize]) -> Vec<f64> {
     v.iter().map(|&v| v as f64).collect()
 }
 
-/// A whole knob's values as counts (checked whole before).
+/// A whole knob's values as counts (checked whole and at most `MAX_WHOLE` before).
 pub(super) fn wholes(v: &[f64]) -> Vec<usize> {
     v.iter().map(|&v| v as usize).collect()
 }

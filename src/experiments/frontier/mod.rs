@@ -72,6 +72,10 @@ pub fn size_knobs(method: MethodId) -> Vec<SweepKnob> {
     frontier_method(method).map_or_else(Vec::new, |m| m.size_knobs(&params))
 }
 
+/// The largest count a whole knob takes (far above any size a frontier can fit; it keeps
+/// the count exact in a `usize` whatever the caller passes).
+pub const MAX_WHOLE: f64 = u32::MAX as f64;
+
 /// Which time defines the cheapest model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -224,7 +228,8 @@ impl FrontierParams {
         }
         for (k, list) in knobs.iter().zip(lists) {
             if k.whole
-                && let Some(v) = list.iter().find(|v| !(v.fract() == 0.0 && **v >= 0.0))
+                && let Some(v) =
+                    (list.iter()).find(|v| !(v.fract() == 0.0 && (0.0..=MAX_WHOLE).contains(*v)))
             {
                 return Err(ExperimentError::param(
                     k.name,
