@@ -28,7 +28,7 @@ use std::time::Instant;
 use ndarray::Array2;
 use serde::{Deserialize, Serialize};
 
-use crate::catalogue::{self, MethodId};
+use crate::catalogue::MethodId;
 use crate::cluster::kmeans::SequentialKMeansParams;
 use crate::cluster::scores::scores;
 use crate::experiments::ExperimentError;
@@ -56,16 +56,24 @@ use crate::sparse::{Dictionary, DictionaryParams};
 use crate::svm::kernel_svm::{KernelSvmParams, stratified_folds};
 use crate::svm::{Confusion, LinearSvmParams, gather, stratified_k_fold};
 
+mod method;
 mod params;
 mod perturbations;
 mod recognition_tasks;
+mod registered;
+mod registry;
 pub mod report;
 mod run;
 mod stability_tasks;
+mod supervised;
+mod table_one;
+mod unsupervised;
 
+use method::*;
 pub use params::*;
 pub use perturbations::*;
 use recognition_tasks::*;
+use registry::robustness_method;
 pub use run::*;
 use stability_tasks::*;
 
@@ -120,10 +128,7 @@ impl Family {
 impl Family {
     /// The family a method's robustness curves belong to.
     pub fn of(method: MethodId) -> Family {
-        match method.task() {
-            catalogue::Task::Stability => Family::Stability,
-            catalogue::Task::Recognition | catalogue::Task::Clustering => Family::Recognition,
-        }
+        robustness_method(method).family()
     }
 }
 

@@ -27,6 +27,41 @@ pub(super) fn renormalise(
     out
 }
 
+/// One repetition of the recognition protocol under one perturbation (or none): what
+/// every method of the task reads.
+pub(super) struct RecognitionRep<'a> {
+    pub(super) params: &'a RobustnessParams,
+    pub(super) prep: &'a RecognitionPrep,
+    pub(super) pert: Option<(Perturbation, f64)>,
+    pub(super) rep: usize,
+    /// The sequences learned from and those tested on: perturbed where the perturbation
+    /// reaches, else the clean ones.
+    pub(super) train_seqs: &'a FeatureSequences,
+    pub(super) test_seqs: &'a FeatureSequences,
+    /// Table I features (training rows, test rows), when a method reads them.
+    pub(super) table: Option<TrainTest>,
+    /// The supervised protocol: one grasp per class taught, then `order`, whose first
+    /// `n_train` grasps are the training part, of which those `keep` marks are learned.
+    pub(super) teach: Vec<usize>,
+    pub(super) order: Vec<usize>,
+    pub(super) n_train: usize,
+    pub(super) keep: Vec<bool>,
+    /// The grasps the unsupervised methods learn from, their labels and (when needed)
+    /// their sequences.
+    pub(super) subset: Vec<usize>,
+    pub(super) sub_labels: Vec<usize>,
+    pub(super) sub_seqs: Vec<Array2<f64>>,
+    /// The clusters k-means and the SOM are given, and their seed.
+    pub(super) k: usize,
+    pub(super) cluster_seed: u64,
+}
+
+impl RecognitionRep<'_> {
+    pub(super) fn table(&self) -> Result<&TrainTest, ExperimentError> {
+        (self.table.as_ref()).ok_or_else(|| ExperimentError::Data("no Table I features".into()))
+    }
+}
+
 pub(super) fn recognition_task(
     params: &RobustnessParams,
     prep: &RecognitionPrep,
@@ -35,8 +70,9 @@ pub(super) fn recognition_task(
     rep: usize,
 ) -> Result<Vec<f64>, ExperimentError> {
     let rc = &params.recognition;
+    let needs = Needs::of(&params.methods);
     let scope = pert.map(|(p, _)| p.scope());
-    let feats = perturbed_sequences(params, prep, scope, perturbed)?;
+    let feats = perturbed_sequences(params, prep, needs, scope, perturbed)?;
     let train_seqs = match (&feats, scope) {
         (Some(f), Some(Scope::All)) => f,
         _ => &prep.clean,
@@ -63,79 +99,36 @@ pub(super) fn recognition_task(
     let kept_all = training_kept(pert, &prep.labels, prep.n_classes, &all, false, &mut aux);
     let subset: Vec<usize> = all.iter().copied().filter(|&g| kept_all[g]).collect();
     let sub_labels: Vec<usize> = subset.iter().map(|&g| prep.labels[g]).collect();
-    // The subset's sequences, copied once for DU and GU.
-    let sub_seqs: Vec<Array2<f64>> =
-        if (params.methods.iter()).any(|m| matches!(m, MethodId::Du | MethodId::Gu)) {
-            subset
-                .iter()
-                .map(|&g| test_seqs.sequences[g].clone())
-                .collect()
-        } else {
-            Vec::new()
-        };
-    let k = rc.clusters.unwrap_or(prep.n_classes);
-    let cluster_seed = Rng::stream(params.seed, CLUSTER_STREAM + rep as u64).next_u64();
-    let mut out = Vec::with_capacity(params.methods.len());
-    for &method in &params.methods {
-        let score = match method {
-            MethodId::Ds | MethodId::Gs => {
-                let kind = if method == MethodId::Ds {
-                    SupervisedLearner::Ds
-                } else {
-                    SupervisedLearner::Gs
-                };
-                supervised_score(
-                    kind, rc, prep, train_seqs, test_seqs, &teach, &order, n_train, &keep,
-                )?
-            }
-            MethodId::Du | MethodId::Gu => {
-                unsupervised_nmi(method, params, &sub_seqs, &sub_labels, test_seqs.dim(), rep)?
-            }
-            MethodId::KMeans | MethodId::Som => {
-                let Some((_, test)) = &table else {
-                    return Err(ExperimentError::Data("no Table I features".into()));
-                };
-                baseline_nmi(method, k, cluster_seed, test, &subset, &sub_labels)?
-            }
-            MethodId::RbfSvm => {
-                let Some((train_x, test_x)) = &table else {
-                    return Err(ExperimentError::Data("no Table I features".into()));
-                };
-                rbf_accuracy(params, prep, train_x, test_x, pert, rep)?
-            }
-            MethodId::Classifier(c) => {
-                // The online protocol's split: taught and kept training grasps, then the
-                // test part.
-                let train: Vec<usize> = (teach.iter().copied())
-                    .chain(
-                        (order[..n_train].iter().zip(&keep)).filter_map(|(&g, &k)| k.then_some(g)),
-                    )
-                    .collect();
-                let seed = Rng::stream(params.seed, CLASSIFIER_STREAM + rep as u64).next_u64();
-                train_test(
-                    c.method(),
-                    &c.method().default_size(),
-                    train_seqs,
-                    test_seqs,
-                    &prep.labels,
-                    prep.n_classes,
-                    &train,
-                    &order[n_train..],
-                    seed,
-                    &Progress::new(),
-                )?
-                .accuracy
-            }
-            MethodId::SparseSvm | MethodId::RawSvm => {
-                return Err(ExperimentError::param(
-                    "methods",
-                    format!("{} is a grasp-stability method", method.key()),
-                ));
-            }
-        };
-        out.push(score);
-    }
-    Ok(out)
+    // The subset's sequences, copied once for the methods that learn from them.
+    let sub_seqs: Vec<Array2<f64>> = if needs.subset_sequences {
+        subset
+            .iter()
+            .map(|&g| test_seqs.sequences[g].clone())
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let ctx = RecognitionRep {
+        params,
+        prep,
+        pert,
+        rep,
+        train_seqs,
+        test_seqs,
+        table,
+        teach,
+        order,
+        n_train,
+        keep,
+        subset,
+        sub_labels,
+        sub_seqs,
+        k: rc.clusters.unwrap_or(prep.n_classes),
+        cluster_seed: Rng::stream(params.seed, CLUSTER_STREAM + rep as u64).next_u64(),
+    };
+    (params.methods.iter())
+        .map(|&m| recognition_method(m)?.score(&ctx))
+        .collect()
 }
 
 /// The perturbed session's feature sequences when a sequence method needs them: normalised
@@ -144,15 +137,12 @@ pub(super) fn recognition_task(
 fn perturbed_sequences(
     params: &RobustnessParams,
     prep: &RecognitionPrep,
+    needs: Needs,
     scope: Option<Scope>,
     perturbed: Option<&Session>,
 ) -> Result<Option<FeatureSequences>, ExperimentError> {
-    let sequences = params
-        .methods
-        .iter()
-        .any(|m| m.input() != catalogue::Input::TableOne);
     Ok(match perturbed {
-        Some(ps) if sequences => {
+        Some(ps) if needs.sequences => {
             let f = feature_sequences(
                 ps,
                 &SequenceParams {
@@ -172,7 +162,7 @@ fn perturbed_sequences(
 }
 
 /// Table I features of the training and of the test grasps (every grasp in each).
-type TrainTest = (Array2<f64>, Array2<f64>);
+pub(super) type TrainTest = (Array2<f64>, Array2<f64>);
 
 /// Table I features: (training rows, test rows), z-scored as the clean session unless
 /// the perturbation is there all along.
@@ -196,160 +186,6 @@ fn table_features(
         (Some((clean, _)), None) => Some((clean.clone(), clean.clone())),
         _ => None,
     })
-}
-
-/// DU's or GU's NMI on the kept grasps, one run at the setup's threshold in repetition
-/// `rep`'s order.
-fn unsupervised_nmi(
-    method: MethodId,
-    params: &RobustnessParams,
-    sub_seqs: &[Array2<f64>],
-    sub_labels: &[usize],
-    dim: usize,
-    rep: usize,
-) -> Result<f64, ExperimentError> {
-    let rc = &params.recognition;
-    let threshold = if method == MethodId::Du {
-        rc.du_threshold
-    } else {
-        rc.gu_threshold
-    };
-    let cp = ClusteringParams {
-        learner: if method == MethodId::Du {
-            UnsupervisedLearner::Du
-        } else {
-            UnsupervisedLearner::Gu
-        },
-        features: rc.features,
-        thresholds: vec![threshold],
-        reps: 1,
-        seed: params.seed,
-        label_set: rc.label_set.clone(),
-        ds: rc.ds.clone(),
-        gs: rc.gs.clone(),
-        gu_aggregate: rc.gu_aggregate,
-        gu_min_grasps: rc.gu_min_grasps,
-        baseline_max_k: 0,
-        // The rest as the clustering experiment's defaults.
-        ..ClusteringParams::default()
-    };
-    // One threshold on a subset: as short as the other tasks, cancelled between them.
-    Ok(one_run(
-        &cp,
-        sub_seqs,
-        sub_labels,
-        dim,
-        threshold,
-        rep,
-        None,
-        &Progress::new(),
-    )?
-    .nmi)
-}
-
-/// Sequential k-means' or the SOM's NMI on the Table I test rows of the kept grasps.
-fn baseline_nmi(
-    method: MethodId,
-    k: usize,
-    cluster_seed: u64,
-    test: &Array2<f64>,
-    subset: &[usize],
-    sub_labels: &[usize],
-) -> Result<f64, ExperimentError> {
-    let data = gather(test.view(), subset);
-    let pred = if method == MethodId::KMeans {
-        SequentialKMeansParams {
-            k,
-            passes: 1,
-            seed: cluster_seed,
-        }
-        .fit(data.view())
-        .and_then(|m| m.assign(data.view()))
-    } else {
-        som_setup(k, cluster_seed)
-            .fit(data.view())
-            .and_then(|m| m.assign(data.view()))
-    }?;
-    Ok(scores(sub_labels, &pred).nmi)
-}
-
-/// DS or GS through the supervised protocol: teach one grasp per class, then predict and
-/// learn the training part (the grasps `keep` leaves), then predict the test part.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn supervised_score(
-    kind: SupervisedLearner,
-    rc: &RecognitionSetup,
-    prep: &RecognitionPrep,
-    train_seqs: &FeatureSequences,
-    test_seqs: &FeatureSequences,
-    teach: &[usize],
-    order: &[usize],
-    n_train: usize,
-    keep: &[bool],
-) -> Result<f64, ExperimentError> {
-    let mut learner = new_learner(kind, prep.clean.dim(), prep.n_classes, &rc.ds, &rc.gs)?;
-    for &g in teach {
-        learner.train_sequence(train_seqs.sequences[g].view(), prep.labels[g]);
-    }
-    let mut hits = 0usize;
-    for (i, &g) in order.iter().enumerate() {
-        let is_test = i >= n_train;
-        if !is_test && !keep[i] {
-            continue;
-        }
-        let seqs = if is_test { test_seqs } else { train_seqs };
-        let seq = seqs.sequences[g].view();
-        let dist = learner.predict_sequence(seq);
-        if is_test {
-            hits += usize::from(learner.decide(dist.view()) == prep.labels[g]);
-        } else {
-            learner.train_sequence(seq, prep.labels[g]);
-        }
-    }
-    let n_test = order.len() - n_train;
-    Ok(if n_test > 0 {
-        hits as f64 / n_test as f64
-    } else {
-        0.0
-    })
-}
-
-/// Stratified k-fold accuracy of the RBF SVM: trained on `train_x` rows of the training
-/// folds (thinned by a training perturbation), tested on `test_x` rows of the test fold.
-pub(super) fn rbf_accuracy(
-    params: &RobustnessParams,
-    prep: &RecognitionPrep,
-    train_x: &Array2<f64>,
-    test_x: &Array2<f64>,
-    pert: Option<(Perturbation, f64)>,
-    rep: usize,
-) -> Result<f64, ExperimentError> {
-    let rc = &params.recognition;
-    let labels = &prep.labels;
-    let fold_seed = Rng::stream(params.seed, rep as u64).next_u64();
-    let fold_of = stratified_folds(labels, rc.svm_folds, fold_seed);
-    let mut aux = Rng::stream(params.seed, SVM_STREAM + rep as u64);
-    let mut correct = 0usize;
-    for f in 0..rc.svm_folds {
-        let train: Vec<usize> = (0..labels.len()).filter(|&i| fold_of[i] != f).collect();
-        let test: Vec<usize> = (0..labels.len()).filter(|&i| fold_of[i] == f).collect();
-        let kept = training_kept(pert, labels, prep.n_classes, &train, false, &mut aux);
-        let train: Vec<usize> = train
-            .iter()
-            .zip(&kept)
-            .filter(|(_, k)| **k)
-            .map(|(&i, _)| i)
-            .collect();
-        let y: Vec<usize> = train.iter().map(|&i| labels[i]).collect();
-        let model = rc.svm.fit(gather(train_x.view(), &train).view(), &y)?;
-        let pred = model.predict(gather(test_x.view(), &test).view())?;
-        correct += test
-            .iter()
-            .zip(&pred)
-            .filter(|(i, p)| labels[**i] == **p)
-            .count();
-    }
-    Ok(correct as f64 / labels.len().max(1) as f64)
 }
 
 /// Which grasps of the training part are learned from: all, or those left by class

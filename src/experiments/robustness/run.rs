@@ -284,11 +284,7 @@ pub fn prepare(
                     seed: params.seed,
                 },
             )?;
-            let table = if params
-                .methods
-                .iter()
-                .any(|m| m.input() == catalogue::Input::TableOne)
-            {
+            let table = if Needs::of(&params.methods).table {
                 let raw = session_features(session)?;
                 let norm = Normaliser::fit(Normalisation::ZScore, raw.view())?;
                 Some((norm.transform(raw.view())?, norm))

@@ -134,6 +134,31 @@ pub(super) fn few_train(train: &[usize], classes: &[usize], n: usize, rng: &mut 
     out
 }
 
+/// One stability repetition: the confusions of both pipelines pooled over its folds.
+#[derive(Default)]
+pub(super) struct StabilityRep {
+    pub(super) sparse: Confusion,
+    pub(super) raw: Confusion,
+}
+
+/// Sparse coding of the key-frame patches + linear SVM (the first paper).
+pub(super) struct SparseSvm;
+
+/// The linear SVM on the scaled raw key-frame values (the first paper's baseline).
+pub(super) struct RawSvm;
+
+impl StabilityMethod for SparseSvm {
+    fn score(&self, r: &StabilityRep) -> f64 {
+        r.sparse.weighted_success_rate().unwrap_or(0.0)
+    }
+}
+
+impl StabilityMethod for RawSvm {
+    fn score(&self, r: &StabilityRep) -> f64 {
+        r.raw.weighted_success_rate().unwrap_or(0.0)
+    }
+}
+
 pub(super) fn stability_task(
     params: &RobustnessParams,
     prep: &StabilityPrep,
@@ -165,7 +190,7 @@ pub(super) fn stability_task(
         }
         _ => (&prep.sparse, &prep.raw, &prep.sparse, &prep.raw),
     };
-    let mut confusion = [Confusion::default(), Confusion::default()];
+    let mut pooled = StabilityRep::default();
     let mut add = |train: &[usize], test: &[usize]| -> Result<(), ExperimentError> {
         let c0 = svm_confusion(
             train_sparse,
@@ -176,8 +201,8 @@ pub(super) fn stability_task(
             &st.settings.svm,
         )?;
         let c1 = svm_confusion(train_raw, test_raw, labels, train, test, &st.settings.svm)?;
-        confusion[0].add(&c0);
-        confusion[1].add(&c1);
+        pooled.sparse.add(&c0);
+        pooled.raw.add(&c1);
         Ok(())
     };
     if let Some((Perturbation::NewObjects, share)) = pert {
@@ -200,29 +225,8 @@ pub(super) fn stability_task(
             add(&train, &folds.test_indices(f))?;
         }
     }
-    params
-        .methods
-        .iter()
-        .map(|&m| {
-            let c = match m {
-                MethodId::SparseSvm => &confusion[0],
-                MethodId::RawSvm => &confusion[1],
-                MethodId::Ds
-                | MethodId::Gs
-                | MethodId::Du
-                | MethodId::Gu
-                | MethodId::KMeans
-                | MethodId::Som
-                | MethodId::RbfSvm
-                | MethodId::Classifier(_) => {
-                    return Err(ExperimentError::param(
-                        "methods",
-                        format!("{} is not a grasp-stability method", m.key()),
-                    ));
-                }
-            };
-            Ok(c.weighted_success_rate().unwrap_or(0.0))
-        })
+    (params.methods.iter())
+        .map(|&m| Ok(stability_method(m)?.score(&pooled)))
         .collect()
 }
 
