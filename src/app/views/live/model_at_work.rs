@@ -168,19 +168,19 @@ fn verdict_ui(ui: &mut egui::Ui, shown: &Shown, open: bool, reserve: f32) {
     }
     // The top classes' probability at every step: how the decision formed (a figure of
     // the figure model, so its legend and axes follow the audited layout rules).
+    let id = if open {
+        "live-steps-open"
+    } else {
+        "live-steps-last"
+    };
+    chart_ui(ui, shown, id, reserve);
+}
+
+/// The verdict's chart, if it has one, in what the tile leaves less `reserve`.
+fn chart_ui(ui: &mut egui::Ui, shown: &Shown, id: &str, reserve: f32) {
     if let Some(figure) = &shown.figure {
-        let id = if open {
-            "live-steps-open"
-        } else {
-            "live-steps-last"
-        };
-        figure_view::show(
-            ui,
-            id,
-            figure,
-            chart_height(ui, reserve),
-            FigureSelection::None,
-        );
+        let height = chart_height(ui, reserve);
+        figure_view::show(ui, id, figure, height, FigureSelection::None);
     }
 }
 
@@ -196,18 +196,10 @@ fn novelty_ui(ui: &mut egui::Ui, shown: &Shown, open: bool, reserve: f32) {
         s.step + 1,
         s.novelty
     ));
-    if let Some(figure) = &shown.figure {
-        let id = if open {
-            "live-novelty-open"
-        } else {
-            "live-novelty-last"
-        };
-        figure_view::show(
-            ui,
-            id,
-            figure,
-            chart_height(ui, reserve),
-            FigureSelection::None,
-        );
-    }
+    let id = if open {
+        "live-novelty-open"
+    } else {
+        "live-novelty-last"
+    };
+    chart_ui(ui, shown, id, reserve);
 }
