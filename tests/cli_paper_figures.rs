@@ -12,7 +12,7 @@ fn baselines_figures_are_written_with_an_index() {
     run(PaperFiguresArgs {
         session: common::sample("object-recognition.json"),
         experiment: Experiment::Baselines,
-        out_dir: out.clone(),
+        out_dir: out.to_path_buf(),
         reps: 2,
         seed: 3,
         preset: None,
@@ -47,7 +47,7 @@ fn stability_figures_and_project_regenerate_the_first_paper() {
     run(PaperFiguresArgs {
         session: common::sample("grasp-stability.json"),
         experiment: Experiment::Stability,
-        out_dir: out.clone(),
+        out_dir: out.to_path_buf(),
         reps: 1,
         seed: 0,
         preset: None,
@@ -86,7 +86,7 @@ fn a_frontier_project_carries_its_frontiers() {
     run(PaperFiguresArgs {
         session: common::sample("grasp-stability.json"),
         experiment: Experiment::Frontier,
-        out_dir: out.clone(),
+        out_dir: out.to_path_buf(),
         reps: 2,
         seed: 0,
         preset: None,

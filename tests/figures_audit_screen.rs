@@ -759,7 +759,7 @@ fn live_figure(objects: &Session) -> Figure {
     let (model, secs) = tactile_workbench::models::fit_sequences(&train, &opts).expect("DS fits");
     let file =
         tactile_workbench::models::sequence_file(model, &train, secs, Default::default(), None);
-    let path = common::temp_dir("audit-live").join("ds.json");
+    let path = common::temp_dir("audit-live").child("ds.json");
     tactile_workbench::models::save(&file, &path).expect("the model saves");
     let one = Session {
         grasps: vec![objects.grasps[35].clone()],
@@ -791,7 +791,7 @@ fn live_novelty_figure(objects: &Session) -> Figure {
     };
     let (model, _) = tactile_workbench::models::fit_clusters(&train, &opts).expect("DU fits");
     let file = tactile_workbench::models::cluster_file(model, &train, 0.0, None);
-    let path = common::temp_dir("audit-live-du").join("du.json");
+    let path = common::temp_dir("audit-live-du").child("du.json");
     tactile_workbench::models::save(&file, &path).expect("the model saves");
     let one = Session {
         grasps: vec![objects.grasps[35].clone()],

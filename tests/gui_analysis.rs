@@ -85,7 +85,7 @@ fn baselines_run_in_the_background_and_show_their_figures() {
 
     // File > Export all figures writes every figure and an index, and says how long it took.
     let dir = common::temp_dir("gui-export-all");
-    h.state_mut().analyses.export.dir = dir.clone();
+    h.state_mut().analyses.export.dir = dir.to_path_buf();
     // The size presets: a page width, then back to the column (the default).
     h.get_by_label("Export settings").click();
     h.run_ok();

@@ -45,7 +45,7 @@ fn a_clustering_form_planned_for_a_cluster_merges_into_the_local_result() {
     h.get_by_label("step").set_value_accesskit(0.05);
     h.run_ok();
 
-    let dir = common::temp_dir("gui-cluster").join("plan");
+    let dir = common::temp_dir("gui-cluster").child("plan");
     open_cluster_section(&mut h);
     h.get_by_label("shards").set_value_accesskit(3.0);
     h.run_ok();
@@ -115,7 +115,7 @@ fn a_single_configuration_is_not_sharded_and_a_grid_is() {
     h.run_ok();
     h.get_by_label("step").set_value_accesskit(10.0);
     h.run_ok();
-    let dir = common::temp_dir("gui-cluster-grid").join("plan");
+    let dir = common::temp_dir("gui-cluster-grid").child("plan");
     h.get_by_label("Plan folder")
         .set_text_value_accesskit(&dir.display().to_string());
     h.run_ok();

@@ -124,7 +124,7 @@ fn the_export_folder_and_preset_persist_and_exports_report_absolute_paths() {
     h.run_ok();
     let chosen = common::temp_dir("export-chosen");
     // What the folder picker would give.
-    h.state_mut().analyses.export.dir = chosen.clone();
+    h.state_mut().analyses.export.dir = chosen.to_path_buf();
     let settings = h.state().analyses.export.clone();
     assert_eq!(
         (settings.width, settings.dpi),

@@ -5,6 +5,7 @@
 //! imported sessions run the stability and recognition analyses.
 
 mod common;
+use common::TempDir;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -266,19 +267,19 @@ fn imported_sessions_run_stability_and_recognition() {
 // ---------------------------------------------------------------------------------------
 
 /// A scratch copy of a fixture with its spec rewritten by `edit` (JSON text replacement).
-fn with_spec(pair: &(PathBuf, PathBuf), tag: &str, edit: impl Fn(String) -> String) -> PathBuf {
+/// The spec owns the scratch folder: dropping it removes the copy.
+fn with_spec(pair: &(PathBuf, PathBuf), tag: &str, edit: impl Fn(String) -> String) -> TempDir {
     let dir = common::temp_dir(tag);
     let text = std::fs::read_to_string(&pair.1).unwrap();
     let edited = edit(text.clone());
     assert_ne!(edited, text, "the edit changed nothing");
-    let spec = dir.join("spec.json");
-    std::fs::write(&spec, edited).unwrap();
+    std::fs::write(dir.join("spec.json"), edited).unwrap();
     // A windows CSV is found beside the spec.
     let windows = pair.1.with_file_name("plain-windows.windows.csv");
     if text.contains("plain-windows.windows.csv") {
         std::fs::copy(&windows, dir.join("plain-windows.windows.csv")).unwrap();
     }
-    spec
+    dir.child("spec.json")
 }
 
 fn error_of(bag: &Path, spec: &Path) -> String {
@@ -477,15 +478,15 @@ fn multiarray_length_does_not_match_the_layout() {
 }
 
 /// The windows fixture with its windows CSV replaced.
-fn with_windows(tag: &str, csv: &str) -> (PathBuf, PathBuf, PathBuf) {
+/// The spec copy owns the scratch folder.
+fn with_windows(tag: &str, csv: &str) -> (PathBuf, TempDir, PathBuf) {
     let (bag, spec) = windows_bag();
     let dir = common::temp_dir(tag);
     let text = std::fs::read_to_string(&spec).unwrap();
-    let spec_copy = dir.join("spec.json");
-    std::fs::write(&spec_copy, text).unwrap();
+    std::fs::write(dir.join("spec.json"), text).unwrap();
     let windows = dir.join("plain-windows.windows.csv");
     std::fs::write(&windows, csv).unwrap();
-    (bag, spec_copy, windows)
+    (bag, dir.child("spec.json"), windows)
 }
 
 #[test]

@@ -6,6 +6,7 @@
 //! the path, and writes nothing.
 
 mod common;
+use common::TempDir;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -110,14 +111,14 @@ fn the_window_treats_a_folder_of_trial_files_as_a_recording() {
 // ---------------------------------------------------------------------------------------
 
 /// A scratch copy of a fixture folder (and its spec, beside it).
-fn copy_of(name: &str, tag: &str) -> (PathBuf, PathBuf) {
+/// The copy owns the scratch folder (the spec's too).
+fn copy_of(name: &str, tag: &str) -> (TempDir, PathBuf) {
     let (dir, spec) = trials(name);
     let root = common::temp_dir(tag);
-    let copy = root.join(name);
-    copy_dir(&dir, &copy);
+    copy_dir(&dir, &root.join(name));
     let spec_copy = root.join(format!("{name}.spec.json"));
     std::fs::copy(&spec, &spec_copy).unwrap();
-    (copy, spec_copy)
+    (root.child(name), spec_copy)
 }
 
 fn copy_dir(from: &Path, to: &Path) {

@@ -138,7 +138,7 @@ fn frontier_and_its_sharded_sweep_agree() {
             m.key(),
             best.score
         );
-        let dir = common::temp_dir(&format!("registered-sweep-{}", m.key())).join("plan");
+        let dir = common::temp_dir(&format!("registered-sweep-{}", m.key())).child("plan");
         let request = PlanRequest {
             shards: 2,
             source: "sample".into(),

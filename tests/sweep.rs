@@ -4,9 +4,10 @@
 //! session or plan are handled.
 
 mod common;
+use common::TempDir;
 
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde_json::Value;
 use tactile_workbench::catalogue::MethodId;
@@ -72,8 +73,8 @@ fn local_stability(s: &Session, sw: &StabilitySweep) -> Value {
 
 /// Plan into a fresh folder, run every shard (in reverse order: the order must not
 /// matter) and merge.
-fn sharded(tag: &str, s: &Session, e: Experiment, shards: usize) -> (PathBuf, Value) {
-    let dir = common::temp_dir(tag).join("plan");
+fn sharded(tag: &str, s: &Session, e: Experiment, shards: usize) -> (TempDir, Value) {
+    let dir = common::temp_dir(tag).child("plan");
     let plan = sweep::write_plan(&dir, s, e, &request(shards)).unwrap();
     assert_eq!(plan.shard_count(), shards);
     for i in (0..shards).rev() {
@@ -265,10 +266,10 @@ fn merged_frontiers_equal_the_local_runs() {
 }
 
 /// A plan of the small stability grid in `tag`, its shards not run.
-fn planned(tag: &str, shards: usize) -> (PathBuf, Session, StabilitySweep) {
+fn planned(tag: &str, shards: usize) -> (TempDir, Session, StabilitySweep) {
     let s = sample("grasp-stability.json");
     let sw = stability_sweep();
-    let dir = common::temp_dir(tag).join("plan");
+    let dir = common::temp_dir(tag).child("plan");
     sweep::write_plan(
         &dir,
         &s,
@@ -386,7 +387,7 @@ fn a_plan_refuses_more_shards_than_items_and_an_existing_plan() {
             .to_string()
             .contains("already holds a plan")
     );
-    let other = common::temp_dir("sweep-refuse-many").join("plan");
+    let other = common::temp_dir("sweep-refuse-many").child("plan");
     let many = sweep::write_plan(&other, &s, Experiment::Stability(sw), &request(7));
     let msg = many.err().unwrap().to_string();
     assert!(msg.contains("7 shards for 6 work items"), "{msg}");
@@ -534,7 +535,7 @@ fn a_shard_edited_by_hand_is_caught_by_its_checksum() {
     let merged = dir.join("merged.json");
     let r = std::process::Command::new(env!("CARGO_BIN_EXE_tactile-workbench"))
         .args(["sweep", "merge", "--quiet"])
-        .arg(&dir)
+        .arg(&*dir)
         .arg("-o")
         .arg(&merged)
         .output()
