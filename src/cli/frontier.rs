@@ -66,8 +66,10 @@ pub struct FrontierArgs {
     /// RBF SVM kernel widths gamma (default 0.001, 0.003, 0.01, 0.03, 0.1).
     #[arg(long, value_delimiter = ',')]
     pub svm_gamma: Vec<f64>,
-    /// A registered method's knob values, `NAME=V1,V2` (repeatable; every combination is
-    /// a size; a knob not given keeps the method's own list).
+    /// Any method's knob values, `NAME=V1,V2` (repeatable; a knob not given keeps its
+    /// flag's or the method's own list; a registered method sweeps every combination).
+    /// The names: capacities, taus (DS/GS), num_bases (sparse coding), thresholds (DU/GU),
+    /// k (k-means, SOM), C, γ (RBF SVM), and each registered method's own.
     #[arg(long = "knob", value_name = "NAME=V1,V2")]
     pub knobs: Vec<String>,
     /// DS/GS score: all (every predicted grasp) or final-20.
@@ -146,20 +148,11 @@ impl FrontierArgs {
                     seed: self.seed,
                     ..FrontierParams::for_method(method)
                 };
-                set_if(&mut p.capacities, &self.capacities);
-                set_if(&mut p.taus, &self.taus);
-                set_if(&mut p.num_bases, &self.num_bases);
                 set_if(&mut p.beta, &self.beta);
                 set_if(&mut p.gamma, &self.gamma);
-                set_if(&mut p.thresholds, &self.thresholds);
-                set_if(&mut p.ks, &self.ks);
                 p.expert_capacity = self.expert_capacity;
                 p.expert_tau = self.expert_tau;
-                set_if(&mut p.svm_c, &self.svm_c);
-                set_if(&mut p.svm_gamma, &self.svm_gamma);
-                if let Some(c) = method.classifier() {
-                    p.sizes = knob_sizes(c, &self.knobs)?;
-                }
+                p.set_size_knobs(&self.knob_lists(method)?)?;
                 p.validate()?;
                 out.push(p);
             }
@@ -168,35 +161,63 @@ impl FrontierArgs {
     }
 }
 
-/// A registered method's sizes: its own values of each knob, those given by `--knob`
-/// replaced.
-fn knob_sizes(
-    c: &dyn crate::catalogue::Classifier,
-    given: &[String],
-) -> anyhow::Result<Vec<Vec<f64>>> {
-    let knobs = c.info().size_knobs;
-    let mut lists = FrontierParams::lists_of_sizes(&c.sizes());
-    for g in given {
-        let (name, values) = g
-            .split_once('=')
-            .ok_or_else(|| anyhow::anyhow!("--knob: `{g}` is not NAME=V1,V2"))?;
-        let k = knobs
-            .iter()
-            .position(|k| k.name == name.trim())
-            .ok_or_else(|| {
-                anyhow::anyhow!(
-                    "--knob: {} has no knob `{name}` (its knobs: {})",
-                    c.info().key,
-                    knobs.iter().map(|k| k.name).collect::<Vec<_>>().join(", ")
-                )
-            })?;
-        lists[k] = values
-            .split(',')
-            .map(|v| v.trim().parse::<f64>())
-            .collect::<Result<_, _>>()
-            .map_err(|e| anyhow::anyhow!("--knob {name}: `{values}`: {e}"))?;
+impl FrontierArgs {
+    /// The lists `method`'s frontier sweeps, one per knob of [`frontier::size_knobs`]: its
+    /// own values, replaced by a built-in method's flag of the knob's name (`--capacities`
+    /// for DS's "capacities") and then by `--knob NAME=V1,V2`.
+    fn knob_lists(&self, method: MethodId) -> anyhow::Result<Vec<Vec<f64>>> {
+        let knobs = frontier::size_knobs(method);
+        let mut lists: Vec<Vec<f64>> = knobs.iter().map(|k| k.values.clone()).collect();
+        // The flags are the built-in methods' own (a registered method's `k` is not
+        // k-means' `--ks`).
+        let named = if method.classifier().is_none() {
+            self.named_knobs().to_vec()
+        } else {
+            Vec::new()
+        };
+        for (k, list) in knobs.iter().zip(&mut lists) {
+            if let Some((_, given)) = named.iter().find(|(n, _)| *n == k.name)
+                && !given.is_empty()
+            {
+                list.clone_from(given);
+            }
+        }
+        for g in &self.knobs {
+            let (name, values) = g
+                .split_once('=')
+                .ok_or_else(|| anyhow::anyhow!("--knob: `{g}` is not NAME=V1,V2"))?;
+            let k = knobs
+                .iter()
+                .position(|k| k.name == name.trim())
+                .ok_or_else(|| {
+                    anyhow::anyhow!(
+                        "--knob: {} has no knob `{name}` (its knobs: {})",
+                        method.key(),
+                        knobs.iter().map(|k| k.name).collect::<Vec<_>>().join(", ")
+                    )
+                })?;
+            lists[k] = values
+                .split(',')
+                .map(|v| v.trim().parse::<f64>())
+                .collect::<Result<_, _>>()
+                .map_err(|e| anyhow::anyhow!("--knob {name}: `{values}`: {e}"))?;
+        }
+        Ok(lists)
     }
-    Ok(FrontierParams::sizes_of_lists(&lists))
+
+    /// The built-in methods' knobs that have a flag of their own, by the knob's name.
+    fn named_knobs(&self) -> [(&'static str, Vec<f64>); 7] {
+        let reals = |v: &[usize]| v.iter().map(|&v| v as f64).collect();
+        [
+            ("capacities", reals(&self.capacities)),
+            ("taus", reals(&self.taus)),
+            ("num_bases", reals(&self.num_bases)),
+            ("thresholds", self.thresholds.clone()),
+            ("k", reals(&self.ks)),
+            ("C", self.svm_c.clone()),
+            ("γ", self.svm_gamma.clone()),
+        ]
+    }
 }
 
 fn set_if<T: Clone>(target: &mut Vec<T>, given: &[T]) {
@@ -274,4 +295,104 @@ pub fn run(args: FrontierArgs) -> anyhow::Result<()> {
         frontiers.push(f);
     }
     write_json(&frontiers, args.json.as_deref())
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use super::super::{Cli, Command};
+    use super::*;
+
+    fn args(given: &[&str]) -> FrontierArgs {
+        let all = [&["tactile-workbench", "frontier", "s.json"], given].concat();
+        let Some(Command::Frontier(a)) = Cli::try_parse_from(all).unwrap().command else {
+            panic!("not parsed as `frontier`");
+        };
+        a
+    }
+
+    /// The one frontier `given` asks for.
+    fn one(given: &[&str]) -> FrontierParams {
+        let mut p = args(given).params().unwrap();
+        assert_eq!(p.len(), 1);
+        p.remove(0)
+    }
+
+    fn error(given: &[&str]) -> String {
+        args(given).params().unwrap_err().to_string()
+    }
+
+    #[test]
+    fn every_flag_names_a_built_in_knob() {
+        let built_in: Vec<&str> = frontier::methods()
+            .filter(|m| m.classifier().is_none())
+            .flat_map(|m| frontier::size_knobs(m).into_iter().map(|k| k.name))
+            .collect();
+        for (name, _) in args(&[]).named_knobs() {
+            assert!(built_in.contains(&name), "no built-in knob `{name}`");
+        }
+    }
+
+    #[test]
+    fn flags_and_knobs_reach_the_lists_swept() {
+        let ds = one(&["--method", "ds", "--capacities", "3,7"]);
+        assert_eq!(ds.capacities, [3, 7]);
+        assert_eq!(ds.taus, FrontierParams::for_method(MethodId::Ds).taus);
+        let by_name = one(&["--method", "ds", "--knob", "capacities=3,7"]);
+        assert_eq!(by_name, ds);
+        // `--knob` comes after the flag.
+        let som = one(&["--method", "som", "--ks", "2,4", "--knob", "k=6"]);
+        assert_eq!(som.ks, [6]);
+        let rbf = one(&["--method", "rbf-svm", "--svm-c", "5", "--knob", "γ=0.1,0.2"]);
+        assert_eq!((rbf.svm_c, rbf.svm_gamma), (vec![5.0], vec![0.1, 0.2]));
+        let du = one(&["--method", "du", "--thresholds", "0.4"]);
+        assert_eq!(du.thresholds, [0.4]);
+    }
+
+    #[test]
+    fn a_built_in_flag_leaves_a_registered_knob_of_the_same_name() {
+        let every_flag = [
+            "--capacities=3",
+            "--taus=1",
+            "--num-bases=2",
+            "--thresholds=0.5",
+            "--ks=2,4",
+            "--svm-c=1",
+            "--svm-gamma=1",
+        ];
+        let registered: Vec<MethodId> = frontier::methods()
+            .filter(|m| m.classifier().is_some())
+            .collect();
+        assert!(!registered.is_empty());
+        for m in registered {
+            let knobs = frontier::size_knobs(m);
+            let own: Vec<Vec<f64>> = knobs.iter().map(|k| k.values.clone()).collect();
+            let key = m.key();
+            let flagged = one(&[&["--method", key], &every_flag[..]].concat());
+            assert_eq!(FrontierParams::lists_of_sizes(&flagged.sizes), own, "{key}");
+            // Its first knob through `--knob`: two of its own values, the others kept.
+            let first = &knobs[0];
+            let two: Vec<f64> = first.values.iter().take(2).copied().collect();
+            let list = two.iter().map(|v| v.to_string()).collect::<Vec<_>>();
+            let knob = format!("{}={}", first.name, list.join(","));
+            let p = one(&["--method", key, "--knob", &knob]);
+            let lists = FrontierParams::lists_of_sizes(&p.sizes);
+            assert_eq!(lists[0], two, "{key}");
+            assert_eq!(lists[1..], own[1..], "{key}");
+        }
+    }
+
+    #[test]
+    fn a_bad_knob_is_refused_by_name() {
+        let e = error(&["--method", "kmeans", "--knob", "k=2.5"]);
+        assert!(e.contains("`k`") && e.contains("whole"), "{e}");
+        let e = error(&["--method", "gs", "--knob", "tau=2"]);
+        assert!(
+            e.contains("no knob `tau`") && e.contains("capacities, taus"),
+            "{e}"
+        );
+        let e = error(&["--method", "gs", "--knob", "taus"]);
+        assert!(e.contains("NAME=V1,V2"), "{e}");
+    }
 }
