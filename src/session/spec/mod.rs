@@ -28,7 +28,7 @@ use serde::Deserialize;
 
 use super::error::open_json;
 use super::native::json_error;
-use super::trial_pattern::{PatternError, TRIAL, TrialPattern};
+use super::trial_pattern::{TRIAL, TrialPattern};
 use super::validate::{MAX_SENSORS, check_layout};
 use super::{
     Frame, Grasp, LabelSet, Layout, Sensor, Session, SessionError, SessionMeta, ValueTransform,
@@ -40,6 +40,11 @@ use crate::error::Kept;
 const MAX_SYNC_TOLERANCE_S: f64 = 3600.0;
 
 pub use super::OBJECT;
+pub use error::{LabelError, SpecError};
+pub use live::{ContactError, ContactParams, LiveSpec};
+
+mod error;
+mod live;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -92,180 +97,6 @@ struct GraspsFile {
     windows: Option<String>,
     #[serde(default)]
     events: Option<String>,
-}
-
-/// How a live stream is read where the spec's `grasps` do not say: `contact` cuts grasps by
-/// the total pressure when the stream has no events topic (see `live::cut`).
-#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct LiveSpec {
-    #[serde(default)]
-    pub contact: ContactParams,
-}
-
-/// Cutting by contact: the total pressure (every taxel after its transform) over a baseline
-/// that follows it while the hand is idle. A grasp begins when the total rises above the
-/// baseline by `onset`, ends when it falls back below `offset`, and is kept when it lasted
-/// at least `min_duration_s`. The thresholds are the larger of a multiple of the idle
-/// total's standard deviation and a floor in pressure units, so that a quiet sensor and a
-/// noisy one both need a real touch.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct ContactParams {
-    /// Onset: this many standard deviations of the idle total above the baseline (default 6).
-    pub onset_sigma: f64,
-    /// Offset: back below this many standard deviations (default 3).
-    pub offset_sigma: f64,
-    /// The onset's floor in pressure units (default 20); the offset's is half of it.
-    pub min_rise: f64,
-    /// Shorter contacts are taps, not grasps (default 0.3 s).
-    pub min_duration_s: f64,
-    /// The baseline's time constant while idle (default 2 s): slow enough to ignore a touch
-    /// that is about to start, fast enough to follow a BioTac's drift.
-    pub baseline_s: f64,
-}
-
-impl Default for ContactParams {
-    fn default() -> Self {
-        ContactParams {
-            onset_sigma: 6.0,
-            offset_sigma: 3.0,
-            min_rise: 20.0,
-            min_duration_s: 0.3,
-            baseline_s: 2.0,
-        }
-    }
-}
-
-/// Why the spec's contact parameters cannot cut grasps; [`ContactError::field`] names the
-/// spec field at fault.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum ContactError {
-    /// A parameter that is not finite, or below 0.
-    #[error("{value} is not a finite number ≥ 0")]
-    NotNonNegative { field: &'static str, value: f64 },
-    #[error("the time constant must be > 0")]
-    ZeroBaseline,
-    #[error("{offset} is above the onset's {onset}: the offset must be the lower threshold")]
-    OffsetAboveOnset { offset: f64, onset: f64 },
-}
-
-impl ContactError {
-    /// The spec field at fault, e.g. `live.contact.offset_sigma`.
-    pub fn field(&self) -> &'static str {
-        match self {
-            ContactError::NotNonNegative { field, .. } => field,
-            ContactError::ZeroBaseline => "live.contact.baseline_s",
-            ContactError::OffsetAboveOnset { .. } => "live.contact.offset_sigma",
-        }
-    }
-}
-
-impl ContactParams {
-    /// Each parameter finite and of its sign, the offset below the onset.
-    pub fn check(&self) -> Result<(), ContactError> {
-        let fields = [
-            ("live.contact.onset_sigma", self.onset_sigma),
-            ("live.contact.offset_sigma", self.offset_sigma),
-            ("live.contact.min_rise", self.min_rise),
-            ("live.contact.min_duration_s", self.min_duration_s),
-            ("live.contact.baseline_s", self.baseline_s),
-        ];
-        for (field, v) in fields {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(ContactError::NotNonNegative { field, value: v });
-            }
-        }
-        if self.baseline_s == 0.0 {
-            return Err(ContactError::ZeroBaseline);
-        }
-        if self.offset_sigma > self.onset_sigma {
-            return Err(ContactError::OffsetAboveOnset {
-                offset: self.offset_sigma,
-                onset: self.onset_sigma,
-            });
-        }
-        Ok(())
-    }
-}
-
-/// What is wrong with a spec's layout or trial pattern. The caller names the spec and the
-/// field.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum SpecError {
-    #[error(
-        "`{}` is not a layout: use icub-fingertip, biotac-sp, grid RxC (e.g. grid 4x4) or a \
-         layout object",
-        super::error::shorten(name)
-    )]
-    UnknownLayout { name: String },
-    /// A layout object that does not parse (the JSON parser's error kept).
-    #[error("{0}")]
-    LayoutObject(#[source] Kept<serde_json::Error>),
-    #[error("expected a layout name or a layout object")]
-    NotALayout,
-    #[error("{0}")]
-    Pattern(#[from] PatternError),
-    /// A capture that is neither the object, the trial nor a label set.
-    #[error(
-        "`{{{}}}` is neither `{{object}}`, `{{trial}}` nor a label set of the spec",
-        super::error::shorten(name)
-    )]
-    UnknownCapture { name: String },
-    /// A pattern that does not capture the object or a label set.
-    #[error(
-        "`{pattern}` does not capture `{{{name}}}`: a trial's object and classes come from \
-         its path"
-    )]
-    Uncaptured { pattern: String, name: String },
-    #[error("`{pattern}` does not end in `.csv`: trial files are CSVs")]
-    NotCsv { pattern: String },
-    /// No `trials.pattern`, and the one made of the label sets' names is not one.
-    #[error("no `trials.pattern`, and the default `{pattern}` is not one: {source}")]
-    DefaultPattern {
-        pattern: String,
-        #[source]
-        source: Kept<SpecError>,
-    },
-}
-
-/// Why the spec refuses a recording's object or classes (a CSV row's, a bag window's or
-/// event's, a trial file path's, a live stream's). The caller names where they were.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-pub enum LabelError {
-    #[error("an empty object name")]
-    EmptyObject,
-    /// An object the spec's `object` label set does not list.
-    #[error(
-        "object `{}` is not a class of label set `object` ({})",
-        super::error::shorten(object),
-        classes.join(", ")
-    )]
-    UnknownObject {
-        object: String,
-        classes: Vec<String>,
-    },
-    #[error(
-        "`{}` is not a class of label set `{set}` ({})",
-        super::error::shorten(class),
-        classes.join(", ")
-    )]
-    NotAClass {
-        class: String,
-        set: String,
-        classes: Vec<String>,
-    },
-    /// An `end` event (quoted as `shown`) whose labels are not one per recorded label set.
-    #[error(
-        "`{}` gives {given} labels; the spec's label sets ({}) need one each",
-        super::error::shorten(shown),
-        sets.join(", ")
-    )]
-    LabelCount {
-        shown: String,
-        given: usize,
-        sets: Vec<String>,
-    },
 }
 
 /// One sensor of the spec: the session's sensor, and where its values are in a bag.
