@@ -2,24 +2,28 @@
 //! the same seed (repetition r of a sweep uses stream r of the seed): DS and GS are the
 //! supervised protocol's "final 20 %", DU and GU the clustering run at their threshold,
 //! sparse coding + SVM and the raw SVM the stability experiment's pooled 10-fold weighted
-//! success rate. A method answered by another's object fails here.
+//! success rate, k-means and the SOM the NMI of their clusters of the z-scored Table I
+//! features. A method answered by another's object fails here.
 
 use std::path::Path;
 
 use tactile_workbench::catalogue::MethodId;
+use tactile_workbench::cluster::{SequentialKMeansParams, scores};
 use tactile_workbench::experiments::clustering::{
-    ClusteringParams, UnsupervisedLearner, run_clustering,
+    ClusteringParams, UnsupervisedLearner, run_clustering, som_setup,
 };
+use tactile_workbench::experiments::labels::session_labels;
 use tactile_workbench::experiments::recognition::{
     RecognitionParams, SupervisedLearner, run_recognition,
 };
 use tactile_workbench::experiments::robustness::{
-    Family, Perturbation, RobustnessParams, RobustnessResult, Sweep, run_robustness,
+    CLUSTER_STREAM, Family, Perturbation, RobustnessParams, RobustnessResult, Sweep, run_robustness,
 };
 use tactile_workbench::experiments::stability::{
     CvScheme, PipelineSettings, StabilityData, baseline, evaluate_config,
 };
-use tactile_workbench::features::FeatureSet;
+use tactile_workbench::features::table_one::session_features;
+use tactile_workbench::features::{FeatureSet, Normalisation, Normaliser};
 use tactile_workbench::jobs::Progress;
 use tactile_workbench::rng::Rng;
 use tactile_workbench::session::Session;
@@ -132,4 +136,31 @@ fn stability_scores_are_the_stability_experiments() {
     );
     assert_eq!(r.clean_score(MethodId::SparseSvm), Some(sparse));
     assert_eq!(r.clean_score(MethodId::RawSvm), Some(raw));
+}
+
+#[test]
+fn k_means_and_som_scores_are_their_clusters_of_the_table_one_features() {
+    let s = sample("object-recognition.json");
+    let p = RobustnessParams::defaults(Family::Recognition);
+    let r = clean_run(&s, p, vec![MethodId::KMeans, MethodId::Som]);
+    // The clean repetition clusters every grasp's z-scored Table I row into as many
+    // clusters as there are objects.
+    let raw = session_features(&s).unwrap();
+    let z = Normaliser::fit(Normalisation::ZScore, raw.view())
+        .and_then(|n| n.transform(raw.view()))
+        .unwrap();
+    let (labels, classes) = session_labels(&s, "object").unwrap();
+    let (k, seed) = (classes.len(), Rng::stream(SEED, CLUSTER_STREAM).next_u64());
+    let kmeans = SequentialKMeansParams { k, passes: 1, seed }
+        .fit(z.view())
+        .and_then(|m| m.assign(z.view()))
+        .unwrap();
+    let som = som_setup(k, seed)
+        .fit(z.view())
+        .and_then(|m| m.assign(z.view()))
+        .unwrap();
+    let (kmeans, som) = (scores(&labels, &kmeans).nmi, scores(&labels, &som).nmi);
+    assert_ne!(kmeans, som, "the two must differ for this check to bite");
+    assert_eq!(r.clean_score(MethodId::KMeans), Some(kmeans));
+    assert_eq!(r.clean_score(MethodId::Som), Some(som));
 }

@@ -49,7 +49,9 @@ pub struct TaskScores {
 /// other random choices of the same repetition independent of them.
 pub(super) const PERTURB_STREAM: u64 = 1 << 40;
 pub(super) const PROTOCOL_STREAM: u64 = 2 << 40;
-pub(super) const CLUSTER_STREAM: u64 = 3 << 40;
+/// k-means' and the SOM's seed in repetition r: the first draw of stream
+/// `CLUSTER_STREAM + r` of the run's seed.
+pub const CLUSTER_STREAM: u64 = 3 << 40;
 pub(super) const SVM_STREAM: u64 = 4 << 40;
 pub(super) const CLASSIFIER_STREAM: u64 = 5 << 40;
 
