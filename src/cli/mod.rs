@@ -112,10 +112,10 @@ pub enum Command {
     /// A model's prediction for every grasp of a session, as CSV.
     Predict(model::PredictArgs),
     /// A session of some grasps of another (objects, trials, labels).
-    Subset(model::SubsetArgs),
+    Subset(session::SubsetArgs),
     /// Fit the grasp-stability methods on a training session and evaluate them on held-out
     /// sessions under each calibration: scores and times (default: BTS3 v2 palm-45).
-    BenchHeldOut(model::BenchHeldOutArgs),
+    BenchHeldOut(stability::BenchHeldOutArgs),
     /// Read a robot's live stream (Foxglove WebSocket protocol): a line per grasp with the
     /// model's verdict, the grasps recorded as a session.
     Live(live::LiveArgs),
@@ -159,8 +159,8 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Fit(a) => model::fit(a),
         Command::Evaluate(a) => model::evaluate(a),
         Command::Predict(a) => model::predict(a),
-        Command::Subset(a) => model::subset(a),
-        Command::BenchHeldOut(a) => model::bench_held_out(a),
+        Command::Subset(a) => session::subset(a),
+        Command::BenchHeldOut(a) => stability::bench_held_out(a),
         Command::Live(a) => live::live(a),
         Command::Serve(a) => live::serve(a),
     }

@@ -1,6 +1,5 @@
 //! Models that leave their session: `fit` a method on a session into a model file,
-//! `evaluate` it on another session, `predict` a session's grasps, and `subset` a session
-//! into the grasps of some objects, trials or labels.
+//! `evaluate` it on another session, and `predict` a session's grasps.
 
 use std::path::{Path, PathBuf};
 
@@ -12,10 +11,10 @@ use super::stability::{StabilityArgs, data_options, in_pool, options_from};
 use crate::catalogue::{Classifier, MethodId};
 use crate::experiments::feature_choice::{AUTO_FOLDS, FeatureChoice};
 use crate::experiments::result::figure_set;
-use crate::experiments::stability::{PipelineInputs, StabilityData};
+use crate::experiments::stability::StabilityData;
 use crate::figures::{Format, RenderOptions, export_all};
 use crate::models::{self, Calibration, HeldOutScores, ModelFile};
-use crate::session::{self, Session, SubsetSpec, Trials};
+use crate::session::{self, Session};
 
 #[derive(Args, Debug)]
 pub struct FitArgs {
@@ -179,26 +178,6 @@ pub struct PredictArgs {
     /// DS/GS: also every step of every grasp with the class distribution after it.
     #[arg(long, value_name = "STEPS.csv")]
     pub steps: Option<PathBuf>,
-}
-
-#[derive(Args, Debug)]
-pub struct SubsetArgs {
-    pub session: PathBuf,
-    /// Keep these objects (comma-separated).
-    #[arg(long, value_delimiter = ',')]
-    pub objects: Vec<String>,
-    /// Keep these trial numbers: a list `1,2,5` and/or ranges `1..10` (inclusive).
-    #[arg(long)]
-    pub trials: Option<String>,
-    /// Keep grasps of these classes: `SET=CLASS,…` (classes of one set: any of them).
-    #[arg(long, value_delimiter = ',')]
-    pub labels: Vec<String>,
-    /// The new session's name (default: the output file's stem).
-    #[arg(long)]
-    pub name: Option<String>,
-    /// The session file to write (native format).
-    #[arg(short, long, value_name = "OUT.json")]
-    pub output: PathBuf,
 }
 
 pub fn fit(a: FitArgs) -> anyhow::Result<()> {
@@ -658,177 +637,5 @@ pub fn predict(a: PredictArgs) -> anyhow::Result<()> {
         file.provenance.summary(),
         a.output.display()
     );
-    Ok(())
-}
-
-/// Parse `1,2,5` / `1..10` (inclusive) trial numbers; a range stays a range. An empty
-/// list or item (`''`, `1,,2`) is refused: it would keep every trial or hide a typo.
-fn parse_trials(s: &str) -> anyhow::Result<Trials> {
-    if s.trim().is_empty() {
-        bail!("--trials: empty; give trial numbers (`1,2,5`, `1..10`) or leave the option out");
-    }
-    let mut ranges = Vec::new();
-    for item in s.split(',').map(str::trim) {
-        let bad = || format!("--trials: bad item {item:?} in {s:?} (expected N or A..B)");
-        if item.is_empty() {
-            bail!(bad());
-        }
-        match item.split_once("..") {
-            Some((a, b)) => {
-                let (a, b): (u32, u32) = (
-                    a.trim().parse().with_context(bad)?,
-                    b.trim_start_matches('=').trim().parse().with_context(bad)?,
-                );
-                if a > b {
-                    bail!(bad());
-                }
-                ranges.push(a..=b);
-            }
-            None => {
-                let n: u32 = item.parse().with_context(bad)?;
-                ranges.push(n..=n);
-            }
-        }
-    }
-    Ok(Trials::new(ranges))
-}
-
-pub fn subset(a: SubsetArgs) -> anyhow::Result<()> {
-    super::refuse_input_as_output(Some(&a.output), &[&a.session])?;
-    let labels = a
-        .labels
-        .iter()
-        .map(|l| {
-            l.split_once('=')
-                .map(|(s, c)| (s.trim().to_string(), c.trim().to_string()))
-                .with_context(|| format!("--labels: {l:?} is not SET=CLASS"))
-        })
-        .collect::<anyhow::Result<Vec<_>>>()?;
-    let spec = SubsetSpec {
-        objects: a.objects.clone(),
-        trials: a
-            .trials
-            .as_deref()
-            .map(parse_trials)
-            .transpose()?
-            .unwrap_or_default(),
-        labels,
-    };
-    let source =
-        session::open(&a.session).with_context(|| format!("opening {}", a.session.display()))?;
-    let name = a
-        .name
-        .clone()
-        .unwrap_or_else(|| session::file_stem(&a.output));
-    let sub = session::subset(&source, &spec, &name)?;
-    session::save(&sub, &a.output)?;
-    println!(
-        "{}: {} of {} grasps ({}); wrote {}",
-        sub.meta.name,
-        sub.grasps.len(),
-        source.grasps.len(),
-        spec.describe(),
-        a.output.display()
-    );
-    Ok(())
-}
-
-/// The held-out benchmark of the BioTac SP set v2: palm-45 training and test files.
-pub const BTS3V2_TRAIN: &str = "../shared/datasets/bts3v2/bts3v2_palm_45.csv";
-pub const BTS3V2_TEST: &str = "../shared/datasets/bts3v2/bts3v2_palm_45_test.csv";
-
-#[derive(Args, Debug)]
-pub struct BenchHeldOutArgs {
-    /// The training session.
-    #[arg(default_value = BTS3V2_TRAIN)]
-    pub train: PathBuf,
-    /// Sessions to test on (default: the palm-45 test file of ten new objects).
-    #[arg(default_value = BTS3V2_TEST)]
-    pub test: Vec<PathBuf>,
-    /// Calibrations to evaluate under, comma-separated.
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "none,session,first:50,first:150"
-    )]
-    pub calibrations: Vec<String>,
-    /// Fit the sparse pipeline by the default grid's parsimonious choice (selected by
-    /// --cv on the training session) instead of its single default configuration.
-    #[arg(long)]
-    pub grid: bool,
-    /// Selection protocol of the grid, as for `stability --cv`.
-    #[arg(long, default_value = "10")]
-    pub cv: String,
-    #[arg(long)]
-    pub threads: Option<usize>,
-}
-
-/// Fit each grasp-stability method on a training session, evaluate it on test sessions
-/// under each calibration, and print scores and times as a table.
-pub fn bench_held_out(a: BenchHeldOutArgs) -> anyhow::Result<()> {
-    let calibrations = a
-        .calibrations
-        .iter()
-        .map(|c| c.parse::<Calibration>())
-        .collect::<Result<Vec<_>, _>>()?;
-    let train =
-        session::open(&a.train).with_context(|| format!("opening {}", a.train.display()))?;
-    let tests = a
-        .test
-        .iter()
-        .map(|p| session::open(p).with_context(|| format!("opening {}", p.display())))
-        .collect::<anyhow::Result<Vec<_>>>()?;
-    let data = StabilityData::from_session(&train, &Default::default())?;
-    let mut opts = crate::experiments::stability::StabilityOptions {
-        selection_cv: super::stability::parse_cv(&a.cv)?,
-        ..Default::default()
-    };
-    if a.grid {
-        opts.grid = Some(crate::experiments::stability::GridSpec::default_for(&data));
-    }
-    println!(
-        "| method | trained on | 10-fold | leave objects out | fit s | tested on | calibration | WSR | failure recall | evaluate s |"
-    );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
-    let pipelines = [
-        (MethodId::RawSvm, PipelineInputs::Codes),
-        (MethodId::SparseSvm, PipelineInputs::Codes),
-        (MethodId::SparseSvm, PipelineInputs::CodesAndRaw),
-    ];
-    for (method, inputs) in pipelines {
-        opts.settings.inputs = inputs;
-        let fit = in_pool(a.threads, || {
-            models::fit_stability(method, &train, &data, &opts, &crate::jobs::Progress::new())
-        })??;
-        let file = fit.into_file(&train, &data);
-        let p = &file.provenance;
-        let score = |i: usize| p.selection.get(i).map_or(f64::NAN, |s| s.value);
-        for (test, path) in tests.iter().zip(&a.test) {
-            for &c in &calibrations {
-                let r = models::evaluate(&file, test, c)
-                    .with_context(|| format!("evaluating on {}", path.display()))?;
-                let HeldOutScores::Stability {
-                    weighted_success_rate,
-                    failure_recall,
-                    ..
-                } = r.scores
-                else {
-                    bail!("{} is not a grasp-stability model", method.key());
-                };
-                println!(
-                    "| {} | {} | {:.3} | {:.3} | {:.2} | {} | {c} | {:.3} | {:.3} | {:.3} |",
-                    p.summary().split(", trained on").next().unwrap_or_default(),
-                    session::file_name(&a.train),
-                    score(0),
-                    score(1),
-                    p.train_seconds,
-                    session::file_name(path),
-                    weighted_success_rate,
-                    failure_recall,
-                    r.secs
-                );
-            }
-        }
-    }
     Ok(())
 }

@@ -1,11 +1,12 @@
-//! `info`, `validate` and `import`: session files from the shell.
+//! `info`, `validate`, `import` and `subset` (a session's grasps of some objects, trials
+//! or labels): session files from the shell.
 
 use std::path::{Path, PathBuf};
 
-use anyhow::Context;
+use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
 
-use crate::session::{self, Session, icub::IcubOptions};
+use crate::session::{self, Session, SubsetSpec, Trials, icub::IcubOptions};
 
 #[derive(Args, Debug)]
 pub struct InfoArgs {
@@ -233,4 +234,96 @@ pub fn import(args: ImportArgs) -> anyhow::Result<()> {
             write(&s, &output)
         }
     }
+}
+
+#[derive(Args, Debug)]
+pub struct SubsetArgs {
+    pub session: PathBuf,
+    /// Keep these objects (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    pub objects: Vec<String>,
+    /// Keep these trial numbers: a list `1,2,5` and/or ranges `1..10` (inclusive).
+    #[arg(long)]
+    pub trials: Option<String>,
+    /// Keep grasps of these classes: `SET=CLASS,…` (classes of one set: any of them).
+    #[arg(long, value_delimiter = ',')]
+    pub labels: Vec<String>,
+    /// The new session's name (default: the output file's stem).
+    #[arg(long)]
+    pub name: Option<String>,
+    /// The session file to write (native format).
+    #[arg(short, long, value_name = "OUT.json")]
+    pub output: PathBuf,
+}
+
+/// Parse `1,2,5` / `1..10` (inclusive) trial numbers; a range stays a range. An empty
+/// list or item (`''`, `1,,2`) is refused: it would keep every trial or hide a typo.
+fn parse_trials(s: &str) -> anyhow::Result<Trials> {
+    if s.trim().is_empty() {
+        bail!("--trials: empty; give trial numbers (`1,2,5`, `1..10`) or leave the option out");
+    }
+    let mut ranges = Vec::new();
+    for item in s.split(',').map(str::trim) {
+        let bad = || format!("--trials: bad item {item:?} in {s:?} (expected N or A..B)");
+        if item.is_empty() {
+            bail!(bad());
+        }
+        match item.split_once("..") {
+            Some((a, b)) => {
+                let (a, b): (u32, u32) = (
+                    a.trim().parse().with_context(bad)?,
+                    b.trim_start_matches('=').trim().parse().with_context(bad)?,
+                );
+                if a > b {
+                    bail!(bad());
+                }
+                ranges.push(a..=b);
+            }
+            None => {
+                let n: u32 = item.parse().with_context(bad)?;
+                ranges.push(n..=n);
+            }
+        }
+    }
+    Ok(Trials::new(ranges))
+}
+
+pub fn subset(a: SubsetArgs) -> anyhow::Result<()> {
+    super::refuse_input_as_output(Some(&a.output), &[&a.session])?;
+    let labels = a
+        .labels
+        .iter()
+        .map(|l| {
+            l.split_once('=')
+                .map(|(s, c)| (s.trim().to_string(), c.trim().to_string()))
+                .with_context(|| format!("--labels: {l:?} is not SET=CLASS"))
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let spec = SubsetSpec {
+        objects: a.objects.clone(),
+        trials: a
+            .trials
+            .as_deref()
+            .map(parse_trials)
+            .transpose()?
+            .unwrap_or_default(),
+        labels,
+    };
+    let source =
+        session::open(&a.session).with_context(|| format!("opening {}", a.session.display()))?;
+    let name = a
+        .name
+        .clone()
+        .unwrap_or_else(|| session::file_stem(&a.output));
+    let sub = session::subset(&source, &spec, &name)?;
+    session::save(&sub, &a.output)?;
+    println!(
+        "{}: {} of {} grasps ({}); wrote {}",
+        sub.meta.name,
+        sub.grasps.len(),
+        source.grasps.len(),
+        spec.describe(),
+        a.output.display()
+    );
+    Ok(())
 }

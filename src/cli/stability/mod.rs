@@ -1,11 +1,12 @@
-//! `stability` (the first paper's pipeline on any session) and `bench-stability` (its
-//! speed on BTS3 palm-down).
+//! `stability` (the first paper's pipeline on any session), `bench-stability` (its
+//! speed on BTS3 palm-down) and `bench-held-out` (its methods on held-out sessions).
 //!
 //! The folder: `args` turns the command line into the pipeline's options, `report` prints
-//! a run's summary, and `bench` is `bench-stability`.
+//! a run's summary, `bench` is `bench-stability` and `held_out` `bench-held-out`.
 
 mod args;
 mod bench;
+mod held_out;
 mod report;
 
 use std::path::Path;
@@ -20,6 +21,7 @@ pub use args::{
     GridPreset, InitArg, LossArg, PenaltyArg, StabilityArgs, data_options, options_from, parse_cv,
 };
 pub use bench::{BenchStabilityArgs, run_bench};
+pub use held_out::{BTS3V2_TEST, BTS3V2_TRAIN, BenchHeldOutArgs, bench_held_out};
 use report::report;
 
 /// Open a native session, or import the BTS3 CSV.
