@@ -6,6 +6,7 @@ use super::View;
 use crate::catalogue::MethodId;
 use crate::experiments::clustering::UnsupervisedLearner;
 use crate::experiments::figure_id::FigureId;
+use crate::experiments::frontier::{FrontierParams, FrontierPoint};
 use crate::experiments::recognition::SupervisedLearner;
 use crate::experiments::stability::Config;
 use crate::features::FeatureSet;
@@ -152,6 +153,35 @@ impl ModelSpec {
         }
     }
 
+    /// The model a frontier's size stands for: what clicking it opens or trains (None for
+    /// a method no view trains: the raw SVM, and the registered methods, fitted from the
+    /// command line).
+    pub fn of_point(params: &FrontierParams, point: &FrontierPoint) -> Option<ModelSpec> {
+        let method = params.method;
+        Some(match method {
+            MethodId::RawSvm | MethodId::Classifier(_) => return None,
+            MethodId::Ds | MethodId::Gs => ModelSpec::Recognition {
+                learner: SupervisedLearner::of(method)?,
+                features: params.features,
+                capacity: point.knob("capacity")? as usize,
+                tau: point.knob("tau")? as usize,
+            },
+            MethodId::SparseSvm => ModelSpec::Stability(Config {
+                num_bases: point.knob("num_bases")? as usize,
+                beta: point.knob("beta")?,
+                gamma: point.knob("gamma")?,
+            }),
+            MethodId::Du | MethodId::Gu => ModelSpec::Clustering {
+                learner: UnsupervisedLearner::of(method)?,
+                threshold: point.knob("threshold")?,
+            },
+            MethodId::KMeans | MethodId::Som => ModelSpec::Baselines {
+                k: Some(point.knob("k")? as usize),
+            },
+            MethodId::RbfSvm => ModelSpec::Baselines { k: None },
+        })
+    }
+
     /// The size in the words a result's `model_size` uses.
     pub fn knobs(&self) -> String {
         match self {
@@ -183,6 +213,63 @@ mod tests {
             basis: Some((2, 4)),
             strength: None,
         }
+    }
+
+    /// A frontier's size opens the model of its own method, at its own size: the inverse
+    /// of [`ModelSpec::method`] (k-means stands for the SOM, which the Baselines view trains
+    /// with it).
+    #[test]
+    fn a_frontier_point_stands_for_its_own_methods_model() {
+        use crate::experiments::frontier;
+        let knobs = [
+            ("capacity", 7.0),
+            ("tau", 3.0),
+            ("num_bases", 11.0),
+            ("beta", 0.5),
+            ("gamma", 2.0),
+            ("threshold", 0.25),
+            ("k", 6.0),
+        ];
+        let point = FrontierPoint {
+            label: String::new(),
+            detail: String::new(),
+            knobs: knobs.iter().map(|&(n, v)| (n.to_string(), v)).collect(),
+            score: 0.5,
+            score_se: 0.0,
+            reps: 2,
+            train_us: 1.0,
+            predict_us: 1.0,
+        };
+        let mut trained = 0;
+        for m in frontier::methods() {
+            let params = FrontierParams::for_method(m);
+            let Some(spec) = ModelSpec::of_point(&params, &point) else {
+                assert!(
+                    m == MethodId::RawSvm || m.classifier().is_some(),
+                    "{m}: no model"
+                );
+                continue;
+            };
+            trained += 1;
+            let stands_for = if m == MethodId::Som {
+                MethodId::KMeans
+            } else {
+                m
+            };
+            assert_eq!(spec.method(), stands_for, "{m}");
+            // Every knob the spec states ("capacity 7, tau 3") is the point's.
+            let text = spec.knobs();
+            for stated in text.split(", ") {
+                let Some((name, value)) = stated.rsplit_once(' ') else {
+                    continue;
+                };
+                let (Some(name), Ok(value)) = (name.split(' ').next_back(), value.parse()) else {
+                    continue;
+                };
+                assert_eq!(point.knob(name), Some(value), "{m}: {text}");
+            }
+        }
+        assert_eq!(trained, 8);
     }
 
     #[test]

@@ -12,15 +12,12 @@ use crate::app::results::Analyses;
 use crate::app::results::{FRONTIER_JOB, JobOutput, experiment_error, recognition_ready};
 use crate::app::selection::{Command, ModelSpec};
 use crate::catalogue::{MethodId, Task};
-use crate::experiments::clustering::UnsupervisedLearner;
 use crate::experiments::frontier::report::frontier_figures;
 use crate::experiments::frontier::{
     CostAxis, Frontier, FrontierItem, FrontierParams, SweepKnob, frontier_items,
     item_cost as frontier_item_cost, size_knobs,
 };
-use crate::experiments::recognition::SupervisedLearner;
 use crate::experiments::result::{self, TimeAxis, date_text};
-use crate::experiments::stability::Config;
 use crate::features::FeatureSet;
 use crate::figures::{self, Rgb, Series, SeriesStyle};
 use crate::session::Session;
@@ -330,35 +327,6 @@ fn charted(chart: &figures::Chart, frontiers: &[Frontier], models: &[usize]) -> 
 
 const TRAINED: &str = "trained models";
 
-/// The model a frontier's size stands for.
-fn spec_of(f: &Frontier, k: usize) -> Option<ModelSpec> {
-    let p = &f.points[k];
-    Some(match f.params.method {
-        MethodId::RawSvm => return None,
-        MethodId::Ds | MethodId::Gs => ModelSpec::Recognition {
-            learner: SupervisedLearner::of(f.params.method)?,
-            features: f.params.features,
-            capacity: p.knob("capacity")? as usize,
-            tau: p.knob("tau")? as usize,
-        },
-        MethodId::SparseSvm => ModelSpec::Stability(Config {
-            num_bases: p.knob("num_bases")? as usize,
-            beta: p.knob("beta")?,
-            gamma: p.knob("gamma")?,
-        }),
-        MethodId::Du | MethodId::Gu => ModelSpec::Clustering {
-            learner: UnsupervisedLearner::of(f.params.method)?,
-            threshold: p.knob("threshold")?,
-        },
-        MethodId::KMeans | MethodId::Som => ModelSpec::Baselines {
-            k: Some(p.knob("k")? as usize),
-        },
-        MethodId::RbfSvm => ModelSpec::Baselines { k: None },
-        // Fitted from the command line (`fit KEY`); no view trains one.
-        MethodId::Classifier(_) => return None,
-    })
-}
-
 impl SpeedRoom {
     fn chart(&mut self, ui: &mut egui::Ui, cx: &mut Cx) {
         let axis = self.time_axis;
@@ -510,7 +478,7 @@ impl SpeedRoom {
             Some(Charted::Size(i, k)) => {
                 let f = &frontiers[i];
                 let p = &f.points[k];
-                let click = match spec_of(f, k) {
+                let click = match ModelSpec::of_point(&f.params, &f.points[k]) {
                     Some(ModelSpec::Baselines { k: None }) => {
                         "click to open or run the Baselines, whose SVM searches this grid"
                     }
@@ -550,7 +518,9 @@ impl SpeedRoom {
         }
         match at(act.clicked_point) {
             Some(Charted::Size(i, k)) => {
-                if let Some(spec) = spec_of(&frontiers[i], k) {
+                if let Some(spec) =
+                    ModelSpec::of_point(&frontiers[i].params, &frontiers[i].points[k])
+                {
                     cx.commands.push(Command::TrainModel(spec));
                 }
             }
