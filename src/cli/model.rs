@@ -4,11 +4,11 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
-use clap::{Args, Subcommand};
+use clap::{Args, FromArgMatches};
 
 use super::progress::with_progress;
 use super::stability::{StabilityArgs, data_options, in_pool, options_from};
-use crate::catalogue::{Classifier, MethodId};
+use crate::catalogue::{Classifier, Input, MethodId, Task};
 use crate::experiments::feature_choice::{AUTO_FOLDS, FeatureChoice};
 use crate::experiments::result::figure_set;
 use crate::experiments::stability::StabilityData;
@@ -16,43 +16,120 @@ use crate::figures::{Format, RenderOptions, export_all};
 use crate::models::{self, Calibration, HeldOutScores, ModelFile};
 use crate::session::{self, Session};
 
-#[derive(Args, Debug)]
+/// `fit METHOD SESSION -o MODEL.json …`: a subcommand per method of the catalogue, named
+/// as `frontier --method` names it, with the options of its kind of fit.
+#[derive(Debug)]
 pub struct FitArgs {
-    #[command(subcommand)]
-    pub method: FitMethod,
+    pub method: MethodId,
+    pub options: FitOptions,
 }
 
-/// The method to fit, named as `frontier --method` names it.
-#[derive(Subcommand, Debug)]
-pub enum FitMethod {
-    /// Sparse coding of the key-frame patches + linear SVM (the first paper), with the
-    /// options of `stability`: one configuration, or a grid's parsimonious choice.
-    SparseSvm(FitStabilityArgs),
-    /// The linear SVM on the scaled key-frame values (the first paper's baseline).
-    #[command(alias = "linear-svm")]
-    RawSvm(FitStabilityArgs),
-    /// Discriminative supervised OIESGP experts (the second paper), taught every grasp in
-    /// the protocol's order; `--from` teaches a saved model further.
-    Ds(FitSequenceArgs),
-    /// Generative supervised OIESGP experts, as DS.
-    Gs(FitSequenceArgs),
-    /// Discriminative unsupervised experts: online clusters at a novelty threshold;
-    /// `--from` learns a saved model further (novel objects open clusters).
-    Du(FitClusterArgs),
-    /// Generative unsupervised experts with the extreme-value novelty, as DU.
-    Gu(FitClusterArgs),
-    /// Sequential k-means on the per-grasp Table I features (the paper's baseline).
-    #[command(name = "kmeans", alias = "k-means")]
-    KMeans(FitTableOneArgs),
-    /// The sequential self-organising map on the Table I features.
-    Som(FitTableOneArgs),
-    /// The RBF SVM on the Table I features, C and gamma chosen by the `baselines` grid
-    /// (repeated 5-fold cross validation).
-    RbfSvm(FitTableOneArgs),
-    /// A registered method: `fit KEY SESSION -o MODEL.json [--features F] [--target SET]
-    /// [--seed N] [--KNOB VALUE …]` (its size knobs; `fit KEY --help` lists them).
-    #[command(external_subcommand)]
-    Registered(Vec<String>),
+/// A method's options, by its kind of fit.
+#[derive(Debug)]
+pub enum FitOptions {
+    Stability(FitStabilityArgs),
+    Sequences(FitSequenceArgs),
+    Clusters(FitClusterArgs),
+    TableOne(FitTableOneArgs),
+    /// A registered method: its own command's options (built from its declared knobs).
+    Registered(clap::ArgMatches),
+}
+
+/// How a method is fitted, from what the catalogue says it learns and reads.
+#[derive(Clone, Copy)]
+enum FitKind {
+    Stability,
+    Sequences,
+    Clusters,
+    TableOne,
+    Registered(&'static dyn Classifier),
+}
+
+impl FitKind {
+    fn of(method: MethodId) -> FitKind {
+        if let Some(c) = method.classifier() {
+            return FitKind::Registered(c);
+        }
+        match (method.task(), method.input()) {
+            (Task::Stability, _) => FitKind::Stability,
+            (_, Input::TableOne) => FitKind::TableOne,
+            (Task::Clustering, _) => FitKind::Clusters,
+            (Task::Recognition, _) => FitKind::Sequences,
+        }
+    }
+
+    /// What `fit --help` says of a method of this kind, after its title.
+    fn about(self) -> &'static str {
+        match self {
+            FitKind::Stability => {
+                "on the key-frame patches, with the options of `stability`: one \
+                 configuration, or a grid's parsimonious choice"
+            }
+            FitKind::Sequences => {
+                "experts taught every grasp in the protocol's order; `--from` teaches a \
+                 saved model further"
+            }
+            FitKind::Clusters => {
+                "experts clustering at a novelty threshold; `--from` learns a saved model \
+                 further (novel objects open clusters)"
+            }
+            FitKind::TableOne => "on the per-grasp Table I features",
+            FitKind::Registered(_) => "with its size knobs as options",
+        }
+    }
+}
+
+/// The `fit` subcommand of `method`.
+fn fit_command(method: MethodId) -> clap::Command {
+    let info = method.info();
+    let kind = FitKind::of(method);
+    let cmd = clap::Command::new(info.key);
+    let cmd = match kind {
+        FitKind::Stability => FitStabilityArgs::augment_args(cmd),
+        FitKind::Sequences => FitSequenceArgs::augment_args(cmd),
+        FitKind::Clusters => FitClusterArgs::augment_args(cmd),
+        FitKind::TableOne => FitTableOneArgs::augment_args(cmd),
+        FitKind::Registered(c) => registered_command(cmd, c),
+    };
+    cmd.visible_aliases(info.aliases.iter().copied())
+        .about(format!("{} {}", info.title, kind.about()))
+}
+
+impl Args for FitArgs {
+    fn augment_args(cmd: clap::Command) -> clap::Command {
+        cmd.subcommand_required(true)
+            .subcommands(MethodId::all().map(fit_command))
+    }
+
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_args(cmd)
+    }
+}
+
+impl FromArgMatches for FitArgs {
+    fn from_arg_matches(m: &clap::ArgMatches) -> Result<Self, clap::Error> {
+        use clap::error::ErrorKind;
+        let (name, sub) = m
+            .subcommand()
+            .ok_or_else(|| clap::Error::new(ErrorKind::MissingSubcommand))?;
+        // clap names the subcommand by its key whatever alias was typed.
+        let method: MethodId = name
+            .parse()
+            .map_err(|_| clap::Error::new(ErrorKind::InvalidSubcommand))?;
+        let options = match FitKind::of(method) {
+            FitKind::Stability => FitOptions::Stability(FitStabilityArgs::from_arg_matches(sub)?),
+            FitKind::Sequences => FitOptions::Sequences(FitSequenceArgs::from_arg_matches(sub)?),
+            FitKind::Clusters => FitOptions::Clusters(FitClusterArgs::from_arg_matches(sub)?),
+            FitKind::TableOne => FitOptions::TableOne(FitTableOneArgs::from_arg_matches(sub)?),
+            FitKind::Registered(_) => FitOptions::Registered(sub.clone()),
+        };
+        Ok(FitArgs { method, options })
+    }
+
+    fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> Result<(), clap::Error> {
+        *self = Self::from_arg_matches(m)?;
+        Ok(())
+    }
 }
 
 #[derive(Args, Debug)]
@@ -181,18 +258,16 @@ pub struct PredictArgs {
 }
 
 pub fn fit(a: FitArgs) -> anyhow::Result<()> {
-    let (method, f) = match a.method {
-        FitMethod::SparseSvm(f) => (MethodId::SparseSvm, f),
-        FitMethod::RawSvm(f) => (MethodId::RawSvm, f),
-        FitMethod::Ds(f) => return fit_sequences(MethodId::Ds, f),
-        FitMethod::Gs(f) => return fit_sequences(MethodId::Gs, f),
-        FitMethod::Du(f) => return fit_clusters(MethodId::Du, f),
-        FitMethod::Gu(f) => return fit_clusters(MethodId::Gu, f),
-        FitMethod::KMeans(f) => return fit_table_one(MethodId::KMeans, f),
-        FitMethod::Som(f) => return fit_table_one(MethodId::Som, f),
-        FitMethod::RbfSvm(f) => return fit_table_one(MethodId::RbfSvm, f),
-        FitMethod::Registered(args) => return fit_registered(&args),
-    };
+    match a.options {
+        FitOptions::Stability(f) => fit_stability(a.method, f),
+        FitOptions::Sequences(f) => fit_sequences(a.method, f),
+        FitOptions::Clusters(f) => fit_clusters(a.method, f),
+        FitOptions::TableOne(f) => fit_table_one(a.method, f),
+        FitOptions::Registered(m) => fit_registered(a.method, &m),
+    }
+}
+
+fn fit_stability(method: MethodId, f: FitStabilityArgs) -> anyhow::Result<()> {
     let s = &f.stability;
     if s.json.is_some() || s.save_model.is_some() || s.nested {
         bail!(
@@ -401,13 +476,13 @@ fn fit_table_one(method: MethodId, a: FitTableOneArgs) -> anyhow::Result<()> {
 }
 
 /// The command line of a registered method, built from its declared knobs.
-fn registered_command(c: &dyn Classifier) -> clap::Command {
+fn registered_command(cmd: clap::Command, c: &dyn Classifier) -> clap::Command {
     use clap::{Arg, value_parser};
     let info = c.info();
-    let mut cmd = clap::Command::new(info.key)
-        .about(info.title)
+    let mut cmd = cmd
         .arg(
             Arg::new("session")
+                .value_name("SESSION")
                 .required(true)
                 .value_parser(value_parser!(PathBuf)),
         )
@@ -453,18 +528,9 @@ fn registered_command(c: &dyn Classifier) -> clap::Command {
     cmd
 }
 
-fn fit_registered(args: &[String]) -> anyhow::Result<()> {
-    let key = args.first().map_or("", String::as_str);
-    let registered = || MethodId::keys(MethodId::all().filter(|m| m.classifier().is_some()));
-    let method: MethodId = key
-        .parse()
-        .with_context(|| format!("fit: `{key}` is no method (registered: {})", registered()))?;
-    let Some(c) = method.classifier() else {
-        bail!("fit: `{key}` takes its own options; see `fit {key} --help`");
-    };
-    let m = registered_command(c)
-        .try_get_matches_from(args)
-        .unwrap_or_else(|e| e.exit());
+fn fit_registered(method: MethodId, m: &clap::ArgMatches) -> anyhow::Result<()> {
+    let c =
+        (method.classifier()).with_context(|| format!("{method} is not a registered method"))?;
     let session_path = m.get_one::<PathBuf>("session").expect("required");
     let output = m.get_one::<PathBuf>("output").expect("required");
     super::refuse_input_as_output(Some(output), &[session_path])?;
@@ -638,4 +704,79 @@ pub fn predict(a: PredictArgs) -> anyhow::Result<()> {
         a.output.display()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use super::super::{Cli, Command};
+    use super::*;
+
+    fn parsed(args: &[&str]) -> Result<FitArgs, clap::Error> {
+        let all = [&["tactile-workbench", "fit"], args].concat();
+        match Cli::try_parse_from(all)?.command {
+            Some(Command::Fit(a)) => Ok(a),
+            other => panic!("not parsed as `fit`: {other:?}"),
+        }
+    }
+
+    /// Every method of the catalogue is a `fit` subcommand by its key and its aliases, with
+    /// the options of what it learns and reads.
+    #[test]
+    fn every_method_is_fitted_with_the_options_of_its_kind() {
+        for m in MethodId::all() {
+            let info = m.info();
+            for name in std::iter::once(info.key).chain(info.aliases.iter().copied()) {
+                let a = parsed(&[name, "s.json", "-o", "m.json"]).unwrap();
+                assert_eq!(a.method, m, "`fit {name}`");
+                let kind = match a.options {
+                    FitOptions::Stability(_) => (Task::Stability, None),
+                    FitOptions::Sequences(_) => (Task::Recognition, Some(Input::Sequences)),
+                    FitOptions::Clusters(_) => (Task::Clustering, Some(Input::Sequences)),
+                    FitOptions::TableOne(_) => (m.task(), Some(Input::TableOne)),
+                    FitOptions::Registered(_) => {
+                        assert!(m.classifier().is_some(), "{m}");
+                        continue;
+                    }
+                };
+                assert!(m.classifier().is_none(), "{m}");
+                assert_eq!(kind.0, m.task(), "{m}");
+                if let Some(input) = kind.1 {
+                    assert_eq!(input, m.input(), "{m}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_kinds_options_are_its_own() {
+        // DS reads --capacity; DU does not, and k-means has no --threshold.
+        let a = parsed(&["ds", "s.json", "-o", "m.json", "--capacity", "7"]).unwrap();
+        assert!(matches!(a.options, FitOptions::Sequences(f) if f.capacity == Some(7)));
+        assert!(parsed(&["du", "s.json", "-o", "m.json", "--capacity", "7"]).is_err());
+        assert!(parsed(&["kmeans", "s.json", "-o", "m.json", "--threshold", "0.3"]).is_err());
+        let a = parsed(&["gu", "s.json", "-o", "m.json", "--threshold", "0.3"]).unwrap();
+        assert!(matches!(a.options, FitOptions::Clusters(f) if f.threshold == Some(0.3)));
+        // A registered method's knob, and a name that is no method.
+        let registered = MethodId::all().find_map(|m| m.classifier()).unwrap();
+        let knob = registered.info().size_knobs[0].name;
+        let a = parsed(&[
+            registered.info().key,
+            "s.json",
+            "-o",
+            "m.json",
+            &format!("--{knob}"),
+            "3",
+        ])
+        .unwrap();
+        let FitOptions::Registered(m) = a.options else {
+            panic!(
+                "{} not fitted as a registered method",
+                registered.info().key
+            );
+        };
+        assert_eq!(m.get_one::<f64>(knob), Some(&3.0));
+        assert!(parsed(&["no-such-method", "s.json", "-o", "m.json"]).is_err());
+    }
 }
