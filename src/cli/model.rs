@@ -73,7 +73,10 @@ impl FitKind {
                 "experts clustering at a novelty threshold; `--from` learns a saved model \
                  further (novel objects open clusters)"
             }
-            FitKind::TableOne => "on the per-grasp Table I features",
+            FitKind::TableOne => {
+                "on the per-grasp Table I features (k-means and the SOM: `--k` centres or \
+                 units; the RBF SVM: C and gamma chosen by the `baselines` grid)"
+            }
             FitKind::Registered(_) => "with its size knobs as options",
         }
     }
