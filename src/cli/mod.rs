@@ -4,6 +4,7 @@
 pub mod baselines;
 pub mod bounds;
 pub mod figures;
+pub mod fit_args;
 pub mod frontier;
 pub mod live;
 pub mod model;
@@ -106,7 +107,7 @@ pub enum Command {
     /// the best.
     Frontier(frontier::FrontierArgs),
     /// Fit a method on a session and save the model file (evaluate it elsewhere).
-    Fit(model::FitArgs),
+    Fit(fit_args::FitArgs),
     /// A model's scores on a session it did not train on, with every grasp's prediction.
     Evaluate(model::EvaluateArgs),
     /// A model's prediction for every grasp of a session, as CSV.
