@@ -3,6 +3,7 @@
 //! reset. Rooms read the shared selection and push commands; they never change another view.
 
 pub mod baselines;
+pub mod card;
 pub mod clustering;
 pub mod compare;
 pub mod live;
@@ -297,7 +298,7 @@ pub fn central_ui(
 ) {
     let key = layout_key(room.view());
     let Some(kind) = room.kind() else {
-        panes::selection_line(ui, cx);
+        card::selection_line(ui, cx);
         let layout = layouts
             .entry(key.clone())
             .or_insert_with(|| Layout::build(&key, room.default_groups(), None, None));
@@ -338,7 +339,7 @@ pub fn central_ui(
         return;
     };
     let mut reset = false;
-    panes::card(ui, cx, i, &mut reset);
+    card::card(ui, cx, i, &mut reset);
     ui.separator();
     let result = &cx.analyses.results[i];
     let key = result_layout_key(room.view(), result);
